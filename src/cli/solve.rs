@@ -1,0 +1,253 @@
+//! `signorini solve`: one problem, one method, all outputs and the report.
+
+use super::{SolveArgs, SolverFlags};
+use crate::pipeline::{self, InputError, Prepared, SolverChoice};
+use crate::post;
+use crate::qp::QpResult;
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+pub const EXIT_BAD_INPUT: i32 = 2;
+pub const EXIT_NOT_CONVERGED: i32 = 3;
+
+pub fn choice(f: &SolverFlags) -> SolverChoice {
+    SolverChoice {
+        method: f.method.clone(),
+        preconditioner: f.preconditioner.clone(),
+        tol: f.tol,
+        max_iter: f.max_iter,
+        omega: f.omega,
+        release: f.release.clone(),
+    }
+}
+
+pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
+    let t0 = Instant::now();
+    let prep = match pipeline::prepare(&a.problem, a.no_contact) {
+        Ok(p) => p,
+        Err(e) => return bad_input(&e),
+    };
+    let (method, opts) = match pipeline::options(&prep.problem, &choice(&a.solver)) {
+        Ok(x) => x,
+        Err(e) => return bad_input(&e),
+    };
+    let mut opts = opts;
+    opts.progress = !quiet;
+    let dir = a
+        .out
+        .clone()
+        .or(prep.problem.file.output.dir.clone())
+        .unwrap_or_else(|| PathBuf::from("out"));
+    // Fail on an unwritable output directory before spending time solving.
+    if let Err(e) = std::fs::create_dir_all(&dir) {
+        eprintln!("error: {}: cannot create output directory: {e}", dir.display());
+        return EXIT_BAD_INPUT;
+    }
+    let t_solve0 = Instant::now();
+    let res = match pipeline::solve(&prep, &method, &opts) {
+        Ok(r) => r,
+        Err(e) => return bad_input(&e),
+    };
+    let t_solve = t_solve0.elapsed().as_secs_f64();
+
+    let t_w = Instant::now();
+    let out = pipeline::output_paths(&dir, &prep.problem.name);
+    let om = post::out_mesh(&prep.model, &prep.mesh);
+    let mut step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    step.info.method = method.clone();
+    step.info.preconditioner = preconditioner_label(&method, &opts);
+    step.info.time_assemble = prep.t_assemble;
+    step.info.time_solve = t_solve;
+    step.info.time_total = t0.elapsed().as_secs_f64();
+    let compress = a.compress || prep.problem.file.output.compress;
+    if let Err(e) = pipeline::write_fields(&prep, &out, &om, &step, compress) {
+        eprintln!("error: {e}");
+        return EXIT_BAD_INPUT;
+    }
+    let t_write_fields = t_w.elapsed().as_secs_f64();
+    let certified = res.kkt.within(a.solver.kkt_target);
+    let timings = Timings {
+        read: prep.t_read,
+        assemble: prep.t_assemble,
+        solve: t_solve,
+        write: t_write_fields,
+        total: t0.elapsed().as_secs_f64(),
+    };
+    let summary = summary_json(&prep, &res, &method, &step.info.preconditioner, &step, &timings, certified, a.solver.kkt_target);
+    let text = match serde_json::to_string_pretty(&summary) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: JSON summary: {e}");
+            return EXIT_BAD_INPUT;
+        }
+    };
+    if let Err(e) = crate::io::atomic::write_atomic_bytes(&out.json, text.as_bytes()) {
+        eprintln!("error: {e}");
+        return EXIT_BAD_INPUT;
+    }
+    if !quiet {
+        print_report(&prep, &res, &method, &step, &summary, &timings, &out, a.solver.kkt_target);
+    }
+    if !res.status.converged() {
+        eprintln!(
+            "warning: {} did not converge: {} (outputs written and flagged converged = false)",
+            method,
+            res.status.describe()
+        );
+        return EXIT_NOT_CONVERGED;
+    }
+    if !certified {
+        eprintln!(
+            "warning: KKT residual {:.2e} above the target {:.0e}",
+            res.kkt.max(),
+            a.solver.kkt_target
+        );
+        if a.solver.strict {
+            return EXIT_NOT_CONVERGED;
+        }
+    }
+    0
+}
+
+pub fn preconditioner_label(method: &str, opts: &crate::qp::SolveOptions) -> String {
+    match crate::qp::registry::find(method) {
+        Some(m) if m.preconditioned => opts.preconditioner.name().to_string(),
+        _ => "-".to_string(),
+    }
+}
+
+fn bad_input(e: &InputError) -> i32 {
+    eprintln!("error: {e}");
+    EXIT_BAD_INPUT
+}
+
+pub struct Timings {
+    pub read: f64,
+    pub assemble: f64,
+    pub solve: f64,
+    pub write: f64,
+    pub total: f64,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn summary_json(
+    prep: &Prepared,
+    res: &QpResult,
+    method: &str,
+    pc: &str,
+    step: &crate::io::StepOutput,
+    t: &Timings,
+    certified: bool,
+    target: f64,
+) -> serde_json::Value {
+    let m = &prep.model;
+    let mut probes = serde_json::Map::new();
+    for (name, x, node, u) in pipeline::probes(prep, &step.displacement) {
+        probes.insert(name, json!({ "x": x[0], "y": x[1], "node": node, "tag": prep.mesh.node_tags[m.topo.point_node[node]], "u": u }));
+    }
+    let max_p = step.contact_pressure.iter().fold(0.0f64, |a, b| a.max(*b));
+    let total: f64 = step.multipliers.iter().sum();
+    json!({
+        "problem": prep.problem.name,
+        "method": method,
+        "preconditioner": pc,
+        "converged": res.status.converged(),
+        "status": res.status.describe(),
+        "iterations": res.iterations,
+        "inner_iterations": res.inner_iterations,
+        "nodes": m.topo.points.len(),
+        "mesh_nodes": prep.mesh.nodes.len(),
+        "triangles": m.topo.triangles.len(),
+        "bodies": m.topo.nbodies,
+        "rigid_modes": m.qp.kernel.len(),
+        "dofs": m.qp.n(),
+        "constraints": m.qp.m(),
+        "active": res.active.iter().filter(|a| **a).count(),
+        "energy": res.energy,
+        "kkt": {
+            "primal": res.kkt.primal,
+            "dual": res.kkt.dual,
+            "complementarity": res.kkt.complementarity,
+            "stationarity": res.kkt.stationarity,
+            "target": target,
+            "certified": certified,
+        },
+        "contact": { "max_pressure": max_p, "total_force": total },
+        "probes": probes,
+        "timings_s": {
+            "read": t.read,
+            "assemble": t.assemble,
+            "solve": t.solve,
+            "write": t.write,
+            "total": t.total,
+            "phases": res.timings.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>(),
+        },
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn print_report(
+    prep: &Prepared,
+    res: &QpResult,
+    method: &str,
+    step: &crate::io::StepOutput,
+    summary: &serde_json::Value,
+    t: &Timings,
+    out: &pipeline::Outputs,
+    target: f64,
+) {
+    let m = &prep.model;
+    println!("signorini {} — {} ({})", env!("CARGO_PKG_VERSION"), prep.problem.name, prep.problem.path.display());
+    let floating: Vec<String> = {
+        let mut b: Vec<u32> = m.kernel_body.clone();
+        b.dedup();
+        b.iter().map(|b| b.to_string()).collect()
+    };
+    println!(
+        "mesh        {} nodes ({} with interface copies), {} triangles, {} bodies{}",
+        prep.mesh.nodes.len(),
+        m.topo.points.len(),
+        m.topo.triangles.len(),
+        m.topo.nbodies,
+        if floating.is_empty() {
+            String::new()
+        } else {
+            format!("; semicoercive: body {} ({} rigid modes)", floating.join(", "), m.qp.kernel.len())
+        }
+    );
+    println!("problem     {} DOFs, {} contact constraints", m.qp.n(), m.qp.m());
+    println!("method      {method} (preconditioner {})", step.info.preconditioner);
+    println!(
+        "status      {} after {} iterations ({} inner)",
+        res.status.describe(),
+        res.iterations,
+        res.inner_iterations
+    );
+    let k = &res.kkt;
+    println!(
+        "KKT         primal {:.2e}  dual {:.2e}  complementarity {:.2e}  stationarity {:.2e}  → {}",
+        k.primal,
+        k.dual,
+        k.complementarity,
+        k.stationarity,
+        if k.within(target) { format!("certified (≤ {target:.0e})") } else { format!("NOT certified (target {target:.0e})") }
+    );
+    println!("energy      {:.6e}", res.energy);
+    println!(
+        "contact     {} active of {}, max pressure {:.4e}, total force {:.4e}",
+        summary["active"], m.qp.m(), summary["contact"]["max_pressure"].as_f64().unwrap_or(0.0), summary["contact"]["total_force"].as_f64().unwrap_or(0.0)
+    );
+    for (name, x, node, u) in pipeline::probes(prep, &step.displacement) {
+        println!("probe {name:<5} ({:.6}, {:.6}) node {node}: u = ({:.6e}, {:.6e})", x[0], x[1], u[0], u[1]);
+    }
+    let phases: Vec<String> = res.timings.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
+    println!(
+        "time [s]    read {:.3}  assemble {:.3}  solve {:.3} ({})  write {:.3}  total {:.3}",
+        t.read, t.assemble, t.solve, phases.join(", "), t.write, t.total
+    );
+    println!("outputs     {}", out.vtu.display());
+    println!("            {}", out.contact_vtu.display());
+    println!("            {}", out.h5.display());
+    println!("            {}", out.json.display());
+}

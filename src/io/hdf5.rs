@@ -1,0 +1,611 @@
+//! The HDF5 checkpoint (`model.h5`).
+//!
+//! Layout (indices are 0-based; "rows" = contact constraint rows):
+//!
+//! ```text
+//! /                       attrs: one string attribute per `attrs` entry
+//!                                (e.g. problem, toml, version),
+//!                                plane_strain (u8 0/1), last_step (u64, once a step exists)
+//! /mesh/nodes             f64  [n, 2]   undeformed point coordinates
+//! /mesh/node_tags         u64  [n]      Gmsh node tag of each point
+//! /mesh/body              u32  [n]      body of each point
+//! /mesh/triangles         u64  [m, 3]   point indices, counter-clockwise
+//! /mesh/material          u32  [m]      index into material_names
+//! /mesh/contact_points    f64  [rows, 2]
+//! /mesh/contact_first     u64  [rows]   point index of the first side
+//! /mesh/contact_second    u64  [rows, 2] point indices of the other side
+//! /mesh/contact_weights   f64  [rows, 2] their weights
+//! /mesh/contact_normal    f64  [rows, 2]
+//! /mesh/contact_gap0      f64  [rows]
+//! /mesh/contact_interface u32  [rows]   index into interface_names
+//! /mesh/contact_segments  u64  [k, 2]   contact-point indices
+//! /mesh                   attrs: material_names, interface_names
+//!                                (1-D arrays of variable-length UTF-8 strings)
+//! /steps/NNNN             one group per step (4+ digits, 1-based):
+//!     displacement f64 [n, 2], stress f64 [m, 4], von_mises f64 [m],
+//!     principal_stress f64 [m, 2], multipliers f64 [rows],
+//!     contact_pressure f64 [rows], gap f64 [rows], active u8 [rows]
+//!     attrs: time, energy, kkt_*, time_* (f64); iterations (u64);
+//!            converged (u8 0/1); method, preconditioner (strings)
+//! ```
+//!
+//! Every write is crash-safe: the file is built (or copied and extended)
+//! under a temporary name, closed, fsynced and renamed over the target.
+
+use std::path::Path;
+use std::str::FromStr;
+
+use ::hdf5::types::VarLenUnicode;
+use ::hdf5::{File, Group, H5Type, Location};
+
+use super::atomic::{write_atomic, IoError};
+use super::{ContactGeometry, OutMesh, StepInfo, StepOutput};
+
+/// Everything a checkpoint holds.
+#[derive(Debug, Clone, Default)]
+pub struct Checkpoint {
+    pub mesh: OutMesh,
+    /// The steps in increasing index order (1, 2, …).
+    pub steps: Vec<StepOutput>,
+    /// The string attributes of the root group (alphabetical order).
+    pub attrs: Vec<(String, String)>,
+}
+
+/// Root attributes that are not user strings.
+const RESERVED_ROOT_ATTRS: [&str; 2] = ["plane_strain", "last_step"];
+
+/// Error context: the file the user named plus an HDF5 location.
+struct Ctx<'a> {
+    path: &'a Path,
+}
+
+impl Ctx<'_> {
+    fn h5(&self, location: impl Into<String>) -> impl FnOnce(::hdf5::Error) -> IoError + '_ {
+        let location = location.into();
+        move |cause| IoError::Hdf5 {
+            path: self.path.to_path_buf(),
+            location,
+            cause,
+        }
+    }
+
+    fn format(&self, message: impl Into<String>) -> IoError {
+        IoError::format(self.path, message)
+    }
+
+    fn missing(&self, what: impl Into<String>) -> IoError {
+        IoError::missing(self.path, what)
+    }
+}
+
+fn vlu(ctx: &Ctx, what: &str, s: &str) -> Result<VarLenUnicode, IoError> {
+    VarLenUnicode::from_str(s)
+        .map_err(|_| ctx.format(format!("{what}: string contains a NUL byte")))
+}
+
+// ---------------------------------------------------------------- writing
+
+fn write_ds<T: H5Type>(
+    ctx: &Ctx,
+    g: &Group,
+    name: &str,
+    shape: &[usize],
+    data: &[T],
+) -> Result<(), IoError> {
+    let loc = format!("{}/{}", g.name(), name);
+    let expected: usize = shape.iter().product();
+    if expected != data.len() {
+        return Err(ctx.format(format!(
+            "{loc}: {} values for shape {:?}",
+            data.len(),
+            shape
+        )));
+    }
+    if g.link_exists(name) {
+        g.unlink(name).map_err(ctx.h5(loc.clone()))?;
+    }
+    let ds = g
+        .new_dataset::<T>()
+        .shape(shape.to_vec())
+        .create(name)
+        .map_err(ctx.h5(loc.clone()))?;
+    ds.write_raw(data).map_err(ctx.h5(loc))?;
+    Ok(())
+}
+
+fn flat2<T: Copy>(v: &[[T; 2]]) -> Vec<T> {
+    v.iter().flat_map(|a| [a[0], a[1]]).collect()
+}
+
+fn set_attr_scalar<T: H5Type>(ctx: &Ctx, loc: &Location, name: &str, v: &T) -> Result<(), IoError> {
+    let where_ = format!("{}@{}", loc.name(), name);
+    if loc
+        .attr_names()
+        .map_err(ctx.h5(where_.clone()))?
+        .iter()
+        .any(|a| a == name)
+    {
+        loc.delete_attr(name).map_err(ctx.h5(where_.clone()))?;
+    }
+    let a = loc
+        .new_attr::<T>()
+        .create(name)
+        .map_err(ctx.h5(where_.clone()))?;
+    a.write_scalar(v).map_err(ctx.h5(where_))
+}
+
+fn set_attr_str(ctx: &Ctx, loc: &Location, name: &str, v: &str) -> Result<(), IoError> {
+    let s = vlu(ctx, name, v)?;
+    set_attr_scalar(ctx, loc, name, &s)
+}
+
+fn set_attr_str_list(ctx: &Ctx, loc: &Location, name: &str, v: &[String]) -> Result<(), IoError> {
+    let where_ = format!("{}@{}", loc.name(), name);
+    let data = v
+        .iter()
+        .map(|s| vlu(ctx, name, s))
+        .collect::<Result<Vec<_>, _>>()?;
+    let a = loc
+        .new_attr::<VarLenUnicode>()
+        .shape(data.len())
+        .create(name)
+        .map_err(ctx.h5(where_.clone()))?;
+    a.write_raw(data.as_slice()).map_err(ctx.h5(where_))
+}
+
+fn check_mesh(ctx: &Ctx, mesh: &OutMesh) -> Result<(), IoError> {
+    let n = mesh.points.len();
+    let m = mesh.triangles.len();
+    let c = &mesh.contact;
+    let r = c.points.len();
+    let lens = [
+        ("node_tags", mesh.point_tags.len(), n),
+        ("body", mesh.point_body.len(), n),
+        ("material", mesh.material.len(), m),
+        ("contact_first", c.first.len(), r),
+        ("contact_second", c.second.len(), r),
+        ("contact_normal", c.normal.len(), r),
+        ("contact_gap0", c.gap0.len(), r),
+        ("contact_interface", c.interface.len(), r),
+    ];
+    for (what, got, want) in lens {
+        if got != want {
+            return Err(ctx.format(format!("{what} has {got} entries, expected {want}")));
+        }
+    }
+    Ok(())
+}
+
+/// Creates a new checkpoint at `path` (replacing any existing file) holding
+/// `/mesh` and the root attributes `attrs` (strings) plus `plane_strain`.
+pub fn create_checkpoint(
+    path: &Path,
+    mesh: &OutMesh,
+    attrs: &[(&str, String)],
+) -> Result<(), IoError> {
+    let ctx = Ctx { path };
+    check_mesh(&ctx, mesh)?;
+    for (k, _) in attrs {
+        if RESERVED_ROOT_ATTRS.contains(k) {
+            return Err(ctx.format(format!("root attribute name {k:?} is reserved")));
+        }
+    }
+    write_atomic(path, |tmp| {
+        let file = File::create(tmp).map_err(ctx.h5("/"))?;
+        {
+            let root: &Group = &file;
+            for (k, v) in attrs {
+                set_attr_str(&ctx, root, k, v)?;
+            }
+            set_attr_scalar(&ctx, root, "plane_strain", &u8::from(mesh.plane_strain))?;
+            let g = file.create_group("mesh").map_err(ctx.h5("/mesh"))?;
+            write_mesh(&ctx, &g, mesh)?;
+        }
+        file.close().map_err(ctx.h5("/"))
+    })
+}
+
+fn write_mesh(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<(), IoError> {
+    let n = mesh.points.len();
+    let m = mesh.triangles.len();
+    let c = &mesh.contact;
+    let r = c.points.len();
+    let k = c.segments.len();
+    let u = |x: usize| x as u64;
+
+    write_ds(ctx, g, "nodes", &[n, 2], &flat2(&mesh.points))?;
+    write_ds(ctx, g, "node_tags", &[n], &mesh.point_tags)?;
+    write_ds(ctx, g, "body", &[n], &mesh.point_body)?;
+    let tri: Vec<u64> = mesh.triangles.iter().flat_map(|t| t.map(u)).collect();
+    write_ds(ctx, g, "triangles", &[m, 3], &tri)?;
+    write_ds(ctx, g, "material", &[m], &mesh.material)?;
+    set_attr_str_list(ctx, g, "material_names", &mesh.material_names)?;
+
+    write_ds(ctx, g, "contact_points", &[r, 2], &flat2(&c.points))?;
+    let first: Vec<u64> = c.first.iter().map(|&i| u(i)).collect();
+    write_ds(ctx, g, "contact_first", &[r], &first)?;
+    let second: Vec<u64> = c
+        .second
+        .iter()
+        .flat_map(|s| [u(s[0].0), u(s[1].0)])
+        .collect();
+    write_ds(ctx, g, "contact_second", &[r, 2], &second)?;
+    let weights: Vec<f64> = c.second.iter().flat_map(|s| [s[0].1, s[1].1]).collect();
+    write_ds(ctx, g, "contact_weights", &[r, 2], &weights)?;
+    write_ds(ctx, g, "contact_normal", &[r, 2], &flat2(&c.normal))?;
+    write_ds(ctx, g, "contact_gap0", &[r], &c.gap0)?;
+    write_ds(ctx, g, "contact_interface", &[r], &c.interface)?;
+    let seg: Vec<u64> = c.segments.iter().flat_map(|s| s.map(u)).collect();
+    write_ds(ctx, g, "contact_segments", &[k, 2], &seg)?;
+    set_attr_str_list(ctx, g, "interface_names", &c.interface_names)?;
+    Ok(())
+}
+
+/// The group name of step `index` (1-based): `NNNN`.
+pub fn step_name(index: usize) -> String {
+    format!("{index:04}")
+}
+
+/// Appends step `index` (1-based) as `/steps/NNNN` and sets the root
+/// attribute `last_step`. Steps with an index ≥ `index` already in the file
+/// are removed first (a restart from an earlier step rewrites the history
+/// after it), so the file always holds a consistent sequence.
+///
+/// Crash-safe: the checkpoint is copied to a temporary file in the same
+/// directory, extended, closed, fsynced and renamed over the original.
+pub fn append_step(path: &Path, index: usize, step: &StepOutput) -> Result<(), IoError> {
+    let ctx = Ctx { path };
+    if index == 0 {
+        return Err(ctx.format("step indices start at 1"));
+    }
+    write_atomic(path, |tmp| {
+        std::fs::copy(path, tmp).map_err(|e| IoError::io(path, "cannot copy checkpoint", e))?;
+        let file = File::open_rw(tmp).map_err(ctx.h5("/"))?;
+        {
+            if !file.link_exists("mesh") {
+                return Err(ctx.missing("group /mesh"));
+            }
+            let mesh = file.group("mesh").map_err(ctx.h5("/mesh"))?;
+            let n = dataset_len(&ctx, &mesh, "nodes")?;
+            let m = dataset_len(&ctx, &mesh, "triangles")?;
+            let r = dataset_len(&ctx, &mesh, "contact_first")?;
+            check_step(&ctx, step, n, m, r)?;
+
+            let steps = if file.link_exists("steps") {
+                file.group("steps").map_err(ctx.h5("/steps"))?
+            } else {
+                file.create_group("steps").map_err(ctx.h5("/steps"))?
+            };
+            for name in steps.member_names().map_err(ctx.h5("/steps"))? {
+                if parse_step_name(&name).is_some_and(|i| i >= index) {
+                    steps
+                        .unlink(&name)
+                        .map_err(ctx.h5(format!("/steps/{name}")))?;
+                }
+            }
+            let name = step_name(index);
+            let g = steps
+                .create_group(&name)
+                .map_err(ctx.h5(format!("/steps/{name}")))?;
+            write_step(&ctx, &g, step)?;
+            set_attr_scalar(&ctx, &file, "last_step", &(index as u64))?;
+        }
+        file.close().map_err(ctx.h5("/"))
+    })
+}
+
+fn check_step(ctx: &Ctx, s: &StepOutput, n: usize, m: usize, r: usize) -> Result<(), IoError> {
+    let lens = [
+        ("displacement", s.displacement.len(), n),
+        ("stress", s.stress.len(), m),
+        ("von_mises", s.von_mises.len(), m),
+        ("principal_stress", s.principal.len(), m),
+        ("multipliers", s.multipliers.len(), r),
+        ("contact_pressure", s.contact_pressure.len(), r),
+        ("gap", s.gap.len(), r),
+        ("active", s.active.len(), r),
+    ];
+    for (what, got, want) in lens {
+        if got != want {
+            return Err(ctx.format(format!(
+                "step field {what} has {got} entries, the mesh needs {want}"
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn write_step(ctx: &Ctx, g: &Group, s: &StepOutput) -> Result<(), IoError> {
+    let n = s.displacement.len();
+    let m = s.stress.len();
+    let r = s.multipliers.len();
+    write_ds(ctx, g, "displacement", &[n, 2], &flat2(&s.displacement))?;
+    let stress: Vec<f64> = s.stress.iter().flatten().copied().collect();
+    write_ds(ctx, g, "stress", &[m, 4], &stress)?;
+    write_ds(ctx, g, "von_mises", &[m], &s.von_mises)?;
+    write_ds(ctx, g, "principal_stress", &[m, 2], &flat2(&s.principal))?;
+    write_ds(ctx, g, "multipliers", &[r], &s.multipliers)?;
+    write_ds(ctx, g, "contact_pressure", &[r], &s.contact_pressure)?;
+    write_ds(ctx, g, "gap", &[r], &s.gap)?;
+    write_ds(ctx, g, "active", &[r], &s.active)?;
+
+    let i = &s.info;
+    set_attr_scalar(ctx, g, "time", &s.time)?;
+    set_attr_str(ctx, g, "method", &i.method)?;
+    set_attr_str(ctx, g, "preconditioner", &i.preconditioner)?;
+    set_attr_scalar(ctx, g, "converged", &u8::from(i.converged))?;
+    set_attr_scalar(ctx, g, "iterations", &(i.iterations as u64))?;
+    for (name, v) in [
+        ("energy", i.energy),
+        ("kkt_primal", i.kkt_primal),
+        ("kkt_dual", i.kkt_dual),
+        ("kkt_complementarity", i.kkt_complementarity),
+        ("kkt_stationarity", i.kkt_stationarity),
+        ("time_assemble", i.time_assemble),
+        ("time_solve", i.time_solve),
+        ("time_total", i.time_total),
+    ] {
+        set_attr_scalar(ctx, g, name, &v)?;
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------- reading
+
+fn parse_step_name(name: &str) -> Option<usize> {
+    if !name.is_empty() && name.bytes().all(|b| b.is_ascii_digit()) {
+        name.parse().ok()
+    } else {
+        None
+    }
+}
+
+fn open_ds(ctx: &Ctx, g: &Group, name: &str) -> Result<::hdf5::Dataset, IoError> {
+    let loc = format!("{}/{}", g.name(), name);
+    if !g.link_exists(name) {
+        return Err(ctx.missing(format!("dataset {loc}")));
+    }
+    g.dataset(name).map_err(ctx.h5(loc))
+}
+
+/// Number of rows (first dimension) of a dataset.
+fn dataset_len(ctx: &Ctx, g: &Group, name: &str) -> Result<usize, IoError> {
+    let ds = open_ds(ctx, g, name)?;
+    Ok(ds.shape().first().copied().unwrap_or(0))
+}
+
+/// Reads a dataset of shape `[rows]` (cols = None) or `[rows, cols]`; checks
+/// the shape and, when `rows` is given, the row count. Returns (rows, values).
+fn read_ds<T: H5Type>(
+    ctx: &Ctx,
+    g: &Group,
+    name: &str,
+    cols: Option<usize>,
+    rows: Option<usize>,
+) -> Result<(usize, Vec<T>), IoError> {
+    let loc = format!("{}/{}", g.name(), name);
+    let ds = open_ds(ctx, g, name)?;
+    let shape = ds.shape();
+    let nrows = match (cols, shape.as_slice()) {
+        (None, [r]) => *r,
+        (Some(c), [r, c2]) if *c2 == c => *r,
+        // A zero-row 2-D dataset is also accepted whatever its width.
+        (Some(_), [0, _]) => 0,
+        _ => {
+            return Err(ctx.format(format!(
+                "{loc}: shape {shape:?}, expected {}",
+                match cols {
+                    None => "[rows]".to_string(),
+                    Some(c) => format!("[rows, {c}]"),
+                }
+            )))
+        }
+    };
+    if let Some(want) = rows {
+        if nrows != want {
+            return Err(ctx.format(format!("{loc}: {nrows} rows, expected {want}")));
+        }
+    }
+    let data = ds.read_raw::<T>().map_err(ctx.h5(loc.clone()))?;
+    let expected = nrows * cols.unwrap_or(1);
+    if data.len() != expected {
+        return Err(ctx.format(format!("{loc}: {} values, expected {expected}", data.len())));
+    }
+    Ok((nrows, data))
+}
+
+fn pairs<T: Copy>(v: &[T]) -> Vec<[T; 2]> {
+    v.chunks_exact(2).map(|c| [c[0], c[1]]).collect()
+}
+
+fn to_index(ctx: &Ctx, loc: &str, v: u64, bound: usize) -> Result<usize, IoError> {
+    match usize::try_from(v) {
+        Ok(i) if i < bound => Ok(i),
+        _ => Err(ctx.format(format!("{loc}: index {v} out of range (bound {bound})"))),
+    }
+}
+
+fn indices(ctx: &Ctx, loc: &str, v: &[u64], bound: usize) -> Result<Vec<usize>, IoError> {
+    v.iter().map(|&x| to_index(ctx, loc, x, bound)).collect()
+}
+
+fn has_attr(ctx: &Ctx, loc: &Location, name: &str) -> Result<bool, IoError> {
+    Ok(loc
+        .attr_names()
+        .map_err(ctx.h5(loc.name()))?
+        .iter()
+        .any(|a| a == name))
+}
+
+fn get_attr<T: H5Type>(ctx: &Ctx, loc: &Location, name: &str) -> Result<T, IoError> {
+    let where_ = format!("{}@{}", loc.name(), name);
+    if !has_attr(ctx, loc, name)? {
+        return Err(ctx.missing(format!("attribute {where_}")));
+    }
+    let a = loc.attr(name).map_err(ctx.h5(where_.clone()))?;
+    a.read_scalar::<T>().map_err(ctx.h5(where_))
+}
+
+fn get_attr_str(ctx: &Ctx, loc: &Location, name: &str) -> Result<String, IoError> {
+    Ok(get_attr::<VarLenUnicode>(ctx, loc, name)?
+        .as_str()
+        .to_string())
+}
+
+fn get_attr_str_list(ctx: &Ctx, loc: &Location, name: &str) -> Result<Vec<String>, IoError> {
+    let where_ = format!("{}@{}", loc.name(), name);
+    if !has_attr(ctx, loc, name)? {
+        return Err(ctx.missing(format!("attribute {where_}")));
+    }
+    let a = loc.attr(name).map_err(ctx.h5(where_.clone()))?;
+    let v = a.read_raw::<VarLenUnicode>().map_err(ctx.h5(where_))?;
+    Ok(v.iter().map(|s| s.as_str().to_string()).collect())
+}
+
+/// Reads a checkpoint: the mesh, every step (in index order) and the string
+/// root attributes. A file without `/steps` gives zero steps; a file without
+/// `/mesh` or with a missing dataset is rejected, naming the missing path.
+pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
+    let ctx = Ctx { path };
+    if !path.is_file() {
+        return Err(IoError::io(
+            path,
+            "cannot open checkpoint",
+            std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
+        ));
+    }
+    let file = File::open(path).map_err(ctx.h5("/"))?;
+
+    let mut attrs = Vec::new();
+    for name in file.attr_names().map_err(ctx.h5("/"))? {
+        if RESERVED_ROOT_ATTRS.contains(&name.as_str()) {
+            continue;
+        }
+        // Only string attributes are user attributes; skip anything else.
+        if let Ok(a) = file.attr(&name) {
+            if let Ok(v) = a.read_scalar::<VarLenUnicode>() {
+                attrs.push((name, v.as_str().to_string()));
+            }
+        }
+    }
+    let plane_strain = get_attr::<u8>(&ctx, &file, "plane_strain")? != 0;
+
+    if !file.link_exists("mesh") {
+        return Err(ctx.missing("group /mesh"));
+    }
+    let g = file.group("mesh").map_err(ctx.h5("/mesh"))?;
+    let mut mesh = read_mesh(&ctx, &g)?;
+    mesh.plane_strain = plane_strain;
+
+    let mut steps = Vec::new();
+    if file.link_exists("steps") {
+        let sg = file.group("steps").map_err(ctx.h5("/steps"))?;
+        let mut names: Vec<(usize, String)> = sg
+            .member_names()
+            .map_err(ctx.h5("/steps"))?
+            .into_iter()
+            .filter_map(|nm| parse_step_name(&nm).map(|i| (i, nm)))
+            .collect();
+        names.sort();
+        for (_, name) in names {
+            let g = sg.group(&name).map_err(ctx.h5(format!("/steps/{name}")))?;
+            steps.push(read_step(&ctx, &g, &mesh)?);
+        }
+    }
+    Ok(Checkpoint { mesh, steps, attrs })
+}
+
+fn read_mesh(ctx: &Ctx, g: &Group) -> Result<OutMesh, IoError> {
+    let (n, nodes) = read_ds::<f64>(ctx, g, "nodes", Some(2), None)?;
+    let (_, point_tags) = read_ds::<u64>(ctx, g, "node_tags", None, Some(n))?;
+    let (_, point_body) = read_ds::<u32>(ctx, g, "body", None, Some(n))?;
+    let (m, tri) = read_ds::<u64>(ctx, g, "triangles", Some(3), None)?;
+    let tri = indices(ctx, "/mesh/triangles", &tri, n)?;
+    let triangles = tri.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let (_, material) = read_ds::<u32>(ctx, g, "material", None, Some(m))?;
+    let material_names = get_attr_str_list(ctx, g, "material_names")?;
+
+    let (r, cpoints) = read_ds::<f64>(ctx, g, "contact_points", Some(2), None)?;
+    let (_, first) = read_ds::<u64>(ctx, g, "contact_first", None, Some(r))?;
+    let first = indices(ctx, "/mesh/contact_first", &first, n)?;
+    let (_, second) = read_ds::<u64>(ctx, g, "contact_second", Some(2), Some(r))?;
+    let second = indices(ctx, "/mesh/contact_second", &second, n)?;
+    let (_, weights) = read_ds::<f64>(ctx, g, "contact_weights", Some(2), Some(r))?;
+    let (_, normal) = read_ds::<f64>(ctx, g, "contact_normal", Some(2), Some(r))?;
+    let (_, gap0) = read_ds::<f64>(ctx, g, "contact_gap0", None, Some(r))?;
+    let (_, interface) = read_ds::<u32>(ctx, g, "contact_interface", None, Some(r))?;
+    let (_, seg) = read_ds::<u64>(ctx, g, "contact_segments", Some(2), None)?;
+    let seg = indices(ctx, "/mesh/contact_segments", &seg, r)?;
+    let interface_names = get_attr_str_list(ctx, g, "interface_names")?;
+
+    let second = second
+        .chunks_exact(2)
+        .zip(weights.chunks_exact(2))
+        .map(|(i, w)| [(i[0], w[0]), (i[1], w[1])])
+        .collect();
+    Ok(OutMesh {
+        points: pairs(&nodes),
+        point_tags,
+        point_body,
+        triangles,
+        material,
+        material_names,
+        plane_strain: false,
+        contact: ContactGeometry {
+            points: pairs(&cpoints),
+            first,
+            second,
+            normal: pairs(&normal),
+            gap0,
+            segments: pairs(&seg),
+            interface,
+            interface_names,
+        },
+    })
+}
+
+fn read_step(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<StepOutput, IoError> {
+    let n = Some(mesh.points.len());
+    let m = Some(mesh.triangles.len());
+    let r = Some(mesh.contact.points.len());
+    let (_, displacement) = read_ds::<f64>(ctx, g, "displacement", Some(2), n)?;
+    let (_, stress) = read_ds::<f64>(ctx, g, "stress", Some(4), m)?;
+    let (_, von_mises) = read_ds::<f64>(ctx, g, "von_mises", None, m)?;
+    let (_, principal) = read_ds::<f64>(ctx, g, "principal_stress", Some(2), m)?;
+    let (_, multipliers) = read_ds::<f64>(ctx, g, "multipliers", None, r)?;
+    let (_, contact_pressure) = read_ds::<f64>(ctx, g, "contact_pressure", None, r)?;
+    let (_, gap) = read_ds::<f64>(ctx, g, "gap", None, r)?;
+    let (_, active) = read_ds::<u8>(ctx, g, "active", None, r)?;
+
+    let iterations = get_attr::<u64>(ctx, g, "iterations")?;
+    let info = StepInfo {
+        method: get_attr_str(ctx, g, "method")?,
+        preconditioner: get_attr_str(ctx, g, "preconditioner")?,
+        converged: get_attr::<u8>(ctx, g, "converged")? != 0,
+        iterations: usize::try_from(iterations)
+            .map_err(|_| ctx.format(format!("{}@iterations: {iterations} too large", g.name())))?,
+        energy: get_attr(ctx, g, "energy")?,
+        kkt_primal: get_attr(ctx, g, "kkt_primal")?,
+        kkt_dual: get_attr(ctx, g, "kkt_dual")?,
+        kkt_complementarity: get_attr(ctx, g, "kkt_complementarity")?,
+        kkt_stationarity: get_attr(ctx, g, "kkt_stationarity")?,
+        time_assemble: get_attr(ctx, g, "time_assemble")?,
+        time_solve: get_attr(ctx, g, "time_solve")?,
+        time_total: get_attr(ctx, g, "time_total")?,
+    };
+    Ok(StepOutput {
+        time: get_attr(ctx, g, "time")?,
+        displacement: pairs(&displacement),
+        stress: stress
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect(),
+        von_mises,
+        principal: pairs(&principal),
+        multipliers,
+        contact_pressure,
+        gap,
+        active,
+        info,
+    })
+}

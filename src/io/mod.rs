@@ -1,0 +1,92 @@
+//! Output files: VTU (ParaView), PVD (time series), HDF5 checkpoint, JSON summary.
+//! Every file is written to a temporary name in the target directory and
+//! renamed into place, so a crash never leaves a half-written output.
+//!
+//! The writers see only the plain arrays below; they know nothing of the
+//! solver or of the mesh reader.
+
+pub mod atomic;
+pub mod hdf5;
+pub mod vtu;
+
+pub use atomic::{write_atomic, IoError};
+
+/// The output mesh: contact nodes appear once per side (one point per body copy).
+#[derive(Debug, Clone, Default)]
+pub struct OutMesh {
+    /// Point coordinates (x, y) of the duplicated mesh.
+    pub points: Vec<[f64; 2]>,
+    /// Gmsh node tag each point came from.
+    pub point_tags: Vec<u64>,
+    /// Body number of each point (0-based).
+    pub point_body: Vec<u32>,
+    /// Triangles (counter-clockwise) in point indices.
+    pub triangles: Vec<[usize; 3]>,
+    /// Material index of each triangle (into `material_names`).
+    pub material: Vec<u32>,
+    pub material_names: Vec<String>,
+    /// Plane strain (true) writes σzz too.
+    pub plane_strain: bool,
+    /// The contact constraints: one contact point per constraint row.
+    pub contact: ContactGeometry,
+}
+
+/// One point per constraint row, placed at the node of the first side
+/// (body k of a conforming pair, or the slave node); segments join the
+/// points of consecutive rows along the same interface.
+#[derive(Debug, Clone, Default)]
+pub struct ContactGeometry {
+    pub points: Vec<[f64; 2]>,
+    /// Output-mesh point index of the first side (k / slave) of each row.
+    pub first: Vec<usize>,
+    /// Output-mesh point indices of the other side: one point (conforming),
+    /// or two master points with weights (1-ξ, ξ) (non-matching).
+    pub second: Vec<[(usize, f64); 2]>,
+    pub normal: Vec<[f64; 2]>,
+    /// Initial gap g of each row.
+    pub gap0: Vec<f64>,
+    /// Line cells in contact-point indices.
+    pub segments: Vec<[usize; 2]>,
+    /// Interface index of each row (into `interface_names`).
+    pub interface: Vec<u32>,
+    pub interface_names: Vec<String>,
+}
+
+/// The fields of one solved (load) step.
+#[derive(Debug, Clone, Default)]
+pub struct StepOutput {
+    /// Pseudo-time of the step (1.0 for a single solve).
+    pub time: f64,
+    /// Nodal displacement per output point.
+    pub displacement: Vec<[f64; 2]>,
+    /// Per triangle: σxx, σyy, σxy, σzz (σzz = 0 in plane stress).
+    pub stress: Vec<[f64; 4]>,
+    /// Per triangle: the report's τe = sqrt(σxx² + σyy² − σxxσyy + 3σxy²).
+    pub von_mises: Vec<f64>,
+    /// Per triangle: in-plane principal stresses (σ1 ≥ σ2).
+    pub principal: Vec<[f64; 2]>,
+    /// Per contact row: λ (nodal force), pressure (λ / tributary length), current gap, active flag.
+    pub multipliers: Vec<f64>,
+    pub contact_pressure: Vec<f64>,
+    pub gap: Vec<f64>,
+    pub active: Vec<u8>,
+    /// Solver record stored as attributes.
+    pub info: StepInfo,
+}
+
+/// Scalars of one step, written as HDF5 attributes and into the JSON summary.
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
+pub struct StepInfo {
+    pub method: String,
+    pub preconditioner: String,
+    pub converged: bool,
+    pub iterations: usize,
+    pub energy: f64,
+    pub kkt_primal: f64,
+    pub kkt_dual: f64,
+    pub kkt_complementarity: f64,
+    pub kkt_stationarity: f64,
+    pub time_assemble: f64,
+    pub time_solve: f64,
+    pub time_total: f64,
+}

@@ -1,0 +1,466 @@
+//! ParaView output: XML UnstructuredGrid (`.vtu`) files and the `.pvd`
+//! collection of a time series.
+//!
+//! Arrays are written inline as base64-encoded little-endian binary
+//! (`format="binary"`, `header_type="UInt64"`); with `compress` they are
+//! zlib-compressed (`vtkZLibDataCompressor`, level 6) as well. Floating-point
+//! arrays are Float64, so values read back bit-exactly.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use vtkio::model::{
+    Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, ElementType, IOBuffer,
+    UnstructuredGridPiece, Version, VertexNumbers, Vtk,
+};
+use vtkio::xml::Compressor;
+
+use super::atomic::{write_atomic, write_atomic_with, IoError};
+use super::{OutMesh, StepOutput};
+
+/// zlib level used when compression is requested (1 fastest … 9 smallest).
+const ZLIB_LEVEL: u32 = 6;
+
+/// One data array read back from a `.vtu` file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VtuArray {
+    pub name: String,
+    pub num_comp: usize,
+    /// All values, component-interleaved, converted to f64.
+    pub values: Vec<f64>,
+}
+
+/// What a `.vtu` file contains, for tests and checks.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct VtuSummary {
+    pub num_points: usize,
+    pub num_cells: usize,
+    /// Point coordinates, 3 per point.
+    pub points: Vec<f64>,
+    /// Cell connectivity (point indices) and end offsets.
+    pub connectivity: Vec<u64>,
+    pub offsets: Vec<u64>,
+    /// VTK cell type codes (5 = triangle, 3 = line).
+    pub cell_types: Vec<u8>,
+    pub point_data: Vec<VtuArray>,
+    pub cell_data: Vec<VtuArray>,
+}
+
+impl VtuSummary {
+    pub fn point_array(&self, name: &str) -> Option<&VtuArray> {
+        self.point_data.iter().find(|a| a.name == name)
+    }
+    pub fn cell_array(&self, name: &str) -> Option<&VtuArray> {
+        self.cell_data.iter().find(|a| a.name == name)
+    }
+}
+
+fn check_len(path: &Path, what: &str, got: usize, want: usize) -> Result<(), IoError> {
+    if got == want {
+        Ok(())
+    } else {
+        Err(IoError::format(
+            path,
+            format!("{what} has {got} entries, expected {want}"),
+        ))
+    }
+}
+
+fn check_index(path: &Path, what: &str, idx: usize, n: usize) -> Result<(), IoError> {
+    if idx < n {
+        Ok(())
+    } else {
+        Err(IoError::format(
+            path,
+            format!("{what}: point index {idx} out of range (have {n} points)"),
+        ))
+    }
+}
+
+fn points3(points: &[[f64; 2]]) -> IOBuffer {
+    IOBuffer::F64(points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect())
+}
+
+fn array(name: &str, elem: ElementType, data: IOBuffer) -> Attribute {
+    Attribute::DataArray(DataArray {
+        name: name.to_string(),
+        elem,
+        data,
+    })
+}
+
+fn f64_array(name: &str, num_comp: u32, data: Vec<f64>) -> Attribute {
+    array(name, ElementType::Generic(num_comp), IOBuffer::F64(data))
+}
+
+fn i32_array(name: &str, data: impl Iterator<Item = i64>) -> Attribute {
+    // Values are body/material/interface numbers or 0/1 flags; saturate rather than panic.
+    let v: Vec<i32> = data.map(|x| i32::try_from(x).unwrap_or(i32::MAX)).collect();
+    array(name, ElementType::Generic(1), IOBuffer::I32(v))
+}
+
+/// Encodes `piece` as an XML UnstructuredGrid and writes it atomically.
+fn write_piece(path: &Path, piece: UnstructuredGridPiece, compress: bool) -> Result<(), IoError> {
+    let vtk = Vtk {
+        version: Version::new_xml(1, 0),
+        byte_order: ByteOrder::LittleEndian,
+        title: String::new(),
+        file_path: None,
+        data: DataSet::inline(piece),
+    };
+    let (compressor, level) = if compress {
+        (Compressor::ZLib, ZLIB_LEVEL)
+    } else {
+        (Compressor::None, 0)
+    };
+    let vtk_err = |e: &dyn std::fmt::Display| IoError::Vtk {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let xml = vtk
+        .try_into_xml_format(compressor, level)
+        .map_err(|e| vtk_err(&e))?;
+    let mut buf = Vec::new();
+    xml.write(&mut buf).map_err(|e| vtk_err(&e))?;
+    let buf = add_zero_counts(buf);
+    write_atomic(path, |tmp| {
+        let file = File::create(tmp).map_err(|e| IoError::io(path, "cannot create", e))?;
+        let mut w = BufWriter::new(file);
+        w.write_all(&buf)
+            .and_then(|()| w.flush())
+            .map_err(|e| IoError::io(path, "cannot write", e))?;
+        Ok(())
+    })
+}
+
+/// vtkio omits `NumberOfPoints` / `NumberOfCells` from `<Piece>` when they
+/// are zero, but VTK's reader requires both ("Piece 0 is missing its
+/// NumberOfPoints attribute"). Insert the missing ones as `"0"`.
+fn add_zero_counts(mut buf: Vec<u8>) -> Vec<u8> {
+    fn find(hay: &[u8], needle: &[u8], from: usize) -> Option<usize> {
+        hay.get(from..)?
+            .windows(needle.len())
+            .position(|w| w == needle)
+            .map(|p| p + from)
+    }
+    let Some(start) = find(&buf, b"<Piece", 0) else {
+        return buf;
+    };
+    let Some(end) = find(&buf, b">", start) else {
+        return buf;
+    };
+    let tag = &buf[start..end];
+    let mut extra = Vec::new();
+    for key in ["NumberOfPoints", "NumberOfCells"] {
+        if find(tag, format!(" {key}=").as_bytes(), 0).is_none() {
+            extra.extend_from_slice(format!(" {key}=\"0\"").as_bytes());
+        }
+    }
+    let at = start + b"<Piece".len();
+    buf.splice(at..at, extra);
+    buf
+}
+
+/// Writes the bulk mesh with its step fields (see the module doc for the encoding).
+///
+/// Point data: `displacement` (3 components, z = 0), `body`. Cell data:
+/// `stress` (σxx, σyy, σxy, and σzz in plane strain), `von_mises`,
+/// `principal_stress` (2), `material`. Points are the undeformed coordinates
+/// with z = 0.
+pub fn write_vtu(
+    path: &Path,
+    mesh: &OutMesh,
+    step: &StepOutput,
+    compress: bool,
+) -> Result<(), IoError> {
+    let n = mesh.points.len();
+    let m = mesh.triangles.len();
+    check_len(path, "point_body", mesh.point_body.len(), n)?;
+    check_len(path, "material", mesh.material.len(), m)?;
+    check_len(path, "displacement", step.displacement.len(), n)?;
+    check_len(path, "stress", step.stress.len(), m)?;
+    check_len(path, "von_mises", step.von_mises.len(), m)?;
+    check_len(path, "principal", step.principal.len(), m)?;
+    for t in &mesh.triangles {
+        for &i in t {
+            check_index(path, "triangle", i, n)?;
+        }
+    }
+
+    let connectivity: Vec<u64> = mesh
+        .triangles
+        .iter()
+        .flat_map(|t| t.iter().map(|&i| i as u64))
+        .collect();
+    let offsets: Vec<u64> = (1..=m as u64).map(|k| 3 * k).collect();
+    let cells = Cells {
+        cell_verts: VertexNumbers::XML {
+            connectivity,
+            offsets,
+        },
+        types: vec![CellType::Triangle; m],
+    };
+
+    let displacement: Vec<f64> = step
+        .displacement
+        .iter()
+        .flat_map(|u| [u[0], u[1], 0.0])
+        .collect();
+    let point = vec![
+        array(
+            "displacement",
+            ElementType::Vectors,
+            IOBuffer::F64(displacement),
+        ),
+        i32_array("body", mesh.point_body.iter().map(|&b| i64::from(b))),
+    ];
+
+    let ncomp: usize = if mesh.plane_strain { 4 } else { 3 };
+    let stress: Vec<f64> = step
+        .stress
+        .iter()
+        .flat_map(|s| s[..ncomp].iter().copied())
+        .collect();
+    let cell = vec![
+        f64_array("stress", ncomp as u32, stress),
+        f64_array("von_mises", 1, step.von_mises.clone()),
+        f64_array(
+            "principal_stress",
+            2,
+            step.principal.iter().flat_map(|p| [p[0], p[1]]).collect(),
+        ),
+        i32_array("material", mesh.material.iter().map(|&k| i64::from(k))),
+    ];
+
+    let piece = UnstructuredGridPiece {
+        points: points3(&mesh.points),
+        cells,
+        data: Attributes { point, cell },
+    };
+    write_piece(path, piece, compress)
+}
+
+/// Writes the contact boundary: one point per constraint row
+/// (`mesh.contact.points`), `mesh.contact.segments` as line cells.
+///
+/// Point data: `contact_pressure`, `gap`, `active` (Int32 0/1), `normal`
+/// (3 components, z = 0), `multiplier`, `interface` (Int32). With no
+/// contact rows a valid empty grid is written.
+pub fn write_contact_vtu(
+    path: &Path,
+    mesh: &OutMesh,
+    step: &StepOutput,
+    compress: bool,
+) -> Result<(), IoError> {
+    let c = &mesh.contact;
+    let r = c.points.len();
+    check_len(path, "contact normal", c.normal.len(), r)?;
+    check_len(path, "contact interface", c.interface.len(), r)?;
+    check_len(path, "multipliers", step.multipliers.len(), r)?;
+    check_len(path, "contact_pressure", step.contact_pressure.len(), r)?;
+    check_len(path, "gap", step.gap.len(), r)?;
+    check_len(path, "active", step.active.len(), r)?;
+    for s in &c.segments {
+        for &i in s {
+            check_index(path, "contact segment", i, r)?;
+        }
+    }
+
+    let k = c.segments.len();
+    let connectivity: Vec<u64> = c
+        .segments
+        .iter()
+        .flat_map(|s| [s[0] as u64, s[1] as u64])
+        .collect();
+    let offsets: Vec<u64> = (1..=k as u64).map(|j| 2 * j).collect();
+    let cells = Cells {
+        cell_verts: VertexNumbers::XML {
+            connectivity,
+            offsets,
+        },
+        types: vec![CellType::Line; k],
+    };
+
+    let point = vec![
+        f64_array("contact_pressure", 1, step.contact_pressure.clone()),
+        f64_array("gap", 1, step.gap.clone()),
+        i32_array("active", step.active.iter().map(|&a| i64::from(a))),
+        f64_array(
+            "normal",
+            3,
+            c.normal.iter().flat_map(|n| [n[0], n[1], 0.0]).collect(),
+        ),
+        f64_array("multiplier", 1, step.multipliers.clone()),
+        i32_array("interface", c.interface.iter().map(|&i| i64::from(i))),
+    ];
+
+    let piece = UnstructuredGridPiece {
+        points: points3(&c.points),
+        cells,
+        data: Attributes {
+            point,
+            cell: Vec::new(),
+        },
+    };
+    write_piece(path, piece, compress)
+}
+
+fn xml_escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for ch in s.chars() {
+        match ch {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+fn xml_unescape(s: &str) -> String {
+    s.replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&quot;", "\"")
+        .replace("&apos;", "'")
+        .replace("&amp;", "&")
+}
+
+/// Writes a ParaView collection (`.pvd`): one `DataSet` per entry
+/// `(time, file)`, file names as given (normally relative to the `.pvd`).
+/// Entries sharing a time get increasing `part` numbers, so a step's bulk
+/// and contact files can be listed together.
+pub fn write_pvd(path: &Path, entries: &[(f64, String)]) -> Result<(), IoError> {
+    let mut text = String::from(
+        "<?xml version=\"1.0\"?>\n\
+         <VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
+    );
+    for (i, (t, file)) in entries.iter().enumerate() {
+        if !t.is_finite() {
+            return Err(IoError::format(
+                path,
+                format!("time step {t} of {file:?} is not finite"),
+            ));
+        }
+        let part = entries[..i].iter().filter(|(s, _)| s == t).count();
+        text.push_str(&format!(
+            "    <DataSet timestep=\"{t:?}\" group=\"\" part=\"{part}\" file=\"{}\"/>\n",
+            xml_escape(file)
+        ));
+    }
+    text.push_str("  </Collection>\n</VTKFile>\n");
+    write_atomic_with(path, |w| w.write_all(text.as_bytes()))
+}
+
+/// Reads the `(timestep, file)` entries of a `.pvd` written by [`write_pvd`]
+/// (a minimal reader: it looks only at `<DataSet .../>` elements).
+pub fn read_pvd(path: &Path) -> Result<Vec<(f64, String)>, IoError> {
+    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, "cannot read", e))?;
+    if !text.contains("type=\"Collection\"") {
+        return Err(IoError::format(path, "not a VTK Collection file"));
+    }
+    let mut out = Vec::new();
+    let mut rest = text.as_str();
+    while let Some(start) = rest.find("<DataSet") {
+        let after = &rest[start + "<DataSet".len()..];
+        let end = after
+            .find('>')
+            .ok_or_else(|| IoError::format(path, "unterminated <DataSet> element"))?;
+        let tag = &after[..end];
+        let attr = |name: &str| -> Option<String> {
+            let key = format!("{name}=\"");
+            let mut from = 0;
+            // Match the attribute name at a word boundary.
+            while let Some(p) = tag[from..].find(&key) {
+                let pos = from + p;
+                let boundary =
+                    pos == 0 || tag[..pos].chars().last().is_some_and(|c| c.is_whitespace());
+                let vstart = pos + key.len();
+                if boundary {
+                    let vend = tag[vstart..].find('"')?;
+                    return Some(xml_unescape(&tag[vstart..vstart + vend]));
+                }
+                from = vstart;
+            }
+            None
+        };
+        let ts =
+            attr("timestep").ok_or_else(|| IoError::format(path, "<DataSet> without timestep"))?;
+        let t: f64 = ts
+            .trim()
+            .parse()
+            .map_err(|_| IoError::format(path, format!("bad timestep {ts:?}")))?;
+        let file = attr("file").ok_or_else(|| IoError::format(path, "<DataSet> without file"))?;
+        out.push((t, file));
+        rest = &after[end..];
+    }
+    Ok(out)
+}
+
+fn to_f64(path: &Path, name: &str, buf: &IOBuffer) -> Result<Vec<f64>, IoError> {
+    buf.cast_into::<f64>()
+        .ok_or_else(|| IoError::format(path, format!("array {name:?}: unsupported data type")))
+}
+
+fn summarize_attrs(path: &Path, attrs: Vec<Attribute>) -> Result<Vec<VtuArray>, IoError> {
+    let mut out = Vec::new();
+    for a in attrs {
+        match a {
+            Attribute::DataArray(d) => {
+                let values = to_f64(path, &d.name, &d.data)?;
+                out.push(VtuArray {
+                    num_comp: d.elem.num_comp() as usize,
+                    name: d.name,
+                    values,
+                });
+            }
+            Attribute::Field { data_array, .. } => {
+                for f in data_array {
+                    let values = to_f64(path, &f.name, &f.data)?;
+                    out.push(VtuArray {
+                        num_comp: f.elem as usize,
+                        name: f.name,
+                        values,
+                    });
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Reads a `.vtu` file (one piece) back: counts, points, cells and every
+/// point/cell array converted to f64.
+pub fn read_vtu_arrays(path: &Path) -> Result<VtuSummary, IoError> {
+    let vtk_err = |e: &dyn std::fmt::Display| IoError::Vtk {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let vtk = Vtk::import(path).map_err(|e| vtk_err(&e))?;
+    let pieces = match vtk.data {
+        DataSet::UnstructuredGrid { pieces, .. } => pieces,
+        _ => return Err(IoError::format(path, "not an UnstructuredGrid")),
+    };
+    let piece = match pieces.into_iter().next() {
+        Some(p) => p.into_loaded_piece_data(None).map_err(|e| vtk_err(&e))?,
+        None => return Err(IoError::format(path, "UnstructuredGrid has no piece")),
+    };
+    let num_points = piece.num_points();
+    let num_cells = piece.cells.types.len();
+    let points = to_f64(path, "Points", &piece.points)?;
+    let (connectivity, offsets) = piece.cells.cell_verts.into_xml();
+    let cell_types = piece.cells.types.iter().map(|&t| t as u8).collect();
+    Ok(VtuSummary {
+        num_points,
+        num_cells,
+        points,
+        connectivity,
+        offsets,
+        cell_types,
+        point_data: summarize_attrs(path, piece.data.point)?,
+        cell_data: summarize_attrs(path, piece.data.cell)?,
+    })
+}

@@ -1,0 +1,371 @@
+//! The problem file (`*.toml`), as specified in `docs/problem-format.md`.
+//!
+//! Parsing is strict: unknown keys are rejected with the key, the table and
+//! the line, so a typo never silently drops a load. Values are checked here
+//! (E > 0, −1 < ν < 0.5, ρ ≥ 0, …); names are checked against the mesh in
+//! `fem::topology`.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Errors of the problem file. The message names the file, and the key or
+/// table where it applies.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: {msg}")]
+    Syntax { path: PathBuf, msg: String },
+    #[error("{path}: {msg}")]
+    Invalid { path: PathBuf, msg: String },
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSection {
+    /// Path of the `.msh`, relative to the TOML file.
+    pub file: PathBuf,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Plane {
+    #[default]
+    Strain,
+    Stress,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelSection {
+    #[serde(default)]
+    pub plane: Plane,
+    /// Thickness t_h (plane stress; multiplies every stiffness and load).
+    #[serde(default = "one")]
+    pub thickness: f64,
+    /// Gravity vector: body force F = ρ·gravity (methods.md §1.2).
+    #[serde(default)]
+    pub gravity: Option<[f64; 2]>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl Default for ModelSection {
+    fn default() -> Self {
+        ModelSection {
+            plane: Plane::Strain,
+            thickness: 1.0,
+            gravity: None,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    #[serde(rename = "E")]
+    pub e: f64,
+    pub nu: f64,
+    #[serde(default)]
+    pub rho: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Dirichlet {
+    pub on: String,
+    pub u: Option<[f64; 2]>,
+    pub ux: Option<f64>,
+    pub uy: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Traction {
+    pub on: String,
+    /// Traction vector P [N/m²].
+    pub p: Option<[f64; 2]>,
+    /// Normal pressure, positive outward (compression negative).
+    pub pn: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Slip {
+    pub on: String,
+}
+
+/// A point force (extension): `f` [N per unit thickness] at a physical point.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Force {
+    pub on: String,
+    pub f: [f64; 2],
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum NormalKind {
+    /// Definition B of methods.md §2.6: one averaged normal per node.
+    #[default]
+    Averaged,
+    /// Definition A: one row per segment through the node.
+    Segment,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Contact {
+    /// Conforming interface: one physical curve between two bodies.
+    pub on: Option<String>,
+    /// Non-matching pair: slave curve projected onto master curve.
+    pub slave: Option<String>,
+    pub master: Option<String>,
+    #[serde(default)]
+    pub normals: NormalKind,
+    /// Non-matching: largest initial gap at which a slave node is paired
+    /// (default: unlimited, i.e. every slave node that projects onto the master).
+    pub max_gap: Option<f64>,
+}
+
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSection {
+    pub method: Option<String>,
+    pub preconditioner: Option<String>,
+    pub tol: Option<f64>,
+    pub max_iter: Option<usize>,
+    /// SSOR relaxation ω ∈ (0, 2).
+    pub omega: Option<f64>,
+    /// CGC release strategy: "single" or "multiple".
+    pub release: Option<String>,
+    /// Penalty parameter ε_p (penalty method).
+    pub penalty: Option<f64>,
+    /// Uzawa step ρ.
+    pub rho: Option<f64>,
+}
+
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSection {
+    #[serde(default)]
+    pub probes: BTreeMap<String, [f64; 2]>,
+    /// Directory for outputs (the `--out` flag overrides it).
+    pub dir: Option<PathBuf>,
+    /// zlib-compress VTU arrays.
+    #[serde(default)]
+    pub compress: bool,
+}
+
+/// The whole problem file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProblemFile {
+    pub mesh: MeshSection,
+    #[serde(default)]
+    pub model: ModelSection,
+    #[serde(default)]
+    pub materials: BTreeMap<String, Material>,
+    #[serde(default)]
+    pub dirichlet: Vec<Dirichlet>,
+    #[serde(default)]
+    pub traction: Vec<Traction>,
+    #[serde(default)]
+    pub slip: Vec<Slip>,
+    #[serde(default)]
+    pub force: Vec<Force>,
+    #[serde(default)]
+    pub contact: Vec<Contact>,
+    #[serde(default)]
+    pub solver: SolverSection,
+    #[serde(default)]
+    pub output: OutputSection,
+}
+
+/// A loaded problem: the parsed file plus where it came from.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    pub path: PathBuf,
+    /// Problem name = file stem (`model.toml` → `model`).
+    pub name: String,
+    /// The TOML text (stored in the checkpoint).
+    pub text: String,
+    pub file: ProblemFile,
+}
+
+impl Problem {
+    pub fn load(path: &Path) -> Result<Problem, ModelError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse(path, &text)
+    }
+
+    /// Parse `text` as the problem file `path` (used for messages and for
+    /// resolving the mesh path).
+    pub fn parse(path: &Path, text: &str) -> Result<Problem, ModelError> {
+        let file: ProblemFile = toml::from_str(text).map_err(|e| ModelError::Syntax {
+            path: path.to_path_buf(),
+            msg: describe_toml_error(text, &e),
+        })?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "model".into());
+        let p = Problem {
+            path: path.to_path_buf(),
+            name,
+            text: text.to_string(),
+            file,
+        };
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// The mesh path, resolved relative to the TOML file.
+    pub fn mesh_path(&self) -> PathBuf {
+        let f = &self.file.mesh.file;
+        if f.is_absolute() {
+            f.clone()
+        } else {
+            self.path.parent().unwrap_or(Path::new(".")).join(f)
+        }
+    }
+
+    fn invalid(&self, msg: String) -> ModelError {
+        ModelError::Invalid {
+            path: self.path.clone(),
+            msg,
+        }
+    }
+
+    fn validate(&self) -> Result<(), ModelError> {
+        let f = &self.file;
+        let finite = |v: f64| v.is_finite();
+        if !(f.model.thickness > 0.0 && finite(f.model.thickness)) {
+            return Err(self.invalid(format!(
+                "[model] thickness = {} must be positive",
+                f.model.thickness
+            )));
+        }
+        if let Some(g) = f.model.gravity {
+            if !g.iter().all(|v| finite(*v)) {
+                return Err(self.invalid("[model] gravity must be finite".into()));
+            }
+        }
+        if f.materials.is_empty() {
+            return Err(self.invalid("no [materials.NAME] table: every physical surface needs a material".into()));
+        }
+        for (name, m) in &f.materials {
+            if !(m.e > 0.0 && finite(m.e)) {
+                return Err(self.invalid(format!("[materials.{name}] E = {} must be positive", m.e)));
+            }
+            if !(m.nu > -1.0 && m.nu < 0.5) {
+                return Err(self.invalid(format!(
+                    "[materials.{name}] nu = {} must lie in (-1, 0.5)",
+                    m.nu
+                )));
+            }
+            if !(m.rho >= 0.0 && finite(m.rho)) {
+                return Err(self.invalid(format!("[materials.{name}] rho = {} must be non-negative", m.rho)));
+            }
+        }
+        for (i, d) in f.dirichlet.iter().enumerate() {
+            let n = d.u.is_some() as u8 + (d.ux.is_some() || d.uy.is_some()) as u8;
+            if n != 1 {
+                return Err(self.invalid(format!(
+                    "[[dirichlet]] #{} (on = \"{}\"): give either u = [ux, uy] or ux and/or uy",
+                    i + 1,
+                    d.on
+                )));
+            }
+            let vals = d.u.map(|u| u.to_vec()).unwrap_or_else(|| d.ux.into_iter().chain(d.uy).collect());
+            if !vals.iter().all(|v| finite(*v)) {
+                return Err(self.invalid(format!("[[dirichlet]] on = \"{}\": values must be finite", d.on)));
+            }
+        }
+        for (i, t) in f.traction.iter().enumerate() {
+            if t.p.is_some() == t.pn.is_some() {
+                return Err(self.invalid(format!(
+                    "[[traction]] #{} (on = \"{}\"): give exactly one of p = [px, py] or pn",
+                    i + 1,
+                    t.on
+                )));
+            }
+            let ok = t.p.map(|p| p.iter().all(|v| finite(*v))).unwrap_or(true) && t.pn.map(finite).unwrap_or(true);
+            if !ok {
+                return Err(self.invalid(format!("[[traction]] on = \"{}\": values must be finite", t.on)));
+            }
+        }
+        for fo in &f.force {
+            if !fo.f.iter().all(|v| finite(*v)) {
+                return Err(self.invalid(format!("[[force]] on = \"{}\": values must be finite", fo.on)));
+            }
+        }
+        for (i, c) in f.contact.iter().enumerate() {
+            let conf = c.on.is_some();
+            let nm = c.slave.is_some() || c.master.is_some();
+            if conf == nm || (nm && (c.slave.is_none() || c.master.is_none())) {
+                return Err(self.invalid(format!(
+                    "[[contact]] #{}: give either on = \"curve\" (conforming) or both slave and master (non-matching)",
+                    i + 1
+                )));
+            }
+            if let Some(g) = c.max_gap {
+                if !(g >= 0.0) {
+                    return Err(self.invalid(format!("[[contact]] #{}: max_gap must be >= 0", i + 1)));
+                }
+            }
+        }
+        let s = &f.solver;
+        if let Some(t) = s.tol {
+            if !(t > 0.0 && t < 1.0) {
+                return Err(self.invalid(format!("[solver] tol = {t} must lie in (0, 1)")));
+            }
+        }
+        if s.max_iter == Some(0) {
+            return Err(self.invalid("[solver] max_iter must be positive".into()));
+        }
+        for (name, p) in &f.output.probes {
+            if !p.iter().all(|v| finite(*v)) {
+                return Err(self.invalid(format!("[output] probe {name}: coordinates must be finite")));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One line: what is wrong, where (line:column), and the key when known.
+fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
+    let msg = e.message().trim().to_string();
+    match e.span() {
+        Some(span) => {
+            let start = span.start.min(text.len());
+            let line = text[..start].matches('\n').count() + 1;
+            let col = start - text[..start].rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
+            let snippet: String = text[start..].lines().next().unwrap_or("").chars().take(40).collect();
+            let table = enclosing_table(text, start);
+            format!("line {line}, column {col}{table}: {msg} (at `{}`)", snippet.trim())
+        }
+        None => msg,
+    }
+}
+
+/// " in [table]" for the table header that precedes byte offset `pos`.
+fn enclosing_table(text: &str, pos: usize) -> String {
+    text[..pos]
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| l.starts_with('['))
+        .map(|l| format!(" in {}", l.split('#').next().unwrap_or(l).trim()))
+        .unwrap_or_default()
+}

@@ -1,0 +1,197 @@
+//! The solve pipeline shared by the CLI commands and the tests:
+//! read → assemble → solve → post-process → write.
+
+use crate::fem::{self, Model};
+use crate::io::{self, IoError, OutMesh, StepOutput};
+use crate::mesh::{self, Mesh};
+use crate::model::Problem;
+use crate::post;
+use crate::qp::{precond::PrecondKind, registry, QpResult, SolveOptions, Status};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Bad input: the problem cannot be solved as given (exit code 2).
+#[derive(Debug, thiserror::Error)]
+pub enum InputError {
+    #[error(transparent)]
+    Model(#[from] crate::model::ModelError),
+    #[error(transparent)]
+    Mesh(#[from] mesh::MeshError),
+    #[error(transparent)]
+    Fem(#[from] fem::FemError),
+    #[error("{path}: {msg}")]
+    Solver { path: PathBuf, msg: String },
+}
+
+/// A problem read and assembled.
+pub struct Prepared {
+    pub problem: Problem,
+    pub mesh: Mesh,
+    pub model: Model,
+    pub t_read: f64,
+    pub t_assemble: f64,
+}
+
+/// Read the TOML and the mesh, build the QP. `no_contact` drops every [[contact]].
+pub fn prepare(path: &Path, no_contact: bool) -> Result<Prepared, InputError> {
+    let t0 = Instant::now();
+    let mut problem = Problem::load(path)?;
+    if no_contact {
+        problem.file.contact.clear();
+    }
+    let mesh = mesh::read_msh(&problem.mesh_path())?;
+    let t_read = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let model = fem::build(&mesh, &problem)?;
+    Ok(Prepared {
+        problem,
+        mesh,
+        model,
+        t_read,
+        t_assemble: t1.elapsed().as_secs_f64(),
+    })
+}
+
+/// Solver choice: method name + options, from [solver] overridden by flags.
+#[derive(Debug, Clone, Default)]
+pub struct SolverChoice {
+    pub method: Option<String>,
+    pub preconditioner: Option<String>,
+    pub tol: Option<f64>,
+    pub max_iter: Option<usize>,
+    pub omega: Option<f64>,
+    pub release: Option<String>,
+}
+
+pub fn options(problem: &Problem, flags: &SolverChoice) -> Result<(String, SolveOptions), InputError> {
+    let s = &problem.file.solver;
+    let bad = |msg: String| InputError::Solver { path: problem.path.clone(), msg };
+    let method = flags.method.clone().or(s.method.clone()).unwrap_or_else(|| "cgc".into());
+    if registry::find(&method).is_none() {
+        return Err(bad(format!("unknown method \"{method}\"; known: {}", registry::names().join(", "))));
+    }
+    let pc_name = flags.preconditioner.clone().or(s.preconditioner.clone()).unwrap_or_else(|| "cholesky".into());
+    let preconditioner = PrecondKind::parse(&pc_name).ok_or_else(|| {
+        bad(format!("unknown preconditioner \"{pc_name}\"; known: none, jacobi, ssor, ic0, mic0, cholesky"))
+    })?;
+    let mut o = SolveOptions { preconditioner, ..Default::default() };
+    if let Some(t) = flags.tol.or(s.tol) {
+        if !(t > 0.0 && t < 1.0) {
+            return Err(bad(format!("tol = {t} must lie in (0, 1)")));
+        }
+        o.tol = t;
+    }
+    if let Some(m) = flags.max_iter.or(s.max_iter) {
+        if m == 0 {
+            return Err(bad("max_iter must be positive".into()));
+        }
+        o.max_iter = m;
+    }
+    if let Some(w) = flags.omega.or(s.omega) {
+        if !(w > 0.0 && w < 2.0) {
+            return Err(bad(format!("omega = {w} must lie in (0, 2)")));
+        }
+        o.omega = w;
+    }
+    if let Some(r) = flags.release.clone().or(s.release.clone()) {
+        o.multiple_release = match r.as_str() {
+            "multiple" => true,
+            "single" => false,
+            _ => return Err(bad(format!("release = \"{r}\": expected \"single\" or \"multiple\""))),
+        };
+    }
+    if let Some(p) = s.penalty {
+        if !(p > 0.0) {
+            return Err(bad(format!("penalty = {p} must be positive")));
+        }
+        o.penalty = Some(p);
+    }
+    if let Some(r) = s.rho {
+        if !(r > 0.0) {
+            return Err(bad(format!("rho = {r} must be positive")));
+        }
+        o.rho = Some(r);
+    }
+    Ok((method, o))
+}
+
+/// Run the method; an unbounded problem is bad input naming the bodies.
+pub fn solve(prep: &Prepared, method: &str, opts: &SolveOptions) -> Result<QpResult, InputError> {
+    let bad = |msg: String| InputError::Solver { path: prep.problem.path.clone(), msg };
+    let res = registry::solve(method, &prep.model.qp, opts).map_err(|e| bad(format!("{method}: {e}")))?;
+    if let Status::Unbounded { direction } = &res.status {
+        let u = prep.model.displacements(direction);
+        // The bodies that the direction moves (relative to the largest motion).
+        let mut per_body = vec![0.0f64; prep.model.topo.nbodies];
+        for (p, v) in u.iter().enumerate() {
+            let b = prep.model.topo.point_body[p] as usize;
+            per_body[b] = per_body[b].max(v[0].abs().max(v[1].abs()));
+        }
+        let m = per_body.iter().fold(0.0f64, |a, b| a.max(*b));
+        let bodies: Vec<String> = per_body
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| **v > 1e-3 * m)
+            .map(|(b, _)| format!("body {b}"))
+            .collect();
+        return Err(bad(format!(
+            "the problem is unbounded: {} can move as a rigid body, opening its contacts, while the loads do positive work (a floating body pulled away from its support)",
+            bodies.join(", ")
+        )));
+    }
+    Ok(res)
+}
+
+/// Output file paths of one solve.
+#[derive(Debug, Clone)]
+pub struct Outputs {
+    pub vtu: PathBuf,
+    pub contact_vtu: PathBuf,
+    pub h5: PathBuf,
+    pub json: PathBuf,
+}
+
+pub fn output_paths(dir: &Path, name: &str) -> Outputs {
+    Outputs {
+        vtu: dir.join(format!("{name}.vtu")),
+        contact_vtu: dir.join(format!("{name}_contact.vtu")),
+        h5: dir.join(format!("{name}.h5")),
+        json: dir.join(format!("{name}.json")),
+    }
+}
+
+/// Post-process and write VTU, contact VTU, HDF5 checkpoint. The JSON is
+/// written by the caller (it needs the timings of this step too).
+pub fn write_fields(
+    prep: &Prepared,
+    out: &Outputs,
+    om: &OutMesh,
+    step: &StepOutput,
+    compress: bool,
+) -> Result<(), IoError> {
+    io::vtu::write_vtu(&out.vtu, om, step, compress)?;
+    io::vtu::write_contact_vtu(&out.contact_vtu, om, step, compress)?;
+    let attrs = [
+        ("problem", prep.problem.name.clone()),
+        ("problem_toml", prep.problem.text.clone()),
+        ("program", format!("signorini {}", env!("CARGO_PKG_VERSION"))),
+    ];
+    io::hdf5::create_checkpoint(&out.h5, om, &attrs)?;
+    io::hdf5::append_step(&out.h5, 1, step)?;
+    Ok(())
+}
+
+/// Probes: nearest output point to each requested point.
+pub fn probes(prep: &Prepared, u: &[[f64; 2]]) -> Vec<(String, [f64; 2], usize, [f64; 2])> {
+    let pts = &prep.model.topo.points;
+    prep.problem
+        .file
+        .output
+        .probes
+        .iter()
+        .map(|(name, x)| {
+            let p = post::nearest_point(pts, *x);
+            (name.clone(), pts[p], p, u[p])
+        })
+        .collect()
+}

@@ -1,0 +1,101 @@
+//! Post-processing: from the QP solution back to the mesh. Stresses per
+//! triangle (σ = D B u_e, §2.2), the report's τe, principal stresses,
+//! contact pressure (λ / tributary length), current gap and active flag.
+
+use crate::fem::{element, Model};
+use crate::io::{ContactGeometry, OutMesh, StepInfo, StepOutput};
+use crate::model::Problem;
+use crate::qp::QpResult;
+
+/// The output mesh of a model (geometry only; no solution).
+pub fn out_mesh(model: &Model, mesh: &crate::mesh::Mesh) -> OutMesh {
+    let t = &model.topo;
+    let contact = ContactGeometry {
+        points: t.contact.iter().map(|r| t.points[r.first]).collect(),
+        first: t.contact.iter().map(|r| r.first).collect(),
+        second: t.contact.iter().map(|r| r.second).collect(),
+        normal: t.contact.iter().map(|r| r.normal).collect(),
+        gap0: t.contact.iter().map(|r| r.gap0).collect(),
+        segments: t.contact_segments.clone(),
+        interface: t.contact.iter().map(|r| r.interface).collect(),
+        interface_names: t.interface_names.clone(),
+    };
+    OutMesh {
+        points: t.points.clone(),
+        point_tags: t.point_node.iter().map(|&v| mesh.node_tags[v]).collect(),
+        point_body: t.point_body.clone(),
+        triangles: t.triangles.clone(),
+        material: t.tri_material.clone(),
+        material_names: t.material_names.clone(),
+        plane_strain: model.plane == crate::model::Plane::Strain,
+        contact,
+    }
+}
+
+/// Fields of one solved step.
+pub fn step_output(model: &Model, problem: &Problem, res: &QpResult, time: f64) -> StepOutput {
+    let t = &model.topo;
+    let u = model.displacements(&res.x);
+    let f = &problem.file;
+    let mut stress = Vec::with_capacity(t.triangles.len());
+    for (e, tri) in t.triangles.iter().enumerate() {
+        let m = &f.materials[&t.material_names[t.tri_material[e] as usize]];
+        let d = element::d_matrix(m, f.model.plane);
+        let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
+        let ue = [u[tri[0]][0], u[tri[0]][1], u[tri[1]][0], u[tri[1]][1], u[tri[2]][0], u[tri[2]][1]];
+        stress.push(element::stress(&p, &d, m, f.model.plane, &ue));
+    }
+    let nrow = t.contact.len();
+    let mut multipliers = vec![0.0; nrow];
+    let mut active = vec![0u8; nrow];
+    for (qi, &r) in model.qp_rows.iter().enumerate() {
+        multipliers[r] = res.lambda[qi];
+        active[r] = res.active[qi] as u8;
+    }
+    let te = model.t_eff();
+    let contact_pressure = t
+        .contact
+        .iter()
+        .zip(&multipliers)
+        .map(|(r, l)| if r.trib > 0.0 { l / (te * r.trib) } else { 0.0 })
+        .collect();
+    let gap = t
+        .contact
+        .iter()
+        .map(|r| {
+            let s: f64 = r.coefficients().iter().map(|(p, c)| c[0] * u[*p][0] + c[1] * u[*p][1]).sum();
+            r.gap0 - s
+        })
+        .collect();
+    StepOutput {
+        time,
+        von_mises: stress.iter().map(element::von_mises).collect(),
+        principal: stress.iter().map(element::principal).collect(),
+        stress,
+        displacement: u,
+        multipliers,
+        contact_pressure,
+        gap,
+        active,
+        info: StepInfo {
+            converged: res.status.converged(),
+            iterations: res.iterations,
+            energy: res.energy,
+            kkt_primal: res.kkt.primal,
+            kkt_dual: res.kkt.dual,
+            kkt_complementarity: res.kkt.complementarity,
+            kkt_stationarity: res.kkt.stationarity,
+            ..Default::default()
+        },
+    }
+}
+
+/// The point nearest to (x, y).
+pub fn nearest_point(points: &[[f64; 2]], x: [f64; 2]) -> usize {
+    points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (i, (p[0] - x[0]).powi(2) + (p[1] - x[1]).powi(2)))
+        .fold((0, f64::MAX), |a, b| if b.1 < a.1 { b } else { a })
+        .0
+}

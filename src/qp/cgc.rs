@@ -1,0 +1,426 @@
+//! CGC: conjugate gradients with constraints (methods.md §4.1), preconditioned
+//! as in §4.2. f is minimised by (P)CG on faces {A_J x = g_J} of the feasible
+//! polyhedron; a face is left when a new constraint blocks the step or when
+//! constraints with negative multiplier estimates are released.
+//!
+//! Written in the original variables with z = W⁻¹r only: the projected
+//! preconditioned gradient is z = W⁻¹(∇f + A_Jᵀλ) with
+//! (A_J W⁻¹ A_Jᵀ) λ = −A_J W⁻¹ ∇f (the report's PROJECT_W), so one trait
+//! method serves every preconditioner. Works for semidefinite C: a descent
+//! direction with zero curvature that no constraint blocks proves f
+//! unbounded below (§4.1, notes).
+//!
+//! One executor iteration = one visit of a face (FACE_CG until a face minimum,
+//! a new constraint, or KMAX steps); the CG steps are the inner iterations.
+
+use super::executor::{Executor, Iterative, Step};
+use super::precond::{self, Preconditioner};
+use super::sparse::{axpy, dot, norm, norm_inf};
+use super::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status, MAXVAL};
+use std::time::Instant;
+
+/// Solve `qp` by CGC with the preconditioner of `opts`.
+pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
+    let t0 = Instant::now();
+    let pc = precond::build(opts.preconditioner, &qp.c, &qp.kernel, opts.omega)?;
+    let t_pc = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let mut state = Cgc::new(qp, pc.as_ref(), opts.tol, opts.multiple_release, None);
+    let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("cgc"));
+    let (status, iters) = exec.run(&mut state);
+    let t_it = t1.elapsed().as_secs_f64();
+    Ok(state.into_result(
+        status,
+        iters,
+        exec.log,
+        vec![("precondition".into(), t_pc), ("iterate".into(), t_it)],
+    ))
+}
+
+/// The CGC state: iterate, gradient, working set.
+pub struct Cgc<'a> {
+    qp: &'a QpProblem,
+    pc: &'a dyn Preconditioner,
+    tol: f64,
+    multiple: bool,
+    pub x: Vec<f64>,
+    grad: Vec<f64>,
+    /// s = A x
+    s: Vec<f64>,
+    in_j: Vec<bool>,
+    /// Multiplier estimates (valid on J; warm start for the inner solves).
+    lam: Vec<f64>,
+    /// Scale of the projected gradient (W⁻¹-norm of d, or of the first one).
+    ref_norm: f64,
+    /// max diag(C): scale for the zero-curvature test.
+    cmax: f64,
+    /// Every column of A occurs in at most one row and W = I: λ_J is explicit.
+    direct: bool,
+    row_norm2: Vec<f64>,
+    pub inner: usize,
+}
+
+enum FaceEnd {
+    Min,
+    NewFace,
+    Kmax,
+    Unbounded(Vec<f64>),
+}
+
+impl<'a> Cgc<'a> {
+    /// Start from `x0` (must be feasible) or from a feasible point built from g.
+    pub fn new(
+        qp: &'a QpProblem,
+        pc: &'a dyn Preconditioner,
+        tol: f64,
+        multiple: bool,
+        x0: Option<&[f64]>,
+    ) -> Cgc<'a> {
+        let n = qp.n();
+        let m = qp.m();
+        let x = match x0 {
+            Some(v) => v.to_vec(),
+            None => feasible_start(qp),
+        };
+        let cx = qp.c.mul(&x);
+        let grad: Vec<f64> = cx.iter().zip(&qp.d).map(|(a, b)| a - b).collect();
+        let s = qp.a.mul(&x);
+        let gscale = norm_inf(&qp.g).max(norm_inf(&x)).max(1e-300);
+        let in_j: Vec<bool> = (0..m).map(|i| s[i] - qp.g[i] >= -1e-12 * gscale).collect();
+        let mut seen = vec![false; n];
+        let mut disjoint = true;
+        for i in 0..m {
+            for &c in qp.a.row(i).0 {
+                if seen[c] {
+                    disjoint = false;
+                }
+                seen[c] = true;
+            }
+        }
+        let row_norm2 = (0..m).map(|i| qp.a.row(i).1.iter().map(|v| v * v).sum()).collect();
+        let mut wd = vec![0.0; n];
+        pc.apply(&qp.d, &mut wd);
+        let cmax = norm_inf(&qp.c.diag()).max(f64::MIN_POSITIVE);
+        let mut st = Cgc {
+            qp,
+            pc,
+            tol,
+            multiple,
+            x,
+            grad,
+            s,
+            in_j,
+            lam: vec![0.0; m],
+            ref_norm: dot(&qp.d, &wd).max(0.0).sqrt(),
+            cmax,
+            direct: disjoint && pc.is_identity(),
+            row_norm2,
+            inner: 0,
+        };
+        let (_, r) = st.project();
+        st.ref_norm = st.ref_norm.max(r.sqrt()).max(1e-300);
+        st
+    }
+
+    fn working_set(&self) -> Vec<usize> {
+        (0..self.qp.m()).filter(|&i| self.in_j[i]).collect()
+    }
+
+    /// PROJECT_W: λ_J for the current gradient, z = W⁻¹(∇f + A_Jᵀλ_J), r = (∇f + A_Jᵀλ)ᵀz.
+    fn project(&mut self) -> (Vec<f64>, f64) {
+        let qp = self.qp;
+        let n = qp.n();
+        let jset = self.working_set();
+        let mut gp = self.grad.clone();
+        if !jset.is_empty() {
+            if self.direct {
+                for &j in &jset {
+                    let l = -qp.a.row_dot(j, &self.grad) / self.row_norm2[j];
+                    self.lam[j] = l;
+                    let (c, v) = qp.a.row(j);
+                    for (&k, &a) in c.iter().zip(v) {
+                        gp[k] += a * l;
+                    }
+                }
+            } else {
+                let mut h = vec![0.0; n];
+                self.pc.apply(&self.grad, &mut h);
+                let rhs: Vec<f64> = jset.iter().map(|&j| -qp.a.row_dot(j, &h)).collect();
+                let mut mu: Vec<f64> = jset.iter().map(|&j| self.lam[j]).collect();
+                self.inner += schur_cg(qp, self.pc, &jset, &rhs, &mut mu);
+                for (&j, &l) in jset.iter().zip(&mu) {
+                    self.lam[j] = l;
+                    let (c, v) = qp.a.row(j);
+                    for (&k, &a) in c.iter().zip(v) {
+                        gp[k] += a * l;
+                    }
+                }
+            }
+        }
+        let mut z = vec![0.0; n];
+        self.pc.apply(&gp, &mut z);
+        let r = dot(&gp, &z);
+        (z, r)
+    }
+
+    /// Pull x back onto its face {A_J x = g_J} after rounding drift:
+    /// x ← x − W⁻¹A_Jᵀ (A_J W⁻¹ A_Jᵀ)⁻¹ (A_J x − g_J).
+    fn restore_face(&mut self) {
+        let qp = self.qp;
+        let jset = self.working_set();
+        if jset.is_empty() {
+            return;
+        }
+        let viol: Vec<f64> = jset.iter().map(|&j| self.s[j] - qp.g[j]).collect();
+        let scale = norm_inf(&self.x).max(norm_inf(&qp.g)).max(1e-300);
+        if norm_inf(&viol) <= 1e-14 * scale {
+            return;
+        }
+        let mut mu = vec![0.0; jset.len()];
+        self.inner += schur_cg(qp, self.pc, &jset, &viol, &mut mu);
+        let mut t = vec![0.0; qp.n()];
+        for (&j, &m) in jset.iter().zip(&mu) {
+            let (c, v) = qp.a.row(j);
+            for (&k, &a) in c.iter().zip(v) {
+                t[k] += a * m;
+            }
+        }
+        let mut dx = vec![0.0; qp.n()];
+        self.pc.apply(&t, &mut dx);
+        axpy(-1.0, &dx, &mut self.x);
+        self.refresh();
+    }
+
+    /// Recompute ∇f and Ax from x (no drift across faces).
+    fn refresh(&mut self) {
+        let cx = self.qp.c.mul(&self.x);
+        for ((g, c), d) in self.grad.iter_mut().zip(&cx).zip(&self.qp.d) {
+            *g = c - d;
+        }
+        self.s = self.qp.a.mul(&self.x);
+    }
+
+    /// FACE_CG (preconditioned): CG on the current face from x.
+    fn face_cg(&mut self) -> FaceEnd {
+        let qp = self.qp;
+        let n = qp.n();
+        let nj = self.in_j.iter().filter(|b| **b).count();
+        let kmax = 2 * n.saturating_sub(nj) + 10;
+        let mut p = vec![0.0; n];
+        let mut w = vec![0.0; n];
+        let mut r_old = 0.0;
+        for k in 0..kmax {
+            let (z, r) = self.project();
+            if !r.is_finite() {
+                return FaceEnd::Unbounded(vec![f64::NAN]);
+            }
+            if r.max(0.0).sqrt() <= self.tol * self.ref_norm {
+                return FaceEnd::Min;
+            }
+            if k == 0 {
+                for (pi, zi) in p.iter_mut().zip(&z) {
+                    *pi = -zi;
+                }
+            } else {
+                let beta = r / r_old;
+                for (pi, zi) in p.iter_mut().zip(&z) {
+                    *pi = -zi + beta * *pi;
+                }
+            }
+            r_old = r;
+            self.inner += 1;
+            qp.c.mul_vec(&p, &mut w);
+            let a2 = dot(&p, &w);
+            let ap = qp.a.mul(&p);
+            let pp = dot(&p, &p);
+            // (g,p) = −r; a step of length r/a2 is the exact line search.
+            let alpha = if a2 > 1e-13 * self.cmax * pp && r < a2 * MAXVAL {
+                r / a2
+            } else {
+                MAXVAL
+            };
+            let mut abar = MAXVAL;
+            let mut istar = usize::MAX;
+            for i in 0..qp.m() {
+                if !self.in_j[i] && ap[i] > 0.0 {
+                    let t = ((qp.g[i] - self.s[i]) / ap[i]).max(0.0);
+                    if t < abar {
+                        abar = t;
+                        istar = i;
+                    }
+                }
+            }
+            if istar != usize::MAX && abar < alpha {
+                axpy(abar, &p, &mut self.x);
+                axpy(abar, &w, &mut self.grad);
+                axpy(abar, &ap, &mut self.s);
+                self.in_j[istar] = true;
+                self.lam[istar] = 0.0;
+                return FaceEnd::NewFace;
+            }
+            if alpha >= MAXVAL {
+                return FaceEnd::Unbounded(p);
+            }
+            axpy(alpha, &p, &mut self.x);
+            axpy(alpha, &w, &mut self.grad);
+            axpy(alpha, &ap, &mut self.s);
+        }
+        FaceEnd::Kmax
+    }
+
+    fn record(&self, residual: f64) -> IterRecord {
+        IterRecord {
+            iter: 0,
+            residual,
+            active: self.in_j.iter().filter(|b| **b).count(),
+            inner: self.inner,
+        }
+    }
+
+    /// Package the state as a [`QpResult`] (KKT filled in by the registry).
+    pub fn into_result(
+        self,
+        status: Status,
+        iterations: usize,
+        log: Vec<IterRecord>,
+        timings: Vec<(String, f64)>,
+    ) -> QpResult {
+        let m = self.qp.m();
+        let lambda: Vec<f64> = (0..m).map(|i| if self.in_j[i] { self.lam[i] } else { 0.0 }).collect();
+        let energy = self.qp.energy(&self.x);
+        QpResult {
+            active: self.in_j.clone(),
+            x: self.x,
+            lambda,
+            status,
+            iterations,
+            inner_iterations: self.inner,
+            log,
+            timings,
+            kkt: Default::default(),
+            energy,
+        }
+    }
+}
+
+impl Iterative for Cgc<'_> {
+    fn step(&mut self) -> Step {
+        self.restore_face();
+        let (_, r) = self.project();
+        let res = r.max(0.0).sqrt() / self.ref_norm;
+        if res <= self.tol {
+            // Face minimum: λ_J are the KKT multipliers of this face.
+            let jset = self.working_set();
+            let lbar = jset.iter().fold(0.0f64, |m, &j| m.max(self.lam[j].abs()));
+            let lbar = if lbar > 0.0 { lbar } else { 1.0 };
+            let thr = -100.0 * self.tol * lbar;
+            let neg: Vec<usize> = jset.iter().copied().filter(|&j| self.lam[j] < thr).collect();
+            if neg.is_empty() {
+                return Step::Done(Status::Converged, self.record(res));
+            }
+            let worst = *neg
+                .iter()
+                .min_by(|&&a, &&b| self.lam[a].total_cmp(&self.lam[b]))
+                .unwrap_or(&neg[0]);
+            let released = if self.multiple { neg } else { vec![worst] };
+            for &j in &released {
+                self.in_j[j] = false;
+            }
+            // Multiple release is safe only if the first direction moves every
+            // released row inward; otherwise fall back to the single release.
+            if released.len() > 1 && !self.release_moves_inward(&released) {
+                for &j in &released {
+                    self.in_j[j] = true;
+                }
+                self.in_j[worst] = false;
+            }
+        }
+        match self.face_cg() {
+            FaceEnd::Unbounded(p) => Step::Done(Status::Unbounded { direction: p }, self.record(res)),
+            FaceEnd::Min | FaceEnd::NewFace | FaceEnd::Kmax => {
+                self.refresh();
+                Step::Continue(self.record(res))
+            }
+        }
+    }
+}
+
+impl Cgc<'_> {
+    /// Does the first FACE_CG direction after releasing `released` move every
+    /// released row inward? (the non-cycling condition of §4.1).
+    fn release_moves_inward(&mut self, released: &[usize]) -> bool {
+        let (z, _) = self.project();
+        let ap = self.qp.a.mul(&z); // p = −z
+        let pn = norm(&z);
+        !released.iter().any(|&j| -ap[j] > -1e-12 * pn * self.row_norm2[j].sqrt())
+    }
+}
+
+/// CG on S μ = rhs with S = A_J W⁻¹ A_Jᵀ (matrix-free), from the given μ.
+/// Returns the number of iterations.
+pub fn schur_cg(qp: &QpProblem, pc: &dyn Preconditioner, jset: &[usize], rhs: &[f64], mu: &mut [f64]) -> usize {
+    let n = qp.n();
+    let k = jset.len();
+    let mut t = vec![0.0; n];
+    let mut wt = vec![0.0; n];
+    let mut apply = |v: &[f64], out: &mut [f64]| {
+        t.iter_mut().for_each(|e| *e = 0.0);
+        for (&j, &vj) in jset.iter().zip(v) {
+            if vj != 0.0 {
+                let (c, a) = qp.a.row(j);
+                for (&col, &aa) in c.iter().zip(a) {
+                    t[col] += aa * vj;
+                }
+            }
+        }
+        pc.apply(&t, &mut wt);
+        for (o, &j) in out.iter_mut().zip(jset) {
+            *o = qp.a.row_dot(j, &wt);
+        }
+    };
+    let bnorm = norm(rhs);
+    if bnorm == 0.0 {
+        mu.iter_mut().for_each(|e| *e = 0.0);
+        return 0;
+    }
+    let mut q = vec![0.0; k];
+    apply(mu, &mut q);
+    let mut res: Vec<f64> = rhs.iter().zip(&q).map(|(b, v)| b - v).collect();
+    let mut p = res.clone();
+    let mut rr = dot(&res, &res);
+    let target = (1e-13 * bnorm).powi(2);
+    let maxit = 2 * k + 50;
+    let mut it = 0;
+    while rr > target && it < maxit {
+        apply(&p, &mut q);
+        let pq = dot(&p, &q);
+        if !(pq > 0.0) {
+            break;
+        }
+        let a = rr / pq;
+        axpy(a, &p, mu);
+        axpy(-a, &q, &mut res);
+        let rr_new = dot(&res, &res);
+        let b = rr_new / rr;
+        rr = rr_new;
+        for (pi, ri) in p.iter_mut().zip(&res) {
+            *pi = ri + b * *pi;
+        }
+        it += 1;
+    }
+    it
+}
+
+/// x⁰ = 0 when g ≥ 0 (the report's glued start); otherwise the least-norm
+/// x⁰ = Aᵀ(AAᵀ)⁻¹ min(g, 0), which satisfies Ax⁰ = min(g, 0) ≤ g.
+pub fn feasible_start(qp: &QpProblem) -> Vec<f64> {
+    let n = qp.n();
+    if qp.g.iter().all(|&v| v >= 0.0) {
+        return vec![0.0; n];
+    }
+    let all: Vec<usize> = (0..qp.m()).collect();
+    let rhs: Vec<f64> = qp.g.iter().map(|&v| v.min(0.0)).collect();
+    let mut mu = vec![0.0; qp.m()];
+    schur_cg(qp, &precond::Identity, &all, &rhs, &mut mu);
+    qp.a.mul_t(&mu)
+}

@@ -1,0 +1,199 @@
+//! Compressed sparse row matrices: C (symmetric, both triangles stored, so a
+//! row is a whole row for Gauss–Seidel) and A (rows accessed one at a time,
+//! as the report's CSR of §3).
+
+/// A real sparse matrix in CSR form with sorted, unique column indices.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Csr {
+    pub nrows: usize,
+    pub ncols: usize,
+    pub indptr: Vec<usize>,
+    pub indices: Vec<usize>,
+    pub data: Vec<f64>,
+}
+
+impl Csr {
+    pub fn zeros(nrows: usize, ncols: usize) -> Csr {
+        Csr {
+            nrows,
+            ncols,
+            indptr: vec![0; nrows + 1],
+            indices: vec![],
+            data: vec![],
+        }
+    }
+
+    /// Build from (row, col, value) triplets; duplicates are summed, exact
+    /// zeros kept (the pattern is what assembly produced).
+    pub fn from_triplets(nrows: usize, ncols: usize, trip: &[(usize, usize, f64)]) -> Csr {
+        let mut count = vec![0usize; nrows + 1];
+        for &(i, _, _) in trip {
+            count[i + 1] += 1;
+        }
+        for i in 0..nrows {
+            count[i + 1] += count[i];
+        }
+        let mut pos = count.clone();
+        let mut cols = vec![0usize; trip.len()];
+        let mut vals = vec![0f64; trip.len()];
+        for &(i, j, v) in trip {
+            cols[pos[i]] = j;
+            vals[pos[i]] = v;
+            pos[i] += 1;
+        }
+        let mut indptr = Vec::with_capacity(nrows + 1);
+        let mut indices = Vec::with_capacity(trip.len());
+        let mut data = Vec::with_capacity(trip.len());
+        indptr.push(0);
+        let mut perm: Vec<usize> = Vec::new();
+        for i in 0..nrows {
+            let (s, e) = (count[i], count[i + 1]);
+            perm.clear();
+            perm.extend(s..e);
+            perm.sort_unstable_by_key(|&k| cols[k]);
+            let mut last = usize::MAX;
+            for &k in &perm {
+                if cols[k] == last {
+                    if let Some(v) = data.last_mut() {
+                        *v += vals[k];
+                    }
+                } else {
+                    indices.push(cols[k]);
+                    data.push(vals[k]);
+                    last = cols[k];
+                }
+            }
+            indptr.push(indices.len());
+        }
+        Csr {
+            nrows,
+            ncols,
+            indptr,
+            indices,
+            data,
+        }
+    }
+
+    pub fn nnz(&self) -> usize {
+        self.data.len()
+    }
+
+    /// (column indices, values) of row `i`.
+    #[inline]
+    pub fn row(&self, i: usize) -> (&[usize], &[f64]) {
+        let (s, e) = (self.indptr[i], self.indptr[i + 1]);
+        (&self.indices[s..e], &self.data[s..e])
+    }
+
+    /// y = M x
+    pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        for (i, yi) in y.iter_mut().enumerate().take(self.nrows) {
+            let (c, v) = self.row(i);
+            *yi = c.iter().zip(v).map(|(&j, &a)| a * x[j]).sum();
+        }
+    }
+
+    pub fn mul(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; self.nrows];
+        self.mul_vec(x, &mut y);
+        y
+    }
+
+    /// y += Mᵀ u
+    pub fn mul_t_add(&self, u: &[f64], y: &mut [f64]) {
+        for (i, &ui) in u.iter().enumerate().take(self.nrows) {
+            if ui != 0.0 {
+                let (c, v) = self.row(i);
+                for (&j, &a) in c.iter().zip(v) {
+                    y[j] += a * ui;
+                }
+            }
+        }
+    }
+
+    pub fn mul_t(&self, u: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; self.ncols];
+        self.mul_t_add(u, &mut y);
+        y
+    }
+
+    /// (a_i, x)
+    #[inline]
+    pub fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
+        let (c, v) = self.row(i);
+        c.iter().zip(v).map(|(&j, &a)| a * x[j]).sum()
+    }
+
+    /// Diagonal entries (0 where absent).
+    pub fn diag(&self) -> Vec<f64> {
+        (0..self.nrows)
+            .map(|i| {
+                let (c, v) = self.row(i);
+                c.binary_search(&i).map(|k| v[k]).unwrap_or(0.0)
+            })
+            .collect()
+    }
+
+    pub fn transpose(&self) -> Csr {
+        let mut trip = Vec::with_capacity(self.nnz());
+        for i in 0..self.nrows {
+            let (c, v) = self.row(i);
+            for (&j, &a) in c.iter().zip(v) {
+                trip.push((j, i, a));
+            }
+        }
+        Csr::from_triplets(self.ncols, self.nrows, &trip)
+    }
+
+    /// Rows `rows` of the matrix, in that order.
+    pub fn select_rows(&self, rows: &[usize]) -> Csr {
+        let mut out = Csr::zeros(rows.len(), self.ncols);
+        out.indptr.clear();
+        out.indptr.push(0);
+        for &r in rows {
+            let (c, v) = self.row(r);
+            out.indices.extend_from_slice(c);
+            out.data.extend_from_slice(v);
+            out.indptr.push(out.indices.len());
+        }
+        out
+    }
+}
+
+#[inline]
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[inline]
+pub fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// y += α x
+#[inline]
+pub fn axpy(alpha: f64, x: &[f64], y: &mut [f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi += alpha * xi;
+    }
+}
+
+pub fn norm_inf(a: &[f64]) -> f64 {
+    a.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triplets_sum_duplicates_and_sort() {
+        let m = Csr::from_triplets(2, 3, &[(1, 2, 1.0), (0, 1, 2.0), (1, 0, 3.0), (1, 2, 4.0)]);
+        assert_eq!(m.indptr, vec![0, 1, 3]);
+        assert_eq!(m.indices, vec![1, 0, 2]);
+        assert_eq!(m.data, vec![2.0, 3.0, 5.0]);
+        assert_eq!(m.mul(&[1.0, 1.0, 1.0]), vec![2.0, 8.0]);
+        assert_eq!(m.mul_t(&[1.0, 2.0]), vec![6.0, 2.0, 10.0]);
+        assert_eq!(m.transpose().transpose(), m);
+    }
+}
