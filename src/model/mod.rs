@@ -345,15 +345,24 @@ impl Problem {
 
 /// One line: what is wrong, where (line:column), and the key when known.
 fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
-    let msg = e.message().trim().to_string();
+    let msg = e.message().trim().replace('\n', "; ");
     match e.span() {
         Some(span) => {
             let start = span.start.min(text.len());
             let line = text[..start].matches('\n').count() + 1;
-            let col = start - text[..start].rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
+            let line_start = text[..start].rfind('\n').map(|i| i + 1).unwrap_or(0);
+            let col = start - line_start + 1;
+            let line_text = text[line_start..].lines().next().unwrap_or("");
             let snippet: String = text[start..].lines().next().unwrap_or("").chars().take(40).collect();
             let table = enclosing_table(text, start);
-            format!("line {line}, column {col}{table}: {msg} (at `{}`)", snippet.trim())
+            // The key of a `key = value` line, when the error is in its value.
+            let key = line_text
+                .split_once('=')
+                .map(|(k, _)| k.trim())
+                .filter(|k| !k.is_empty() && !k.starts_with('[') && line_start + line_text.find('=').unwrap_or(0) < start)
+                .map(|k| format!(", key `{k}`"))
+                .unwrap_or_default();
+            format!("line {line}, column {col}{table}{key}: {msg} (at `{}`)", snippet.trim())
         }
         None => msg,
     }
