@@ -5,11 +5,11 @@
 //! a TOML problem into a [`qp::QpProblem`] (plus maps back to the nodes);
 //! `qp` solves it without knowing about meshes.
 
+pub mod cli;
 pub mod fem;
 pub mod io;
 pub mod mesh;
 pub mod model;
-pub mod qp;
-pub mod cli;
 pub mod pipeline;
 pub mod post;
+pub mod qp;

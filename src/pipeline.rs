@@ -63,18 +63,40 @@ pub struct SolverChoice {
     pub release: Option<String>,
 }
 
-pub fn options(problem: &Problem, flags: &SolverChoice) -> Result<(String, SolveOptions), InputError> {
+pub fn options(
+    problem: &Problem,
+    flags: &SolverChoice,
+) -> Result<(String, SolveOptions), InputError> {
     let s = &problem.file.solver;
-    let bad = |msg: String| InputError::Solver { path: problem.path.clone(), msg };
-    let method = flags.method.clone().or(s.method.clone()).unwrap_or_else(|| "cgc".into());
+    let bad = |msg: String| InputError::Solver {
+        path: problem.path.clone(),
+        msg,
+    };
+    let method = flags
+        .method
+        .clone()
+        .or(s.method.clone())
+        .unwrap_or_else(|| "cgc".into());
     if registry::find(&method).is_none() {
-        return Err(bad(format!("unknown method \"{method}\"; known: {}", registry::names().join(", "))));
+        return Err(bad(format!(
+            "unknown method \"{method}\"; known: {}",
+            registry::names().join(", ")
+        )));
     }
-    let pc_name = flags.preconditioner.clone().or(s.preconditioner.clone()).unwrap_or_else(|| "cholesky".into());
+    let pc_name = flags
+        .preconditioner
+        .clone()
+        .or(s.preconditioner.clone())
+        .unwrap_or_else(|| "cholesky".into());
     let preconditioner = PrecondKind::parse(&pc_name).ok_or_else(|| {
-        bad(format!("unknown preconditioner \"{pc_name}\"; known: none, jacobi, ssor, ic0, mic0, cholesky"))
+        bad(format!(
+            "unknown preconditioner \"{pc_name}\"; known: none, jacobi, ssor, ic0, mic0, cholesky"
+        ))
     })?;
-    let mut o = SolveOptions { preconditioner, ..Default::default() };
+    let mut o = SolveOptions {
+        preconditioner,
+        ..Default::default()
+    };
     if let Some(t) = flags.tol.or(s.tol) {
         if !(t > 0.0 && t < 1.0) {
             return Err(bad(format!("tol = {t} must lie in (0, 1)")));
@@ -97,7 +119,11 @@ pub fn options(problem: &Problem, flags: &SolverChoice) -> Result<(String, Solve
         o.multiple_release = match r.as_str() {
             "multiple" => true,
             "single" => false,
-            _ => return Err(bad(format!("release = \"{r}\": expected \"single\" or \"multiple\""))),
+            _ => {
+                return Err(bad(format!(
+                    "release = \"{r}\": expected \"single\" or \"multiple\""
+                )))
+            }
         };
     }
     if let Some(p) = s.penalty {
@@ -117,8 +143,12 @@ pub fn options(problem: &Problem, flags: &SolverChoice) -> Result<(String, Solve
 
 /// Run the method; an unbounded problem is bad input naming the bodies.
 pub fn solve(prep: &Prepared, method: &str, opts: &SolveOptions) -> Result<QpResult, InputError> {
-    let bad = |msg: String| InputError::Solver { path: prep.problem.path.clone(), msg };
-    let res = registry::solve(method, &prep.model.qp, opts).map_err(|e| bad(format!("{method}: {e}")))?;
+    let bad = |msg: String| InputError::Solver {
+        path: prep.problem.path.clone(),
+        msg,
+    };
+    let res =
+        registry::solve(method, &prep.model.qp, opts).map_err(|e| bad(format!("{method}: {e}")))?;
     if let Status::Unbounded { direction } = &res.status {
         let u = prep.model.displacements(direction);
         // The bodies that the direction moves (relative to the largest motion).
@@ -174,7 +204,10 @@ pub fn write_fields(
     let attrs = [
         ("problem", prep.problem.name.clone()),
         ("problem_toml", prep.problem.text.clone()),
-        ("program", format!("signorini {}", env!("CARGO_PKG_VERSION"))),
+        (
+            "program",
+            format!("signorini {}", env!("CARGO_PKG_VERSION")),
+        ),
     ];
     io::hdf5::create_checkpoint(&out.h5, om, &attrs)?;
     io::hdf5::append_step(&out.h5, 1, step)?;

@@ -9,7 +9,10 @@ fn root() -> PathBuf {
 }
 
 fn signorini(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_signorini")).args(args).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .args(args)
+        .output()
+        .unwrap();
     (
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -18,30 +21,53 @@ fn signorini(args: &[&str]) -> (i32, String, String) {
 }
 
 fn example(name: &str) -> String {
-    root().join("meshes").join(format!("{name}.toml")).display().to_string()
+    root()
+        .join("meshes")
+        .join(format!("{name}.toml"))
+        .display()
+        .to_string()
 }
 
 #[test]
 fn solve_writes_all_four_outputs_with_the_contract_arrays() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().to_str().unwrap();
-    let (code, stdout, stderr) = signorini(&["solve", &example("two_blocks_eccentric"), "--out", out]);
+    let (code, stdout, stderr) =
+        signorini(&["solve", &example("two_blocks_eccentric"), "--out", out]);
     assert_eq!(code, 0, "{stdout}\n{stderr}");
     assert!(stdout.contains("certified"), "{stdout}");
     let base = dir.path().join("two_blocks_eccentric");
     // VTU: point and cell arrays of the contract.
     let v = signorini::io::vtu::read_vtu_arrays(&base.with_extension("vtu")).unwrap();
-    let names: Vec<&str> = v.point_data.iter().chain(&v.cell_data).map(|a| a.name.as_str()).collect();
-    for n in ["displacement", "body", "stress", "von_mises", "principal_stress", "material"] {
+    let names: Vec<&str> = v
+        .point_data
+        .iter()
+        .chain(&v.cell_data)
+        .map(|a| a.name.as_str())
+        .collect();
+    for n in [
+        "displacement",
+        "body",
+        "stress",
+        "von_mises",
+        "principal_stress",
+        "material",
+    ] {
         assert!(names.contains(&n), "{n} missing in {names:?}");
     }
     let disp = v.point_array("displacement").unwrap();
     assert_eq!(disp.num_comp, 3);
     assert_eq!(disp.values.len(), 3 * v.num_points);
-    assert_eq!(v.cell_array("stress").unwrap().num_comp, 4, "plane strain writes σzz");
+    assert_eq!(
+        v.cell_array("stress").unwrap().num_comp,
+        4,
+        "plane strain writes σzz"
+    );
     assert!(disp.values.iter().all(|x| x.is_finite()));
     // Contact VTU.
-    let c = signorini::io::vtu::read_vtu_arrays(&dir.path().join("two_blocks_eccentric_contact.vtu")).unwrap();
+    let c =
+        signorini::io::vtu::read_vtu_arrays(&dir.path().join("two_blocks_eccentric_contact.vtu"))
+            .unwrap();
     for n in ["contact_pressure", "gap", "active", "normal"] {
         assert!(c.point_array(n).is_some(), "{n} missing in contact VTU");
     }
@@ -53,17 +79,34 @@ fn solve_writes_all_four_outputs_with_the_contract_arrays() {
     assert_eq!(ck.steps[0].displacement.len(), v.num_points);
     assert!(ck.steps[0].info.converged);
     assert_eq!(ck.steps[0].info.method, "cgc");
-    assert!(ck.steps[0].active.iter().any(|a| *a == 0) && ck.steps[0].active.iter().any(|a| *a == 1));
+    assert!(
+        ck.steps[0].active.iter().any(|a| *a == 0) && ck.steps[0].active.iter().any(|a| *a == 1)
+    );
     // The VTU displacement equals the checkpoint's.
     for (i, u) in ck.steps[0].displacement.iter().enumerate() {
         assert_eq!(disp.values[3 * i], u[0]);
         assert_eq!(disp.values[3 * i + 1], u[1]);
     }
     // JSON summary schema of the contract.
-    let j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(base.with_extension("json")).unwrap()).unwrap();
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(base.with_extension("json")).unwrap())
+            .unwrap();
     for k in [
-        "problem", "method", "preconditioner", "converged", "iterations", "nodes", "triangles", "dofs", "constraints",
-        "active", "energy", "kkt", "contact", "probes", "timings_s",
+        "problem",
+        "method",
+        "preconditioner",
+        "converged",
+        "iterations",
+        "nodes",
+        "triangles",
+        "dofs",
+        "constraints",
+        "active",
+        "energy",
+        "kkt",
+        "contact",
+        "probes",
+        "timings_s",
     ] {
         assert!(j.get(k).is_some(), "JSON lacks {k}");
     }
@@ -88,13 +131,24 @@ fn solve_writes_all_four_outputs_with_the_contract_arrays() {
 fn not_converged_gives_exit_3_and_flagged_outputs() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().to_str().unwrap();
-    let (code, _, stderr) = signorini(&["solve", &example("two_blocks_eccentric"), "--out", out, "--max-iter", "1", "--quiet"]);
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        &example("two_blocks_eccentric"),
+        "--out",
+        out,
+        "--max-iter",
+        "1",
+        "--quiet",
+    ]);
     assert_eq!(code, 3, "{stderr}");
     assert!(stderr.contains("did not converge"), "{stderr}");
-    let j: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("two_blocks_eccentric.json")).unwrap()).unwrap();
+    let j: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("two_blocks_eccentric.json")).unwrap(),
+    )
+    .unwrap();
     assert_eq!(j["converged"], false);
-    let ck = signorini::io::hdf5::read_checkpoint(&dir.path().join("two_blocks_eccentric.h5")).unwrap();
+    let ck =
+        signorini::io::hdf5::read_checkpoint(&dir.path().join("two_blocks_eccentric.h5")).unwrap();
     assert!(!ck.steps[0].info.converged);
 }
 
@@ -102,18 +156,32 @@ fn not_converged_gives_exit_3_and_flagged_outputs() {
 /// and words that the error line must contain.
 fn bad(toml: &str, words: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
-    let mesh = root().join("tests/data/msh/square_ascii41.msh").display().to_string();
+    let mesh = root()
+        .join("tests/data/msh/square_ascii41.msh")
+        .display()
+        .to_string();
     let p = dir.path().join("bad.toml");
     std::fs::write(&p, toml.replace("MESH", &mesh)).unwrap();
     let out = dir.path().join("out");
-    let (code, _, stderr) = signorini(&["solve", p.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"]);
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
     assert_eq!(code, 2, "expected exit 2 for {words:?}, stderr: {stderr}");
     for w in words {
         assert!(stderr.contains(w), "message lacks {w:?}: {stderr}");
     }
     assert!(!stderr.contains("panicked"), "{stderr}");
-    let written: Vec<_> = std::fs::read_dir(&out).map(|d| d.filter_map(|e| e.ok()).collect()).unwrap_or_default();
-    assert!(written.is_empty(), "no output may be written on bad input: {written:?}");
+    let written: Vec<_> = std::fs::read_dir(&out)
+        .map(|d| d.filter_map(|e| e.ok()).collect())
+        .unwrap_or_default();
+    assert!(
+        written.is_empty(),
+        "no output may be written on bad input: {written:?}"
+    );
 }
 
 const GOOD: &str = "[mesh]\nfile = \"MESH\"\n[materials.body_left]\nE = 1e9\nnu = 0.3\n[materials.body_right]\nE = 1e9\nnu = 0.3\n[[dirichlet]]\non = \"bottom\"\nu = [0.0, 0.0]\n[[traction]]\non = \"top\"\npn = -1e6\n[[contact]]\non = \"interface\"\n";
@@ -121,82 +189,144 @@ const GOOD: &str = "[mesh]\nfile = \"MESH\"\n[materials.body_left]\nE = 1e9\nnu 
 #[test]
 fn good_square_problem_solves() {
     let dir = tempfile::tempdir().unwrap();
-    let mesh = root().join("tests/data/msh/square_ascii41.msh").display().to_string();
+    let mesh = root()
+        .join("tests/data/msh/square_ascii41.msh")
+        .display()
+        .to_string();
     let p = dir.path().join("good.toml");
     std::fs::write(&p, GOOD.replace("MESH", &mesh)).unwrap();
-    let (code, _, stderr) = signorini(&["solve", p.to_str().unwrap(), "--out", dir.path().join("o").to_str().unwrap(), "--quiet"]);
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--out",
+        dir.path().join("o").to_str().unwrap(),
+        "--quiet",
+    ]);
     assert_eq!(code, 0, "{stderr}");
 }
 
 #[test]
 fn bad_unknown_key_names_key_and_table() {
-    bad(&GOOD.replace("nu = 0.3\n[materials.body_right]", "nu = 0.3\nyoung = 3\n[materials.body_right]"), &["bad.toml", "young", "materials.body_left"]);
+    bad(
+        &GOOD.replace(
+            "nu = 0.3\n[materials.body_right]",
+            "nu = 0.3\nyoung = 3\n[materials.body_right]",
+        ),
+        &["bad.toml", "young", "materials.body_left"],
+    );
 }
 
 #[test]
 fn bad_poisson_ratio() {
-    bad(&GOOD.replacen("nu = 0.3", "nu = 0.5", 1), &["nu", "0.5", "body_left"]);
-    bad(&GOOD.replacen("nu = 0.3", "nu = -1.0", 1), &["nu", "(-1, 0.5)"]);
+    bad(
+        &GOOD.replacen("nu = 0.3", "nu = 0.5", 1),
+        &["nu", "0.5", "body_left"],
+    );
+    bad(
+        &GOOD.replacen("nu = 0.3", "nu = -1.0", 1),
+        &["nu", "(-1, 0.5)"],
+    );
 }
 
 #[test]
 fn bad_young_modulus_and_density() {
     bad(&GOOD.replacen("E = 1e9", "E = 0.0", 1), &["E", "positive"]);
-    bad(&GOOD.replacen("nu = 0.3", "nu = 0.3\nrho = -1.0", 1), &["rho", "non-negative"]);
+    bad(
+        &GOOD.replacen("nu = 0.3", "nu = 0.3\nrho = -1.0", 1),
+        &["rho", "non-negative"],
+    );
 }
 
 #[test]
 fn bad_unknown_physical_name() {
-    bad(&GOOD.replace("on = \"top\"", "on = \"roof\""), &["roof", "no physical group", "square_ascii41.msh"]);
+    bad(
+        &GOOD.replace("on = \"top\"", "on = \"roof\""),
+        &["roof", "no physical group", "square_ascii41.msh"],
+    );
 }
 
 #[test]
 fn bad_missing_material() {
-    bad(&GOOD.replace("[materials.body_right]\nE = 1e9\nnu = 0.3\n", ""), &["body_right", "no material"]);
+    bad(
+        &GOOD.replace("[materials.body_right]\nE = 1e9\nnu = 0.3\n", ""),
+        &["body_right", "no material"],
+    );
 }
 
 #[test]
 fn bad_material_for_missing_surface() {
-    bad(&GOOD.replace("[materials.body_right]", "[materials.granite]"), &["granite", "no physical surface"]);
+    bad(
+        &GOOD.replace("[materials.body_right]", "[materials.granite]"),
+        &["granite", "no physical surface"],
+    );
 }
 
 #[test]
 fn bad_contact_curve_on_boundary() {
-    bad(&GOOD.replace("on = \"interface\"", "on = \"left\""), &["left", "not between two bodies"]);
+    bad(
+        &GOOD.replace("on = \"interface\"", "on = \"left\""),
+        &["left", "not between two bodies"],
+    );
 }
 
 #[test]
 fn bad_surface_used_as_dirichlet_curve() {
-    bad(&GOOD.replace("on = \"bottom\"", "on = \"body_left\""), &["body_left", "surface"]);
+    bad(
+        &GOOD.replace("on = \"bottom\"", "on = \"body_left\""),
+        &["body_left", "surface"],
+    );
 }
 
 #[test]
 fn bad_toml_syntax_gives_line_and_column() {
-    bad(&GOOD.replace("nu = 0.3\n[materials.body_right]", "nu = = 0.3\n[materials.body_right]"), &["bad.toml", "line 5"]);
+    bad(
+        &GOOD.replace(
+            "nu = 0.3\n[materials.body_right]",
+            "nu = = 0.3\n[materials.body_right]",
+        ),
+        &["bad.toml", "line 5"],
+    );
 }
 
 #[test]
 fn bad_wrong_type() {
-    bad(&GOOD.replacen("E = 1e9", "E = \"stiff\"", 1), &["key `E`", "line 4", "materials.body_left"]);
+    bad(
+        &GOOD.replacen("E = 1e9", "E = \"stiff\"", 1),
+        &["key `E`", "line 4", "materials.body_left"],
+    );
 }
 
 #[test]
 fn bad_missing_mesh_file() {
-    bad(&GOOD.replace("MESH", "/nonexistent/none.msh"), &["none.msh", "cannot read"]);
+    bad(
+        &GOOD.replace("MESH", "/nonexistent/none.msh"),
+        &["none.msh", "cannot read"],
+    );
 }
 
 #[test]
 fn bad_unknown_method_and_parameters() {
-    bad(&format!("{GOOD}[solver]\nmethod = \"magic\"\n"), &["magic", "unknown method"]);
+    bad(
+        &format!("{GOOD}[solver]\nmethod = \"magic\"\n"),
+        &["magic", "unknown method"],
+    );
     bad(&format!("{GOOD}[solver]\nomega = 2.5\n"), &["omega"]);
     bad(&format!("{GOOD}[solver]\nrho = -1.0\n"), &["rho"]);
-    bad(&format!("{GOOD}[solver]\npreconditioner = \"amg\"\n"), &["amg", "preconditioner"]);
+    bad(
+        &format!("{GOOD}[solver]\npreconditioner = \"amg\"\n"),
+        &["amg", "preconditioner"],
+    );
 }
 
 #[test]
 fn bad_body_without_support() {
     // No Dirichlet at all and no contact: both halves are free.
-    bad(&GOOD.replace("[[dirichlet]]\non = \"bottom\"\nu = [0.0, 0.0]\n", "").replace("[[contact]]\non = \"interface\"\n", ""), &["not supported", "body 0"]);
+    bad(
+        &GOOD
+            .replace("[[dirichlet]]\non = \"bottom\"\nu = [0.0, 0.0]\n", "")
+            .replace("[[contact]]\non = \"interface\"\n", ""),
+        &["not supported", "body 0"],
+    );
 }
 
 #[test]
@@ -219,7 +349,13 @@ fn bad_output_directory_not_writable() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("plainfile");
     std::fs::write(&file, "x").unwrap();
-    let (code, _, stderr) = signorini(&["solve", &example("column"), "--out", file.join("sub").to_str().unwrap(), "--quiet"]);
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        &example("column"),
+        "--out",
+        file.join("sub").to_str().unwrap(),
+        "--quiet",
+    ]);
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("plainfile"), "{stderr}");
 }
@@ -233,8 +369,15 @@ fn truncated_mesh_is_bad_input() {
     std::fs::write(&m, cut).unwrap();
     let p = dir.path().join("cut.toml");
     std::fs::write(&p, GOOD.replace("MESH", m.to_str().unwrap())).unwrap();
-    let (code, _, stderr) = signorini(&["solve", p.to_str().unwrap(), "--out", dir.path().join("o").to_str().unwrap()]);
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--out",
+        dir.path().join("o").to_str().unwrap(),
+    ]);
     assert_eq!(code, 2, "{stderr}");
-    assert!(stderr.contains("cut.msh") && stderr.contains("$Elements"), "{stderr}");
+    assert!(
+        stderr.contains("cut.msh") && stderr.contains("$Elements"),
+        "{stderr}"
+    );
 }
-

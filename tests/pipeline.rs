@@ -13,12 +13,20 @@ fn solve_file(path: &Path, choice: &SolverChoice) -> (Prepared, QpResult) {
     let prep = pipeline::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
     let (method, opts) = pipeline::options(&prep.problem, choice).unwrap();
     let res = pipeline::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
-    assert!(res.status.converged(), "{}: {:?}", path.display(), res.status);
+    assert!(
+        res.status.converged(),
+        "{}: {:?}",
+        path.display(),
+        res.status
+    );
     (prep, res)
 }
 
 fn solve_example(name: &str) -> (Prepared, QpResult) {
-    solve_file(&root().join("meshes").join(format!("{name}.toml")), &SolverChoice::default())
+    solve_file(
+        &root().join("meshes").join(format!("{name}.toml")),
+        &SolverChoice::default(),
+    )
 }
 
 /// Write a TOML next to nothing (mesh path absolute) in a temp dir.
@@ -29,7 +37,11 @@ fn temp_toml(dir: &Path, name: &str, text: &str) -> PathBuf {
 }
 
 fn square_mesh(kind: &str) -> String {
-    root().join("tests/data/msh").join(format!("square_{kind}.msh")).display().to_string()
+    root()
+        .join("tests/data/msh")
+        .join(format!("square_{kind}.msh"))
+        .display()
+        .to_string()
 }
 
 /// Uniaxial stress patch: left slip (ux = 0), bottom slip (uy = 0), traction
@@ -39,7 +51,11 @@ fn square_mesh(kind: &str) -> String {
 fn patch(with_contact: bool) {
     let dir = tempfile::tempdir().unwrap();
     let (e, nu, s) = (7.0e10, 0.28, -3.0e7);
-    let contact = if with_contact { "[[contact]]\non = \"interface\"\n" } else { "" };
+    let contact = if with_contact {
+        "[[contact]]\non = \"interface\"\n"
+    } else {
+        ""
+    };
     let text = format!(
         r#"
 [mesh]
@@ -72,16 +88,29 @@ tol = 1e-12
     for (i, x) in prep.model.topo.points.iter().enumerate() {
         let exact = [s * x[0] / e, -nu * s * x[1] / e];
         for k in 0..2 {
-            assert!((u[i][k] - exact[k]).abs() < 1e-12 * (s / e).abs(), "point {i}: {:?} vs {:?}", u[i], exact);
+            assert!(
+                (u[i][k] - exact[k]).abs() < 1e-12 * (s / e).abs(),
+                "point {i}: {:?} vs {:?}",
+                u[i],
+                exact
+            );
         }
     }
     let step = signorini::post::step_output(&prep.model, &prep.problem, &res, 1.0);
     for st in &step.stress {
-        assert!((st[0] - s).abs() < 1e-9 * s.abs() && st[1].abs() < 1e-9 * s.abs() && st[2].abs() < 1e-9 * s.abs(), "{st:?}");
+        assert!(
+            (st[0] - s).abs() < 1e-9 * s.abs()
+                && st[1].abs() < 1e-9 * s.abs()
+                && st[2].abs() < 1e-9 * s.abs(),
+            "{st:?}"
+        );
     }
     if with_contact {
         assert_eq!(prep.model.topo.nbodies, 2);
-        assert!(res.active.iter().all(|a| *a), "the compressed interface must stay closed");
+        assert!(
+            res.active.iter().all(|a| *a),
+            "the compressed interface must stay closed"
+        );
         // Contact pressure = −σ on the vertical interface (σxx = s < 0).
         for p in &step.contact_pressure {
             assert!((p + s).abs() < 1e-8 * s.abs(), "pressure {p} vs {}", -s);
@@ -129,11 +158,18 @@ fn two_blocks_in_full_contact_equal_one_glued_body() {
     assert!(ra.active.iter().all(|a| *a));
     let ua = pa.model.displacements(&ra.x);
     let ub = pb.model.displacements(&rb.x);
-    let scale = ub.iter().fold(0.0f64, |m, v| m.max(v[0].abs()).max(v[1].abs()));
+    let scale = ub
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v[0].abs()).max(v[1].abs()));
     for (i, &node) in pa.model.topo.point_node.iter().enumerate() {
         let j = pb.model.topo.point(node, 0).unwrap();
         for k in 0..2 {
-            assert!((ua[i][k] - ub[j][k]).abs() <= 1e-9 * scale, "node {node}: {:?} vs {:?}", ua[i], ub[j]);
+            assert!(
+                (ua[i][k] - ub[j][k]).abs() <= 1e-9 * scale,
+                "node {node}: {:?} vs {:?}",
+                ua[i],
+                ub[j]
+            );
         }
     }
 }
@@ -144,7 +180,11 @@ fn eccentric_load_opens_part_of_the_interface_with_tight_kkt() {
     let k = res.kkt;
     assert!(k.within(1e-8), "{k:?}");
     let na = res.active.iter().filter(|a| **a).count();
-    assert!(na > 0 && na < res.active.len(), "partly open: {na} of {}", res.active.len());
+    assert!(
+        na > 0 && na < res.active.len(),
+        "partly open: {na} of {}",
+        res.active.len()
+    );
     let step = signorini::post::step_output(&prep.model, &prep.problem, &res, 1.0);
     let gmax = step.gap.iter().fold(0.0f64, |m, g| m.max(*g));
     for (i, (&l, &g)) in res.lambda.iter().zip(&step.gap).enumerate() {
@@ -153,21 +193,42 @@ fn eccentric_load_opens_part_of_the_interface_with_tight_kkt() {
     }
     // Opening on the left (unloaded) side: the open rows lie left of the closed ones.
     let rows = &prep.model.topo.contact;
-    let open_x: Vec<f64> = rows.iter().zip(&step.active).filter(|(_, a)| **a == 0).map(|(r, _)| prep.model.topo.points[r.first][0]).collect();
-    let closed_x: Vec<f64> = rows.iter().zip(&step.active).filter(|(_, a)| **a == 1).map(|(r, _)| prep.model.topo.points[r.first][0]).collect();
+    let open_x: Vec<f64> = rows
+        .iter()
+        .zip(&step.active)
+        .filter(|(_, a)| **a == 0)
+        .map(|(r, _)| prep.model.topo.points[r.first][0])
+        .collect();
+    let closed_x: Vec<f64> = rows
+        .iter()
+        .zip(&step.active)
+        .filter(|(_, a)| **a == 1)
+        .map(|(r, _)| prep.model.topo.points[r.first][0])
+        .collect();
     let max_open = open_x.iter().fold(f64::MIN, |m, v| m.max(*v));
     let min_closed = closed_x.iter().fold(f64::MAX, |m, v| m.min(*v));
-    assert!(max_open < min_closed + 1e-12, "open up to x = {max_open}, closed from x = {min_closed}");
+    assert!(
+        max_open < min_closed + 1e-12,
+        "open up to x = {max_open}, closed from x = {min_closed}"
+    );
 }
 
 #[test]
 fn floating_block_is_in_equilibrium_through_contact() {
     let (prep, res) = solve_example("floating_block");
-    assert!(!prep.model.qp.kernel.is_empty(), "the block must be semicoercive");
+    assert!(
+        !prep.model.qp.kernel.is_empty(),
+        "the block must be semicoercive"
+    );
     assert!(res.kkt.within(1e-8), "{:?}", res.kkt);
     // The body held only by contact: vertical contact force = its weight + top load.
     let t = &prep.model.topo;
-    let fy: f64 = t.contact.iter().zip(&res.lambda).map(|(r, l)| l * r.normal[1].abs()).sum();
+    let fy: f64 = t
+        .contact
+        .iter()
+        .zip(&res.lambda)
+        .map(|(r, l)| l * r.normal[1].abs())
+        .sum();
     let f = &prep.problem.file;
     let mut weight = 0.0;
     for (e, tri) in t.triangles.iter().enumerate() {
@@ -191,7 +252,10 @@ fn floating_block_is_in_equilibrium_through_contact() {
         -z.iter().zip(&qp.d).map(|(a, b)| a * b).sum::<f64>()
     };
     assert!(weight > 0.0);
-    assert!((fy - d_sum).abs() < 1e-8 * d_sum, "contact force {fy} vs load {d_sum}");
+    assert!(
+        (fy - d_sum).abs() < 1e-8 * d_sum,
+        "contact force {fy} vs load {d_sum}"
+    );
 }
 
 #[test]
@@ -207,7 +271,13 @@ fn hertz_contact_width_and_peak_pressure() {
     let a = (4.0 * f * r / (std::f64::consts::PI * estar)).sqrt();
     let p0 = 2.0 * f / (std::f64::consts::PI * a);
     let t = &prep.model.topo;
-    let xs: Vec<f64> = t.contact.iter().zip(&step.active).filter(|(_, a)| **a == 1).map(|(r, _)| t.points[r.first][0]).collect();
+    let xs: Vec<f64> = t
+        .contact
+        .iter()
+        .zip(&step.active)
+        .filter(|(_, a)| **a == 1)
+        .map(|(r, _)| t.points[r.first][0])
+        .collect();
     let a_num = xs.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let pmax = step.contact_pressure.iter().fold(0.0f64, |m, p| m.max(*p));
     eprintln!("hertz: a = {a_num:.4} (analytic {a:.4}), p0 = {pmax:.4e} (analytic {p0:.4e})");
@@ -219,7 +289,10 @@ fn hertz_contact_width_and_peak_pressure() {
         let x = t.points[row.first][0].abs();
         if x < 0.7 * a {
             let ph = p0 * (1.0 - x * x / (a * a)).sqrt();
-            assert!((p - ph).abs() < 0.05 * p0, "x = {x}: p = {p:.4e}, Hertz {ph:.4e}");
+            assert!(
+                (p - ph).abs() < 0.05 * p0,
+                "x = {x}: p = {p:.4e}, Hertz {ph:.4e}"
+            );
         }
     }
 }

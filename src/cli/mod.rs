@@ -9,7 +9,11 @@ use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
-#[command(name = "signorini", version, about = "Frictionless multibody contact in 2D elasticity (P1 FEM) with a choice of QP methods")]
+#[command(
+    name = "signorini",
+    version,
+    about = "Frictionless multibody contact in 2D elasticity (P1 FEM) with a choice of QP methods"
+)]
 pub struct Cli {
     /// Diagnostics level: error, warn, info, debug, trace.
     #[arg(long, global = true, default_value = "warn")]
@@ -76,15 +80,25 @@ pub struct SolveArgs {
 
 /// Run the CLI; returns the process exit code.
 pub fn run(cli: Cli) -> i32 {
-    let level = if cli.quiet { "error" } else { cli.log_level.as_str() };
-    let _ = env_logger::Builder::new().parse_filters(level).format_timestamp(None).try_init();
+    let level = if cli.quiet {
+        "error"
+    } else {
+        cli.log_level.as_str()
+    };
+    let _ = env_logger::Builder::new()
+        .parse_filters(level)
+        .format_timestamp(None)
+        .try_init();
     match cli.command {
         Command::Solve(a) => solve::run(&a, cli.quiet),
         Command::Methods => {
             for m in crate::qp::registry::METHODS {
                 println!("{:<10} {}", m.name, m.summary);
             }
-            let pcs: Vec<&str> = crate::qp::precond::PrecondKind::ALL.iter().map(|k| k.name()).collect();
+            let pcs: Vec<&str> = crate::qp::precond::PrecondKind::ALL
+                .iter()
+                .map(|k| k.name())
+                .collect();
             println!("preconditioners (cgc): {}", pcs.join(", "));
             0
         }

@@ -41,7 +41,10 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         .unwrap_or_else(|| PathBuf::from("out"));
     // Fail on an unwritable output directory before spending time solving.
     if let Err(e) = std::fs::create_dir_all(&dir) {
-        eprintln!("error: {}: cannot create output directory: {e}", dir.display());
+        eprintln!(
+            "error: {}: cannot create output directory: {e}",
+            dir.display()
+        );
         return EXIT_BAD_INPUT;
     }
     let t_solve0 = Instant::now();
@@ -74,7 +77,16 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         write: t_write_fields,
         total: t0.elapsed().as_secs_f64(),
     };
-    let summary = summary_json(&prep, &res, &method, &step.info.preconditioner, &step, &timings, certified, a.solver.kkt_target);
+    let summary = summary_json(
+        &prep,
+        &res,
+        &method,
+        &step.info.preconditioner,
+        &step,
+        &timings,
+        certified,
+        a.solver.kkt_target,
+    );
     let text = match serde_json::to_string_pretty(&summary) {
         Ok(t) => t,
         Err(e) => {
@@ -87,7 +99,16 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         return EXIT_BAD_INPUT;
     }
     if !quiet {
-        print_report(&prep, &res, &method, &step, &summary, &timings, &out, a.solver.kkt_target);
+        print_report(
+            &prep,
+            &res,
+            &method,
+            &step,
+            &summary,
+            &timings,
+            &out,
+            a.solver.kkt_target,
+        );
     }
     if !res.status.converged() {
         eprintln!(
@@ -198,7 +219,12 @@ fn print_report(
     target: f64,
 ) {
     let m = &prep.model;
-    println!("signorini {} — {} ({})", env!("CARGO_PKG_VERSION"), prep.problem.name, prep.problem.path.display());
+    println!(
+        "signorini {} — {} ({})",
+        env!("CARGO_PKG_VERSION"),
+        prep.problem.name,
+        prep.problem.path.display()
+    );
     let floating: Vec<String> = {
         let mut b: Vec<u32> = m.kernel_body.clone();
         b.dedup();
@@ -213,11 +239,22 @@ fn print_report(
         if floating.is_empty() {
             String::new()
         } else {
-            format!("; semicoercive: body {} ({} rigid modes)", floating.join(", "), m.qp.kernel.len())
+            format!(
+                "; semicoercive: body {} ({} rigid modes)",
+                floating.join(", "),
+                m.qp.kernel.len()
+            )
         }
     );
-    println!("problem     {} DOFs, {} contact constraints", m.qp.n(), m.qp.m());
-    println!("method      {method} (preconditioner {})", step.info.preconditioner);
+    println!(
+        "problem     {} DOFs, {} contact constraints",
+        m.qp.n(),
+        m.qp.m()
+    );
+    println!(
+        "method      {method} (preconditioner {})",
+        step.info.preconditioner
+    );
     println!(
         "status      {} after {} iterations ({} inner)",
         res.status.describe(),
@@ -231,20 +268,39 @@ fn print_report(
         k.dual,
         k.complementarity,
         k.stationarity,
-        if k.within(target) { format!("certified (≤ {target:.0e})") } else { format!("NOT certified (target {target:.0e})") }
+        if k.within(target) {
+            format!("certified (≤ {target:.0e})")
+        } else {
+            format!("NOT certified (target {target:.0e})")
+        }
     );
     println!("energy      {:.6e}", res.energy);
     println!(
         "contact     {} active of {}, max pressure {:.4e}, total force {:.4e}",
-        summary["active"], m.qp.m(), summary["contact"]["max_pressure"].as_f64().unwrap_or(0.0), summary["contact"]["total_force"].as_f64().unwrap_or(0.0)
+        summary["active"],
+        m.qp.m(),
+        summary["contact"]["max_pressure"].as_f64().unwrap_or(0.0),
+        summary["contact"]["total_force"].as_f64().unwrap_or(0.0)
     );
     for (name, x, node, u) in pipeline::probes(prep, &step.displacement) {
-        println!("probe {name:<5} ({:.6}, {:.6}) node {node}: u = ({:.6e}, {:.6e})", x[0], x[1], u[0], u[1]);
+        println!(
+            "probe {name:<5} ({:.6}, {:.6}) node {node}: u = ({:.6e}, {:.6e})",
+            x[0], x[1], u[0], u[1]
+        );
     }
-    let phases: Vec<String> = res.timings.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
+    let phases: Vec<String> = res
+        .timings
+        .iter()
+        .map(|(k, v)| format!("{k} {v:.3}"))
+        .collect();
     println!(
         "time [s]    read {:.3}  assemble {:.3}  solve {:.3} ({})  write {:.3}  total {:.3}",
-        t.read, t.assemble, t.solve, phases.join(", "), t.write, t.total
+        t.read,
+        t.assemble,
+        t.solve,
+        phases.join(", "),
+        t.write,
+        t.total
     );
     println!("outputs     {}", out.vtu.display());
     println!("            {}", out.contact_vtu.display());

@@ -86,56 +86,59 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     // --- conditions per point
     let mut conds: Vec<Vec<Cond>> = vec![vec![]; np];
     // Points of a group: for a curve, the copies owned by each segment's body.
-    let group_points = |name: &str, what: &str| -> Result<Vec<(usize, usize, Option<(usize, usize, usize)>)>, FemError> {
-        // (point, mesh node, Some((segment node a, b, owner triangle)) for curves)
-        let Some(g) = mesh.group_any(name) else {
-            return Err(err(format!(
-                "{what}: no physical group named \"{name}\" in {} (curves: {}; points: {})",
-                mesh.path.display(),
-                super::topology::group_names(mesh, 1),
-                super::topology::group_names(mesh, 0)
-            )));
-        };
-        let mut out = vec![];
-        match g.dim {
-            0 => {
-                for &e in &g.elements {
-                    let v = mesh.points[e];
-                    for &(_, p) in topo.copies(v) {
-                        out.push((p, v, None));
+    let group_points =
+        |name: &str,
+         what: &str|
+         -> Result<Vec<(usize, usize, Option<(usize, usize, usize)>)>, FemError> {
+            // (point, mesh node, Some((segment node a, b, owner triangle)) for curves)
+            let Some(g) = mesh.group_any(name) else {
+                return Err(err(format!(
+                    "{what}: no physical group named \"{name}\" in {} (curves: {}; points: {})",
+                    mesh.path.display(),
+                    super::topology::group_names(mesh, 1),
+                    super::topology::group_names(mesh, 0)
+                )));
+            };
+            let mut out = vec![];
+            match g.dim {
+                0 => {
+                    for &e in &g.elements {
+                        let v = mesh.points[e];
+                        for &(_, p) in topo.copies(v) {
+                            out.push((p, v, None));
+                        }
                     }
                 }
-            }
-            1 => {
-                for &e in &g.elements {
-                    let [a, b] = mesh.lines[e];
-                    let ts = topo.edge_triangles(a, b);
-                    if ts.is_empty() {
-                        return Err(err(format!(
+                1 => {
+                    for &e in &g.elements {
+                        let [a, b] = mesh.lines[e];
+                        let ts = topo.edge_triangles(a, b);
+                        if ts.is_empty() {
+                            return Err(err(format!(
                             "{what}: segment ({}, {}) of curve \"{name}\" is not an edge of any triangle",
                             mesh.node_tags[a], mesh.node_tags[b]
                         )));
-                    }
-                    for &t in &ts {
-                        let body = topo.mesh_triangle_body(t);
-                        for v in [a, b] {
-                            if let Some(p) = topo.point(v, body) {
-                                out.push((p, v, Some((a, b, t))));
+                        }
+                        for &t in &ts {
+                            let body = topo.mesh_triangle_body(t);
+                            for v in [a, b] {
+                                if let Some(p) = topo.point(v, body) {
+                                    out.push((p, v, Some((a, b, t))));
+                                }
                             }
                         }
                     }
                 }
+                d => {
+                    return Err(err(format!(
+                        "{what}: \"{name}\" is a physical {} in {}, expected a curve or a point",
+                        super::topology::dim_name(d),
+                        mesh.path.display()
+                    )))
+                }
             }
-            d => {
-                return Err(err(format!(
-                    "{what}: \"{name}\" is a physical {} in {}, expected a curve or a point",
-                    super::topology::dim_name(d),
-                    mesh.path.display()
-                )))
-            }
-        }
-        Ok(out)
-    };
+            Ok(out)
+        };
 
     for (i, dch) in f.dirichlet.iter().enumerate() {
         let what = format!("[[dirichlet]] #{} (on = \"{}\")", i + 1, dch.on);
@@ -143,7 +146,10 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
             Some(u) => (Some(u[0]), Some(u[1])),
             None => (dch.ux, dch.uy),
         };
-        let mut pts: Vec<usize> = group_points(&dch.on, &what)?.into_iter().map(|x| x.0).collect();
+        let mut pts: Vec<usize> = group_points(&dch.on, &what)?
+            .into_iter()
+            .map(|x| x.0)
+            .collect();
         pts.sort_unstable();
         pts.dedup();
         for p in pts {
@@ -160,7 +166,11 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         let g = mesh.group_any(&s.on);
         if let Some(g) = g {
             if g.dim != 1 {
-                return Err(err(format!("{what}: \"{}\" is a physical {}, expected a curve", s.on, super::topology::dim_name(g.dim))));
+                return Err(err(format!(
+                    "{what}: \"{}\" is a physical {}, expected a curve",
+                    s.on,
+                    super::topology::dim_name(g.dim)
+                )));
             }
         }
         // Averaged unit normal per point over the segments of this line.
@@ -176,7 +186,10 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         for (p, n) in sum {
             let len = (n[0] * n[0] + n[1] * n[1]).sqrt();
             if len > 1e-12 {
-                conds[p].push(Cond { r: [n[0] / len, n[1] / len], v: 0.0 });
+                conds[p].push(Cond {
+                    r: [n[0] / len, n[1] / len],
+                    v: 0.0,
+                });
             }
         }
     }
@@ -200,12 +213,23 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     // --- stiffness and body force
     let mut trip: Vec<(usize, usize, f64)> = Vec::with_capacity(topo.triangles.len() * 36);
     let mut d = vec![0.0; n];
-    let mats: Vec<&crate::model::Material> = topo.material_names.iter().map(|m| &f.materials[m]).collect();
-    let dmats: Vec<[[f64; 3]; 3]> = mats.iter().map(|m| element::d_matrix(m, f.model.plane)).collect();
+    let mats: Vec<&crate::model::Material> = topo
+        .material_names
+        .iter()
+        .map(|m| &f.materials[m])
+        .collect();
+    let dmats: Vec<[[f64; 3]; 3]> = mats
+        .iter()
+        .map(|m| element::d_matrix(m, f.model.plane))
+        .collect();
     let gvec = f.model.gravity.unwrap_or([0.0, 0.0]);
     for (t, tri) in topo.triangles.iter().enumerate() {
         let mi = topo.tri_material[t] as usize;
-        let pts = [topo.points[tri[0]], topo.points[tri[1]], topo.points[tri[2]]];
+        let pts = [
+            topo.points[tri[0]],
+            topo.points[tri[1]],
+            topo.points[tri[2]],
+        ];
         let ke = element::stiffness(&pts, &dmats[mi], th);
         let area = element::area2(&pts) / 2.0;
         let fb = [mats[mi].rho * gvec[0], mats[mi].rho * gvec[1]];
@@ -232,7 +256,8 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
                     for kb in 0..pb.ndof {
                         let tb = pb.t[kb];
                         let v = ta[0] * (ke[2 * a][2 * b] * tb[0] + ke[2 * a][2 * b + 1] * tb[1])
-                            + ta[1] * (ke[2 * a + 1][2 * b] * tb[0] + ke[2 * a + 1][2 * b + 1] * tb[1]);
+                            + ta[1]
+                                * (ke[2 * a + 1][2 * b] * tb[0] + ke[2 * a + 1][2 * b + 1] * tb[1]);
                         trip.push((ia, pb.start + kb, v));
                     }
                 }
@@ -250,7 +275,11 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         let what = format!("[[traction]] #{} (on = \"{}\")", i + 1, tr.on);
         if let Some(g) = mesh.group_any(&tr.on) {
             if g.dim != 1 {
-                return Err(err(format!("{what}: \"{}\" is a physical {}, expected a curve", tr.on, super::topology::dim_name(g.dim))));
+                return Err(err(format!(
+                    "{what}: \"{}\" is a physical {}, expected a curve",
+                    tr.on,
+                    super::topology::dim_name(g.dim)
+                )));
             }
         }
         let items = group_points(&tr.on, &what)?;
@@ -272,9 +301,17 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     // --- point forces: on the copy of the lowest body
     for (i, fo) in f.force.iter().enumerate() {
         let what = format!("[[force]] #{} (on = \"{}\")", i + 1, fo.on);
-        let g = mesh.group_any(&fo.on).filter(|g| g.dim == 0).ok_or_else(|| {
-            err(format!("{what}: no physical point named \"{}\" in {} (points: {})", fo.on, mesh.path.display(), super::topology::group_names(mesh, 0)))
-        })?;
+        let g = mesh
+            .group_any(&fo.on)
+            .filter(|g| g.dim == 0)
+            .ok_or_else(|| {
+                err(format!(
+                    "{what}: no physical point named \"{}\" in {} (points: {})",
+                    fo.on,
+                    mesh.path.display(),
+                    super::topology::group_names(mesh, 0)
+                ))
+            })?;
         for &e in &g.elements {
             let v = mesh.points[e];
             if let Some(&(_, p)) = topo.copies(v).first() {
@@ -339,7 +376,12 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
 
 /// Combine the conditions r·u = v at one point into u = u0 + Tξ.
 fn eliminate(cs: &[Cond]) -> Result<PointDofs, String> {
-    let mut pd = PointDofs { start: 0, ndof: 2, t: [[1.0, 0.0], [0.0, 1.0]], u0: [0.0, 0.0] };
+    let mut pd = PointDofs {
+        start: 0,
+        ndof: 2,
+        t: [[1.0, 0.0], [0.0, 1.0]],
+        u0: [0.0, 0.0],
+    };
     if cs.is_empty() {
         return Ok(pd);
     }
@@ -358,7 +400,11 @@ fn eliminate(cs: &[Cond]) -> Result<PointDofs, String> {
                 let s = r[0] * q1[0] + r[1] * q1[1];
                 let v = c.v / norm2(c.r);
                 if (v - s * v1).abs() > 1e-9 * (1.0 + v.abs() + v1.abs()) {
-                    return Err(format!("two conditions prescribe different values ({} and {}) in one direction", v1 * s, v));
+                    return Err(format!(
+                        "two conditions prescribe different values ({} and {}) in one direction",
+                        v1 * s,
+                        v
+                    ));
                 }
             }
             pd.ndof = 1;
@@ -368,11 +414,16 @@ fn eliminate(cs: &[Cond]) -> Result<PointDofs, String> {
         Some(c2) => {
             let (r1, r2) = (cs[0].r, c2.r);
             let det = r1[0] * r2[1] - r1[1] * r2[0];
-            let u = [(cs[0].v * r2[1] - c2.v * r1[1]) / det, (r1[0] * c2.v - r2[0] * cs[0].v) / det];
+            let u = [
+                (cs[0].v * r2[1] - c2.v * r1[1]) / det,
+                (r1[0] * c2.v - r2[0] * cs[0].v) / det,
+            ];
             for c in cs {
                 let res = c.r[0] * u[0] + c.r[1] * u[1] - c.v;
                 if res.abs() > 1e-9 * (1.0 + c.v.abs() + u[0].abs() + u[1].abs()) {
-                    return Err(format!("more than two independent conditions that disagree (residual {res:.3e})"));
+                    return Err(format!(
+                        "more than two independent conditions that disagree (residual {res:.3e})"
+                    ));
                 }
             }
             pd.ndof = 0;
@@ -393,7 +444,12 @@ fn normalize(r: [f64; 2]) -> [f64; 2] {
 
 /// Rigid motions z = (a1 − b·ȳ, a2 + b·x̄) of each body that satisfy the
 /// homogeneous conditions (methods.md §1.7), in reduced DOFs, orthonormalised.
-fn rigid_modes(topo: &Topology, dofs: &[PointDofs], conds: &[Vec<Cond>], n: usize) -> (Vec<Vec<f64>>, Vec<u32>) {
+fn rigid_modes(
+    topo: &Topology,
+    dofs: &[PointDofs],
+    conds: &[Vec<Cond>],
+    n: usize,
+) -> (Vec<Vec<f64>>, Vec<u32>) {
     let nb = topo.nbodies;
     let mut lo = vec![[f64::MAX; 2]; nb];
     let mut hi = vec![[f64::MIN; 2]; nb];
@@ -409,7 +465,11 @@ fn rigid_modes(topo: &Topology, dofs: &[PointDofs], conds: &[Vec<Cond>], n: usiz
     let basis = |b: usize, x: [f64; 2]| -> [[f64; 2]; 3] {
         let c = [(lo[b][0] + hi[b][0]) / 2.0, (lo[b][1] + hi[b][1]) / 2.0];
         let l = ((hi[b][0] - lo[b][0]).max(hi[b][1] - lo[b][1])).max(1e-300);
-        [[1.0, 0.0], [0.0, 1.0], [-(x[1] - c[1]) / l, (x[0] - c[0]) / l]]
+        [
+            [1.0, 0.0],
+            [0.0, 1.0],
+            [-(x[1] - c[1]) / l, (x[0] - c[0]) / l],
+        ]
     };
     for (p, cs) in conds.iter().enumerate() {
         let b = topo.point_body[p] as usize;
@@ -468,7 +528,11 @@ fn describe_mode(m: &Model, c: &[f64]) -> String {
     }
     parts.sort_unstable();
     parts.dedup();
-    parts.iter().map(|b| format!("body {b}")).collect::<Vec<_>>().join(", ")
+    parts
+        .iter()
+        .map(|b| format!("body {b}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Semicoercive checks of methods.md §1.7 that need no iteration: a body
@@ -508,7 +572,11 @@ fn check_semicoercive(m: &Model, problem: &Problem) -> Result<(), FemError> {
             mtm[i][j] = az[i].iter().zip(&az[j]).map(|(a, b)| a * b).sum();
         }
     }
-    let dz: Vec<f64> = qp.kernel.iter().map(|z| z.iter().zip(&qp.d).map(|(a, b)| a * b).sum()).collect();
+    let dz: Vec<f64> = qp
+        .kernel
+        .iter()
+        .map(|z| z.iter().zip(&qp.d).map(|(a, b)| a * b).sum())
+        .collect();
     let dnorm = qp.d.iter().map(|v| v * v).sum::<f64>().sqrt().max(1e-300);
     let (vals, vecs) = sym_eigen(&mtm);
     let amax = vals.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(1e-300);
@@ -521,7 +589,10 @@ fn check_semicoercive(m: &Model, problem: &Problem) -> Result<(), FemError> {
                     describe_mode(m, c)
                 )));
             }
-            log::warn!("a rigid motion of {} is free (loads do no work on it): the solution is not unique", describe_mode(m, c));
+            log::warn!(
+                "a rigid motion of {} is free (loads do no work on it): the solution is not unique",
+                describe_mode(m, c)
+            );
         }
     }
     Ok(())
@@ -531,7 +602,9 @@ fn check_semicoercive(m: &Model, problem: &Problem) -> Result<(), FemError> {
 pub fn sym_eigen(a: &[Vec<f64>]) -> (Vec<f64>, Vec<Vec<f64>>) {
     let n = a.len();
     let mut a: Vec<Vec<f64>> = a.to_vec();
-    let mut v: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect()).collect();
+    let mut v: Vec<Vec<f64>> = (0..n)
+        .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
+        .collect();
     for _ in 0..100 {
         let mut off = 0.0;
         let mut diag = 0.0;
@@ -550,7 +623,11 @@ pub fn sym_eigen(a: &[Vec<f64>]) -> (Vec<f64>, Vec<Vec<f64>>) {
                     continue;
                 }
                 let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-                let t = if theta == 0.0 { 1.0 } else { theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt()) };
+                let t = if theta == 0.0 {
+                    1.0
+                } else {
+                    theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt())
+                };
                 let c = 1.0 / (t * t + 1.0).sqrt();
                 let s = t * c;
                 for k in 0..n {

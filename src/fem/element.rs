@@ -17,7 +17,11 @@ pub fn d_matrix(m: &Material, plane: Plane) -> [[f64; 3]; 3] {
         }
         Plane::Stress => {
             let f = e / (1.0 - nu * nu);
-            [[f, f * nu, 0.0], [f * nu, f, 0.0], [0.0, 0.0, f * (1.0 - nu) / 2.0]]
+            [
+                [f, f * nu, 0.0],
+                [f * nu, f, 0.0],
+                [0.0, 0.0, f * (1.0 - nu) / 2.0],
+            ]
         }
     }
 }
@@ -61,7 +65,13 @@ pub fn stiffness(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64) -> [[f64; 6]; 6]
 }
 
 /// Stresses (σxx, σyy, σxy, σzz) from the element displacements.
-pub fn stress(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], m: &Material, plane: Plane, u: &[f64; 6]) -> [f64; 4] {
+pub fn stress(
+    p: &[[f64; 2]; 3],
+    d: &[[f64; 3]; 3],
+    m: &Material,
+    plane: Plane,
+    u: &[f64; 6],
+) -> [f64; 4] {
     let (b, _) = b_matrix(p);
     let mut e = [0.0; 3];
     for (i, ei) in e.iter_mut().enumerate() {
@@ -80,7 +90,9 @@ pub fn stress(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], m: &Material, plane: Plane, 
 
 /// The report's equivalent stress τe = sqrt(σxx² + σyy² − σxxσyy + 3σxy²) (§1.4).
 pub fn von_mises(s: &[f64; 4]) -> f64 {
-    (s[0] * s[0] + s[1] * s[1] - s[0] * s[1] + 3.0 * s[2] * s[2]).max(0.0).sqrt()
+    (s[0] * s[0] + s[1] * s[1] - s[0] * s[1] + 3.0 * s[2] * s[2])
+        .max(0.0)
+        .sqrt()
 }
 
 /// In-plane principal stresses, σ1 ≥ σ2.
@@ -97,7 +109,11 @@ mod tests {
     #[test]
     fn rigid_motions_have_zero_energy_and_stiffness_is_symmetric() {
         let p = [[0.0, 0.0], [2.0, 0.3], [0.4, 1.5]];
-        let m = Material { e: 1e9, nu: 0.3, rho: 0.0 };
+        let m = Material {
+            e: 1e9,
+            nu: 0.3,
+            rho: 0.0,
+        };
         let d = d_matrix(&m, Plane::Strain);
         let k = stiffness(&p, &d, 1.0);
         for i in 0..6 {
@@ -123,7 +139,11 @@ mod tests {
     fn uniaxial_stress_state() {
         // u = (εx, 0): plane stress σxx = E/(1−ν²) ε, σyy = ν σxx
         let p = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
-        let m = Material { e: 200.0, nu: 0.25, rho: 0.0 };
+        let m = Material {
+            e: 200.0,
+            nu: 0.25,
+            rho: 0.0,
+        };
         let d = d_matrix(&m, Plane::Stress);
         let eps = 1e-3;
         let u = [0.0, 0.0, eps, 0.0, 0.0, 0.0];

@@ -20,6 +20,9 @@ pub struct FemError {
 
 impl FemError {
     pub fn new(path: &Path, msg: String) -> FemError {
-        FemError { path: path.to_path_buf(), msg }
+        FemError {
+            path: path.to_path_buf(),
+            msg,
+        }
     }
 }

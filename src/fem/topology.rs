@@ -89,7 +89,10 @@ const NONE: usize = usize::MAX;
 impl Topology {
     /// The point of mesh node `node` in body `body`.
     pub fn point(&self, node: usize, body: u32) -> Option<usize> {
-        self.copies(node).iter().find(|(b, _)| *b == body).map(|c| c.1)
+        self.copies(node)
+            .iter()
+            .find(|(b, _)| *b == body)
+            .map(|c| c.1)
     }
 
     /// All copies (body, point) of a mesh node.
@@ -259,7 +262,11 @@ impl Topology {
         }
         let mut roots: Vec<(u64, usize)> = root_min_tag.iter().map(|(&r, &m)| (m, r)).collect();
         roots.sort_unstable();
-        let body_of_root: HashMap<usize, u32> = roots.iter().enumerate().map(|(i, &(_, r))| (r, i as u32)).collect();
+        let body_of_root: HashMap<usize, u32> = roots
+            .iter()
+            .enumerate()
+            .map(|(i, &(_, r))| (r, i as u32))
+            .collect();
         let mesh_tri_body: Vec<u32> = (0..nt).map(|t| body_of_root[&uf.find(t)]).collect();
         let nbodies = roots.len();
 
@@ -369,7 +376,8 @@ impl Topology {
             interface: u32,
         }
         let mut acc: HashMap<(usize, u32, u32), Acc> = HashMap::new();
-        let mut edges: Vec<((usize, usize), u32)> = contact_edge.iter().map(|(k, v)| (*k, *v)).collect();
+        let mut edges: Vec<((usize, usize), u32)> =
+            contact_edge.iter().map(|(k, v)| (*k, *v)).collect();
         edges.sort_unstable();
         let mut seg_info = vec![];
         for &((a, b), id) in &edges {
@@ -388,13 +396,20 @@ impl Topology {
                     }
                 )));
             }
-            let (tk, tl) = if bodies[0] < bodies[1] { (ts[0], ts[1]) } else { (ts[1], ts[0]) };
+            let (tk, tl) = if bodies[0] < bodies[1] {
+                (ts[0], ts[1])
+            } else {
+                (ts[1], ts[0])
+            };
             let (k, l) = (self.mesh_tri_body[tk], self.mesh_tri_body[tl]);
             let n = self.outward_normal(mesh, tk, a, b);
             let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
             let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
             for v in [a, b] {
-                let e = acc.entry((v, k, l)).or_insert(Acc { normals: vec![], interface: id });
+                let e = acc.entry((v, k, l)).or_insert(Acc {
+                    normals: vec![],
+                    interface: id,
+                });
                 e.normals.push((n, len / 2.0));
             }
             seg_info.push((a, b, k, l, n, id));
@@ -408,12 +423,18 @@ impl Topology {
             let a = &acc[&key];
             let first = self.point(v, k).unwrap_or(0);
             let second = self.point(v, l).unwrap_or(0);
-            let kind = kind_of.get(a.interface as usize).copied().unwrap_or_default();
+            let kind = kind_of
+                .get(a.interface as usize)
+                .copied()
+                .unwrap_or_default();
             let trib: f64 = a.normals.iter().map(|x| x.1).sum();
             let mut normals: Vec<([f64; 2], f64)> = vec![];
             match kind {
                 NormalKind::Averaged => {
-                    let s = a.normals.iter().fold([0.0, 0.0], |s, (n, _)| [s[0] + n[0], s[1] + n[1]]);
+                    let s = a
+                        .normals
+                        .iter()
+                        .fold([0.0, 0.0], |s, (n, _)| [s[0] + n[0], s[1] + n[1]]);
                     let len = (s[0] * s[0] + s[1] * s[1]).sqrt();
                     if !(len > 1e-12) {
                         return Err(err(format!(
@@ -426,7 +447,10 @@ impl Topology {
                 NormalKind::Segment => {
                     for &(n, t) in &a.normals {
                         // Two segments with the same normal (a straight line) give one row.
-                        if let Some(e) = normals.iter_mut().find(|(m, _)| (m[0] - n[0]).abs() + (m[1] - n[1]).abs() < 1e-12) {
+                        if let Some(e) = normals
+                            .iter_mut()
+                            .find(|(m, _)| (m[0] - n[0]).abs() + (m[1] - n[1]).abs() < 1e-12)
+                        {
                             e.1 += t;
                         } else {
                             normals.push((n, t));
@@ -633,7 +657,12 @@ pub fn dim_name(d: u8) -> &'static str {
 }
 
 pub fn group_names(mesh: &Mesh, dim: u8) -> String {
-    let v: Vec<String> = mesh.groups.iter().filter(|g| g.dim == dim).map(|g| format!("\"{}\"", g.name)).collect();
+    let v: Vec<String> = mesh
+        .groups
+        .iter()
+        .filter(|g| g.dim == dim)
+        .map(|g| format!("\"{}\"", g.name))
+        .collect();
     if v.is_empty() {
         "none".into()
     } else {
@@ -647,7 +676,9 @@ struct UnionFind {
 
 impl UnionFind {
     fn new(n: usize) -> Self {
-        UnionFind { parent: (0..n).collect() }
+        UnionFind {
+            parent: (0..n).collect(),
+        }
     }
     fn find(&mut self, mut x: usize) -> usize {
         while self.parent[x] != x {

@@ -262,11 +262,15 @@ impl Problem {
             }
         }
         if f.materials.is_empty() {
-            return Err(self.invalid("no [materials.NAME] table: every physical surface needs a material".into()));
+            return Err(self.invalid(
+                "no [materials.NAME] table: every physical surface needs a material".into(),
+            ));
         }
         for (name, m) in &f.materials {
             if !(m.e > 0.0 && finite(m.e)) {
-                return Err(self.invalid(format!("[materials.{name}] E = {} must be positive", m.e)));
+                return Err(
+                    self.invalid(format!("[materials.{name}] E = {} must be positive", m.e))
+                );
             }
             if !(m.nu > -1.0 && m.nu < 0.5) {
                 return Err(self.invalid(format!(
@@ -275,7 +279,10 @@ impl Problem {
                 )));
             }
             if !(m.rho >= 0.0 && finite(m.rho)) {
-                return Err(self.invalid(format!("[materials.{name}] rho = {} must be non-negative", m.rho)));
+                return Err(self.invalid(format!(
+                    "[materials.{name}] rho = {} must be non-negative",
+                    m.rho
+                )));
             }
         }
         for (i, d) in f.dirichlet.iter().enumerate() {
@@ -287,9 +294,14 @@ impl Problem {
                     d.on
                 )));
             }
-            let vals = d.u.map(|u| u.to_vec()).unwrap_or_else(|| d.ux.into_iter().chain(d.uy).collect());
+            let vals =
+                d.u.map(|u| u.to_vec())
+                    .unwrap_or_else(|| d.ux.into_iter().chain(d.uy).collect());
             if !vals.iter().all(|v| finite(*v)) {
-                return Err(self.invalid(format!("[[dirichlet]] on = \"{}\": values must be finite", d.on)));
+                return Err(self.invalid(format!(
+                    "[[dirichlet]] on = \"{}\": values must be finite",
+                    d.on
+                )));
             }
         }
         for (i, t) in f.traction.iter().enumerate() {
@@ -300,14 +312,21 @@ impl Problem {
                     t.on
                 )));
             }
-            let ok = t.p.map(|p| p.iter().all(|v| finite(*v))).unwrap_or(true) && t.pn.map(finite).unwrap_or(true);
+            let ok = t.p.map(|p| p.iter().all(|v| finite(*v))).unwrap_or(true)
+                && t.pn.map(finite).unwrap_or(true);
             if !ok {
-                return Err(self.invalid(format!("[[traction]] on = \"{}\": values must be finite", t.on)));
+                return Err(self.invalid(format!(
+                    "[[traction]] on = \"{}\": values must be finite",
+                    t.on
+                )));
             }
         }
         for fo in &f.force {
             if !fo.f.iter().all(|v| finite(*v)) {
-                return Err(self.invalid(format!("[[force]] on = \"{}\": values must be finite", fo.on)));
+                return Err(self.invalid(format!(
+                    "[[force]] on = \"{}\": values must be finite",
+                    fo.on
+                )));
             }
         }
         for (i, c) in f.contact.iter().enumerate() {
@@ -321,7 +340,9 @@ impl Problem {
             }
             if let Some(g) = c.max_gap {
                 if !(g >= 0.0) {
-                    return Err(self.invalid(format!("[[contact]] #{}: max_gap must be >= 0", i + 1)));
+                    return Err(
+                        self.invalid(format!("[[contact]] #{}: max_gap must be >= 0", i + 1))
+                    );
                 }
             }
         }
@@ -336,7 +357,9 @@ impl Problem {
         }
         for (name, p) in &f.output.probes {
             if !p.iter().all(|v| finite(*v)) {
-                return Err(self.invalid(format!("[output] probe {name}: coordinates must be finite")));
+                return Err(
+                    self.invalid(format!("[output] probe {name}: coordinates must be finite"))
+                );
             }
         }
         Ok(())
@@ -353,16 +376,29 @@ fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
             let line_start = text[..start].rfind('\n').map(|i| i + 1).unwrap_or(0);
             let col = start - line_start + 1;
             let line_text = text[line_start..].lines().next().unwrap_or("");
-            let snippet: String = text[start..].lines().next().unwrap_or("").chars().take(40).collect();
+            let snippet: String = text[start..]
+                .lines()
+                .next()
+                .unwrap_or("")
+                .chars()
+                .take(40)
+                .collect();
             let table = enclosing_table(text, start);
             // The key of a `key = value` line, when the error is in its value.
             let key = line_text
                 .split_once('=')
                 .map(|(k, _)| k.trim())
-                .filter(|k| !k.is_empty() && !k.starts_with('[') && line_start + line_text.find('=').unwrap_or(0) < start)
+                .filter(|k| {
+                    !k.is_empty()
+                        && !k.starts_with('[')
+                        && line_start + line_text.find('=').unwrap_or(0) < start
+                })
                 .map(|k| format!(", key `{k}`"))
                 .unwrap_or_default();
-            format!("line {line}, column {col}{table}{key}: {msg} (at `{}`)", snippet.trim())
+            format!(
+                "line {line}, column {col}{table}{key}: {msg} (at `{}`)",
+                snippet.trim()
+            )
         }
         None => msg,
     }

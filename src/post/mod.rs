@@ -42,7 +42,14 @@ pub fn step_output(model: &Model, problem: &Problem, res: &QpResult, time: f64) 
         let m = &f.materials[&t.material_names[t.tri_material[e] as usize]];
         let d = element::d_matrix(m, f.model.plane);
         let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
-        let ue = [u[tri[0]][0], u[tri[0]][1], u[tri[1]][0], u[tri[1]][1], u[tri[2]][0], u[tri[2]][1]];
+        let ue = [
+            u[tri[0]][0],
+            u[tri[0]][1],
+            u[tri[1]][0],
+            u[tri[1]][1],
+            u[tri[2]][0],
+            u[tri[2]][1],
+        ];
         stress.push(element::stress(&p, &d, m, f.model.plane, &ue));
     }
     let nrow = t.contact.len();
@@ -63,7 +70,11 @@ pub fn step_output(model: &Model, problem: &Problem, res: &QpResult, time: f64) 
         .contact
         .iter()
         .map(|r| {
-            let s: f64 = r.coefficients().iter().map(|(p, c)| c[0] * u[*p][0] + c[1] * u[*p][1]).sum();
+            let s: f64 = r
+                .coefficients()
+                .iter()
+                .map(|(p, c)| c[0] * u[*p][0] + c[1] * u[*p][1])
+                .sum();
             r.gap0 - s
         })
         .collect();

@@ -97,7 +97,9 @@ impl<'a> Cgc<'a> {
                 seen[c] = true;
             }
         }
-        let row_norm2 = (0..m).map(|i| qp.a.row(i).1.iter().map(|v| v * v).sum()).collect();
+        let row_norm2 = (0..m)
+            .map(|i| qp.a.row(i).1.iter().map(|v| v * v).sum())
+            .collect();
         let mut wd = vec![0.0; n];
         pc.apply(&qp.d, &mut wd);
         let cmax = norm_inf(&qp.c.diag()).max(f64::MIN_POSITIVE);
@@ -286,7 +288,9 @@ impl<'a> Cgc<'a> {
         timings: Vec<(String, f64)>,
     ) -> QpResult {
         let m = self.qp.m();
-        let lambda: Vec<f64> = (0..m).map(|i| if self.in_j[i] { self.lam[i] } else { 0.0 }).collect();
+        let lambda: Vec<f64> = (0..m)
+            .map(|i| if self.in_j[i] { self.lam[i] } else { 0.0 })
+            .collect();
         let energy = self.qp.energy(&self.x);
         QpResult {
             active: self.in_j.clone(),
@@ -314,7 +318,11 @@ impl Iterative for Cgc<'_> {
             let lbar = jset.iter().fold(0.0f64, |m, &j| m.max(self.lam[j].abs()));
             let lbar = if lbar > 0.0 { lbar } else { 1.0 };
             let thr = -100.0 * self.tol * lbar;
-            let neg: Vec<usize> = jset.iter().copied().filter(|&j| self.lam[j] < thr).collect();
+            let neg: Vec<usize> = jset
+                .iter()
+                .copied()
+                .filter(|&j| self.lam[j] < thr)
+                .collect();
             if neg.is_empty() {
                 return Step::Done(Status::Converged, self.record(res));
             }
@@ -336,7 +344,9 @@ impl Iterative for Cgc<'_> {
             }
         }
         match self.face_cg() {
-            FaceEnd::Unbounded(p) => Step::Done(Status::Unbounded { direction: p }, self.record(res)),
+            FaceEnd::Unbounded(p) => {
+                Step::Done(Status::Unbounded { direction: p }, self.record(res))
+            }
             FaceEnd::Min | FaceEnd::NewFace | FaceEnd::Kmax => {
                 self.refresh();
                 Step::Continue(self.record(res))
@@ -352,13 +362,21 @@ impl Cgc<'_> {
         let (z, _) = self.project();
         let ap = self.qp.a.mul(&z); // p = −z
         let pn = norm(&z);
-        !released.iter().any(|&j| -ap[j] > -1e-12 * pn * self.row_norm2[j].sqrt())
+        !released
+            .iter()
+            .any(|&j| -ap[j] > -1e-12 * pn * self.row_norm2[j].sqrt())
     }
 }
 
 /// CG on S μ = rhs with S = A_J W⁻¹ A_Jᵀ (matrix-free), from the given μ.
 /// Returns the number of iterations.
-pub fn schur_cg(qp: &QpProblem, pc: &dyn Preconditioner, jset: &[usize], rhs: &[f64], mu: &mut [f64]) -> usize {
+pub fn schur_cg(
+    qp: &QpProblem,
+    pc: &dyn Preconditioner,
+    jset: &[usize],
+    rhs: &[f64],
+    mu: &mut [f64],
+) -> usize {
     let n = qp.n();
     let k = jset.len();
     let mut t = vec![0.0; n];

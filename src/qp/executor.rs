@@ -35,7 +35,12 @@ pub struct Progress {
 impl Progress {
     pub fn new(name: &str) -> Progress {
         let now = Instant::now();
-        Progress { start: now, last: now, name: name.to_string(), printed: false }
+        Progress {
+            start: now,
+            last: now,
+            name: name.to_string(),
+            printed: false,
+        }
     }
 }
 
@@ -72,7 +77,12 @@ impl Executor {
         if let Some(name) = progress {
             observers.push(Box::new(Progress::new(name)));
         }
-        Executor { max_iter, observers, log: vec![], log_limit: 10_000 }
+        Executor {
+            max_iter,
+            observers,
+            log: vec![],
+            log_limit: 10_000,
+        }
     }
 
     /// Run `it` until it finishes or MAXIT; returns the status and the

@@ -26,9 +26,14 @@ impl Cholesky {
     pub fn new(c: &Csr, kernel: &[Vec<f64>]) -> Result<Cholesky, QpError> {
         let fixing = fixing_dofs(kernel, c.nrows);
         let diag = c.diag();
-        let scale = diag.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
-        let shift: Vec<(usize, f64)> =
-            fixing.iter().map(|&i| (i, if diag[i] > 0.0 { diag[i] } else { scale })).collect();
+        let scale = diag
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+            .max(f64::MIN_POSITIVE);
+        let shift: Vec<(usize, f64)> = fixing
+            .iter()
+            .map(|&i| (i, if diag[i] > 0.0 { diag[i] } else { scale }))
+            .collect();
         let (sym, vals) = lower_csc(c, &shift);
         let symbolic = SymbolicLlt::try_new(sym.as_ref(), Side::Lower)
             .map_err(|e| QpError::Factor(format!("symbolic analysis: {e:?}")))?;
@@ -98,7 +103,10 @@ fn lower_csc(c: &Csr, shift: &[(usize, f64)]) -> (SymbolicSparseColMat<usize>, V
         }
         col_ptr.push(row_idx.len());
     }
-    (SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx), vals)
+    (
+        SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx),
+        vals,
+    )
 }
 
 /// k DOFs such that R restricted to them is nonsingular: columns of Rᵀ
@@ -109,7 +117,9 @@ pub fn fixing_dofs(kernel: &[Vec<f64>], n: usize) -> Vec<usize> {
         return vec![];
     }
     // rows[i] = R[i, :] (length k), orthogonalised in place.
-    let mut rows: Vec<Vec<f64>> = (0..n).map(|i| kernel.iter().map(|z| z[i]).collect()).collect();
+    let mut rows: Vec<Vec<f64>> = (0..n)
+        .map(|i| kernel.iter().map(|z| z[i]).collect())
+        .collect();
     let mut chosen = Vec::with_capacity(k);
     for _ in 0..k {
         let (best, bn) = rows
@@ -117,7 +127,10 @@ pub fn fixing_dofs(kernel: &[Vec<f64>], n: usize) -> Vec<usize> {
             .enumerate()
             .filter(|(i, _)| !chosen.contains(i))
             .map(|(i, r)| (i, r.iter().map(|v| v * v).sum::<f64>()))
-            .fold((usize::MAX, 0.0), |acc, (i, v)| if v > acc.1 { (i, v) } else { acc });
+            .fold(
+                (usize::MAX, 0.0),
+                |acc, (i, v)| if v > acc.1 { (i, v) } else { acc },
+            );
         if best == usize::MAX || bn <= 0.0 {
             break;
         }
@@ -168,7 +181,17 @@ mod tests {
         let c = lap1d(20, false);
         let f = Cholesky::new(&c, &[vec![1.0; 20]]).unwrap();
         assert_eq!(f.fixing.len(), 1);
-        let b: Vec<f64> = (0..20).map(|i| if i == 0 { 1.0 } else if i == 19 { -1.0 } else { 0.0 }).collect();
+        let b: Vec<f64> = (0..20)
+            .map(|i| {
+                if i == 0 {
+                    1.0
+                } else if i == 19 {
+                    -1.0
+                } else {
+                    0.0
+                }
+            })
+            .collect();
         let y = f.solve(&b);
         // (C + s·e_i e_iᵀ) y = b with b ⟂ ker C = span(1): summing the rows gives
         // s·y_i = 0, so y_i = 0 and C y = b exactly.

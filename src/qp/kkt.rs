@@ -14,7 +14,11 @@ pub fn residuals(qp: &QpProblem, x: &[f64], lambda: &[f64]) -> Kkt {
     let mut r: Vec<f64> = cx.iter().zip(&qp.d).map(|(a, b)| a - b).collect();
     qp.a.mul_t_add(lambda, &mut r);
     let scale = norm(&qp.d).max(norm(&cx));
-    let stationarity = if scale > 0.0 { norm(&r) / scale } else { norm(&r) };
+    let stationarity = if scale > 0.0 {
+        norm(&r) / scale
+    } else {
+        norm(&r)
+    };
     let ax = qp.a.mul(x);
     let viol: Vec<f64> = ax.iter().zip(&qp.g).map(|(a, g)| a - g).collect();
     let xmax = norm_inf(x);
@@ -36,7 +40,10 @@ pub fn residuals(qp: &QpProblem, x: &[f64], lambda: &[f64]) -> Kkt {
 impl Kkt {
     /// The largest of the four residuals.
     pub fn max(&self) -> f64 {
-        self.primal.max(self.dual).max(self.complementarity).max(self.stationarity)
+        self.primal
+            .max(self.dual)
+            .max(self.complementarity)
+            .max(self.stationarity)
     }
     /// NaN-safe check against a target.
     pub fn within(&self, target: f64) -> bool {

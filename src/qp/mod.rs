@@ -59,7 +59,9 @@ pub enum Status {
     MaxIter,
     /// f is unbounded below on the feasible set; `direction` is a descent
     /// direction with zero curvature along which no constraint blocks.
-    Unbounded { direction: Vec<f64> },
+    Unbounded {
+        direction: Vec<f64>,
+    },
     /// NaN/Inf, stagnation or a failed factorization.
     Failed(String),
 }
@@ -72,7 +74,9 @@ impl Status {
         match self {
             Status::Converged => "converged".into(),
             Status::MaxIter => "not converged: maximum number of iterations reached".into(),
-            Status::Unbounded { .. } => "unbounded: the energy decreases without limit along a rigid motion".into(),
+            Status::Unbounded { .. } => {
+                "unbounded: the energy decreases without limit along a rigid motion".into()
+            }
             Status::Failed(m) => format!("failed: {m}"),
         }
     }

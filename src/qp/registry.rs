@@ -31,7 +31,10 @@ pub fn names() -> Vec<&'static str> {
 /// Run method `name` and attach the KKT certificate.
 pub fn solve(name: &str, qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     let m = find(name).ok_or_else(|| {
-        QpError::BadParameter(format!("unknown method \"{name}\"; known: {}", names().join(", ")))
+        QpError::BadParameter(format!(
+            "unknown method \"{name}\"; known: {}",
+            names().join(", ")
+        ))
     })?;
     let mut r = (m.solve)(qp, opts)?;
     r.kkt = kkt::residuals(qp, &r.x, &r.lambda);

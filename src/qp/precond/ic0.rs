@@ -41,7 +41,9 @@ impl Ic0 {
             colptr[j + 1] = rows.len();
         }
         if let Some(i) = diag.iter().position(|v| !(*v > 0.0)) {
-            return Err(QpError::Unsupported(format!("IC(0): diagonal entry {i} of C is not positive")));
+            return Err(QpError::Unsupported(format!(
+                "IC(0): diagonal entry {i} of C is not positive"
+            )));
         }
         let mut shift = 0.0;
         loop {
@@ -49,13 +51,25 @@ impl Ic0 {
             let mut piv: Vec<f64> = diag.iter().map(|d| d * (1.0 + shift)).collect();
             if factor(n, &colptr, &rows, &mut vals, &mut piv, modified) {
                 if shift > 0.0 {
-                    log::info!("{}: shifted by {shift:e}·diag(C) to avoid a non-positive pivot", if modified { "MIC(0)" } else { "IC(0)" });
+                    log::info!(
+                        "{}: shifted by {shift:e}·diag(C) to avoid a non-positive pivot",
+                        if modified { "MIC(0)" } else { "IC(0)" }
+                    );
                 }
-                return Ok(Ic0 { colptr, rows, vals, piv, modified, shift });
+                return Ok(Ic0 {
+                    colptr,
+                    rows,
+                    vals,
+                    piv,
+                    modified,
+                    shift,
+                });
             }
             shift = if shift == 0.0 { 1e-3 } else { shift * 10.0 };
             if shift > 10.0 {
-                return Err(QpError::Factor("incomplete Cholesky broke down even with a diagonal shift".into()));
+                return Err(QpError::Factor(
+                    "incomplete Cholesky broke down even with a diagonal shift".into(),
+                ));
             }
         }
     }
@@ -63,7 +77,14 @@ impl Ic0 {
 
 /// Right-looking elimination restricted to the pattern. On return `vals`
 /// holds l_ir and `piv` the pivots; false on a non-positive pivot.
-fn factor(n: usize, colptr: &[usize], rows: &[usize], vals: &mut [f64], piv: &mut [f64], modified: bool) -> bool {
+fn factor(
+    n: usize,
+    colptr: &[usize],
+    rows: &[usize],
+    vals: &mut [f64],
+    piv: &mut [f64],
+    modified: bool,
+) -> bool {
     for r in 0..n {
         let d = piv[r];
         if !(d > 0.0) || !d.is_finite() {

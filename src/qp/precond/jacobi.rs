@@ -11,7 +11,9 @@ impl Jacobi {
     pub fn new(c: &Csr) -> Result<Jacobi, QpError> {
         let d = c.diag();
         if let Some(i) = d.iter().position(|v| !(*v > 0.0)) {
-            return Err(QpError::Unsupported(format!("Jacobi: diagonal entry {i} of C is not positive")));
+            return Err(QpError::Unsupported(format!(
+                "Jacobi: diagonal entry {i} of C is not positive"
+            )));
         }
         Ok(Jacobi {
             inv_diag: d.iter().map(|v| 1.0 / v).collect(),

@@ -134,7 +134,10 @@ mod tests {
             let mut w = vec![0.0; n];
             p.apply(&s, &mut w);
             // symmetric: sᵀW⁻¹r = rᵀW⁻¹s ; positive: rᵀW⁻¹r > 0
-            assert!((dot(&s, &z) - dot(&r, &w)).abs() < 1e-10 * dot(&r, &z).abs().max(1.0), "{kind:?}");
+            assert!(
+                (dot(&s, &z) - dot(&r, &w)).abs() < 1e-10 * dot(&r, &z).abs().max(1.0),
+                "{kind:?}"
+            );
             assert!(dot(&r, &z) > 0.0, "{kind:?}");
             if kind == PrecondKind::Cholesky {
                 let back = c.mul(&z);

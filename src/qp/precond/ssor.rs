@@ -12,11 +12,15 @@ pub struct Ssor {
 impl Ssor {
     pub fn new(c: &Csr, omega: f64) -> Result<Ssor, QpError> {
         if !(omega > 0.0 && omega < 2.0) {
-            return Err(QpError::BadParameter(format!("SSOR: omega = {omega} must lie in (0, 2)")));
+            return Err(QpError::BadParameter(format!(
+                "SSOR: omega = {omega} must lie in (0, 2)"
+            )));
         }
         let d = c.diag();
         if let Some(i) = d.iter().position(|v| !(*v > 0.0)) {
-            return Err(QpError::Unsupported(format!("SSOR: diagonal entry {i} of C is not positive")));
+            return Err(QpError::Unsupported(format!(
+                "SSOR: diagonal entry {i} of C is not positive"
+            )));
         }
         Ok(Ssor {
             c: c.clone(),
