@@ -3,6 +3,7 @@
 //! 3 not converged (outputs written and flagged) or, with `--strict`, a
 //! KKT residual above target.
 
+pub mod compare;
 pub mod solve;
 
 use clap::{Args, Parser, Subcommand};
@@ -29,6 +30,8 @@ pub struct Cli {
 pub enum Command {
     /// Solve a problem file and write VTU, HDF5 and JSON outputs.
     Solve(SolveArgs),
+    /// Run every method (or `--methods a,b`) on one problem and print the comparison table.
+    Compare(compare::CompareArgs),
     /// List the available methods and preconditioners.
     Methods,
 }
@@ -91,6 +94,7 @@ pub fn run(cli: Cli) -> i32 {
         .try_init();
     match cli.command {
         Command::Solve(a) => solve::run(&a, cli.quiet),
+        Command::Compare(a) => compare::run(&a, cli.quiet),
         Command::Methods => {
             for m in crate::qp::registry::METHODS {
                 println!("{:<10} {}", m.name, m.summary);
