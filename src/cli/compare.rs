@@ -46,17 +46,28 @@ pub fn variants(spec: Option<&str>) -> Result<Vec<(String, Option<PrecondKind>)>
     let all: Vec<String> = registry::names().iter().map(|s| s.to_string()).collect();
     let items: Vec<String> = match spec {
         None => all.clone(),
-        Some(s) => s.split(',').map(|x| x.trim().to_string()).filter(|x| !x.is_empty()).collect(),
+        Some(s) => s
+            .split(',')
+            .map(|x| x.trim().to_string())
+            .filter(|x| !x.is_empty())
+            .collect(),
     };
     for it in items {
         let (name, pc) = match it.split_once(':') {
             Some((n, p)) => (n.to_string(), Some(p.to_string())),
             None => (it.clone(), None),
         };
-        let m = registry::find(&name).ok_or_else(|| format!("unknown method \"{name}\"; known: {}", all.join(", ")))?;
+        let m = registry::find(&name)
+            .ok_or_else(|| format!("unknown method \"{name}\"; known: {}", all.join(", ")))?;
         if m.preconditioned {
             match pc {
-                Some(p) => out.push((name, Some(PrecondKind::parse(&p).ok_or_else(|| format!("unknown preconditioner \"{p}\""))?))),
+                Some(p) => out.push((
+                    name,
+                    Some(
+                        PrecondKind::parse(&p)
+                            .ok_or_else(|| format!("unknown preconditioner \"{p}\""))?,
+                    ),
+                )),
                 None => out.extend(PrecondKind::ALL.iter().map(|k| (name.clone(), Some(*k)))),
             }
         } else {
@@ -91,13 +102,24 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
             Err(e) => Err(e.to_string()),
             Ok((m, opts)) => {
                 let t = Instant::now();
-                pipeline::solve(&prep, &m, &opts).map(|r| (r, t.elapsed().as_secs_f64())).map_err(|e| e.to_string())
+                pipeline::solve(&prep, &m, &opts)
+                    .map(|r| (r, t.elapsed().as_secs_f64()))
+                    .map_err(|e| e.to_string())
             }
         };
         if !quiet {
-            eprintln!("compare: {method} {} done", pc.map(|k| k.name()).unwrap_or("-"));
+            eprintln!(
+                "compare: {method} {} done",
+                pc.map(|k| k.name()).unwrap_or("-")
+            );
         }
-        rows.push(Row { method, preconditioner: pc.map(|k| k.name().to_string()).unwrap_or_else(|| "-".into()), outcome });
+        rows.push(Row {
+            method,
+            preconditioner: pc
+                .map(|k| k.name().to_string())
+                .unwrap_or_else(|| "-".into()),
+            outcome,
+        });
     }
     let table = table_json(&prep, &rows);
     if !quiet {
@@ -126,10 +148,18 @@ pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
     let best = rows
         .iter()
         .enumerate()
-        .filter_map(|(i, r)| r.outcome.as_ref().ok().filter(|(q, _)| q.status.converged()).map(|(q, _)| (i, q.kkt.max())))
+        .filter_map(|(i, r)| {
+            r.outcome
+                .as_ref()
+                .ok()
+                .filter(|(q, _)| q.status.converged())
+                .map(|(q, _)| (i, q.kkt.max()))
+        })
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|x| x.0);
-    let reference = best.and_then(|i| rows[i].outcome.as_ref().ok()).map(|(q, _)| q);
+    let reference = best
+        .and_then(|i| rows[i].outcome.as_ref().ok())
+        .map(|(q, _)| q);
     let mut out = vec![];
     for r in rows {
         let mut o = json!({ "method": r.method, "preconditioner": r.preconditioner });
@@ -140,12 +170,24 @@ pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
             }
             Ok((q, t)) => {
                 let u = prep.model.displacements(&q.x);
-                let probes: serde_json::Map<String, serde_json::Value> =
-                    pipeline::probes(prep, &u).into_iter().map(|(n, _, _, v)| (n, json!(v))).collect();
+                let probes: serde_json::Map<String, serde_json::Value> = pipeline::probes(prep, &u)
+                    .into_iter()
+                    .map(|(n, _, _, v)| (n, json!(v)))
+                    .collect();
                 let (rel, agrees) = match reference {
                     Some(rf) => {
-                        let num: f64 = q.x.iter().zip(&rf.x).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
-                        let den: f64 = rf.x.iter().map(|a| a * a).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
+                        let num: f64 =
+                            q.x.iter()
+                                .zip(&rf.x)
+                                .map(|(a, b)| (a - b) * (a - b))
+                                .sum::<f64>()
+                                .sqrt();
+                        let den: f64 =
+                            rf.x.iter()
+                                .map(|a| a * a)
+                                .sum::<f64>()
+                                .sqrt()
+                                .max(f64::MIN_POSITIVE);
                         let rel = num / den;
                         (rel, rel <= 1e-6 && q.active == rf.active)
                     }
@@ -156,7 +198,11 @@ pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
                 o["iterations"] = json!(q.iterations);
                 o["inner_iterations"] = json!(q.inner_iterations);
                 o["time_s"] = json!(t);
-                o["phases"] = json!(q.timings.iter().map(|(k, v)| (k.clone(), json!(v))).collect::<serde_json::Map<_, _>>());
+                o["phases"] = json!(q
+                    .timings
+                    .iter()
+                    .map(|(k, v)| (k.clone(), json!(v)))
+                    .collect::<serde_json::Map<_, _>>());
                 o["kkt"] = json!(q.kkt);
                 o["kkt_max"] = json!(q.kkt.max());
                 o["energy"] = json!(q.energy);
@@ -183,22 +229,33 @@ fn print_table(prep: &Prepared, t: &serde_json::Value) {
     for n in &names {
         head += &format!(" {:>12} {:>12}", format!("u1({n})"), format!("u2({n})"));
     }
-    head += &format!(" {:>7} {:>8} {:>9} {:>9} {:>15} {:>9}  agrees", "outer", "inner", "time[s]", "KKT", "energy", "rel.diff");
+    head += &format!(
+        " {:>7} {:>8} {:>9} {:>9} {:>15} {:>9}  agrees",
+        "outer", "inner", "time[s]", "KKT", "energy", "rel.diff"
+    );
     println!("{head}");
     for r in t["rows"].as_array().into_iter().flatten() {
-        let mut line = format!("{:<8} {:<9}", r["method"].as_str().unwrap_or(""), r["preconditioner"].as_str().unwrap_or(""));
+        let mut line = format!(
+            "{:<8} {:<9}",
+            r["method"].as_str().unwrap_or(""),
+            r["preconditioner"].as_str().unwrap_or("")
+        );
         if let Some(e) = r["error"].as_str() {
             println!("{line} FAILED: {e}");
             continue;
         }
         for n in &names {
             let u = &r["probes"][n];
-            line += &format!(" {:>12.5e} {:>12.5e}", u[0].as_f64().unwrap_or(f64::NAN), u[1].as_f64().unwrap_or(f64::NAN));
+            line += &format!(
+                " {:>12.5e} {:>12.5e}",
+                u[0].as_f64().unwrap_or(f64::NAN),
+                u[1].as_f64().unwrap_or(f64::NAN)
+            );
         }
         line += &format!(
             " {:>7} {:>8} {:>9.4} {:>9.2e} {:>15.8e} {:>9.2e}  {}",
-            r["iterations"],
-            r["inner_iterations"],
+            r["iterations"].as_u64().unwrap_or(0),
+            r["inner_iterations"].as_u64().unwrap_or(0),
             r["time_s"].as_f64().unwrap_or(f64::NAN),
             r["kkt_max"].as_f64().unwrap_or(f64::NAN),
             r["energy"].as_f64().unwrap_or(f64::NAN),
@@ -220,7 +277,12 @@ fn to_csv(t: &serde_json::Value) -> String {
     for r in t["rows"].as_array().into_iter().flatten() {
         let probes = r["probes"]
             .as_object()
-            .map(|m| m.iter().map(|(k, v)| format!("{k}={}:{}", v[0], v[1])).collect::<Vec<_>>().join(" "))
+            .map(|m| {
+                m.iter()
+                    .map(|(k, v)| format!("{k}={}:{}", v[0], v[1]))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            })
             .unwrap_or_default();
         s += &format!(
             "{},{},{},{},{},{},{},{},{},{},{},\"{}\"\n",
