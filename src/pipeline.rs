@@ -52,6 +52,26 @@ pub fn prepare(path: &Path, no_contact: bool) -> Result<Prepared, InputError> {
     })
 }
 
+/// The model of load step `s` (0-based): the same mesh and DOF numbering,
+/// with loads and prescribed displacements of that step.
+pub fn step_model(prep: &Prepared, s: usize) -> Result<Model, InputError> {
+    let mut p = prep.problem.clone();
+    p.file = prep.problem.file.at_step(s);
+    Ok(fem::build(&prep.mesh, &p)?)
+}
+
+/// Reduced unknowns ξ = Tᵀ(u − u0) of point displacements `u` (a warm start).
+pub fn reduce(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
+    let mut x = vec![0.0; model.qp.n()];
+    for (p, pd) in model.dofs.iter().enumerate() {
+        let du = [u[p][0] - pd.u0[0], u[p][1] - pd.u0[1]];
+        for k in 0..pd.ndof {
+            x[pd.start + k] = pd.t[k][0] * du[0] + pd.t[k][1] * du[1];
+        }
+    }
+    x
+}
+
 /// Solver choice: method name + options, from [solver] overridden by flags.
 #[derive(Debug, Clone, Default)]
 pub struct SolverChoice {
@@ -143,18 +163,22 @@ pub fn options(
 
 /// Run the method; an unbounded problem is bad input naming the bodies.
 pub fn solve(prep: &Prepared, method: &str, opts: &SolveOptions) -> Result<QpResult, InputError> {
+    solve_model(prep, &prep.model, method, opts)
+}
+
+/// [`solve`] for the model of a load step.
+pub fn solve_model(prep: &Prepared, model: &Model, method: &str, opts: &SolveOptions) -> Result<QpResult, InputError> {
     let bad = |msg: String| InputError::Solver {
         path: prep.problem.path.clone(),
         msg,
     };
-    let res =
-        registry::solve(method, &prep.model.qp, opts).map_err(|e| bad(format!("{method}: {e}")))?;
+    let res = registry::solve(method, &model.qp, opts).map_err(|e| bad(format!("{method}: {e}")))?;
     if let Status::Unbounded { direction } = &res.status {
-        let u = prep.model.displacements(direction);
+        let u = model.displacements(direction);
         // The bodies that the direction moves (relative to the largest motion).
-        let mut per_body = vec![0.0f64; prep.model.topo.nbodies];
+        let mut per_body = vec![0.0f64; model.topo.nbodies];
         for (p, v) in u.iter().enumerate() {
-            let b = prep.model.topo.point_body[p] as usize;
+            let b = model.topo.point_body[p] as usize;
             per_body[b] = per_body[b].max(v[0].abs().max(v[1].abs()));
         }
         let m = per_body.iter().fold(0.0f64, |a, b| a.max(*b));
@@ -181,41 +205,40 @@ pub struct Outputs {
     pub json: PathBuf,
 }
 
-pub fn output_paths(dir: &Path, name: &str) -> Outputs {
+/// Output paths; `step` = Some(k) names the VTU pair of load step k (1-based).
+pub fn output_paths(dir: &Path, name: &str, step: Option<usize>) -> Outputs {
+    let stem = match step {
+        Some(k) => format!("{name}_{k:04}"),
+        None => name.to_string(),
+    };
     Outputs {
-        vtu: dir.join(format!("{name}.vtu")),
-        contact_vtu: dir.join(format!("{name}_contact.vtu")),
+        vtu: dir.join(format!("{stem}.vtu")),
+        contact_vtu: dir.join(format!("{stem}_contact.vtu")),
         h5: dir.join(format!("{name}.h5")),
         json: dir.join(format!("{name}.json")),
     }
 }
 
-/// Post-process and write VTU, contact VTU, HDF5 checkpoint. The JSON is
-/// written by the caller (it needs the timings of this step too).
-pub fn write_fields(
-    prep: &Prepared,
-    out: &Outputs,
-    om: &OutMesh,
-    step: &StepOutput,
-    compress: bool,
-) -> Result<(), IoError> {
-    io::vtu::write_vtu(&out.vtu, om, step, compress)?;
-    io::vtu::write_contact_vtu(&out.contact_vtu, om, step, compress)?;
+/// A new checkpoint holding the mesh (steps are appended one by one).
+pub fn create_checkpoint(prep: &Prepared, out: &Outputs, om: &OutMesh) -> Result<(), IoError> {
     let attrs = [
         ("problem", prep.problem.name.clone()),
         ("problem_toml", prep.problem.text.clone()),
-        (
-            "program",
-            format!("signorini {}", env!("CARGO_PKG_VERSION")),
-        ),
+        ("program", format!("signorini {}", env!("CARGO_PKG_VERSION"))),
     ];
-    io::hdf5::create_checkpoint(&out.h5, om, &attrs)?;
-    io::hdf5::append_step(&out.h5, 1, step)?;
-    Ok(())
+    io::hdf5::create_checkpoint(&out.h5, om, &attrs)
+}
+
+/// Write the VTU pair of a step and append it to the checkpoint (each file atomically).
+pub fn write_step(out: &Outputs, om: &OutMesh, step: &StepOutput, index: usize, compress: bool) -> Result<(), IoError> {
+    io::vtu::write_vtu(&out.vtu, om, step, compress)?;
+    io::vtu::write_contact_vtu(&out.contact_vtu, om, step, compress)?;
+    io::hdf5::append_step(&out.h5, index, step)
 }
 
 /// Probes: nearest output point to each requested point.
 pub fn probes(prep: &Prepared, u: &[[f64; 2]]) -> Vec<(String, [f64; 2], usize, [f64; 2])> {
+    // The point numbering is the same in every load step.
     let pts = &prep.model.topo.points;
     prep.problem
         .file

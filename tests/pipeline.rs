@@ -330,3 +330,22 @@ fn every_shipped_example_solves_with_the_default_method() {
         assert!(res.kkt.within(1e-8), "{n}: {:?}", res.kkt);
     }
 }
+
+#[test]
+fn point_force_is_per_unit_thickness_in_plane_stress() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!(
+        "[mesh]\nfile = \"{}\"\n[model]\nplane = \"stress\"\nthickness = 0.1\n[materials.body_left]\nE = 1e9\nnu = 0.3\n[materials.body_right]\nE = 1e9\nnu = 0.3\n[[dirichlet]]\non = \"top\"\nu = [0.0, 0.0]\n[[force]]\non = \"corner\"\nf = [1e3, 2e3]\n",
+        square_mesh("ascii41")
+    );
+    let p = temp_toml(dir.path(), "force", &text);
+    let prep = pipeline::prepare(&p, false).unwrap();
+    let m = &prep.model;
+    let corner = m.topo.points.iter().position(|x| x[0] == 0.0 && x[1] == 0.0).unwrap();
+    let pd = m.dofs[corner];
+    assert_eq!(pd.ndof, 2);
+    // The load vector holds t_h·f at the corner and nothing else.
+    assert!((m.qp.d[pd.start] - 100.0).abs() < 1e-9 && (m.qp.d[pd.start + 1] - 200.0).abs() < 1e-9, "{:?}", &m.qp.d[pd.start..pd.start + 2]);
+    let total: f64 = m.qp.d.iter().map(|v| v.abs()).sum();
+    assert!((total - 300.0).abs() < 1e-9, "{total}");
+}

@@ -4,6 +4,7 @@
 //! KKT residual above target.
 
 pub mod compare;
+pub mod mesh;
 pub mod solve;
 
 use clap::{Args, Parser, Subcommand};
@@ -32,6 +33,9 @@ pub enum Command {
     Solve(SolveArgs),
     /// Run every method (or `--methods a,b`) on one problem and print the comparison table.
     Compare(compare::CompareArgs),
+    /// Draw a checkpoint (NAME.h5) as PNG or SVG: the deformed mesh coloured by a field, or the contact pressure.
+    /// Mesh a Gmsh .geo file (2D, MSH 4.1) and check it.
+    Mesh(mesh::MeshArgs),
     /// List the available methods and preconditioners.
     Methods,
 }
@@ -77,6 +81,12 @@ pub struct SolveArgs {
     /// zlib-compress the VTU arrays.
     #[arg(long)]
     pub compress: bool,
+    /// Continue after the last complete step of this checkpoint (warm start).
+    #[arg(long)]
+    pub restart: Option<PathBuf>,
+    /// Stop after this load step (1-based); `--restart` continues later.
+    #[arg(long)]
+    pub max_steps: Option<usize>,
     #[command(flatten)]
     pub solver: SolverFlags,
 }
@@ -95,6 +105,7 @@ pub fn run(cli: Cli) -> i32 {
     match cli.command {
         Command::Solve(a) => solve::run(&a, cli.quiet),
         Command::Compare(a) => compare::run(&a, cli.quiet),
+        Command::Mesh(a) => mesh::run(&a, cli.quiet),
         Command::Methods => {
             for m in crate::qp::registry::METHODS {
                 println!("{:<10} {}", m.name, m.summary);

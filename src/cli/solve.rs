@@ -41,52 +41,170 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         .unwrap_or_else(|| PathBuf::from("out"));
     // Fail on an unwritable output directory before spending time solving.
     if let Err(e) = std::fs::create_dir_all(&dir) {
-        eprintln!(
-            "error: {}: cannot create output directory: {e}",
-            dir.display()
-        );
+        eprintln!("error: {}: cannot create output directory: {e}", dir.display());
         return EXIT_BAD_INPUT;
     }
-    let t_solve0 = Instant::now();
-    let res = match pipeline::solve(&prep, &method, &opts) {
-        Ok(r) => r,
-        Err(e) => return bad_input(&e),
-    };
-    let t_solve = t_solve0.elapsed().as_secs_f64();
-
-    let t_w = Instant::now();
-    let out = pipeline::output_paths(&dir, &prep.problem.name);
+    let name = prep.problem.name.clone();
+    let file = &prep.problem.file;
+    let multi = !file.steps.is_empty();
+    let nsteps = file.nsteps();
+    let last = a.max_steps.unwrap_or(nsteps).min(nsteps);
     let om = post::out_mesh(&prep.model, &prep.mesh);
-    let mut step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
-    step.info.method = method.clone();
-    step.info.preconditioner = preconditioner_label(&method, &opts);
-    step.info.time_assemble = prep.t_assemble;
-    step.info.time_solve = t_solve;
-    step.info.time_total = t0.elapsed().as_secs_f64();
-    let compress = a.compress || prep.problem.file.output.compress;
-    if let Err(e) = pipeline::write_fields(&prep, &out, &om, &step, compress) {
+    let h5 = pipeline::output_paths(&dir, &name, None).h5;
+    let compress = a.compress || file.output.compress;
+
+    // Restart: the steps already in the checkpoint are kept; warm start from the last.
+    let mut first = 0usize;
+    let mut u_prev: Option<Vec<[f64; 2]>> = None;
+    if let Some(rp) = &a.restart {
+        let ck = match crate::io::hdf5::read_checkpoint(rp) {
+            Ok(c) => c,
+            Err(e) => {
+                eprintln!("error: --restart: {e}");
+                return EXIT_BAD_INPUT;
+            }
+        };
+        if ck.mesh.points.len() != om.points.len() || ck.mesh.triangles.len() != om.triangles.len() {
+            eprintln!(
+                "error: {}: checkpoint mesh ({} points, {} triangles) does not match {} ({} points, {} triangles)",
+                rp.display(),
+                ck.mesh.points.len(),
+                ck.mesh.triangles.len(),
+                a.problem.display(),
+                om.points.len(),
+                om.triangles.len()
+            );
+            return EXIT_BAD_INPUT;
+        }
+        first = ck.steps.len();
+        u_prev = ck.steps.last().map(|s| s.displacement.clone());
+        if rp.canonicalize().ok() != h5.canonicalize().ok() {
+            if let Err(e) = crate::io::atomic::write_atomic(&h5, |tmp| {
+                std::fs::copy(rp, tmp).map(|_| ()).map_err(|cause| crate::io::IoError::Io {
+                    path: h5.clone(),
+                    action: "copy the checkpoint",
+                    cause,
+                })
+            }) {
+                eprintln!("error: {e}");
+                return EXIT_BAD_INPUT;
+            }
+        }
+        if !quiet {
+            println!("restart     from step {first} of {} ({})", nsteps, rp.display());
+        }
+    } else if let Err(e) = pipeline::create_checkpoint(&prep, &pipeline::output_paths(&dir, &name, None), &om) {
         eprintln!("error: {e}");
         return EXIT_BAD_INPUT;
     }
-    let t_write_fields = t_w.elapsed().as_secs_f64();
-    let certified = res.kkt.within(a.solver.kkt_target);
-    let timings = Timings {
-        read: prep.t_read,
-        assemble: prep.t_assemble,
-        solve: t_solve,
-        write: t_write_fields,
-        total: t0.elapsed().as_secs_f64(),
+
+    let mut code = 0;
+    let mut step_rows = vec![];
+    let mut final_state = None;
+    for s in first..last {
+        let ts = Instant::now();
+        // Without [[steps]] the prepared model is the problem; with steps every
+        // step (the first included) gets its own loads.
+        let model = if !multi {
+            None
+        } else {
+            match pipeline::step_model(&prep, s) {
+                Ok(m) => Some(m),
+                Err(e) => return bad_input(&e),
+            }
+        };
+        let model_ref = model.as_ref().unwrap_or(&prep.model);
+        let t_assemble = if model.is_none() { prep.t_assemble } else { ts.elapsed().as_secs_f64() };
+        let mut o = opts.clone();
+        o.x0 = u_prev.as_ref().map(|u| pipeline::reduce(model_ref, u));
+        let t_solve0 = Instant::now();
+        let res = match pipeline::solve_model(&prep, model_ref, &method, &o) {
+            Ok(r) => r,
+            Err(e) => return bad_input(&e),
+        };
+        let t_solve = t_solve0.elapsed().as_secs_f64();
+        let t_w = Instant::now();
+        let out = pipeline::output_paths(&dir, &name, multi.then_some(s + 1));
+        let mut problem_s = prep.problem.clone();
+        problem_s.file = file.at_step(s);
+        let mut step = post::step_output(model_ref, &problem_s, &res, file.step_time(s));
+        step.info.method = method.clone();
+        step.info.preconditioner = preconditioner_label(&method, &opts);
+        step.info.time_assemble = t_assemble;
+        step.info.time_solve = t_solve;
+        step.info.time_total = ts.elapsed().as_secs_f64();
+        if let Err(e) = pipeline::write_step(&out, &om, &step, s + 1, compress) {
+            eprintln!("error: {e}");
+            return EXIT_BAD_INPUT;
+        }
+        if multi {
+            let entries: Vec<(f64, String)> = (0..=s)
+                .flat_map(|k| {
+                    let o = pipeline::output_paths(&dir, &name, Some(k + 1));
+                    let f = |p: &std::path::Path| p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+                    [(file.step_time(k), f(&o.vtu)), (file.step_time(k), f(&o.contact_vtu))]
+                })
+                .collect();
+            if let Err(e) = crate::io::vtu::write_pvd(&dir.join(format!("{name}.pvd")), &entries) {
+                eprintln!("error: {e}");
+                return EXIT_BAD_INPUT;
+            }
+        }
+        let t_write = t_w.elapsed().as_secs_f64();
+        if multi && !quiet {
+            println!(
+                "step {:>4}/{}  t = {:<10} {} in {} iterations, KKT {:.2e}, {} active, {:.3} s",
+                s + 1,
+                nsteps,
+                file.step_time(s),
+                if res.status.converged() { "converged" } else { "NOT CONVERGED" },
+                res.iterations,
+                res.kkt.max(),
+                res.active.iter().filter(|a| **a).count(),
+                ts.elapsed().as_secs_f64()
+            );
+        }
+        step_rows.push(json!({
+            "step": s + 1, "t": file.step_time(s), "converged": res.status.converged(),
+            "iterations": res.iterations, "kkt_max": res.kkt.max(), "energy": res.energy,
+            "active": res.active.iter().filter(|a| **a).count(),
+        }));
+        if !res.status.converged() {
+            eprintln!(
+                "warning: step {}: {} did not converge: {} (outputs written and flagged converged = false)",
+                s + 1,
+                method,
+                res.status.describe()
+            );
+            code = EXIT_NOT_CONVERGED;
+        } else if !res.kkt.within(a.solver.kkt_target) {
+            eprintln!(
+                "warning: step {}: KKT residual {:.2e} above the target {:.0e}",
+                s + 1,
+                res.kkt.max(),
+                a.solver.kkt_target
+            );
+            if a.solver.strict {
+                code = EXIT_NOT_CONVERGED;
+            }
+        }
+        u_prev = Some(step.displacement.clone());
+        let timings = Timings { read: prep.t_read, assemble: t_assemble, solve: t_solve, write: t_write, total: 0.0 };
+        final_state = Some((model, res, step, out, timings));
+    }
+    let Some((model, res, step, out, mut timings)) = final_state else {
+        if !quiet {
+            println!("nothing to do: the checkpoint already holds all {nsteps} steps");
+        }
+        return 0;
     };
-    let summary = summary_json(
-        &prep,
-        &res,
-        &method,
-        &step.info.preconditioner,
-        &step,
-        &timings,
-        certified,
-        a.solver.kkt_target,
-    );
+    timings.total = t0.elapsed().as_secs_f64();
+    let model_ref = model.as_ref().unwrap_or(&prep.model);
+    let certified = res.kkt.within(a.solver.kkt_target);
+    let mut summary = summary_json(&prep, model_ref, &res, &method, &step.info.preconditioner, &step, &timings, certified, a.solver.kkt_target);
+    if multi {
+        summary["steps"] = json!(step_rows);
+    }
     let text = match serde_json::to_string_pretty(&summary) {
         Ok(t) => t,
         Err(e) => {
@@ -99,36 +217,9 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         return EXIT_BAD_INPUT;
     }
     if !quiet {
-        print_report(
-            &prep,
-            &res,
-            &method,
-            &step,
-            &summary,
-            &timings,
-            &out,
-            a.solver.kkt_target,
-        );
+        print_report(&prep, model_ref, &res, &method, &step, &summary, &timings, &out, a.solver.kkt_target);
     }
-    if !res.status.converged() {
-        eprintln!(
-            "warning: {} did not converge: {} (outputs written and flagged converged = false)",
-            method,
-            res.status.describe()
-        );
-        return EXIT_NOT_CONVERGED;
-    }
-    if !certified {
-        eprintln!(
-            "warning: KKT residual {:.2e} above the target {:.0e}",
-            res.kkt.max(),
-            a.solver.kkt_target
-        );
-        if a.solver.strict {
-            return EXIT_NOT_CONVERGED;
-        }
-    }
-    0
+    code
 }
 
 pub fn preconditioner_label(method: &str, opts: &crate::qp::SolveOptions) -> String {
@@ -154,6 +245,7 @@ pub struct Timings {
 #[allow(clippy::too_many_arguments)]
 pub fn summary_json(
     prep: &Prepared,
+    m: &crate::fem::Model,
     res: &QpResult,
     method: &str,
     pc: &str,
@@ -162,7 +254,6 @@ pub fn summary_json(
     certified: bool,
     target: f64,
 ) -> serde_json::Value {
-    let m = &prep.model;
     let mut probes = serde_json::Map::new();
     for (name, x, node, u) in pipeline::probes(prep, &step.displacement) {
         probes.insert(name, json!({ "x": x[0], "y": x[1], "node": node, "tag": prep.mesh.node_tags[m.topo.point_node[node]], "u": u }));
@@ -210,6 +301,7 @@ pub fn summary_json(
 #[allow(clippy::too_many_arguments)]
 fn print_report(
     prep: &Prepared,
+    m: &crate::fem::Model,
     res: &QpResult,
     method: &str,
     step: &crate::io::StepOutput,
@@ -218,7 +310,6 @@ fn print_report(
     out: &pipeline::Outputs,
     target: f64,
 ) {
-    let m = &prep.model;
     println!(
         "signorini {} — {} ({})",
         env!("CARGO_PKG_VERSION"),

@@ -298,7 +298,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
             add_force(&mut d, p, [0.5 * th * len * pv[0], 0.5 * th * len * pv[1]]);
         }
     }
-    // --- point forces: on the copy of the lowest body
+    // --- point forces [N per unit thickness]: on the copy of the lowest body
     for (i, fo) in f.force.iter().enumerate() {
         let what = format!("[[force]] #{} (on = \"{}\")", i + 1, fo.on);
         let g = mesh
@@ -315,7 +315,8 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         for &e in &g.elements {
             let v = mesh.points[e];
             if let Some(&(_, p)) = topo.copies(v).first() {
-                add_force(&mut d, p, fo.f);
+                // f is per unit thickness, like every other load (§2.2).
+                add_force(&mut d, p, [th * fo.f[0], th * fo.f[1]]);
             }
         }
     }

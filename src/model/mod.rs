@@ -164,6 +164,26 @@ pub struct OutputSection {
     pub compress: bool,
 }
 
+/// One load step (extension): pseudo-time `t`, a factor on every load
+/// (tractions, point forces, gravity) and on every prescribed displacement,
+/// or explicit displacement values for named `[[dirichlet]]` groups.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadStep {
+    /// Pseudo-time (default: the step number).
+    pub t: Option<f64>,
+    /// Factor on loads and prescribed displacements (default 1).
+    pub factor: Option<f64>,
+    /// Factor on loads only (overrides `factor` for loads).
+    pub load: Option<f64>,
+    /// Factor on prescribed displacements only (overrides `factor` for them).
+    pub displacement: Option<f64>,
+    /// Explicit prescribed displacement per `[[dirichlet]] on` name: [ux, uy]
+    /// (replaces the group's values and its factor in this step).
+    #[serde(default)]
+    pub dirichlet: BTreeMap<String, [f64; 2]>,
+}
+
 /// The whole problem file.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -187,6 +207,53 @@ pub struct ProblemFile {
     pub solver: SolverSection,
     #[serde(default)]
     pub output: OutputSection,
+    /// Load steps (extension); none = one step with the values as given.
+    #[serde(default)]
+    pub steps: Vec<LoadStep>,
+}
+
+impl ProblemFile {
+    /// The problem of load step `s` (0-based): loads and prescribed
+    /// displacements scaled or replaced as the step says.
+    pub fn at_step(&self, s: usize) -> ProblemFile {
+        let mut f = self.clone();
+        let Some(st) = self.steps.get(s) else { return f };
+        let lf = st.load.or(st.factor).unwrap_or(1.0);
+        let df = st.displacement.or(st.factor).unwrap_or(1.0);
+        for t in f.traction.iter_mut() {
+            t.p = t.p.map(|p| [p[0] * lf, p[1] * lf]);
+            t.pn = t.pn.map(|v| v * lf);
+        }
+        for fo in f.force.iter_mut() {
+            fo.f = [fo.f[0] * lf, fo.f[1] * lf];
+        }
+        f.model.gravity = f.model.gravity.map(|g| [g[0] * lf, g[1] * lf]);
+        for d in f.dirichlet.iter_mut() {
+            if let Some(u) = st.dirichlet.get(&d.on) {
+                if d.u.is_some() {
+                    d.u = Some(*u);
+                } else {
+                    d.ux = d.ux.map(|_| u[0]);
+                    d.uy = d.uy.map(|_| u[1]);
+                }
+            } else {
+                d.u = d.u.map(|u| [u[0] * df, u[1] * df]);
+                d.ux = d.ux.map(|v| v * df);
+                d.uy = d.uy.map(|v| v * df);
+            }
+        }
+        f
+    }
+
+    /// Number of load steps (1 without [[steps]]).
+    pub fn nsteps(&self) -> usize {
+        self.steps.len().max(1)
+    }
+
+    /// Pseudo-time of step `s` (0-based).
+    pub fn step_time(&self, s: usize) -> f64 {
+        self.steps.get(s).and_then(|st| st.t).unwrap_or((s + 1) as f64)
+    }
 }
 
 /// A loaded problem: the parsed file plus where it came from.
@@ -354,6 +421,30 @@ impl Problem {
         }
         if s.max_iter == Some(0) {
             return Err(self.invalid("[solver] max_iter must be positive".into()));
+        }
+        let mut last_t = f64::NEG_INFINITY;
+        for (i, st) in f.steps.iter().enumerate() {
+            for v in [st.t, st.factor, st.load, st.displacement].into_iter().flatten() {
+                if !v.is_finite() {
+                    return Err(self.invalid(format!("[[steps]] #{}: values must be finite", i + 1)));
+                }
+            }
+            let t = st.t.unwrap_or((i + 1) as f64);
+            if t <= last_t {
+                return Err(self.invalid(format!("[[steps]] #{}: t = {t} must increase from step to step", i + 1)));
+            }
+            last_t = t;
+            for (name, u) in &st.dirichlet {
+                if !f.dirichlet.iter().any(|d| &d.on == name) {
+                    return Err(self.invalid(format!(
+                        "[[steps]] #{}: dirichlet.{name}: no [[dirichlet]] with on = \"{name}\"",
+                        i + 1
+                    )));
+                }
+                if !u.iter().all(|v| v.is_finite()) {
+                    return Err(self.invalid(format!("[[steps]] #{}: dirichlet.{name}: values must be finite", i + 1)));
+                }
+            }
         }
         for (name, p) in &f.output.probes {
             if !p.iter().all(|v| finite(*v)) {

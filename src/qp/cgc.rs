@@ -25,7 +25,8 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     let pc = precond::build(opts.preconditioner, &qp.c, &qp.kernel, opts.omega)?;
     let t_pc = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let mut state = Cgc::new(qp, pc.as_ref(), opts.tol, opts.multiple_release, None);
+    let x0 = opts.x0.as_deref().filter(|x| x.len() == qp.n() && is_feasible(qp, x));
+    let mut state = Cgc::new(qp, pc.as_ref(), opts.tol, opts.multiple_release, x0);
     let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("cgc"));
     let (status, iters) = exec.run(&mut state);
     let t_it = t1.elapsed().as_secs_f64();
@@ -427,6 +428,13 @@ pub fn schur_cg(
         it += 1;
     }
     it
+}
+
+/// Ax ≤ g up to rounding (a warm start must be feasible, §4.1).
+pub fn is_feasible(qp: &QpProblem, x: &[f64]) -> bool {
+    let ax = qp.a.mul(x);
+    let scale = norm_inf(x).max(norm_inf(&qp.g)).max(1e-300);
+    x.iter().all(|v| v.is_finite()) && ax.iter().zip(&qp.g).all(|(a, g)| a - g <= 1e-12 * scale)
 }
 
 /// x⁰ = 0 when g ≥ 0 (the report's glued start); otherwise the least-norm

@@ -136,6 +136,8 @@ pub struct SolveOptions {
     pub rho: Option<f64>,
     /// Print progress to stderr for long solves.
     pub progress: bool,
+    /// Warm start (load steps, restart): used by methods that can, when feasible.
+    pub x0: Option<Vec<f64>>,
 }
 
 impl Default for SolveOptions {
@@ -149,6 +151,7 @@ impl Default for SolveOptions {
             penalty: None,
             rho: None,
             progress: false,
+            x0: None,
         }
     }
 }

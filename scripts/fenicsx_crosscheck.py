@@ -1,0 +1,1059 @@
+#!/usr/bin/python3
+"""Cross-check `signorini` against an independent FEniCSx (dolfinx) model.
+
+Usage:  /usr/bin/python3 scripts/fenicsx_crosscheck.py meshes/NAME.toml [--tol 1e-8]
+
+Runs under Debian's python3 (python3-dolfinx-real 0.5.2, python3-gmsh,
+python3-scipy, python3-h5py); the QP solver Clarabel comes from PyPI and is
+looked for in <repo>/.venv/debian-site (pip install --target, see python_checks.sh) or
+$SIGNORINI_PYDEPS.
+
+What it does
+------------
+The mesh is read with the gmsh Python API (gmsh.open) and converted with
+dolfinx.io.gmshio.model_to_mesh (read_from_msh is broken in dolfinx 0.5.2).
+The stiffness and the loads are assembled by dolfinx on P1 vector Lagrange
+elements:
+
+    a(u, v) = t ∫ 2μ ε(u):ε(v) + λ tr ε(u) tr ε(v) dx
+    L(v)    = t ∫ ρ g·v dx + t ∫_Γτ (P + pn n)·v ds
+
+(λ → 2λμ/(λ+2μ) in plane stress; t = thickness in plane stress, 1 in plane
+strain).  λ, μ, ρ are DG0 functions.
+
+Cut mesh (contact): the problem-format contract duplicates the nodes of each
+conforming contact curve, one copy per body.  Rather than re-meshing, every
+form is assembled once *per body* on the uncut dolfinx mesh, with λ, μ, ρ
+multiplied by the body's indicator (and tractions on that body's facets
+only).  K_b then couples only nodes of body b, and the cut stiffness is
+K = Σ_b E_b K_b E_bᵀ, E_b mapping node v of body b to its copy (v, b).  This
+is exact (element contributions are simply routed to the body's copy), and
+with no contact curve it reduces to the ordinary assembly.
+
+Dirichlet data, slip lines (u·n = 0 with the per-node averaged unit outward
+normal of the line's segments) and point conditions are eliminated node by
+node exactly as documented (u_p = u0_p + T_p ξ_p), in scipy.
+
+Part a (linear elasticity): the contact curves are ordinary interior lines
+(no copies).  Solve K_r ξ = f_r with scipy.sparse.linalg.spsolve and compare
+with `signorini solve TOML --no-contact` (nodal displacements matched by
+coordinates; stresses per triangle).  A body left with rigid motions is
+refused by signorini (exit 2): then part a only checks that refusal.
+
+Part b (contact): rows built from the mesh as problem-format.md says:
+conforming curves → one row per node copy pair (averaged unit outward normal
+of the lower-numbered body, row n·(u_k − u_l) ≤ 0; `normals = "segment"` gives
+one row per distinct segment normal); non-matching pairs → nearest master
+segment projection, n·((1−ξ)u_m1 + ξ u_m2 − u_s) ≤ g.  The QP
+min ½xᵀKx − fᵀx, Ax ≤ g is solved by Clarabel (interior point, handles the
+positive semidefinite K of floating bodies), then polished by a primal-dual
+active-set iteration that solves the equality-constrained KKT system of the
+active rows exactly (sparse LU).  Compared with `signorini solve TOML`:
+displacements, stresses and multipliers.
+
+Exit code: 0 all comparisons within --tol, 1 a difference above it (or a
+failed self-check), 2 usage or setup error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent
+for _d in (os.environ.get("SIGNORINI_PYDEPS"), str(REPO / ".venv" / "debian-site")):
+    if _d and Path(_d).is_dir() and _d not in sys.path:
+        sys.path.append(_d)  # after dist-packages: Debian's numpy/scipy win
+
+try:
+    import numpy as np
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+    from scipy.spatial import cKDTree
+except ImportError as _e:
+    print(f"fenicsx_crosscheck: error: {_e} under {sys.executable}: run this script with Debian's "
+          "/usr/bin/python3 (python3-dolfinx-real, python3-gmsh, python3-scipy, python3-h5py; "
+          "scripts/python_checks.sh installs them)", file=sys.stderr)
+    sys.exit(2)
+
+
+class CheckError(Exception):
+    """A comparison failed (exit 1)."""
+
+
+class SetupError(Exception):
+    """Bad usage or a missing tool (exit 2)."""
+
+
+class Conflict(Exception):
+    """Conditions at a point contradict each other (signorini: exit 2)."""
+
+
+def log(msg: str) -> None:
+    print(msg, flush=True)
+
+
+# --------------------------------------------------------------------- mesh
+
+
+class GmshMesh:
+    """Nodes, triangles, lines and points of a .msh with physical names."""
+
+    def __init__(self, gmsh, path: Path, materials: dict):
+        gmsh.open(str(path))
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        order = np.argsort(tags)
+        self.tags = np.asarray(tags, dtype=np.int64)[order]
+        self.x = np.asarray(coords, dtype=float).reshape(-1, 3)[order, :2]
+        self.index = {int(t): i for i, t in enumerate(self.tags)}
+        self.groups: dict[str, tuple[int, int]] = {}
+        for dim, ptag in gmsh.model.getPhysicalGroups():
+            name = gmsh.model.getPhysicalName(dim, ptag)
+            self.groups.setdefault(name, (dim, ptag))
+        self._gmsh = gmsh
+        # triangles of the material surfaces
+        tris, mat, seen = [], [], set()
+        self.material_names = list(materials.keys())
+        for mi, name in enumerate(self.material_names):
+            dim, ptag = self.group(name, 2)
+            for ent in gmsh.model.getEntitiesForPhysicalGroup(dim, ptag):
+                etypes, etags, enodes = gmsh.model.mesh.getElements(2, ent)
+                for ty, et, en in zip(etypes, etags, enodes):
+                    if ty != 2:
+                        raise SetupError(f"surface {name}: element type {ty} is not a 3-node triangle")
+                    en = np.asarray(en, dtype=np.int64).reshape(-1, 3)
+                    for t, nodes in zip(et, en):
+                        if int(t) in seen:
+                            continue
+                        seen.add(int(t))
+                        tris.append([self.index[int(v)] for v in nodes])
+                        mat.append(mi)
+        self.tri = np.array(tris, dtype=np.int64)
+        self.tri_mat = np.array(mat, dtype=np.int64)
+        # edge -> triangles
+        self.edge_tris: dict[tuple[int, int], list[int]] = {}
+        for t, tri in enumerate(self.tri):
+            for k in range(3):
+                a, b = int(tri[k]), int(tri[(k + 1) % 3])
+                self.edge_tris.setdefault((min(a, b), max(a, b)), []).append(t)
+
+    def group(self, name: str, dim: int | None = None) -> tuple[int, int]:
+        if name not in self.groups:
+            raise SetupError(f"no physical group named {name!r} in the mesh")
+        g = self.groups[name]
+        if dim is not None and g[0] != dim:
+            raise SetupError(f"{name!r} is a physical group of dimension {g[0]}, expected {dim}")
+        return g
+
+    def lines(self, name: str) -> list[tuple[int, int]]:
+        """Segments (node indices) of a physical curve, in element order."""
+        dim, ptag = self.group(name, 1)
+        out = []
+        for ent in self._gmsh.model.getEntitiesForPhysicalGroup(dim, ptag):
+            etypes, _, enodes = self._gmsh.model.mesh.getElements(1, ent)
+            for ty, en in zip(etypes, enodes):
+                if ty != 1:
+                    raise SetupError(f"curve {name}: element type {ty} is not a 2-node line")
+                for a, b in np.asarray(en, dtype=np.int64).reshape(-1, 2):
+                    out.append((self.index[int(a)], self.index[int(b)]))
+        return out
+
+    def points(self, name: str) -> list[int]:
+        dim, ptag = self.group(name, 0)
+        out = []
+        for ent in self._gmsh.model.getEntitiesForPhysicalGroup(dim, ptag):
+            ntags, _, _ = self._gmsh.model.mesh.getNodes(0, ent)
+            out += [self.index[int(v)] for v in ntags]
+        return out
+
+    def outward_normal(self, t: int, a: int, b: int) -> np.ndarray:
+        tri = self.tri[t]
+        c = [int(v) for v in tri if v != a and v != b][0]
+        pa, pb, pc = self.x[a], self.x[b], self.x[c]
+        d = pb - pa
+        n = np.array([d[1], -d[0]]) / np.hypot(*d)
+        if n @ (pc - pa) > 0:
+            n = -n
+        return n
+
+
+class Topology:
+    """Bodies after cutting along the conforming contact curves, node copies."""
+
+    def __init__(self, m: GmshMesh, contact_curves: list[str]):
+        self.contact_edge: dict[tuple[int, int], int] = {}
+        for cid, name in enumerate(contact_curves):
+            for a, b in m.lines(name):
+                self.contact_edge[(min(a, b), max(a, b))] = cid
+        nt = len(m.tri)
+        parent = list(range(nt))
+
+        def find(x):
+            while parent[x] != x:
+                parent[x] = parent[parent[x]]
+                x = parent[x]
+            return x
+
+        for e, ts in m.edge_tris.items():
+            if len(ts) > 2:
+                raise SetupError(f"edge {e} shared by more than two triangles")
+            if len(ts) == 2 and e not in self.contact_edge:
+                ra, rb = find(ts[0]), find(ts[1])
+                if ra != rb:
+                    parent[ra] = rb
+        roots = {}
+        for t in range(nt):
+            r = find(t)
+            mt = int(m.tags[m.tri[t]].min())
+            roots[r] = min(roots.get(r, 1 << 62), mt)
+        order = sorted(roots, key=lambda r: roots[r])
+        body_of_root = {r: i for i, r in enumerate(order)}
+        self.nbodies = len(order)
+        self.tri_body = np.array([body_of_root[find(t)] for t in range(nt)], dtype=np.int64)
+        pairs = sorted({(int(self.tri_body[t]), int(v)) for t in range(nt) for v in m.tri[t]},
+                       key=lambda p: (p[0], int(m.tags[p[1]])))
+        self.point_body = np.array([p[0] for p in pairs], dtype=np.int64)
+        self.point_node = np.array([p[1] for p in pairs], dtype=np.int64)
+        self.point_of = {(v, b): i for i, (b, v) in enumerate(pairs)}
+        self.copies: dict[int, list[int]] = {}
+        for i, (b, v) in enumerate(pairs):
+            self.copies.setdefault(v, []).append(i)  # ascending body
+        self.np = len(pairs)
+        self.x = m.x[self.point_node]
+
+
+# ------------------------------------------------------------- dolfinx part
+
+
+class Assembler:
+    """dolfinx forms on the uncut mesh, assembled per body."""
+
+    def __init__(self, gmsh, m: GmshMesh, cfg: dict):
+        from mpi4py import MPI
+        import dolfinx
+        import dolfinx.fem.petsc  # noqa: F401
+        import dolfinx.io.gmshio
+        import ufl
+
+        self.dolfinx, self.ufl = dolfinx, ufl
+        # the JIT (cffi/distutils) logs every compiler call at INFO on the root logger
+        logging.disable(logging.INFO)
+        msh, ct, ft = dolfinx.io.gmshio.model_to_mesh(gmsh.model, MPI.COMM_WORLD, 0, gdim=2)
+        self.msh = msh
+        # geometry node -> gmsh node: model_to_mesh orders its input by gmsh tag (tag − 1),
+        # so input_global_indices gives the tag (coordinates would be ambiguous where two
+        # bodies have distinct nodes at the same place, as in a non-matching pair)
+        geo_node = np.array([m.index[int(i) + 1] for i in msh.geometry.input_global_indices])
+        scale = np.ptp(m.x, axis=0).max()
+        if np.abs(msh.geometry.x[:, :2] - m.x[geo_node]).max() > 1e-12 * scale:
+            raise SetupError("dolfinx geometry nodes do not match the gmsh nodes")
+        # cells -> gmsh triangles
+        key_tri = {tuple(sorted(int(v) for v in tri)): t for t, tri in enumerate(m.tri)}
+        gdm = msh.geometry.dofmap
+        ncell = msh.topology.index_map(2).size_local
+        self.cell_tri = np.empty(ncell, dtype=np.int64)
+        for c in range(ncell):
+            key = tuple(sorted(int(geo_node[v]) for v in gdm.links(c)))
+            if key not in key_tri:
+                raise SetupError(f"dolfinx cell {c} is not a triangle of a material surface")
+            self.cell_tri[c] = key_tri[key]
+        if ncell != len(m.tri):
+            raise SetupError(f"dolfinx has {ncell} cells, the material surfaces {len(m.tri)} triangles")
+        # facets -> gmsh edges (through cells: topology vertex = geometry node for P1)
+        tdim = 2
+        msh.topology.create_connectivity(tdim, 0)
+        msh.topology.create_connectivity(tdim - 1, 0)
+        msh.topology.create_connectivity(tdim - 1, tdim)
+        c2v = msh.topology.connectivity(tdim, 0)
+        vert_node = np.full(msh.topology.index_map(0).size_local, -1, dtype=np.int64)
+        for c in range(ncell):
+            for tv, gv in zip(c2v.links(c), gdm.links(c)):
+                vert_node[tv] = geo_node[gv]
+        f2v = msh.topology.connectivity(tdim - 1, 0)
+        nfac = msh.topology.index_map(tdim - 1).size_local
+        self.edge_facet = {}
+        for f in range(nfac):
+            a, b = (int(vert_node[v]) for v in f2v.links(f))
+            self.edge_facet[(min(a, b), max(a, b))] = f
+        self.f2c = msh.topology.connectivity(tdim - 1, tdim)
+
+        V = dolfinx.fem.VectorFunctionSpace(msh, ("Lagrange", 1))
+        self.V = V
+        # P1 on a linear mesh: the cell's DOFs follow its geometry nodes
+        self.dof_node = np.full(V.dofmap.index_map.size_local, -1, dtype=np.int64)
+        for c in range(ncell):
+            self.dof_node[V.dofmap.cell_dofs(c)] = geo_node[gdm.links(c)]
+        dofx = V.tabulate_dof_coordinates()[:, :2]
+        if (self.dof_node < 0).any() or np.abs(dofx - m.x[self.dof_node]).max() > 1e-12 * scale:
+            raise SetupError("dolfinx DOF coordinates do not match the gmsh nodes")
+        Q = dolfinx.fem.FunctionSpace(msh, ("DG", 0))
+        self.mu, self.lam, self.rho = (dolfinx.fem.Function(Q) for _ in range(3))
+        self.q_cells = np.arange(ncell)  # DG0: one dof per cell, dof = cell index below
+        self.q_dof = np.array([Q.dofmap.cell_dofs(c)[0] for c in range(ncell)])
+        plane = cfg.get("model", {}).get("plane", "strain")
+        self.plane_stress = plane == "stress"
+        th = float(cfg.get("model", {}).get("thickness", 1.0)) if self.plane_stress else 1.0
+        self.th = th
+        grav = cfg.get("model", {}).get("gravity", [0.0, 0.0])
+        C = dolfinx.fem.Constant
+        self.t = C(msh, th)
+        self.g = C(msh, np.array(grav, dtype=float))
+        self.P = C(msh, np.zeros(2))
+        self.PN = C(msh, 0.0)
+        u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+        eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
+        self.a = dolfinx.fem.form(self.t * (2 * self.mu * ufl.inner(eps(u), eps(v))
+                                            + self.lam * ufl.tr(eps(u)) * ufl.tr(eps(v))) * ufl.dx)
+        self.Lg = dolfinx.fem.form(self.t * self.rho * ufl.dot(self.g, v) * ufl.dx)
+        self.v = v
+        self.n = ufl.FacetNormal(msh)
+        # material data per cell
+        mats = cfg["materials"]
+        E = np.array([float(mats[nm]["E"]) for nm in m.material_names])
+        nu = np.array([float(mats[nm]["nu"]) for nm in m.material_names])
+        rho = np.array([float(mats[nm].get("rho", 0.0)) for nm in m.material_names])
+        mu = E / (2 * (1 + nu))
+        lam = E * nu / ((1 + nu) * (1 - 2 * nu))
+        if self.plane_stress:
+            lam = 2 * lam * mu / (lam + 2 * mu)
+        cm = m.tri_mat[self.cell_tri]
+        self.cell_mu, self.cell_lam, self.cell_rho = mu[cm], lam[cm], rho[cm]
+
+    def _set_body(self, mask: np.ndarray) -> None:
+        for f, vals in ((self.mu, self.cell_mu), (self.lam, self.cell_lam), (self.rho, self.cell_rho)):
+            arr = np.zeros_like(f.x.array)
+            arr[self.q_dof] = vals * mask
+            f.x.array[:] = arr
+
+    def _matrix(self, form) -> sp.csr_matrix:
+        import dolfinx.fem.petsc as dp
+        A = dp.assemble_matrix(form)
+        A.assemble()
+        ip, ii, dd = A.getValuesCSR()
+        n = A.getSize()[0]
+        M = sp.csr_matrix((dd.copy(), ii.copy(), ip.copy()), shape=(n, n))
+        A.destroy()
+        return M
+
+    def _vector(self, form) -> np.ndarray:
+        b = self.dolfinx.fem.assemble_vector(form)
+        return b.array.copy()
+
+    def body_stiffness(self, cell_in_body: np.ndarray) -> sp.csr_matrix:
+        self._set_body(cell_in_body.astype(float))
+        return self._matrix(self.a)
+
+    def body_gravity(self, cell_in_body: np.ndarray) -> np.ndarray:
+        self._set_body(cell_in_body.astype(float))
+        return self._vector(self.Lg)
+
+    def traction(self, facets: list[int], p, pn) -> np.ndarray:
+        """Load vector of a constant traction on the given exterior facets."""
+        dolfinx, ufl = self.dolfinx, self.ufl
+        facets = np.array(sorted(set(facets)), dtype=np.int32)
+        mt = dolfinx.mesh.meshtags(self.msh, 1, facets, np.ones(len(facets), dtype=np.int32))
+        ds = ufl.Measure("ds", domain=self.msh, subdomain_data=mt)
+        self.P.value = np.array(p if p is not None else [0.0, 0.0], dtype=float)
+        self.PN.value = float(pn if pn is not None else 0.0)
+        L = dolfinx.fem.form(self.t * (ufl.dot(self.P, self.v) + self.PN * ufl.dot(self.n, self.v)) * ds(1))
+        return self._vector(L)
+
+
+# ---------------------------------------------------------------- problem
+
+
+def eliminate(cs):
+    """signorini's per-point elimination: conditions [(r, v)] -> (u0, T columns)."""
+    if not cs:
+        return np.zeros(2), [np.array([1.0, 0.0]), np.array([0.0, 1.0])]
+    r1, v1r = np.asarray(cs[0][0], float), cs[0][1]
+    q1 = r1 / np.linalg.norm(r1)
+    v1 = v1r / np.linalg.norm(r1)
+    second = None
+    for r, v in cs[1:]:
+        rn = np.asarray(r, float) / np.linalg.norm(r)
+        if abs(rn[0] * q1[1] - rn[1] * q1[0]) > 1e-8:
+            second = (np.asarray(r, float), v)
+            break
+    if second is None:
+        for r, v in cs[1:]:
+            rn = np.asarray(r, float) / np.linalg.norm(r)
+            s = rn @ q1
+            vv = v / np.linalg.norm(r)
+            if abs(vv - s * v1) > 1e-9 * (1 + abs(vv) + abs(v1)):
+                raise Conflict("two conditions prescribe different values in one direction")
+        return v1 * q1, [np.array([-q1[1], q1[0]])]
+    ra, rb = r1, second[0]
+    det = ra[0] * rb[1] - ra[1] * rb[0]
+    u = np.array([(v1r * rb[1] - second[1] * ra[1]) / det, (ra[0] * second[1] - rb[0] * v1r) / det])
+    for r, v in cs:
+        res = r[0] * u[0] + r[1] * u[1] - v
+        if abs(res) > 1e-9 * (1 + abs(v) + abs(u[0]) + abs(u[1])):
+            raise Conflict(f"more than two independent conditions that disagree (residual {res:.3e})")
+    return u, []
+
+
+def at_step(cfg: dict, s: int) -> dict:
+    """The problem of load step s (0-based), as README's [[steps]] extension says: loads
+    (tractions, point forces, gravity) × load factor, prescribed displacements × displacement
+    factor or replaced by the step's dirichlet.NAME = [ux, uy]."""
+    import copy
+
+    steps = cfg.get("steps", [])
+    if s >= len(steps):
+        return cfg
+    st = steps[s]
+    out = copy.deepcopy(cfg)
+    lf = st.get("load", st.get("factor", 1.0))
+    df = st.get("displacement", st.get("factor", 1.0))
+    for t in out.get("traction", []):
+        if "p" in t:
+            t["p"] = [t["p"][0] * lf, t["p"][1] * lf]
+        if "pn" in t:
+            t["pn"] = t["pn"] * lf
+    for fo in out.get("force", []):
+        fo["f"] = [fo["f"][0] * lf, fo["f"][1] * lf]
+    if "gravity" in out.get("model", {}):
+        g = out["model"]["gravity"]
+        out["model"]["gravity"] = [g[0] * lf, g[1] * lf]
+    explicit = st.get("dirichlet", {})
+    for d in out.get("dirichlet", []):
+        if d["on"] in explicit:
+            u = explicit[d["on"]]
+            if "u" in d:
+                d["u"] = list(u)
+            else:
+                if "ux" in d:
+                    d["ux"] = u[0]
+                if "uy" in d:
+                    d["uy"] = u[1]
+        else:
+            if "u" in d:
+                d["u"] = [d["u"][0] * df, d["u"][1] * df]
+            for k in ("ux", "uy"):
+                if k in d:
+                    d[k] = d[k] * df
+    return out
+
+
+class Problem:
+    def __init__(self, toml_path: Path, with_contact: bool, gmsh, point_force_thickness: bool = True):
+        self.toml_path = toml_path
+        self.cfg = tomllib.loads(toml_path.read_text())
+        cfg = self.cfg
+        self.mesh_path = (toml_path.parent / cfg["mesh"]["file"]).resolve()
+        self.m = GmshMesh(gmsh, self.mesh_path, cfg["materials"])
+        contacts = cfg.get("contact", []) if with_contact else []
+        self.contacts = contacts
+        self.topo = Topology(self.m, [c["on"] for c in contacts if "on" in c])
+        self.with_contact = with_contact
+        self.point_force_thickness = point_force_thickness
+
+    # --- conditions per point (signorini's order: dirichlet entries, then slip lines)
+    def conditions(self):
+        m, tp, cfg = self.m, self.topo, self.cfg
+        conds = [[] for _ in range(tp.np)]
+
+        def group_points(name):
+            dim, _ = m.group(name)
+            out = []
+            if dim == 0:
+                for v in m.points(name):
+                    out += [(p, None) for p in tp.copies[v]]
+            elif dim == 1:
+                for a, b in m.lines(name):
+                    for t in m.edge_tris.get((min(a, b), max(a, b)), []):
+                        body = int(tp.tri_body[t])
+                        for v in (a, b):
+                            out.append((tp.point_of[(v, body)], (a, b, t)))
+            else:
+                raise SetupError(f"{name!r}: expected a curve or a point")
+            return out
+
+        self.group_points = group_points
+        for d in cfg.get("dirichlet", []):
+            if "u" in d:
+                ux, uy = d["u"]
+            else:
+                ux, uy = d.get("ux"), d.get("uy")
+            for p in sorted({p for p, _ in group_points(d["on"])}):
+                if ux is not None:
+                    conds[p].append(((1.0, 0.0), float(ux)))
+                if uy is not None:
+                    conds[p].append(((0.0, 1.0), float(uy)))
+        for s in cfg.get("slip", []):
+            sums = {}
+            for p, seg in group_points(s["on"]):
+                if seg is None:
+                    continue
+                a, b, t = seg
+                sums[p] = sums.get(p, np.zeros(2)) + m.outward_normal(t, a, b)
+            for p in sorted(sums):
+                n = sums[p]
+                ln = np.linalg.norm(n)
+                if ln > 1e-12:
+                    conds[p].append(((n[0] / ln, n[1] / ln), 0.0))
+        return conds
+
+    def reduction(self):
+        """u = u0 + T ξ over all points (2 np) and the rigid-mode check per body."""
+        conds = self.conditions()
+        rows, cols, vals = [], [], []
+        u0 = np.zeros(2 * self.topo.np)
+        n = 0
+        for p, cs in enumerate(conds):
+            try:
+                up, tcols = eliminate(cs)
+            except Conflict as e:
+                tp = self.topo
+                raise Conflict(f"node {int(self.m.tags[tp.point_node[p]])} (body {int(tp.point_body[p])}): {e}")
+            u0[2 * p:2 * p + 2] = up
+            for tc in tcols:
+                for k in range(2):
+                    if tc[k] != 0.0:
+                        rows.append(2 * p + k)
+                        cols.append(n)
+                        vals.append(tc[k])
+                n += 1
+        T = sp.csr_matrix((vals, (rows, cols)), shape=(2 * self.topo.np, n))
+        # free rigid motions per body (methods.md §1.7)
+        floating = []
+        tp = self.topo
+        for b in range(tp.nbodies):
+            pts = np.where(tp.point_body == b)[0]
+            xb = tp.x[pts]
+            c = (xb.min(0) + xb.max(0)) / 2
+            L = max(np.ptp(xb, axis=0).max(), 1e-300)
+            G = []
+            for p in pts:
+                z = np.array([[1.0, 0.0], [0.0, 1.0], [-(tp.x[p, 1] - c[1]) / L, (tp.x[p, 0] - c[0]) / L]])
+                for r, _ in conds[p]:
+                    r = np.asarray(r) / np.linalg.norm(r)
+                    G.append(z @ r)
+            rank = np.linalg.matrix_rank(np.array(G), tol=1e-6) if G else 0
+            if rank < 3:
+                floating.append((b, 3 - rank))
+        return T, u0, floating
+
+    def assemble(self, asm: Assembler):
+        """Cut-mesh stiffness K (2np × 2np) and load f."""
+        m, tp = self.m, self.topo
+        ndof_orig = 2 * len(asm.dof_node)
+        cell_body = tp.tri_body[asm.cell_tri]
+        K = sp.csr_matrix((2 * tp.np, 2 * tp.np))
+        f = np.zeros(2 * tp.np)
+        for b in range(tp.nbodies):
+            mask = cell_body == b
+            # E_b: original dof -> cut dof of body b's copy
+            r, c = [], []
+            for d, v in enumerate(asm.dof_node):
+                p = tp.point_of.get((int(v), b))
+                if p is not None:
+                    for k in range(2):
+                        r.append(2 * p + k)
+                        c.append(2 * d + k)
+            E = sp.csr_matrix((np.ones(len(r)), (r, c)), shape=(2 * tp.np, ndof_orig))
+            Kb = asm.body_stiffness(mask)
+            Kc = E @ Kb @ E.T
+            lost = abs(Kb).sum() - abs(Kc).sum()
+            if abs(lost) > 1e-12 * abs(Kb).sum():
+                raise CheckError(f"body {b}: stiffness entries outside the body ({lost:.3e})")
+            K = K + Kc
+            asm.g.value = np.array(self.cfg.get("model", {}).get("gravity", [0.0, 0.0]), dtype=float)
+            if any(float(x) != 0.0 for x in asm.g.value):
+                f += E @ asm.body_gravity(mask)
+        # tractions: each segment loads the copies of the body owning it
+        for tr in self.cfg.get("traction", []):
+            per_body: dict[int, list[int]] = {}
+            for a, b in m.lines(tr["on"]):
+                e = (min(a, b), max(a, b))
+                ts = m.edge_tris.get(e, [])
+                if len(ts) != 1:
+                    raise SetupError(f"traction curve {tr['on']!r}: segment {e} is not on the boundary "
+                                     "(interior tractions are not supported by this check)")
+                per_body.setdefault(int(tp.tri_body[ts[0]]), []).append(asm.edge_facet[e])
+            for b, facets in per_body.items():
+                fo = asm.traction(facets, tr.get("p"), tr.get("pn"))
+                for d, v in enumerate(asm.dof_node):
+                    p = tp.point_of.get((int(v), b))
+                    if p is not None:
+                        f[2 * p:2 * p + 2] += fo[2 * d:2 * d + 2]
+        # point forces [N per unit thickness, README]: copy of the lowest body, × thickness
+        # (--force-total: f taken as the force on the whole thickness, no factor)
+        fscale = asm.th if self.point_force_thickness else 1.0
+        for fo in self.cfg.get("force", []):
+            for v in m.points(fo["on"]):
+                p = tp.copies[v][0]
+                f[2 * p:2 * p + 2] += fscale * np.asarray(fo["f"], dtype=float)
+        return K.tocsr(), f
+
+    # --- contact rows: list of (coefficients {point: 2-vector}, gap0, kind info)
+    def contact_rows(self):
+        m, tp = self.m, self.topo
+        rows = []
+        conf = [c for c in self.contacts if "on" in c]
+        if conf:
+            kind_of = [c.get("normals", "averaged") for c in conf]
+            acc = {}
+            for e, cid in sorted(tp.contact_edge.items()):
+                ts = m.edge_tris.get(e, [])
+                bodies = [int(tp.tri_body[t]) for t in ts]
+                if len(ts) != 2 or bodies[0] == bodies[1]:
+                    raise SetupError(f"contact curve {conf[cid]['on']!r} is not between two bodies at {e}")
+                tk, tl = (ts[0], ts[1]) if bodies[0] < bodies[1] else (ts[1], ts[0])
+                k, l = int(tp.tri_body[tk]), int(tp.tri_body[tl])
+                n = m.outward_normal(tk, *e)
+                for v in e:
+                    acc.setdefault((v, k, l), {"n": [], "cid": cid})["n"].append(n)
+            for (v, k, l) in sorted(acc, key=lambda key: (key[1], key[2], int(m.tags[key[0]]))):
+                a = acc[(v, k, l)]
+                first, second = tp.point_of[(v, k)], tp.point_of[(v, l)]
+                normals = []
+                if kind_of[a["cid"]] == "segment":
+                    for n in a["n"]:
+                        if not any(np.abs(q - n).sum() < 1e-12 for q in normals):
+                            normals.append(n)
+                else:
+                    s = np.sum(a["n"], axis=0)
+                    normals.append(s / np.linalg.norm(s))
+                for n in normals:
+                    rows.append({"coef": {first: n, second: -n}, "g": 0.0, "n": n, "first": first, "second": second})
+        for c in self.contacts:
+            if "slave" not in c:
+                continue
+            msegs = []
+            for a, b in m.lines(c["master"]):
+                ts = m.edge_tris.get((min(a, b), max(a, b)), [])
+                if len(ts) != 1:
+                    raise SetupError(f"master segment {(a, b)} is not on the boundary of one body")
+                msegs.append((a, b, int(tp.tri_body[ts[0]]), m.outward_normal(ts[0], a, b)))
+            slave = set()
+            for a, b in m.lines(c["slave"]):
+                ts = m.edge_tris.get((min(a, b), max(a, b)), [])
+                if len(ts) != 1:
+                    raise SetupError(f"slave segment {(a, b)} is not on the boundary of one body")
+                sb = int(tp.tri_body[ts[0]])
+                slave |= {(a, sb), (b, sb)}
+            for v, sb in sorted(slave, key=lambda s: (s[1], int(m.tags[s[0]]))):
+                xs = m.x[v]
+                best = None
+                for si, (a, b, mb, _) in enumerate(msegs):
+                    if mb == sb:
+                        continue
+                    pa, pb = m.x[a], m.x[b]
+                    d = pb - pa
+                    xi = ((xs - pa) @ d) / (d @ d)
+                    if not (-1e-9 <= xi <= 1 + 1e-9):
+                        continue
+                    xi = min(max(xi, 0.0), 1.0)
+                    dist = np.linalg.norm(xs - (pa + xi * d))
+                    if best is None or dist < best[0]:
+                        best = (dist, si, xi)
+                if best is None:
+                    continue
+                _, si, xi = best
+                a, b, mb, n = msegs[si]
+                pp = m.x[a] + xi * (m.x[b] - m.x[a])
+                g = float(n @ (xs - pp))
+                if "max_gap" in c and g > c["max_gap"]:
+                    continue
+                coef = {tp.point_of[(v, sb)]: -n}
+                for node, w in ((a, 1 - xi), (b, xi)):
+                    if w != 0.0:
+                        q = tp.point_of[(node, mb)]
+                        coef[q] = coef.get(q, 0) + w * n
+                rows.append({"coef": coef, "g": max(g, 0.0), "n": n, "first": tp.point_of[(v, sb)],
+                             "second": tp.point_of[(a, mb)]})
+        return rows
+
+
+# ------------------------------------------------------------------- QP
+
+
+def solve_qp(K, f, A, g, label):
+    """min ½xᵀKx − fᵀx  s.t.  Ax ≤ g: Clarabel, then an exact active-set polish."""
+    try:
+        import clarabel
+    except ImportError as e:
+        raise SetupError(f"clarabel not importable ({e}); install it (python_checks.sh does: "
+                         "pip install --target .venv/debian-site clarabel)")
+    n, mrows = K.shape[0], A.shape[0]
+    # Jacobi scaling of the unknowns, row scaling of the constraints, objective scaling
+    dk = K.diagonal()
+    s = 1.0 / np.sqrt(np.where(dk > 0, dk, 1.0))
+    S = sp.diags(s)
+    Ks = (S @ K @ S).tocsc()
+    fs = s * f
+    As = (A @ S).tocsr()
+    rn = np.sqrt(abs(As).power(2).sum(axis=1)).A1
+    rn[rn == 0] = 1.0
+    R = sp.diags(1.0 / rn)
+    As = (R @ As).tocsc()
+    gs = g / rn
+    obj = max(np.abs(fs).max(), 1e-300)
+    # y = x_scaled / obj: then ½yᵀKy − (f/obj)ᵀy with Ay ≤ g/obj
+    t0 = time.time()
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.tol_gap_abs = 1e-12
+    settings.tol_gap_rel = 1e-12
+    settings.tol_feas = 1e-12
+    settings.tol_ktratio = 1e-10
+    settings.max_iter = 400
+    P = sp.triu(Ks).tocsc()
+    solver = clarabel.DefaultSolver(P, -fs / obj, As, gs / obj, [clarabel.NonnegativeConeT(mrows)], settings)
+    sol = solver.solve()
+    status = str(sol.status)
+    y = np.array(sol.x)
+    lam_s = np.array(sol.z)  # multipliers of the scaled rows (objective scaled by obj … see below)
+    t_ip = time.time() - t0
+    if "Solved" not in status:
+        raise CheckError(f"{label}: Clarabel did not solve the QP ({status})")
+    xs = y * obj
+    # polish: primal-dual active set on the scaled problem, exact KKT solves
+    slack = gs - As @ xs
+    sc_g = max(np.abs(As @ xs).max(), np.abs(gs).max(), 1e-300)
+    act = (lam_s > 1e-6 * max(lam_s.max(), 1e-300)) | (slack < 1e-8 * sc_g)
+    lam = np.zeros(mrows)
+    ok = False
+    for it in range(60):
+        idx = np.where(act)[0]
+        Aa = As[idx]
+        KKT = sp.bmat([[Ks, Aa.T], [Aa, None]], format="csc")
+        rhs = np.concatenate([fs, gs[idx]])
+        try:
+            z = spla.spsolve(KKT, rhs)
+        except Exception as e:  # singular (a rigid motion not held by the active rows)
+            raise CheckError(f"{label}: active-set KKT solve failed: {e}")
+        if not np.all(np.isfinite(z)):
+            raise CheckError(f"{label}: singular active-set KKT system")
+        xs_new = z[:n]
+        lam = np.zeros(mrows)
+        lam[idx] = z[n:]
+        viol_p = (As @ xs_new - gs) > 1e-12 * sc_g
+        viol_p &= ~act
+        lmax = max(np.abs(lam).max(), 1e-300)
+        viol_d = act & (lam < -1e-12 * lmax)
+        xs = xs_new
+        if not viol_p.any() and not viol_d.any():
+            ok = True
+            break
+        act = (act & ~viol_d) | viol_p
+    if not ok:
+        raise CheckError(f"{label}: active-set polish did not converge")
+    x = s * xs
+    lam_true = lam / rn  # λ for the unscaled rows: As = R A S, multiplier scaled by 1/rn
+    # KKT certificate of the reference solution (unscaled)
+    Kx = K @ x
+    stat = np.linalg.norm(Kx - f + A.T @ lam_true) / max(np.linalg.norm(f), np.linalg.norm(Kx))
+    prim = max(((A @ x - g).clip(min=0)).max(initial=0.0), 0.0) / max(np.abs(x).max(), 1e-300)
+    comp = abs(lam_true @ (A @ x - g)) / max(np.abs(lam_true).max() * np.abs(x).max(), 1e-300)
+    dual = (-lam_true).clip(min=0).max(initial=0.0) / max(np.abs(lam_true).max(), 1.0)
+    info = dict(status=status, ip_time=t_ip, ip_iter=sol.iterations, polish_iter=it + 1,
+                active=int(act.sum()), stationarity=stat, primal=prim, dual=dual, complementarity=comp)
+    return x, lam_true, info
+
+
+# ------------------------------------------------------------ comparison
+
+
+def read_signorini(h5path: Path, step: int):
+    import h5py
+
+    with h5py.File(h5path, "r") as f:
+        key = f"{step:04d}"
+        if key not in f["steps"]:
+            raise CheckError(f"{h5path.name}: no /steps/{key} (has {sorted(f['steps'].keys())})")
+        st = f["steps"][key]
+        out = {
+            "nodes": f["mesh/nodes"][:],
+            "body": f["mesh/body"][:].astype(np.int64),
+            "tags": f["mesh/node_tags"][:].astype(np.int64),
+            "triangles": f["mesh/triangles"][:].astype(np.int64),
+            "u": st["displacement"][:],
+            "stress": st["stress"][:],
+            "multipliers": st["multipliers"][:],
+            "contact_first": f["mesh/contact_first"][:].astype(np.int64),
+            "contact_second": f["mesh/contact_second"][:].astype(np.int64),
+            "contact_normal": f["mesh/contact_normal"][:],
+            "converged": int(st.attrs["converged"]),
+        }
+    return out
+
+
+def match_points(prob: Problem, sig) -> np.ndarray:
+    """signorini point i -> our point index, by coordinates (+ body for node copies)."""
+    tp = prob.topo
+    L = np.ptp(tp.x, axis=0).max()
+    ours = np.column_stack([tp.x, tp.point_body * 10.0 * L])
+    theirs = np.column_stack([sig["nodes"], sig["body"] * 10.0 * L])
+    if len(theirs) != len(ours):
+        raise CheckError(f"signorini has {len(theirs)} points, this model {len(ours)} "
+                         f"(bodies: {prob.topo.nbodies} here)")
+    dist, idx = cKDTree(ours).query(theirs)
+    if dist.max() > 1e-9 * L or len(set(idx.tolist())) != len(idx):
+        raise CheckError(f"points do not match by coordinates and body (max distance {dist.max():.3e})")
+    if not np.array_equal(prob.m.tags[tp.point_node[idx]], sig["tags"]):
+        raise CheckError("matched points have different Gmsh node tags")
+    return idx
+
+
+def stresses(prob: Problem, u: np.ndarray, tris_pts: np.ndarray) -> np.ndarray:
+    """(σxx, σyy, σxy, σzz) per triangle (given in our point indices) from P1 displacements."""
+    cfg, m, tp = prob.cfg, prob.m, prob.topo
+    tri_mat = {}
+    for t, tri in enumerate(m.tri):
+        tri_mat[(int(tp.tri_body[t]), tuple(sorted(int(v) for v in tri)))] = int(m.tri_mat[t])
+    mats = cfg["materials"]
+    stress_plane = cfg.get("model", {}).get("plane", "strain") == "stress"
+    out = np.zeros((len(tris_pts), 4))
+    U = u.reshape(-1, 2)
+    for e, tri in enumerate(tris_pts):
+        b = int(tp.point_body[tri[0]])
+        key = (b, tuple(sorted(int(tp.point_node[p]) for p in tri)))
+        mat = mats[m.material_names[tri_mat[key]]]
+        E, nu = float(mat["E"]), float(mat["nu"])
+        x = tp.x[tri]
+        a2 = (x[1, 0] - x[0, 0]) * (x[2, 1] - x[0, 1]) - (x[2, 0] - x[0, 0]) * (x[1, 1] - x[0, 1])
+        bb = np.array([x[1, 1] - x[2, 1], x[2, 1] - x[0, 1], x[0, 1] - x[1, 1]]) / a2
+        cc = np.array([x[2, 0] - x[1, 0], x[0, 0] - x[2, 0], x[1, 0] - x[0, 0]]) / a2
+        ue = U[tri]
+        exx, eyy = bb @ ue[:, 0], cc @ ue[:, 1]
+        gxy = cc @ ue[:, 0] + bb @ ue[:, 1]
+        if stress_plane:
+            fct = E / (1 - nu * nu)
+            sxx, syy, sxy = fct * (exx + nu * eyy), fct * (nu * exx + eyy), fct * (1 - nu) / 2 * gxy
+            szz = 0.0
+        else:
+            fct = E / ((1 + nu) * (1 - 2 * nu))
+            sxx = fct * ((1 - nu) * exx + nu * eyy)
+            syy = fct * (nu * exx + (1 - nu) * eyy)
+            sxy = fct * (1 - 2 * nu) / 2 * gxy
+            szz = nu * (sxx + syy)
+        out[e] = (sxx, syy, sxy, szz)
+    return out
+
+
+def rel(a, b):
+    scale = max(np.abs(b).max(initial=0.0), 1e-300)
+    return float(np.abs(a - b).max(initial=0.0) / scale)
+
+
+def compare(prob, u_ref, sig, tol, label, lam_ref=None, rows=None):
+    idx = match_points(prob, sig)
+    U = u_ref.reshape(-1, 2)[idx]
+    res = {"displacement": rel(sig["u"], U)}
+    tris = idx[sig["triangles"]]
+    res["stress"] = rel(sig["stress"], stresses(prob, u_ref, tris))
+    if lam_ref is not None:
+        key = {(r["first"], r["second"]): i for i, r in enumerate(rows)}
+        nr = len(sig["multipliers"])
+        if nr != len(rows):
+            raise CheckError(f"{label}: signorini has {nr} contact rows, this model {len(rows)}")
+        perm = np.array([key[(int(idx[sig['contact_first'][i]]), int(idx[sig['contact_second'][i, 0]]))]
+                         for i in range(nr)])
+        normals = np.array([rows[j]["n"] for j in perm])
+        res["normals"] = rel(sig["contact_normal"], normals)
+        res["multipliers"] = rel(sig["multipliers"], lam_ref[perm])
+    worst = max(res.values())
+    line = "  ".join(f"{k} {v:.2e}" for k, v in res.items())
+    ok = worst <= tol
+    log(f"{label}: max relative difference {line}  -> {'OK' if ok else 'FAIL'} (tol {tol:g})")
+    return ok, res
+
+
+def run_signorini(exe: Path, toml: Path, out: Path, extra: list[str]):
+    cmd = [str(exe), "solve", str(toml), "--out", str(out), "--quiet", *extra]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    return p.returncode, p.stdout + p.stderr, " ".join(cmd)
+
+
+# ----------------------------------------------------------------- main
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("toml", type=Path)
+    ap.add_argument("--tol", type=float, default=1e-8, help="max relative difference (default 1e-8)")
+    ap.add_argument("--signorini", type=Path, default=None,
+                    help="binary (default $SIGNORINI or <repo>/target/release/signorini)")
+    ap.add_argument("--part", choices=["a", "b", "both"], default="both")
+    ap.add_argument("--keep", type=Path, default=None, help="keep signorini's outputs in this directory")
+    ap.add_argument("--force-total", dest="force_thickness", action="store_false",
+                    help="take [[force]] f as the force on the whole thickness (plane stress) instead of "
+                         "N per unit thickness as the README says (a diagnostic switch)")
+    args = ap.parse_args(argv)
+
+    exe = args.signorini or Path(os.environ.get("SIGNORINI", REPO / "target/release/signorini"))
+    if not exe.is_file():
+        raise SetupError(f"signorini binary not found at {exe} (cargo build --release)")
+    toml = args.toml.resolve()
+    if not toml.is_file():
+        raise SetupError(f"no such problem file: {toml}")
+    name = toml.stem
+    try:
+        import gmsh
+        import dolfinx  # noqa: F401
+        import h5py  # noqa: F401
+    except ImportError as e:
+        raise SetupError(f"{e} under {sys.executable}: run this script with Debian's /usr/bin/python3 "
+                         "(apt-get install python3-dolfinx-real python3-gmsh python3-scipy python3-h5py; "
+                         "scripts/python_checks.sh does it)")
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
+    tmp_ctx = tempfile.TemporaryDirectory(prefix=f"xcheck_{name}_")
+    tmp = args.keep.resolve() if args.keep else Path(tmp_ctx.name)
+    failures = []
+    t_start = time.time()
+    log(f"== {name}: {toml}")
+    try:
+        cfg = tomllib.loads(toml.read_text())
+        has_contact = bool(cfg.get("contact"))
+        parts = ["a", "b"] if args.part == "both" else [args.part]
+        nsteps = max(1, len(cfg.get("steps", [])))
+        step_cfgs = [at_step(cfg, s) for s in range(nsteps)]
+        if nsteps > 1:
+            log(f"{nsteps} load steps: each step is compared with /steps/NNNN")
+
+        if "a" in parts:
+            t0 = time.time()
+            prob = Problem(toml, with_contact=False, gmsh=gmsh, point_force_thickness=args.force_thickness)
+            conflict = None
+            try:
+                _, _, floating = prob.reduction()
+            except Conflict as e:
+                conflict, floating = str(e), []
+            outa = tmp / "no_contact"
+            outa.mkdir(parents=True, exist_ok=True)
+            rc, txt, cmd = run_signorini(exe, toml, outa, ["--no-contact"])
+            last = txt.strip().splitlines()[-1] if txt.strip() else ""
+            if conflict:
+                # e.g. geodynamic: without the contact copies a plate-motion Dirichlet curve and a
+                # slip line meet at one node
+                if rc == 2 and "conflicting conditions" in txt:
+                    log(f"part a: without contact the conditions conflict at {conflict}; signorini "
+                        f"refuses as it should (exit 2: {last}) -> OK, no comparison")
+                else:
+                    failures.append("a")
+                    log(f"part a: conflicting conditions at {conflict}, but `{cmd}` exited {rc} -> FAIL")
+            elif floating:
+                desc = ", ".join(f"body {b} ({k} rigid motion(s))" for b, k in floating)
+                if rc == 2:
+                    log(f"part a: without contact {desc} is free; signorini refuses as it should "
+                        f"(exit 2: {last}) -> OK, no comparison")
+                else:
+                    failures.append("a")
+                    log(f"part a: without contact {desc} is free, but `{cmd}` exited {rc} -> FAIL")
+            else:
+                if rc != 0:
+                    raise CheckError(f"`{cmd}` exited {rc}:\n{txt}")
+                log(f"part a: `{cmd}`")
+                asm = Assembler(gmsh, prob.m, prob.cfg)
+                for s, cfg_s in enumerate(step_cfgs, start=1):
+                    prob.cfg = cfg_s
+                    T, u0, _ = prob.reduction()
+                    K, f = prob.assemble(asm)
+                    Kr = (T.T @ K @ T).tocsc()
+                    fr = T.T @ (f - K @ u0)
+                    xi = spla.spsolve(Kr, fr)
+                    u = u0 + T @ xi
+                    res = np.linalg.norm(Kr @ xi - fr) / max(np.linalg.norm(fr), 1e-300)
+                    tag = f" step {s}" if nsteps > 1 else ""
+                    log(f"part a{tag}: FEniCSx linear solve: {T.shape[1]} DOFs, residual {res:.1e} "
+                        f"({time.time() - t0:.1f} s)")
+                    ok, _ = compare(prob, u, read_signorini(outa / f"{name}.h5", s), args.tol,
+                                    f"part a{tag} (no contact)")
+                    if not ok:
+                        failures.append(f"a{tag}")
+
+        if "b" in parts:
+            if not has_contact:
+                log("part b: the problem has no [[contact]] -> skipped")
+            else:
+                outb = tmp / "contact"
+                outb.mkdir(parents=True, exist_ok=True)
+                rc, txt, cmd = run_signorini(exe, toml, outb, [])
+                if rc != 0:
+                    raise CheckError(f"`{cmd}` exited {rc}:\n{txt}")
+                log(f"part b: `{cmd}`")
+                t0 = time.time()
+                prob = Problem(toml, with_contact=True, gmsh=gmsh, point_force_thickness=args.force_thickness)
+                asm = Assembler(gmsh, prob.m, prob.cfg)
+                rows = prob.contact_rows()
+                r_i, r_j, r_v, g = [], [], [], []
+                for i, r in enumerate(rows):
+                    for p, c in r["coef"].items():
+                        for k in range(2):
+                            if c[k] != 0.0:
+                                r_i.append(i)
+                                r_j.append(2 * p + k)
+                                r_v.append(c[k])
+                    g.append(r["g"])
+                A = sp.csr_matrix((r_v, (r_i, r_j)), shape=(len(rows), 2 * prob.topo.np))
+                g = np.array(g)
+                for s, cfg_s in enumerate(step_cfgs, start=1):
+                    prob.cfg = cfg_s
+                    T, u0, floating = prob.reduction()
+                    K, f = prob.assemble(asm)
+                    # rows in the reduced unknowns: A T ξ ≤ g − A u0 (rows with no free DOF dropped)
+                    Ar = (A @ T).tocsr()
+                    Ar.data[np.abs(Ar.data) <= 1e-14] = 0.0
+                    Ar.eliminate_zeros()
+                    gr = g - A @ u0
+                    keep = np.diff(Ar.indptr) > 0
+                    if np.any(gr[~keep] < -1e-12 * (1 + np.abs(g[~keep]))):
+                        raise CheckError("a contact row is violated by the prescribed displacements")
+                    Kr = (T.T @ K @ T).tocsr()
+                    fr = T.T @ (f - K @ u0)
+                    tag = f" step {s}" if nsteps > 1 else ""
+                    xi, lam_k, info = solve_qp(Kr, fr, Ar[keep], gr[keep], f"part b{tag}")
+                    lam = np.zeros(len(rows))
+                    lam[np.where(keep)[0]] = lam_k
+                    u = u0 + T @ xi
+                    fl = ", ".join(f"body {b}: {k}" for b, k in floating) or "none"
+                    log(f"part b{tag}: reference QP: {Kr.shape[0]} DOFs, {int(keep.sum())} rows, "
+                        f"free rigid motions {fl}; Clarabel {info['status']} in {info['ip_iter']} it, "
+                        f"active-set polish {info['polish_iter']} solve(s), {info['active']} active; "
+                        f"KKT stat {info['stationarity']:.1e} primal {info['primal']:.1e} "
+                        f"compl {info['complementarity']:.1e} ({time.time() - t0:.1f} s)")
+                    if max(info["stationarity"], info["primal"], info["complementarity"], info["dual"]) > 1e-9:
+                        failures.append(f"b{tag}")
+                        log(f"part b{tag}: the reference QP solution is not accurate -> FAIL")
+                    ok, _ = compare(prob, u, read_signorini(outb / f"{name}.h5", s), args.tol,
+                                    f"part b{tag} (contact)", lam_ref=lam, rows=rows)
+                    if not ok:
+                        failures.append(f"b{tag}")
+    finally:
+        gmsh.finalize()
+        tmp_ctx.cleanup()
+    dt = time.time() - t_start
+    if failures:
+        m = cfg.get("model", {})
+        if (cfg.get("force") and m.get("plane") == "stress" and float(m.get("thickness", 1.0)) != 1.0
+                and args.force_thickness):
+            log("hint: the problem has [[force]] point loads in plane stress with thickness "
+                f"{m.get('thickness')}; this check multiplies them by the thickness (README: f is in "
+                "N per unit thickness). Rerun with --force-total to see whether that is the only difference.")
+        log(f"FAIL {name}: part(s) {', '.join(failures)} ({dt:.1f} s)")
+        return 1
+    log(f"OK {name} ({dt:.1f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main())
+    except SetupError as e:
+        print(f"fenicsx_crosscheck: error: {e}", file=sys.stderr)
+        sys.exit(2)
+    except (CheckError, Conflict) as e:
+        print(f"fenicsx_crosscheck: FAIL: {e}", file=sys.stderr)
+        sys.exit(1)
