@@ -5,6 +5,7 @@
 
 pub mod compare;
 pub mod mesh;
+pub mod plot;
 pub mod solve;
 
 use clap::{Args, Parser, Subcommand};
@@ -34,6 +35,7 @@ pub enum Command {
     /// Run every method (or `--methods a,b`) on one problem and print the comparison table.
     Compare(compare::CompareArgs),
     /// Draw a checkpoint (NAME.h5) as PNG or SVG: the deformed mesh coloured by a field, or the contact pressure.
+    Plot(plot::PlotArgs),
     /// Mesh a Gmsh .geo file (2D, MSH 4.1) and check it.
     Mesh(mesh::MeshArgs),
     /// List the available methods and preconditioners.
@@ -106,6 +108,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Solve(a) => solve::run(&a, cli.quiet),
         Command::Compare(a) => compare::run(&a, cli.quiet),
         Command::Mesh(a) => mesh::run(&a, cli.quiet),
+        Command::Plot(a) => plot::run(&a, cli.quiet),
         Command::Methods => {
             for m in crate::qp::registry::METHODS {
                 println!("{:<10} {}", m.name, m.summary);

@@ -2,6 +2,8 @@
 //! triangle (σ = D B u_e, §2.2), the report's τe, principal stresses,
 //! contact pressure (λ / tributary length), current gap and active flag.
 
+pub mod plot;
+
 use crate::fem::{element, Model};
 use crate::io::{ContactGeometry, OutMesh, StepInfo, StepOutput};
 use crate::model::Problem;

@@ -1,0 +1,109 @@
+//! `signorini plot`: a PNG or SVG figure of an HDF5 checkpoint: the
+//! deformed mesh coloured by a field, or (`--contact`) the contact pressure
+//! along each interface. Bad input (unreadable file, step out of range,
+//! unknown field, bad extension or size, unwritable output) is one line on
+//! stderr and exit 2, with no output file written.
+
+use super::solve::EXIT_BAD_INPUT;
+use crate::post::plot::{self, Field, PlotOptions};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug, Clone)]
+pub struct PlotArgs {
+    /// The HDF5 checkpoint written by `solve` (NAME.h5).
+    pub checkpoint: PathBuf,
+    /// Output file: .png or .svg.
+    #[arg(long, short)]
+    pub output: PathBuf,
+    /// Step to draw (1-based; default: the last one).
+    #[arg(long)]
+    pub step: Option<usize>,
+    /// von_mises | ux | uy | umag | sxx | syy | sxy | szz | s1 | s2 | material | body.
+    #[arg(long, default_value = "von_mises")]
+    pub field: String,
+    /// Displacement magnification (default: the largest displacement drawn
+    /// as 5 % of the bounding-box diagonal).
+    #[arg(long, allow_negative_numbers = true)]
+    pub scale: Option<f64>,
+    /// Plot the contact pressure along each interface against arc length.
+    #[arg(long)]
+    pub contact: bool,
+    /// Image width [px].
+    #[arg(long, default_value_t = 1200)]
+    pub width: u32,
+    /// Image height [px].
+    #[arg(long, default_value_t = 900)]
+    pub height: u32,
+    /// Draw the triangle edges (default: when the triangles are large enough).
+    #[arg(long, conflicts_with = "no_edges")]
+    pub edges: bool,
+    /// Never draw the triangle edges.
+    #[arg(long)]
+    pub no_edges: bool,
+}
+
+pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
+    let field = match Field::parse(&a.field) {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_BAD_INPUT;
+        }
+    };
+    let opts = PlotOptions {
+        step: a.step,
+        field,
+        scale: a.scale,
+        contact: a.contact,
+        width: a.width,
+        height: a.height,
+        edges: match (a.edges, a.no_edges) {
+            (true, _) => Some(true),
+            (_, true) => Some(false),
+            _ => None,
+        },
+    };
+    match plot::plot_file(&a.checkpoint, &a.output, &opts) {
+        Ok(s) => {
+            if !quiet {
+                let what = if a.contact {
+                    "contact pressure".to_string()
+                } else {
+                    field.name().to_string()
+                };
+                let unit = if a.contact {
+                    " Pa"
+                } else {
+                    match field.unit() {
+                        Some("Pa") => " Pa",
+                        Some("m") => " m",
+                        _ => "",
+                    }
+                };
+                println!("step {} of {}, {what}", s.step, s.steps);
+                if let Some((lo, hi)) = s.range {
+                    println!("range: {} to {}{unit}", plot::fmt_num(lo), plot::fmt_num(hi));
+                }
+                if let Some(k) = s.scale {
+                    let how = if a.scale.is_some() {
+                        "--scale"
+                    } else {
+                        "largest displacement = 5 % of the bounding-box diagonal"
+                    };
+                    println!(
+                        "displacement scale: {} ({how}; max |u| = {} m)",
+                        plot::fmt_num(k),
+                        plot::fmt_num(s.max_displacement)
+                    );
+                }
+                println!("wrote {}", a.output.display());
+            }
+            0
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            EXIT_BAD_INPUT
+        }
+    }
+}

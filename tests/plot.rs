@@ -1,0 +1,237 @@
+//! `signorini plot`: PNG and SVG figures of a solved checkpoint (default
+//! field, a nodal field at another size, SVG, contact pressure), and bad
+//! input that must give exit 2 and no output file.
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn signorini(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// One solve of two_blocks_eccentric shared by every test: (dir, NAME.h5).
+fn checkpoint() -> &'static (tempfile::TempDir, PathBuf) {
+    static CK: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    CK.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap();
+        let problem = root().join("meshes").join("two_blocks_eccentric.toml");
+        let (code, stdout, stderr) = signorini(&[
+            "solve",
+            problem.to_str().unwrap(),
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert_eq!(code, 0, "{stdout}\n{stderr}");
+        let h5 = dir.path().join("two_blocks_eccentric.h5");
+        assert!(h5.is_file());
+        (dir, h5)
+    })
+}
+
+fn h5() -> &'static str {
+    checkpoint().1.to_str().unwrap()
+}
+
+fn out_dir() -> tempfile::TempDir {
+    tempfile::tempdir().unwrap()
+}
+
+/// Decodes a PNG: (width, height, number of distinct colours).
+fn decode_png(path: &Path) -> (u32, u32, usize) {
+    let bytes = std::fs::read(path).unwrap();
+    let dec = png::Decoder::new(std::io::Cursor::new(bytes));
+    let mut reader = dec.read_info().unwrap();
+    let mut buf = vec![0u8; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.color_type.samples();
+    assert_eq!(info.bit_depth, png::BitDepth::Eight);
+    let data = &buf[..info.buffer_size()];
+    let colours: HashSet<&[u8]> = data.chunks_exact(channels).collect();
+    (info.width, info.height, colours.len())
+}
+
+/// Files left in `dir` (a failed plot must leave none, not even a temporary).
+fn files_in(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect()
+}
+
+#[test]
+fn default_png_is_von_mises_at_1200x900_with_many_colours() {
+    let dir = out_dir();
+    let fig = dir.path().join("fig.png");
+    let (code, stdout, stderr) = signorini(&["plot", h5(), "-o", fig.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    assert!(stdout.contains("von_mises"), "{stdout}");
+    assert!(stdout.contains("displacement scale"), "{stdout}");
+    let (w, h, colours) = decode_png(&fig);
+    assert_eq!((w, h), (1200, 900));
+    assert!(colours > 20, "only {colours} colours");
+    assert_eq!(files_in(dir.path()), vec!["fig.png".to_string()]);
+}
+
+#[test]
+fn nodal_field_png_has_the_requested_size() {
+    let dir = out_dir();
+    let fig = dir.path().join("uy.png");
+    let (code, stdout, stderr) = signorini(&[
+        "plot",
+        h5(),
+        "--field",
+        "uy",
+        "--width",
+        "800",
+        "--height",
+        "600",
+        "-o",
+        fig.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    let (w, h, colours) = decode_png(&fig);
+    assert_eq!((w, h), (800, 600));
+    assert!(colours > 20, "only {colours} colours");
+}
+
+#[test]
+fn categorical_field_and_explicit_scale() {
+    let dir = out_dir();
+    let fig = dir.path().join("material.png");
+    let (code, stdout, stderr) = signorini(&[
+        "plot",
+        h5(),
+        "--field",
+        "material",
+        "--scale",
+        "50",
+        "--step",
+        "1",
+        "-o",
+        fig.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    assert!(stdout.contains("displacement scale: 50"), "{stdout}");
+    let (w, h, colours) = decode_png(&fig);
+    assert_eq!((w, h), (1200, 900));
+    assert!(colours >= 4, "only {colours} colours");
+}
+
+#[test]
+fn svg_is_well_formed_enough() {
+    let dir = out_dir();
+    let fig = dir.path().join("fig.svg");
+    let (code, stdout, stderr) = signorini(&["plot", h5(), "-o", fig.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    let text = std::fs::read_to_string(&fig).unwrap();
+    let head = text.trim_start();
+    assert!(
+        head.starts_with("<svg") || head.starts_with("<?xml"),
+        "{}",
+        &head[..head.len().min(200)]
+    );
+    assert!(text.trim_end().ends_with("</svg>"));
+    assert!(text.contains("<polygon"), "no triangles drawn");
+    assert!(text.contains("two_blocks_eccentric — step 1 — von_mises"));
+    assert!(text.contains("von_mises [Pa]"));
+}
+
+#[test]
+fn contact_pressure_png() {
+    let dir = out_dir();
+    let fig = dir.path().join("contact.png");
+    let (code, stdout, stderr) = signorini(&["plot", h5(), "--contact", "-o", fig.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    assert!(stdout.contains("contact pressure"), "{stdout}");
+    let (w, h, colours) = decode_png(&fig);
+    assert_eq!((w, h), (1200, 900));
+    assert!(colours > 5, "only {colours} colours");
+}
+
+#[test]
+fn contact_svg_names_the_interface() {
+    let dir = out_dir();
+    let fig = dir.path().join("contact.svg");
+    let (code, stdout, stderr) = signorini(&["plot", h5(), "--contact", "-o", fig.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    let text = std::fs::read_to_string(&fig).unwrap();
+    assert!(text.contains("interface"));
+    assert!(text.contains("contact pressure [Pa]"));
+    assert!(text.contains("arc length [m]"));
+}
+
+/// Runs a failing plot: exit 2, one line on stderr, no file left behind.
+fn fails(extra: &[&str], file: &str) -> String {
+    let dir = out_dir();
+    let fig = dir.path().join(file);
+    let mut args = vec!["plot", h5()];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["-o", fig.to_str().unwrap()]);
+    let (code, stdout, stderr) = signorini(&args);
+    assert_eq!(code, 2, "{stdout}\n{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(files_in(dir.path()).is_empty(), "{:?}", files_in(dir.path()));
+    stderr
+}
+
+#[test]
+fn step_out_of_range_is_exit_2() {
+    let e = fails(&["--step", "5"], "fig.png");
+    assert!(e.contains("step"), "{e}");
+    let e = fails(&["--step", "0"], "fig.png");
+    assert!(e.contains("step"), "{e}");
+}
+
+#[test]
+fn unknown_field_is_exit_2() {
+    let e = fails(&["--field", "nope"], "fig.png");
+    assert!(e.contains("nope"), "{e}");
+}
+
+#[test]
+fn bad_extension_and_size_are_exit_2() {
+    let e = fails(&[], "fig.jpg");
+    assert!(e.contains(".png"), "{e}");
+    let e = fails(&["--width", "10"], "fig.png");
+    assert!(e.contains("width"), "{e}");
+}
+
+#[test]
+fn unreadable_checkpoint_and_unwritable_output_are_exit_2() {
+    let dir = out_dir();
+    let fig = dir.path().join("fig.png");
+    let (code, _, stderr) = signorini(&[
+        "plot",
+        dir.path().join("missing.h5").to_str().unwrap(),
+        "-o",
+        fig.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("missing.h5"), "{stderr}");
+    // Not an HDF5 file.
+    let junk = dir.path().join("junk.h5");
+    std::fs::write(&junk, b"not hdf5").unwrap();
+    let (code, _, stderr) = signorini(&["plot", junk.to_str().unwrap(), "-o", fig.to_str().unwrap()]);
+    assert_eq!(code, 2, "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    // Output in a directory that does not exist.
+    let bad = dir.path().join("no").join("such").join("fig.png");
+    let (code, _, stderr) = signorini(&["plot", h5(), "-o", bad.to_str().unwrap()]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(!fig.exists());
+}
