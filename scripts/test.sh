@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
-# The test command of the README: installs what is missing, then runs every test.
+# The test command of the README: installs what is missing, then runs every
+# test: the Rust suite, then the Python checks (outputs read back with
+# pyvista/h5py, FEniCSx cross-check on the shipped examples).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 cargo test --all-targets 2>&1
+bash scripts/python_checks.sh
