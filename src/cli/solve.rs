@@ -93,10 +93,10 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         if !quiet {
             println!("restart     from step {first} of {} ({})", nsteps, rp.display());
         }
-    } else if let Err(e) = pipeline::create_checkpoint(&prep, &pipeline::output_paths(&dir, &name, None), &om) {
-        eprintln!("error: {e}");
-        return EXIT_BAD_INPUT;
     }
+    // A new checkpoint is created only once the first step has solved, so bad
+    // input (e.g. an unbounded problem) leaves no output file behind.
+    let mut need_checkpoint = a.restart.is_none();
 
     let mut code = 0;
     let mut step_rows = vec![];
@@ -133,6 +133,13 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         step.info.time_assemble = t_assemble;
         step.info.time_solve = t_solve;
         step.info.time_total = ts.elapsed().as_secs_f64();
+        if need_checkpoint {
+            if let Err(e) = pipeline::create_checkpoint(&prep, &out, &om) {
+                eprintln!("error: {e}");
+                return EXIT_BAD_INPUT;
+            }
+            need_checkpoint = false;
+        }
         if let Err(e) = pipeline::write_step(&out, &om, &step, s + 1, compress) {
             eprintln!("error: {e}");
             return EXIT_BAD_INPUT;

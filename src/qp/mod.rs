@@ -15,13 +15,23 @@
 //! This layer knows nothing of meshes: `fem` builds a [`QpProblem`], every method
 //! returns a [`QpResult`]. A method is one file and one line in [`registry`].
 
+pub mod asm;
+pub mod asm_cgh;
 pub mod cgc;
+pub mod dual;
+pub mod penalty;
+pub mod preelim;
+#[cfg(test)]
+mod tests_methods;
+pub mod uzawa;
 pub mod executor;
 pub mod factor;
 pub mod kkt;
 pub mod precond;
 pub mod registry;
 pub mod sparse;
+pub mod mprgp;
+pub mod ssn;
 
 pub use sparse::Csr;
 

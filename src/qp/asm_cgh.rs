@@ -1,0 +1,379 @@
+//! ASM-CGH: the active set loop of ASM-E (`asm.rs`, methods.md §4.7) with the
+//! KKT systems B_J y = f solved iteratively by CG with hyperbolic pairs
+//! (Luenberger; methods.md §4.8), matrix-free with C and A_J (no factor, no
+//! fill-in).
+//!
+//! Scaling (the implementation note of §4.8): the unknown multipliers are
+//! scaled, λ = s·μ with s = max diag C / max ‖a_i‖, so that both blocks of
+//!
+//! ```text
+//!   B = [[C, s A_Jᵀ], [s A_J, 0]]
+//! ```
+//!
+//! have the magnitude of C. The singularity test is made scale-free as the
+//! implementation note of §4.8 asks, with the local value ‖Bp‖/‖p‖ ≤ ‖B‖ in
+//! place of ‖B‖: p is treated as singular when |(p,Bp)| ≤ ε_s ‖p‖ ‖Bp‖
+//! (ε_s = 10⁻⁴, the report's value), i.e. when p and Bp are nearly orthogonal.
+//! (With the global ‖B‖ every smooth direction of a stiffness matrix, whose
+//! Rayleigh quotient is ~λ_min(C) ≪ 10⁻⁴‖C‖, would be declared singular.)
+//!
+//! Semidefinite C: B_J is nonsingular iff no rigid motion satisfies A_J v = 0.
+//! With the kernel in `qp.kernel`, the active-set loop detects the rigid
+//! motions the working set leaves free (ray steps, or `Status::Unbounded`);
+//! a free motion with no force along it is appended to B_J as an extra
+//! constraint row (its multiplier is zero), so CGH only ever sees nonsingular
+//! systems. Without a kernel a singular B_J shows up as a CGH breakdown or
+//! non-convergence: `Status::Failed`.
+
+use super::asm::{check_common, ActiveSet, FaceKernel, FaceSolver};
+use super::executor::Executor;
+use super::sparse::{axpy, dot, norm};
+use super::{QpError, QpProblem, QpResult, SolveOptions};
+use std::time::Instant;
+
+/// Solve `qp` by the active set method with CGH inner solves.
+pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
+    check_common(qp, opts)?;
+    let t1 = Instant::now();
+    let solver = CghSolver::new(qp, opts.tol);
+    let mut state = ActiveSet::new(qp, solver, opts);
+    let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("asm-cgh"));
+    let (status, iters) = exec.run(&mut state);
+    let t_it = t1.elapsed().as_secs_f64();
+    Ok(state.into_result(status, iters, exec.log, vec![("iterate".into(), t_it)]))
+}
+
+/// Parameters of [`cgh`].
+#[derive(Debug, Clone, Copy)]
+pub struct CghOptions {
+    /// Stop when ‖f − By‖ ≤ tol ‖f‖.
+    pub tol: f64,
+    /// Singularity threshold ε_s: p is singular if |(p,Bp)| ≤ ε_s ‖p‖‖Bp‖.
+    pub eps_s: f64,
+    pub max_iter: usize,
+}
+
+/// Solve B y = f (B symmetric, nonsingular, possibly indefinite) by CG with
+/// hyperbolic pairs, starting from the given y. `apply(v, out)` sets out = Bv.
+/// Returns the number of steps (a hyperbolic pair counts two), or an error
+/// message on breakdown / non-convergence.
+///
+/// Case I (regular p) and Case II (nearly singular p: |(p,Bp)| ≤ ε_s‖p‖‖Bp‖)
+/// follow methods.md §4.8, (2.27)–(2.38). In Case II the two step lengths and
+/// the new direction are obtained from the 2×2 Galerkin system on span{p_k,
+/// p_{k+1}} with matrix [[(p,Bp), (p,Bq)], [(q,Bp), (q,Bq)]]; with
+/// (p_k,Bp_k) = 0 (and hence (q,Bq) = 0) this is exactly the report's
+/// α_k = (r,p_{k+1})/den, α_{k+1} = (r,p_k)/den, p_{k+2} = r − (r,Bp_{k+1})/den·p_k,
+/// and it stays exact when the test admits a small nonzero (p_k,Bp_k). Should
+/// that 2×2 matrix be numerically singular while (p_k,Bp_k) ≠ 0 (p_k close to
+/// an eigenvector), the regular step is taken instead.
+pub fn cgh(
+    apply: &mut dyn FnMut(&[f64], &mut [f64]),
+    f: &[f64],
+    y: &mut [f64],
+    o: &CghOptions,
+) -> Result<usize, String> {
+    let n = f.len();
+    let fnorm = norm(f);
+    if fnorm == 0.0 {
+        y.iter_mut().for_each(|v| *v = 0.0);
+        return Ok(0);
+    }
+    let target = o.tol * fnorm;
+    let mut by = vec![0.0; n];
+    apply(y, &mut by);
+    let mut r: Vec<f64> = f.iter().zip(&by).map(|(a, b)| a - b).collect();
+    let mut p = r.clone();
+    let mut bp = vec![0.0; n];
+    apply(&p, &mut bp);
+    let mut b2p = vec![0.0; n];
+    let mut q = vec![0.0; n];
+    let mut bq = vec![0.0; n];
+    let mut k = 0usize;
+    let mut restarts = 0;
+    loop {
+        let rn = norm(&r);
+        if !rn.is_finite() {
+            return Err(format!("CGH: NaN/Inf after {k} steps"));
+        }
+        if rn <= target {
+            // Confirm with the true residual (rounding drift); restart if needed.
+            apply(y, &mut by);
+            for i in 0..n {
+                r[i] = f[i] - by[i];
+            }
+            if norm(&r) <= target {
+                return Ok(k);
+            }
+            restarts += 1;
+            if restarts > 10 {
+                return Err(format!(
+                    "CGH stagnates at relative residual {:.2e} > {:.2e}",
+                    norm(&r) / fnorm,
+                    o.tol
+                ));
+            }
+            p.copy_from_slice(&r);
+            apply(&p, &mut bp);
+        }
+        if k >= o.max_iter {
+            return Err(format!(
+                "CGH did not converge in {k} steps (relative residual {:.2e}); B_J may be singular",
+                rn / fnorm
+            ));
+        }
+        let pbp = dot(&p, &bp);
+        let pp = dot(&p, &p);
+        if pp == 0.0 {
+            return Err("CGH breakdown: zero search direction".into());
+        }
+        let bpn = norm(&bp);
+        let mut regular = pbp.abs() > o.eps_s * pp.sqrt() * bpn;
+        if !regular {
+            // Case II: hyperbolic pair (p, q).
+            let bpbp = bpn * bpn;
+            if !(bpbp > 0.0) {
+                return Err("CGH breakdown: B p = 0 for a direction p ≠ 0 (B_J singular)".into());
+            }
+            apply(&bp, &mut b2p);
+            let shift = dot(&bp, &b2p) / (2.0 * bpbp);
+            for i in 0..n {
+                q[i] = bp[i] - shift * p[i];
+                bq[i] = b2p[i] - shift * bp[i];
+            }
+            let m11 = pbp;
+            let m12 = dot(&p, &bq);
+            let m22 = dot(&q, &bq);
+            let det = m11 * m22 - m12 * m12;
+            if det.abs() > 1e-12 * ((m11 * m22).abs() + m12 * m12) {
+                let solve2 = |b1: f64, b2: f64| ((m22 * b1 - m12 * b2) / det, (m11 * b2 - m12 * b1) / det);
+                let (a0, a1) = solve2(dot(&r, &p), dot(&r, &q));
+                axpy(a0, &p, y);
+                axpy(a1, &q, y);
+                axpy(-a0, &bp, &mut r);
+                axpy(-a1, &bq, &mut r);
+                let (b0, b1) = solve2(dot(&r, &bp), dot(&r, &bq));
+                for i in 0..n {
+                    p[i] = r[i] - b0 * p[i] - b1 * q[i];
+                }
+                apply(&p, &mut bp);
+                k += 2;
+            } else if pbp != 0.0 {
+                regular = true;
+            } else {
+                return Err("CGH breakdown: singular hyperbolic pair (B_J singular?)".into());
+            }
+        }
+        if regular {
+            // Case I: regular step.
+            let alpha = dot(&r, &p) / pbp;
+            axpy(alpha, &p, y);
+            axpy(-alpha, &bp, &mut r);
+            let beta = dot(&r, &bp) / pbp;
+            for i in 0..n {
+                p[i] = r[i] - beta * p[i];
+            }
+            apply(&p, &mut bp);
+            k += 1;
+        }
+    }
+}
+
+struct CghSolver<'a> {
+    qp: &'a QpProblem,
+    tol: f64,
+    /// λ = s μ
+    s: f64,
+    /// max ‖a_i‖ (extra rows are scaled to it)
+    amax: f64,
+    steps: usize,
+    /// Multipliers of the previous solve by constraint (warm start).
+    warm: Vec<f64>,
+}
+
+impl<'a> CghSolver<'a> {
+    fn new(qp: &'a QpProblem, tol: f64) -> Self {
+        let cmax = qp.c.diag().iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        let amax = (0..qp.m()).map(|i| norm(qp.a.row(i).1)).fold(0.0f64, f64::max);
+        let s = if amax > 0.0 && cmax > 0.0 { cmax / amax } else { 1.0 };
+        CghSolver {
+            qp,
+            tol,
+            s,
+            amax: if amax > 0.0 { amax } else { 1.0 },
+            steps: 0,
+            warm: vec![0.0; qp.m()],
+        }
+    }
+}
+
+impl FaceSolver for CghSolver<'_> {
+    fn push(&mut self, _j: usize, _jl: &[usize]) -> bool {
+        true // rows assumed independent (methods.md §2.7)
+    }
+
+    fn remove(&mut self, _pos: usize) {}
+
+    fn solve(&mut self, r: &[f64], e: &[f64], jl: &[usize], fk: &FaceKernel) -> Result<(Vec<f64>, Vec<f64>), String> {
+        let qp = self.qp;
+        let n = qp.n();
+        let nj = jl.len();
+        let extra = &fk.free;
+        let dim = n + nj + extra.len();
+        let s = self.s;
+        // Extra rows v (unit) are scaled like a row of A.
+        let amax = self.amax;
+        let mut f = vec![0.0; dim];
+        f[..n].copy_from_slice(r);
+        for (fi, ei) in f[n..n + nj].iter_mut().zip(e) {
+            *fi = s * ei;
+        }
+        let mut y = vec![0.0; dim];
+        for (yi, &j) in y[n..n + nj].iter_mut().zip(jl) {
+            *yi = self.warm[j] / s;
+        }
+        let mut apply = |v: &[f64], out: &mut [f64]| {
+            let (vx, vm) = v.split_at(n);
+            let (ox, om) = out.split_at_mut(n);
+            qp.c.mul_vec(vx, ox);
+            for (t, &j) in jl.iter().enumerate() {
+                let mu = vm[t];
+                let (c, a) = qp.a.row(j);
+                let mut acc = 0.0;
+                for (&k, &aa) in c.iter().zip(a) {
+                    if mu != 0.0 {
+                        ox[k] += s * aa * mu;
+                    }
+                    acc += aa * vx[k];
+                }
+                om[t] = s * acc;
+            }
+            for (t, w) in extra.iter().enumerate() {
+                let mu = vm[nj + t];
+                if mu != 0.0 {
+                    axpy(s * amax * mu, w, ox);
+                }
+                om[nj + t] = s * amax * dot(w, vx);
+            }
+        };
+        let o = CghOptions {
+            tol: self.tol,
+            eps_s: 1e-4,
+            max_iter: 20 * dim + 200,
+        };
+        let res = cgh(&mut apply, &f, &mut y, &o);
+        match res {
+            Ok(k) => self.steps += k,
+            Err(msg) => return Err(format!("asm-cgh, working set of {nj} rows: {msg}")),
+        }
+        let lam: Vec<f64> = y[n..n + nj].iter().map(|m| s * m).collect();
+        for (&j, &l) in jl.iter().zip(&lam) {
+            self.warm[j] = l;
+        }
+        y.truncate(n);
+        Ok((y, lam))
+    }
+
+    fn inner(&self) -> usize {
+        self.steps
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Dense solve by Gaussian elimination with partial pivoting.
+    fn dense_solve(a: &[f64], n: usize, b: &[f64]) -> Vec<f64> {
+        let mut m = a.to_vec();
+        let mut x = b.to_vec();
+        for c in 0..n {
+            let p = (c..n)
+                .max_by(|&i, &j| m[i * n + c].abs().total_cmp(&m[j * n + c].abs()))
+                .unwrap();
+            for k in 0..n {
+                m.swap(c * n + k, p * n + k);
+            }
+            x.swap(c, p);
+            for i in c + 1..n {
+                let l = m[i * n + c] / m[c * n + c];
+                for k in c..n {
+                    m[i * n + k] -= l * m[c * n + k];
+                }
+                x[i] -= l * x[c];
+            }
+        }
+        for c in (0..n).rev() {
+            let s: f64 = (c + 1..n).map(|k| m[c * n + k] * x[k]).sum();
+            x[c] = (x[c] - s) / m[c * n + c];
+        }
+        x
+    }
+
+    fn run(b: &[f64], n: usize, f: &[f64]) -> (Vec<f64>, usize) {
+        let mut apply = |v: &[f64], out: &mut [f64]| {
+            for i in 0..n {
+                out[i] = (0..n).map(|j| b[i * n + j] * v[j]).sum();
+            }
+        };
+        let mut y = vec![0.0; n];
+        let o = CghOptions {
+            tol: 1e-13,
+            eps_s: 1e-4,
+            max_iter: 20 * n,
+        };
+        let k = cgh(&mut apply, f, &mut y, &o).expect("cgh");
+        (y, k)
+    }
+
+    #[test]
+    fn cgh_small_kkt_against_direct() {
+        // B = [[C, Aᵀ], [A, 0]], C SPD 6×6 (tridiagonal + shift), A 2×6.
+        let (nc, na) = (6, 2);
+        let n = nc + na;
+        let mut b = vec![0.0; n * n];
+        for i in 0..nc {
+            b[i * n + i] = 3.0 + i as f64 * 0.5;
+            if i + 1 < nc {
+                b[i * n + i + 1] = -1.0;
+                b[(i + 1) * n + i] = -1.0;
+            }
+        }
+        let arows = [[1.0, 0.0, -1.0, 0.0, 0.5, 0.0], [0.0, 1.0, 0.0, 0.0, -1.0, 2.0]];
+        for (r, row) in arows.iter().enumerate() {
+            for (c, &v) in row.iter().enumerate() {
+                b[(nc + r) * n + c] = v;
+                b[c * n + nc + r] = v;
+            }
+        }
+        let f: Vec<f64> = (0..n).map(|i| (i as f64 * 1.3).sin()).collect();
+        let exact = dense_solve(&b, n, &f);
+        let (y, _) = run(&b, n, &f);
+        for (a, e) in y.iter().zip(&exact) {
+            assert!((a - e).abs() < 1e-9, "{a} vs {e}");
+        }
+    }
+
+    #[test]
+    fn cgh_semidefinite_block_and_hyperbolic_pair() {
+        // C singular (ker C = span(e0 − e1)), fixed by the constraint row: B nonsingular.
+        let n = 4;
+        let b = vec![
+            1.0, -1.0, 0.0, 1.0, //
+            -1.0, 1.0, 0.0, 0.0, //
+            0.0, 0.0, 2.0, 1.0, //
+            1.0, 0.0, 1.0, 0.0,
+        ];
+        let f = vec![1.0, 0.0, 0.5, -1.0];
+        let exact = dense_solve(&b, n, &f);
+        let (y, _) = run(&b, n, &f);
+        for (a, e) in y.iter().zip(&exact) {
+            assert!((a - e).abs() < 1e-9, "{a} vs {e}");
+        }
+        // Pure hyperbolic start: B = [[0,1],[1,0]], p0 = f has (p,Bp) = 0.
+        let b2 = vec![0.0, 1.0, 1.0, 0.0];
+        let (y, k) = run(&b2, 2, &[1.0, 0.0]);
+        assert!((y[0]).abs() < 1e-12 && (y[1] - 1.0).abs() < 1e-12, "{y:?}");
+        assert_eq!(k, 2);
+    }
+}

@@ -1,0 +1,436 @@
+//! Cross-checks of the QP methods (preelim, penalty, uzawa, dual, asm, asm-cgh)
+//! against CGC with the Cholesky preconditioner on small two-body contact
+//! problems: 2D trusses on a square grid (with diagonals, hence rigid), one
+//! contact row per pair of facing nodes, g = 0 and g > 0, coercive and
+//! semicoercive (a floating body resting in a V-shaped contact).
+
+use super::precond::PrecondKind;
+use super::sparse::{norm, norm_inf};
+use super::{cgc, registry, Csr, QpError, QpProblem, QpResult, SolveOptions, Status};
+
+#[derive(Clone, Copy, Debug)]
+enum Variant {
+    /// Body 1 fixed at the bottom, body 2 fixed at the top; normals (0, 1).
+    Coercive { gaps: bool },
+    /// Body 2 floating (3 rigid modes in `kernel`), pushed into a V-shaped contact.
+    Floating { gaps: bool },
+}
+
+/// Two nx×ny truss grids, body 2 above body 1.
+fn two_bodies(v: Variant) -> QpProblem {
+    let (nx, ny) = (9usize, 4usize);
+    let h = 1.0;
+    let floating = matches!(v, Variant::Floating { .. });
+    let gaps = match v {
+        Variant::Coercive { gaps } | Variant::Floating { gaps } => gaps,
+    };
+    // nodes: (body, i, j) → coordinates; body 2 sits one unit above body 1.
+    let mut coords = vec![];
+    let mut fixed = vec![];
+    for b in 0..2 {
+        for j in 0..ny {
+            for i in 0..nx {
+                let y = if b == 0 {
+                    j as f64 * h
+                } else {
+                    (ny as f64) * h + j as f64 * h
+                };
+                coords.push((i as f64 * h, y));
+                fixed.push((b == 0 && j == 0) || (b == 1 && !floating && j == ny - 1));
+            }
+        }
+    }
+    let node = |b: usize, i: usize, j: usize| b * nx * ny + j * nx + i;
+    let mut dof = vec![usize::MAX; 2 * coords.len()];
+    let mut n = 0;
+    for (k, &f) in fixed.iter().enumerate() {
+        if !f {
+            dof[2 * k] = n;
+            dof[2 * k + 1] = n + 1;
+            n += 2;
+        }
+    }
+    let mut trip = vec![];
+    let mut count = 0usize;
+    let mut spring = |a: usize, b: usize, trip: &mut Vec<(usize, usize, f64)>| {
+        count += 1;
+        let k = 1e4 * (1.0 + 0.3 * (count as f64 * 0.7).sin());
+        let (dx, dy) = (coords[b].0 - coords[a].0, coords[b].1 - coords[a].1);
+        let l = (dx * dx + dy * dy).sqrt();
+        let e = [dx / l, dy / l];
+        for (p, sp) in [(a, 1.0), (b, -1.0)] {
+            for (q, sq) in [(a, 1.0), (b, -1.0)] {
+                for r in 0..2 {
+                    for c in 0..2 {
+                        let (i, j) = (dof[2 * p + r], dof[2 * q + c]);
+                        if i != usize::MAX && j != usize::MAX {
+                            trip.push((i, j, sp * sq * k * e[r] * e[c]));
+                        }
+                    }
+                }
+            }
+        }
+    };
+    for b in 0..2 {
+        for j in 0..ny {
+            for i in 0..nx {
+                if i + 1 < nx {
+                    spring(node(b, i, j), node(b, i + 1, j), &mut trip);
+                }
+                if j + 1 < ny {
+                    spring(node(b, i, j), node(b, i, j + 1), &mut trip);
+                }
+                if i + 1 < nx && j + 1 < ny {
+                    spring(node(b, i, j), node(b, i + 1, j + 1), &mut trip);
+                    spring(node(b, i + 1, j), node(b, i, j + 1), &mut trip);
+                }
+            }
+        }
+    }
+    let c = Csr::from_triplets(n, n, &trip);
+    // Loads.
+    let mut d = vec![0.0; n];
+    for i in 0..nx {
+        let t = i as f64 / (nx - 1) as f64;
+        if floating {
+            for j in 0..ny {
+                let k = node(1, i, j);
+                d[dof[2 * k]] += 0.3;
+                d[dof[2 * k + 1]] += -1.0 - 0.8 * (3.0 * t).sin();
+            }
+        } else {
+            let k = node(1, i, 0);
+            d[dof[2 * k + 1]] += -3.0 * (std::f64::consts::PI * t).cos() - 0.5;
+            d[dof[2 * k]] += 0.2;
+        }
+        let k = node(0, i, ny - 1);
+        d[dof[2 * k + 1]] += 0.4 * (1.0 + t);
+    }
+    // Contact rows (u1 − u2)·n ≤ g between facing nodes.
+    let mut atrip = vec![];
+    let mut g = vec![];
+    for i in 0..nx {
+        let nrm = if floating {
+            let s: f64 = if 2 * i < nx - 1 { 0.35 } else { -0.35 };
+            (s.sin(), s.cos())
+        } else {
+            (0.0, 1.0)
+        };
+        let (a, b) = (node(0, i, ny - 1), node(1, i, 0));
+        atrip.push((i, dof[2 * a], nrm.0));
+        atrip.push((i, dof[2 * a + 1], nrm.1));
+        atrip.push((i, dof[2 * b], -nrm.0));
+        atrip.push((i, dof[2 * b + 1], -nrm.1));
+        g.push(if gaps { 1e-5 * ((i * 5 % 3) as f64) } else { 0.0 });
+    }
+    let a = Csr::from_triplets(nx, n, &atrip);
+    let mut kernel = vec![];
+    if floating {
+        let mut tx = vec![0.0; n];
+        let mut ty = vec![0.0; n];
+        let mut rot = vec![0.0; n];
+        for j in 0..ny {
+            for i in 0..nx {
+                let k = node(1, i, j);
+                let (x, y) = coords[k];
+                tx[dof[2 * k]] = 1.0;
+                ty[dof[2 * k + 1]] = 1.0;
+                rot[dof[2 * k]] = -(y - 5.5);
+                rot[dof[2 * k + 1]] = x - 4.0;
+            }
+        }
+        kernel = vec![tx, ty, rot];
+    }
+    QpProblem { c, d, a, g, kernel }
+}
+
+fn opts(tol: f64) -> SolveOptions {
+    SolveOptions {
+        tol,
+        max_iter: 1_000_000,
+        preconditioner: PrecondKind::Cholesky,
+        ..Default::default()
+    }
+}
+
+fn reference(qp: &QpProblem) -> QpResult {
+    // (CGC's residual floor on the semicoercive problems is ≈1e-13.)
+    let r = registry::solve("cgc", qp, &opts(1e-11)).expect("cgc");
+    assert!(r.status.converged(), "reference: {}", r.status.describe());
+    assert!(r.kkt.within(1e-9), "reference KKT {:?}", r.kkt);
+    r
+}
+
+fn rel_err(x: &[f64], y: &[f64]) -> f64 {
+    let d: Vec<f64> = x.iter().zip(y).map(|(a, b)| a - b).collect();
+    norm(&d) / norm(y).max(1e-300)
+}
+
+const VARIANTS: [Variant; 4] = [
+    Variant::Coercive { gaps: false },
+    Variant::Coercive { gaps: true },
+    Variant::Floating { gaps: false },
+    Variant::Floating { gaps: true },
+];
+
+#[test]
+fn test_problems_are_nondegenerate() {
+    for v in VARIANTS {
+        let qp = two_bodies(v);
+        let r = reference(&qp);
+        let ax = qp.a.mul(&r.x);
+        let lmax = norm_inf(&r.lambda);
+        let xmax = norm_inf(&r.x);
+        let nact = r.active.iter().filter(|b| **b).count();
+        assert!(nact > 0 && nact < qp.m(), "{v:?}: {nact} of {} active", qp.m());
+        for i in 0..qp.m() {
+            let slack = qp.g[i] - ax[i];
+            assert!(
+                r.lambda[i] > 1e-4 * lmax || slack > 1e-4 * xmax,
+                "{v:?}: constraint {i} weakly active (λ {:e}, slack {slack:e})",
+                r.lambda[i]
+            );
+            assert_eq!(r.active[i], r.lambda[i] > 1e-4 * lmax, "{v:?} row {i}");
+        }
+    }
+}
+
+/// x, active set, KKT and λ ≥ 0 against the reference.
+fn check_exact(name: &str, v: Variant, qp: &QpProblem, r: &QpResult, refr: &QpResult) {
+    assert!(r.status.converged(), "{name} {v:?}: {}", r.status.describe());
+    let e = rel_err(&r.x, &refr.x);
+    assert!(e < 1e-6, "{name} {v:?}: relative error {e:e}");
+    assert_eq!(r.active, refr.active, "{name} {v:?}: active set");
+    assert!(r.kkt.within(1e-8), "{name} {v:?}: KKT {:?}", r.kkt);
+    assert!(r.lambda.iter().all(|&l| l >= 0.0), "{name} {v:?}: λ < 0");
+    let le = rel_err(&r.lambda, &refr.lambda);
+    assert!(le < 1e-6, "{name} {v:?}: λ relative error {le:e}");
+    assert!((r.energy - qp.energy(&r.x)).abs() <= 1e-12 * r.energy.abs().max(1.0));
+    assert!(!r.timings.is_empty() && r.iterations > 0, "{name}: bookkeeping");
+}
+
+#[test]
+fn exact_methods_match_cgc_coercive() {
+    for v in [VARIANTS[0], VARIANTS[1]] {
+        let qp = two_bodies(v);
+        let refr = reference(&qp);
+        for name in ["preelim", "uzawa", "dual", "asm", "asm-cgh"] {
+            let tol = if name == "asm-cgh" { 1e-11 } else { 1e-12 };
+            let r = registry::solve(name, &qp, &opts(tol)).unwrap_or_else(|e| panic!("{name}: {e}"));
+            check_exact(name, v, &qp, &r, &refr);
+        }
+    }
+}
+
+#[test]
+fn semicoercive_solved_or_refused() {
+    for v in [VARIANTS[2], VARIANTS[3]] {
+        let qp = two_bodies(v);
+        let refr = reference(&qp);
+        for name in ["preelim", "uzawa", "dual", "asm", "asm-cgh", "penalty"] {
+            // preelim runs CGC on the reduced problem: its floor applies.
+            let mut o = opts(match name {
+                "asm-cgh" => 1e-11,
+                "preelim" => 1e-10,
+                _ => 1e-12,
+            });
+            if name == "penalty" {
+                o.penalty = Some(1e-3 / norm_inf(&qp.c.diag()));
+                o.omega = 1.5;
+            }
+            match registry::solve(name, &qp, &o) {
+                Err(QpError::Unsupported(msg)) => {
+                    assert!(["uzawa", "dual"].contains(&name), "{name} refused: {msg}");
+                    assert!(msg.contains("singular"), "{name}: {msg}");
+                }
+                Err(e) => panic!("{name} {v:?}: unexpected error {e}"),
+                Ok(r) if name == "penalty" => {
+                    assert!(r.status.converged(), "{name}: {}", r.status.describe());
+                    let e = rel_err(&r.x, &refr.x);
+                    assert!(e < 1e-2, "penalty semicoercive error {e:e}");
+                    assert!(r.kkt.stationarity < 1e-7, "{:?}", r.kkt);
+                }
+                Ok(r) => check_exact(name, v, &qp, &r, &refr),
+            }
+        }
+    }
+}
+
+#[test]
+fn semicoercive_unbounded_is_detected() {
+    // Pull the floating body away from the contact: no solution.
+    let mut qp = two_bodies(Variant::Floating { gaps: true });
+    for v in qp.d.iter_mut() {
+        *v = 0.0;
+    }
+    let n = qp.n();
+    for k in (n - 2 * 9 * 4..n).skip(1).step_by(2) {
+        qp.d[k] = 1.0; // +y on every node of body 2
+    }
+    for name in ["asm", "asm-cgh"] {
+        let r = registry::solve(name, &qp, &opts(1e-11)).unwrap();
+        match &r.status {
+            Status::Unbounded { direction } => {
+                assert!(norm(&qp.c.mul(direction)) <= 1e-8 * norm(direction) * norm_inf(&qp.c.diag()));
+                assert!(
+                    super::sparse::dot(direction, &qp.d) > 0.0,
+                    "{name}: not a descent direction"
+                );
+            }
+            s => panic!("{name}: expected Unbounded, got {}", s.describe()),
+        }
+    }
+}
+
+fn penalty_run(qp: &QpProblem, eps: Option<f64>, omega: f64, tol: f64) -> QpResult {
+    let mut o = opts(tol);
+    o.penalty = eps;
+    o.omega = omega;
+    let r = registry::solve("penalty", qp, &o).expect("penalty");
+    assert!(r.status.converged(), "penalty: {}", r.status.describe());
+    r
+}
+
+#[test]
+fn penalty_error_is_first_order_in_eps() {
+    let qp = two_bodies(Variant::Coercive { gaps: true });
+    let refr = reference(&qp);
+    let cmax = norm_inf(&qp.c.diag());
+    let mut errs = vec![];
+    for k in 1..=3 {
+        let eps = 10f64.powi(-k) / cmax;
+        let r = penalty_run(&qp, Some(eps), 1.6, 1e-12);
+        let e = rel_err(&r.x, &refr.x);
+        let le = rel_err(&r.lambda, &refr.lambda);
+        // Stationarity is exact for λ = (Ax − g)⁺/ε; the violation is O(ε).
+        assert!(r.kkt.stationarity < 1e-7, "{:?}", r.kkt);
+        assert!(r.kkt.primal < 1e3 * eps * cmax, "ε {eps:e}: primal {:e}", r.kkt.primal);
+        assert!(r.lambda.iter().all(|&l| l >= 0.0));
+        assert!(le < 100.0 * eps * cmax, "λ error {le:e}");
+        errs.push(e);
+    }
+    for w in errs.windows(2) {
+        let ratio = w[1] / w[0];
+        assert!((0.05..0.2).contains(&ratio), "errors {errs:?} not O(ε)");
+    }
+    // Small enough ε: the active set is exact as well.
+    let r = penalty_run(&qp, Some(1e-3 / cmax), 1.6, 1e-12);
+    assert_eq!(r.active, refr.active);
+}
+
+#[test]
+fn penalty_default_eps_and_gauss_seidel() {
+    let qp = two_bodies(Variant::Coercive { gaps: false });
+    let refr = reference(&qp);
+    let gs = penalty_run(&qp, None, 1.0, 1e-13);
+    let sor = penalty_run(&qp, None, 1.7, 1e-13);
+    assert!(rel_err(&gs.x, &refr.x) < 1e-2, "{}", rel_err(&gs.x, &refr.x));
+    assert!(rel_err(&gs.x, &sor.x) < 1e-8);
+    assert!(
+        sor.iterations < gs.iterations,
+        "SOR {} vs GS {}",
+        sor.iterations,
+        gs.iterations
+    );
+}
+
+#[test]
+fn no_constraints() {
+    let mut qp = two_bodies(Variant::Coercive { gaps: false });
+    qp.a = Csr::zeros(0, qp.n());
+    qp.g = vec![];
+    let x = super::factor::Cholesky::new(&qp.c, &[]).unwrap().solve(&qp.d);
+    for name in ["preelim", "uzawa", "dual", "asm", "asm-cgh", "penalty"] {
+        let r = registry::solve(name, &qp, &opts(1e-12)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(r.status.converged(), "{name}: {}", r.status.describe());
+        let tol = if name == "penalty" { 1e-6 } else { 1e-8 };
+        assert!(rel_err(&r.x, &x) < tol, "{name}: {}", rel_err(&r.x, &x));
+    }
+}
+
+#[test]
+fn bad_parameters_do_not_panic() {
+    let qp = two_bodies(Variant::Coercive { gaps: true });
+    let names = ["preelim", "uzawa", "dual", "asm", "asm-cgh", "penalty"];
+    let bad = [
+        SolveOptions {
+            rho: Some(-1.0),
+            ..opts(1e-10)
+        },
+        SolveOptions {
+            rho: Some(f64::NAN),
+            ..opts(1e-10)
+        },
+        SolveOptions {
+            rho: Some(1e12),
+            max_iter: 50,
+            ..opts(1e-10)
+        },
+        SolveOptions {
+            penalty: Some(-1.0),
+            ..opts(1e-10)
+        },
+        SolveOptions {
+            penalty: Some(0.0),
+            ..opts(1e-10)
+        },
+        SolveOptions {
+            omega: 3.0,
+            ..opts(1e-10)
+        },
+        SolveOptions {
+            tol: f64::NAN,
+            ..opts(1e-10)
+        },
+        SolveOptions {
+            tol: -1.0,
+            ..opts(1e-10)
+        },
+        SolveOptions {
+            max_iter: 0,
+            ..opts(1e-10)
+        },
+        SolveOptions {
+            max_iter: 1,
+            ..opts(1e-10)
+        },
+    ];
+    for o in &bad {
+        for name in names {
+            // Either an error or a result; never a panic.
+            if let Ok(r) = registry::solve(name, &qp, o) {
+                assert_eq!(r.x.len(), qp.n());
+                assert_eq!(r.lambda.len(), qp.m());
+            }
+        }
+    }
+    // A huge ρ makes Uzawa diverge: reported as a status, not a panic.
+    let r = registry::solve("uzawa", &qp, &bad[2]).unwrap();
+    assert!(!r.status.converged());
+}
+
+#[test]
+fn preelim_refuses_singular_c11() {
+    // A floating body whose contact DOFs do not fix it: only the y-DOF of one node constrained.
+    let c = Csr::from_triplets(
+        3,
+        3,
+        &[(0, 0, 1.0), (0, 1, -1.0), (1, 0, -1.0), (1, 1, 1.0), (2, 2, 1.0)],
+    );
+    let a = Csr::from_triplets(1, 3, &[(0, 2, 1.0)]);
+    let qp = QpProblem {
+        c,
+        d: vec![0.0, 0.0, 1.0],
+        a,
+        g: vec![0.0],
+        kernel: vec![vec![1.0, 1.0, 0.0]],
+    };
+    match registry::solve("preelim", &qp, &opts(1e-10)) {
+        Err(QpError::Unsupported(msg)) => assert!(msg.contains("C11"), "{msg}"),
+        Err(e) => panic!("unexpected error {e}"),
+        Ok(r) => panic!("expected refusal, got {}", r.status.describe()),
+    }
+    // The reference copes (the energy is constant along the kernel).
+    let r = cgc::solve(&qp, &opts(1e-10)).unwrap();
+    assert!(r.status.converged());
+}
