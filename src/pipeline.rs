@@ -167,12 +167,18 @@ pub fn solve(prep: &Prepared, method: &str, opts: &SolveOptions) -> Result<QpRes
 }
 
 /// [`solve`] for the model of a load step.
-pub fn solve_model(prep: &Prepared, model: &Model, method: &str, opts: &SolveOptions) -> Result<QpResult, InputError> {
+pub fn solve_model(
+    prep: &Prepared,
+    model: &Model,
+    method: &str,
+    opts: &SolveOptions,
+) -> Result<QpResult, InputError> {
     let bad = |msg: String| InputError::Solver {
         path: prep.problem.path.clone(),
         msg,
     };
-    let res = registry::solve(method, &model.qp, opts).map_err(|e| bad(format!("{method}: {e}")))?;
+    let res =
+        registry::solve(method, &model.qp, opts).map_err(|e| bad(format!("{method}: {e}")))?;
     if let Status::Unbounded { direction } = &res.status {
         let u = model.displacements(direction);
         // The bodies that the direction moves (relative to the largest motion).
@@ -224,13 +230,22 @@ pub fn create_checkpoint(prep: &Prepared, out: &Outputs, om: &OutMesh) -> Result
     let attrs = [
         ("problem", prep.problem.name.clone()),
         ("problem_toml", prep.problem.text.clone()),
-        ("program", format!("signorini {}", env!("CARGO_PKG_VERSION"))),
+        (
+            "program",
+            format!("signorini {}", env!("CARGO_PKG_VERSION")),
+        ),
     ];
     io::hdf5::create_checkpoint(&out.h5, om, &attrs)
 }
 
 /// Write the VTU pair of a step and append it to the checkpoint (each file atomically).
-pub fn write_step(out: &Outputs, om: &OutMesh, step: &StepOutput, index: usize, compress: bool) -> Result<(), IoError> {
+pub fn write_step(
+    out: &Outputs,
+    om: &OutMesh,
+    step: &StepOutput,
+    index: usize,
+    compress: bool,
+) -> Result<(), IoError> {
     io::vtu::write_vtu(&out.vtu, om, step, compress)?;
     io::vtu::write_contact_vtu(&out.contact_vtu, om, step, compress)?;
     io::hdf5::append_step(&out.h5, index, step)

@@ -341,11 +341,20 @@ fn point_force_is_per_unit_thickness_in_plane_stress() {
     let p = temp_toml(dir.path(), "force", &text);
     let prep = pipeline::prepare(&p, false).unwrap();
     let m = &prep.model;
-    let corner = m.topo.points.iter().position(|x| x[0] == 0.0 && x[1] == 0.0).unwrap();
+    let corner = m
+        .topo
+        .points
+        .iter()
+        .position(|x| x[0] == 0.0 && x[1] == 0.0)
+        .unwrap();
     let pd = m.dofs[corner];
     assert_eq!(pd.ndof, 2);
     // The load vector holds t_h·f at the corner and nothing else.
-    assert!((m.qp.d[pd.start] - 100.0).abs() < 1e-9 && (m.qp.d[pd.start + 1] - 200.0).abs() < 1e-9, "{:?}", &m.qp.d[pd.start..pd.start + 2]);
+    assert!(
+        (m.qp.d[pd.start] - 100.0).abs() < 1e-9 && (m.qp.d[pd.start + 1] - 200.0).abs() < 1e-9,
+        "{:?}",
+        &m.qp.d[pd.start..pd.start + 2]
+    );
     let total: f64 = m.qp.d.iter().map(|v| v.abs()).sum();
     assert!((total - 300.0).abs() < 1e-9, "{total}");
 }

@@ -155,7 +155,8 @@ fn svg_is_well_formed_enough() {
 fn contact_pressure_png() {
     let dir = out_dir();
     let fig = dir.path().join("contact.png");
-    let (code, stdout, stderr) = signorini(&["plot", h5(), "--contact", "-o", fig.to_str().unwrap()]);
+    let (code, stdout, stderr) =
+        signorini(&["plot", h5(), "--contact", "-o", fig.to_str().unwrap()]);
     assert_eq!(code, 0, "{stdout}\n{stderr}");
     assert!(stdout.contains("contact pressure"), "{stdout}");
     let (w, h, colours) = decode_png(&fig);
@@ -167,7 +168,8 @@ fn contact_pressure_png() {
 fn contact_svg_names_the_interface() {
     let dir = out_dir();
     let fig = dir.path().join("contact.svg");
-    let (code, stdout, stderr) = signorini(&["plot", h5(), "--contact", "-o", fig.to_str().unwrap()]);
+    let (code, stdout, stderr) =
+        signorini(&["plot", h5(), "--contact", "-o", fig.to_str().unwrap()]);
     assert_eq!(code, 0, "{stdout}\n{stderr}");
     let text = std::fs::read_to_string(&fig).unwrap();
     assert!(text.contains("interface"));
@@ -185,7 +187,11 @@ fn fails(extra: &[&str], file: &str) -> String {
     let (code, stdout, stderr) = signorini(&args);
     assert_eq!(code, 2, "{stdout}\n{stderr}");
     assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
-    assert!(files_in(dir.path()).is_empty(), "{:?}", files_in(dir.path()));
+    assert!(
+        files_in(dir.path()).is_empty(),
+        "{:?}",
+        files_in(dir.path())
+    );
     stderr
 }
 
@@ -226,7 +232,8 @@ fn unreadable_checkpoint_and_unwritable_output_are_exit_2() {
     // Not an HDF5 file.
     let junk = dir.path().join("junk.h5");
     std::fs::write(&junk, b"not hdf5").unwrap();
-    let (code, _, stderr) = signorini(&["plot", junk.to_str().unwrap(), "-o", fig.to_str().unwrap()]);
+    let (code, _, stderr) =
+        signorini(&["plot", junk.to_str().unwrap(), "-o", fig.to_str().unwrap()]);
     assert_eq!(code, 2, "{stderr}");
     assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
     // Output in a directory that does not exist.

@@ -6,12 +6,25 @@ use std::path::PathBuf;
 use std::process::Command;
 
 fn run(args: &[&str]) -> (i32, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_signorini")).args(args).output().unwrap();
-    (o.status.code().unwrap_or(-1), format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr)))
+    let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        ),
+    )
 }
 
 fn example() -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes/three_bodies_steps.toml").display().to_string()
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("meshes/three_bodies_steps.toml")
+        .display()
+        .to_string()
 }
 
 #[test]
@@ -20,46 +33,105 @@ fn steps_write_a_time_series_and_restart_reproduces_the_uninterrupted_run() {
     let (code, log) = run(&["solve", &example(), "--out", full.path().to_str().unwrap()]);
     assert_eq!(code, 0, "{log}");
     for k in 1..=4 {
-        assert!(full.path().join(format!("three_bodies_steps_{k:04}.vtu")).exists(), "step {k} VTU");
-        assert!(full.path().join(format!("three_bodies_steps_{k:04}_contact.vtu")).exists());
+        assert!(
+            full.path()
+                .join(format!("three_bodies_steps_{k:04}.vtu"))
+                .exists(),
+            "step {k} VTU"
+        );
+        assert!(full
+            .path()
+            .join(format!("three_bodies_steps_{k:04}_contact.vtu"))
+            .exists());
     }
     let pvd = signorini::io::vtu::read_pvd(&full.path().join("three_bodies_steps.pvd")).unwrap();
     assert_eq!(pvd.len(), 8, "two datasets per step: {pvd:?}");
-    let ck = signorini::io::hdf5::read_checkpoint(&full.path().join("three_bodies_steps.h5")).unwrap();
+    let ck =
+        signorini::io::hdf5::read_checkpoint(&full.path().join("three_bodies_steps.h5")).unwrap();
     assert_eq!(ck.steps.len(), 4);
     let times: Vec<f64> = ck.steps.iter().map(|s| s.time).collect();
     assert_eq!(times, vec![1.0, 2.0, 3.0, 4.0]);
     // The prescribed side displacement u_x = 0.2 m × factor of each step
     // (0.25, 0.5, 0.75, 1), the first step included.
-    let left: Vec<usize> = ck.mesh.points.iter().enumerate().filter(|(_, p)| p[0] == 0.0).map(|(i, _)| i).collect();
+    let left: Vec<usize> = ck
+        .mesh
+        .points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p[0] == 0.0)
+        .map(|(i, _)| i)
+        .collect();
     assert!(!left.is_empty());
     for (k, st) in ck.steps.iter().enumerate() {
         let want = 0.2 * 0.25 * (k + 1) as f64;
         for &p in &left {
-            assert!((st.displacement[p][0] - want).abs() < 1e-12, "step {}: u_x = {} want {want}", k + 1, st.displacement[p][0]);
+            assert!(
+                (st.displacement[p][0] - want).abs() < 1e-12,
+                "step {}: u_x = {} want {want}",
+                k + 1,
+                st.displacement[p][0]
+            );
         }
     }
 
     // Stopped after step 2, then restarted from the checkpoint.
     let part = tempfile::tempdir().unwrap();
-    let (code, log) = run(&["solve", &example(), "--out", part.path().to_str().unwrap(), "--max-steps", "2"]);
+    let (code, log) = run(&[
+        "solve",
+        &example(),
+        "--out",
+        part.path().to_str().unwrap(),
+        "--max-steps",
+        "2",
+    ]);
     assert_eq!(code, 0, "{log}");
     let h5 = part.path().join("three_bodies_steps.h5");
-    assert_eq!(signorini::io::hdf5::read_checkpoint(&h5).unwrap().steps.len(), 2);
-    let (code, log) = run(&["solve", &example(), "--out", part.path().to_str().unwrap(), "--restart", h5.to_str().unwrap()]);
+    assert_eq!(
+        signorini::io::hdf5::read_checkpoint(&h5)
+            .unwrap()
+            .steps
+            .len(),
+        2
+    );
+    let (code, log) = run(&[
+        "solve",
+        &example(),
+        "--out",
+        part.path().to_str().unwrap(),
+        "--restart",
+        h5.to_str().unwrap(),
+    ]);
     assert_eq!(code, 0, "{log}");
     assert!(log.contains("restart"), "{log}");
     let ck2 = signorini::io::hdf5::read_checkpoint(&h5).unwrap();
     assert_eq!(ck2.steps.len(), 4);
-    let scale = ck.steps[3].displacement.iter().fold(0.0f64, |m, u| m.max(u[0].abs()).max(u[1].abs()));
+    let scale = ck.steps[3]
+        .displacement
+        .iter()
+        .fold(0.0f64, |m, u| m.max(u[0].abs()).max(u[1].abs()));
     for k in 0..4 {
-        for (a, b) in ck.steps[k].displacement.iter().zip(&ck2.steps[k].displacement) {
-            assert!((a[0] - b[0]).abs() <= 1e-8 * scale && (a[1] - b[1]).abs() <= 1e-8 * scale, "step {}: {a:?} vs {b:?}", k + 1);
+        for (a, b) in ck.steps[k]
+            .displacement
+            .iter()
+            .zip(&ck2.steps[k].displacement)
+        {
+            assert!(
+                (a[0] - b[0]).abs() <= 1e-8 * scale && (a[1] - b[1]).abs() <= 1e-8 * scale,
+                "step {}: {a:?} vs {b:?}",
+                k + 1
+            );
         }
         assert_eq!(ck.steps[k].active, ck2.steps[k].active, "step {}", k + 1);
     }
     // Restarting a finished run has nothing to do.
-    let (code, log) = run(&["solve", &example(), "--out", part.path().to_str().unwrap(), "--restart", h5.to_str().unwrap()]);
+    let (code, log) = run(&[
+        "solve",
+        &example(),
+        "--out",
+        part.path().to_str().unwrap(),
+        "--restart",
+        h5.to_str().unwrap(),
+    ]);
     assert_eq!(code, 0, "{log}");
     assert!(log.contains("nothing to do"), "{log}");
 }
@@ -68,10 +140,23 @@ fn steps_write_a_time_series_and_restart_reproduces_the_uninterrupted_run() {
 fn restart_from_a_foreign_checkpoint_is_bad_input() {
     let d = tempfile::tempdir().unwrap();
     let col = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes/column.toml");
-    let (code, log) = run(&["solve", col.to_str().unwrap(), "--out", d.path().to_str().unwrap(), "--quiet"]);
+    let (code, log) = run(&[
+        "solve",
+        col.to_str().unwrap(),
+        "--out",
+        d.path().to_str().unwrap(),
+        "--quiet",
+    ]);
     assert_eq!(code, 0, "{log}");
     let h5 = d.path().join("column.h5");
-    let (code, log) = run(&["solve", &example(), "--out", d.path().join("x").to_str().unwrap(), "--restart", h5.to_str().unwrap()]);
+    let (code, log) = run(&[
+        "solve",
+        &example(),
+        "--out",
+        d.path().join("x").to_str().unwrap(),
+        "--restart",
+        h5.to_str().unwrap(),
+    ]);
     assert_eq!(code, 2, "{log}");
     assert!(log.contains("does not match"), "{log}");
 }

@@ -32,7 +32,10 @@ pub fn run(a: &MeshArgs, quiet: bool) -> i32 {
         );
         return 2;
     }
-    let out = a.output.clone().unwrap_or_else(|| a.geo.with_extension("msh"));
+    let out = a
+        .output
+        .clone()
+        .unwrap_or_else(|| a.geo.with_extension("msh"));
     let result = crate::io::atomic::write_atomic(&out, |tmp| {
         let mut cmd = Command::new(&a.gmsh);
         cmd.arg("-2").arg("-format").arg("msh41");
@@ -40,13 +43,25 @@ pub fn run(a: &MeshArgs, quiet: bool) -> i32 {
             cmd.arg("-bin");
         }
         cmd.arg(&a.geo).arg("-o").arg(tmp);
-        let o = cmd.output().map_err(|cause| crate::io::IoError::Io { path: out.clone(), action: "run gmsh", cause })?;
+        let o = cmd.output().map_err(|cause| crate::io::IoError::Io {
+            path: out.clone(),
+            action: "run gmsh",
+            cause,
+        })?;
         if !o.status.success() || !tmp.is_file() {
             let err = String::from_utf8_lossy(&o.stderr);
-            let tail: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).rev().take(3).collect();
+            let tail: Vec<&str> = err
+                .lines()
+                .filter(|l| !l.trim().is_empty())
+                .rev()
+                .take(3)
+                .collect();
             return Err(crate::io::IoError::Format {
                 path: a.geo.clone(),
-                message: format!("gmsh failed: {}", tail.into_iter().rev().collect::<Vec<_>>().join(" | ")),
+                message: format!(
+                    "gmsh failed: {}",
+                    tail.into_iter().rev().collect::<Vec<_>>().join(" | ")
+                ),
             });
         }
         Ok(())
@@ -61,9 +76,21 @@ pub fn run(a: &MeshArgs, quiet: bool) -> i32 {
                 let groups: Vec<String> = m
                     .groups
                     .iter()
-                    .map(|g| format!("{} ({}, {})", g.name, crate::fem::topology::dim_name(g.dim), g.elements.len()))
+                    .map(|g| {
+                        format!(
+                            "{} ({}, {})",
+                            g.name,
+                            crate::fem::topology::dim_name(g.dim),
+                            g.elements.len()
+                        )
+                    })
                     .collect();
-                println!("{}: {} nodes, {} triangles", out.display(), m.nodes.len(), m.triangles.len());
+                println!(
+                    "{}: {} nodes, {} triangles",
+                    out.display(),
+                    m.nodes.len(),
+                    m.triangles.len()
+                );
                 println!("physical groups: {}", groups.join(", "));
             }
             0

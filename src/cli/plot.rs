@@ -83,7 +83,11 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                 };
                 println!("step {} of {}, {what}", s.step, s.steps);
                 if let Some((lo, hi)) = s.range {
-                    println!("range: {} to {}{unit}", plot::fmt_num(lo), plot::fmt_num(hi));
+                    println!(
+                        "range: {} to {}{unit}",
+                        plot::fmt_num(lo),
+                        plot::fmt_num(hi)
+                    );
                 }
                 if let Some(k) = s.scale {
                     let how = if a.scale.is_some() {

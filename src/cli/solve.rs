@@ -41,7 +41,10 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         .unwrap_or_else(|| PathBuf::from("out"));
     // Fail on an unwritable output directory before spending time solving.
     if let Err(e) = std::fs::create_dir_all(&dir) {
-        eprintln!("error: {}: cannot create output directory: {e}", dir.display());
+        eprintln!(
+            "error: {}: cannot create output directory: {e}",
+            dir.display()
+        );
         return EXIT_BAD_INPUT;
     }
     let name = prep.problem.name.clone();
@@ -64,7 +67,8 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
                 return EXIT_BAD_INPUT;
             }
         };
-        if ck.mesh.points.len() != om.points.len() || ck.mesh.triangles.len() != om.triangles.len() {
+        if ck.mesh.points.len() != om.points.len() || ck.mesh.triangles.len() != om.triangles.len()
+        {
             eprintln!(
                 "error: {}: checkpoint mesh ({} points, {} triangles) does not match {} ({} points, {} triangles)",
                 rp.display(),
@@ -80,18 +84,24 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         u_prev = ck.steps.last().map(|s| s.displacement.clone());
         if rp.canonicalize().ok() != h5.canonicalize().ok() {
             if let Err(e) = crate::io::atomic::write_atomic(&h5, |tmp| {
-                std::fs::copy(rp, tmp).map(|_| ()).map_err(|cause| crate::io::IoError::Io {
-                    path: h5.clone(),
-                    action: "copy the checkpoint",
-                    cause,
-                })
+                std::fs::copy(rp, tmp)
+                    .map(|_| ())
+                    .map_err(|cause| crate::io::IoError::Io {
+                        path: h5.clone(),
+                        action: "copy the checkpoint",
+                        cause,
+                    })
             }) {
                 eprintln!("error: {e}");
                 return EXIT_BAD_INPUT;
             }
         }
         if !quiet {
-            println!("restart     from step {first} of {} ({})", nsteps, rp.display());
+            println!(
+                "restart     from step {first} of {} ({})",
+                nsteps,
+                rp.display()
+            );
         }
     }
     // A new checkpoint is created only once the first step has solved, so bad
@@ -114,7 +124,11 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
             }
         };
         let model_ref = model.as_ref().unwrap_or(&prep.model);
-        let t_assemble = if model.is_none() { prep.t_assemble } else { ts.elapsed().as_secs_f64() };
+        let t_assemble = if model.is_none() {
+            prep.t_assemble
+        } else {
+            ts.elapsed().as_secs_f64()
+        };
         let mut o = opts.clone();
         o.x0 = u_prev.as_ref().map(|u| pipeline::reduce(model_ref, u));
         let t_solve0 = Instant::now();
@@ -148,8 +162,15 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
             let entries: Vec<(f64, String)> = (0..=s)
                 .flat_map(|k| {
                     let o = pipeline::output_paths(&dir, &name, Some(k + 1));
-                    let f = |p: &std::path::Path| p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-                    [(file.step_time(k), f(&o.vtu)), (file.step_time(k), f(&o.contact_vtu))]
+                    let f = |p: &std::path::Path| {
+                        p.file_name()
+                            .map(|n| n.to_string_lossy().into_owned())
+                            .unwrap_or_default()
+                    };
+                    [
+                        (file.step_time(k), f(&o.vtu)),
+                        (file.step_time(k), f(&o.contact_vtu)),
+                    ]
                 })
                 .collect();
             if let Err(e) = crate::io::vtu::write_pvd(&dir.join(format!("{name}.pvd")), &entries) {
@@ -164,7 +185,11 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
                 s + 1,
                 nsteps,
                 file.step_time(s),
-                if res.status.converged() { "converged" } else { "NOT CONVERGED" },
+                if res.status.converged() {
+                    "converged"
+                } else {
+                    "NOT CONVERGED"
+                },
                 res.iterations,
                 res.kkt.max(),
                 res.active.iter().filter(|a| **a).count(),
@@ -196,7 +221,13 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
             }
         }
         u_prev = Some(step.displacement.clone());
-        let timings = Timings { read: prep.t_read, assemble: t_assemble, solve: t_solve, write: t_write, total: 0.0 };
+        let timings = Timings {
+            read: prep.t_read,
+            assemble: t_assemble,
+            solve: t_solve,
+            write: t_write,
+            total: 0.0,
+        };
         final_state = Some((model, res, step, out, timings));
     }
     let Some((model, res, step, out, mut timings)) = final_state else {
@@ -208,7 +239,17 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
     timings.total = t0.elapsed().as_secs_f64();
     let model_ref = model.as_ref().unwrap_or(&prep.model);
     let certified = res.kkt.within(a.solver.kkt_target);
-    let mut summary = summary_json(&prep, model_ref, &res, &method, &step.info.preconditioner, &step, &timings, certified, a.solver.kkt_target);
+    let mut summary = summary_json(
+        &prep,
+        model_ref,
+        &res,
+        &method,
+        &step.info.preconditioner,
+        &step,
+        &timings,
+        certified,
+        a.solver.kkt_target,
+    );
     if multi {
         summary["steps"] = json!(step_rows);
     }
@@ -224,7 +265,17 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         return EXIT_BAD_INPUT;
     }
     if !quiet {
-        print_report(&prep, model_ref, &res, &method, &step, &summary, &timings, &out, a.solver.kkt_target);
+        print_report(
+            &prep,
+            model_ref,
+            &res,
+            &method,
+            &step,
+            &summary,
+            &timings,
+            &out,
+            a.solver.kkt_target,
+        );
     }
     code
 }

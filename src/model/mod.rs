@@ -217,7 +217,9 @@ impl ProblemFile {
     /// displacements scaled or replaced as the step says.
     pub fn at_step(&self, s: usize) -> ProblemFile {
         let mut f = self.clone();
-        let Some(st) = self.steps.get(s) else { return f };
+        let Some(st) = self.steps.get(s) else {
+            return f;
+        };
         let lf = st.load.or(st.factor).unwrap_or(1.0);
         let df = st.displacement.or(st.factor).unwrap_or(1.0);
         for t in f.traction.iter_mut() {
@@ -252,7 +254,10 @@ impl ProblemFile {
 
     /// Pseudo-time of step `s` (0-based).
     pub fn step_time(&self, s: usize) -> f64 {
-        self.steps.get(s).and_then(|st| st.t).unwrap_or((s + 1) as f64)
+        self.steps
+            .get(s)
+            .and_then(|st| st.t)
+            .unwrap_or((s + 1) as f64)
     }
 }
 
@@ -424,14 +429,22 @@ impl Problem {
         }
         let mut last_t = f64::NEG_INFINITY;
         for (i, st) in f.steps.iter().enumerate() {
-            for v in [st.t, st.factor, st.load, st.displacement].into_iter().flatten() {
+            for v in [st.t, st.factor, st.load, st.displacement]
+                .into_iter()
+                .flatten()
+            {
                 if !v.is_finite() {
-                    return Err(self.invalid(format!("[[steps]] #{}: values must be finite", i + 1)));
+                    return Err(
+                        self.invalid(format!("[[steps]] #{}: values must be finite", i + 1))
+                    );
                 }
             }
             let t = st.t.unwrap_or((i + 1) as f64);
             if t <= last_t {
-                return Err(self.invalid(format!("[[steps]] #{}: t = {t} must increase from step to step", i + 1)));
+                return Err(self.invalid(format!(
+                    "[[steps]] #{}: t = {t} must increase from step to step",
+                    i + 1
+                )));
             }
             last_t = t;
             for (name, u) in &st.dirichlet {
@@ -442,7 +455,10 @@ impl Problem {
                     )));
                 }
                 if !u.iter().all(|v| v.is_finite()) {
-                    return Err(self.invalid(format!("[[steps]] #{}: dirichlet.{name}: values must be finite", i + 1)));
+                    return Err(self.invalid(format!(
+                        "[[steps]] #{}: dirichlet.{name}: values must be finite",
+                        i + 1
+                    )));
                 }
             }
         }

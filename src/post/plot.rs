@@ -100,10 +100,17 @@ impl Field {
 
     /// The field named `s`, or an error listing the known names.
     pub fn parse(s: &str) -> Result<Field, PlotError> {
-        Field::ALL.iter().copied().find(|f| f.name() == s).ok_or_else(|| {
-            let names: Vec<&str> = Field::ALL.iter().map(|f| f.name()).collect();
-            err(format!("unknown field \"{s}\"; known: {}", names.join(", ")))
-        })
+        Field::ALL
+            .iter()
+            .copied()
+            .find(|f| f.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Field::ALL.iter().map(|f| f.name()).collect();
+                err(format!(
+                    "unknown field \"{s}\"; known: {}",
+                    names.join(", ")
+                ))
+            })
     }
 
     /// SI unit of the field (None for the categorical fields).
@@ -216,7 +223,8 @@ pub fn plot_file(h5: &Path, out: &Path, opts: &PlotOptions) -> Result<PlotSummar
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "checkpoint".to_string());
-    let (bytes, summary) = render(&ck, &name, opts, format).map_err(|e| err(format!("{}: {}", h5.display(), e.0)))?;
+    let (bytes, summary) =
+        render(&ck, &name, opts, format).map_err(|e| err(format!("{}: {}", h5.display(), e.0)))?;
     write_atomic_bytes(out, &bytes).map_err(|e| err(e.to_string()))?;
     Ok(summary)
 }
@@ -491,7 +499,8 @@ fn encode_png(buf: &[u8], w: u32, h: u32) -> Result<Vec<u8>, PlotError> {
             .map_err(|e| err(format!("PNG encoding failed: {e}")))?;
         wr.write_image_data(buf)
             .map_err(|e| err(format!("PNG encoding failed: {e}")))?;
-        wr.finish().map_err(|e| err(format!("PNG encoding failed: {e}")))?;
+        wr.finish()
+            .map_err(|e| err(format!("PNG encoding failed: {e}")))?;
     }
     Ok(out)
 }
@@ -507,7 +516,9 @@ enum Values {
 
 fn field_values(mesh: &OutMesh, step: &StepOutput, field: Field) -> Values {
     let cell = |f: &dyn Fn(usize) -> f64| Values::Cell((0..mesh.triangles.len()).map(f).collect());
-    let nodal = |f: &dyn Fn([f64; 2]) -> f64| Values::Nodal(step.displacement.iter().map(|&u| f(u)).collect());
+    let nodal = |f: &dyn Fn([f64; 2]) -> f64| {
+        Values::Nodal(step.displacement.iter().map(|&u| f(u)).collect())
+    };
     match field {
         Field::VonMises => cell(&|i| step.von_mises[i]),
         Field::Sxx => cell(&|i| step.stress[i][0]),
@@ -533,7 +544,11 @@ fn field_values(mesh: &OutMesh, step: &StepOutput, field: Field) -> Values {
             Values::Categories(cats, names)
         }
         Field::Body => {
-            let cats: Vec<usize> = mesh.triangles.iter().map(|t| mesh.point_body[t[0]] as usize).collect();
+            let cats: Vec<usize> = mesh
+                .triangles
+                .iter()
+                .map(|t| mesh.point_body[t[0]] as usize)
+                .collect();
             let n = cats.iter().max().map_or(0, |&m| m + 1);
             let names = (0..n).map(|i| format!("body {i}")).collect();
             Values::Categories(cats, names)
@@ -545,7 +560,9 @@ fn finite_range(v: &[f64]) -> (f64, f64) {
     let (lo, hi) = v
         .iter()
         .filter(|x| x.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
     if lo.is_finite() {
         (lo, hi)
     } else {
@@ -618,7 +635,10 @@ fn draw_mesh<DB: DrawingBackend>(
             .y_label_area_size(yl)
             .build_cartesian_2d(xr, yr)
     };
-    let (pw, ph) = build(0.0..1.0, 0.0..1.0).map_err(de)?.plotting_area().dim_in_pixel();
+    let (pw, ph) = build(0.0..1.0, 0.0..1.0)
+        .map_err(de)?
+        .plotting_area()
+        .dim_in_pixel();
     let (lo, hi) = bbox(pts.iter().map(|&(x, y)| [x, y]));
     if !lo[0].is_finite() || !lo[1].is_finite() {
         return Err(err("no finite point coordinates to draw"));
@@ -658,7 +678,12 @@ fn draw_mesh<DB: DrawingBackend>(
         let (x0, y0) = chart.backend_coord(&(cx - hx, cy + hy));
         let (x1, y1) = chart.backend_coord(&(cx + hx, cy - hy));
         let (sx, sy) = ((x1 - x0) as f64 / (2.0 * hx), (y1 - y0) as f64 / (2.0 * hy));
-        let to_px = |(x, y): (f64, f64)| (x0 as f64 + (x - (cx - hx)) * sx, y0 as f64 + ((cy + hy) - y) * sy);
+        let to_px = |(x, y): (f64, f64)| {
+            (
+                x0 as f64 + (x - (cx - hx)) * sx,
+                y0 as f64 + ((cy + hy) - y) * sy,
+            )
+        };
         let px: Vec<(f64, f64)> = pts.iter().map(|&p| to_px(p)).collect();
         let clip = (x0.min(x1), y0.min(y1), x0.max(x1), y0.max(y1));
         for (i, t) in mesh.triangles.iter().enumerate() {
@@ -669,7 +694,9 @@ fn draw_mesh<DB: DrawingBackend>(
             let flat = cell_color(i);
             fill_triangle([px[t[0]], px[t[1]], px[t[2]]], clip, |x, y, l| {
                 let c = match nodal {
-                    Some(v) => viridis(normalize(l[0] * v[0] + l[1] * v[1] + l[2] * v[2], vlo, vhi)),
+                    Some(v) => {
+                        viridis(normalize(l[0] * v[0] + l[1] * v[1] + l[2] * v[2], vlo, vhi))
+                    }
                     None => flat,
                 };
                 let _ = root.draw_pixel((x, y), &c);
@@ -804,7 +831,11 @@ fn centroid(t: &[[f64; 3]; 3]) -> [f64; 3] {
 
 /// Calls `put(x, y, barycentric)` for every pixel whose centre lies in the
 /// triangle (pixel coordinates), within `clip` = (x0, y0, x1, y1) inclusive.
-fn fill_triangle(v: [(f64, f64); 3], clip: (i32, i32, i32, i32), mut put: impl FnMut(i32, i32, [f64; 3])) {
+fn fill_triangle(
+    v: [(f64, f64); 3],
+    clip: (i32, i32, i32, i32),
+    mut put: impl FnMut(i32, i32, [f64; 3]),
+) {
     let area = (v[1].0 - v[0].0) * (v[2].1 - v[0].1) - (v[2].0 - v[0].0) * (v[1].1 - v[0].1);
     if !area.is_finite() || area.abs() < 1e-12 {
         return;
@@ -879,8 +910,12 @@ fn draw_colorbar<DB: DrawingBackend>(
             BLACK.stroke_width(1),
         ))
         .map_err(de)?;
-        area.draw(&Text::new(fmt_num(v), (x1 + (fs * 0.6) as i32, y), tick_style.clone()))
-            .map_err(de)?;
+        area.draw(&Text::new(
+            fmt_num(v),
+            (x1 + (fs * 0.6) as i32, y),
+            tick_style.clone(),
+        ))
+        .map_err(de)?;
     }
     Ok(())
 }
@@ -1038,7 +1073,11 @@ fn draw_contact<DB: DrawingBackend>(
             .unwrap_or_else(|| format!("interface {i}"));
         let pieces = arc_lengths(c, &chains)
             .into_iter()
-            .map(|p| p.into_iter().map(|(s, r)| (s, step.contact_pressure[r])).collect())
+            .map(|p| {
+                p.into_iter()
+                    .map(|(s, r)| (s, step.contact_pressure[r]))
+                    .collect()
+            })
             .collect();
         series.push((name, pieces));
     }
@@ -1084,12 +1123,16 @@ fn draw_contact<DB: DrawingBackend>(
         let color = category_color(k);
         for (j, piece) in pieces.iter().enumerate() {
             let anno = chart
-                .draw_series(LineSeries::new(piece.iter().copied(), color.stroke_width(2)))
+                .draw_series(LineSeries::new(
+                    piece.iter().copied(),
+                    color.stroke_width(2),
+                ))
                 .map_err(de)?;
             if j == 0 {
                 let lw = fs as i32;
-                anno.label(name.clone())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + lw, y)], color.stroke_width(2)));
+                anno.label(name.clone()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + lw, y)], color.stroke_width(2))
+                });
             }
             chart
                 .draw_series(
@@ -1151,7 +1194,10 @@ mod tests {
         let ch = interface_chains(&c, 0);
         assert_eq!(ch, vec![vec![0, 1, 2], vec![3, 4]]);
         let s = arc_lengths(&c, &ch);
-        assert_eq!(s[0].iter().map(|q| q.0).collect::<Vec<_>>(), vec![0.0, 1.0, 2.0]);
+        assert_eq!(
+            s[0].iter().map(|q| q.0).collect::<Vec<_>>(),
+            vec![0.0, 1.0, 2.0]
+        );
         assert_eq!(s[1].iter().map(|q| q.0).collect::<Vec<_>>(), vec![2.0, 3.0]);
     }
 }

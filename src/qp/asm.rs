@@ -87,7 +87,9 @@ pub(crate) fn check_common(qp: &QpProblem, opts: &SolveOptions) -> Result<(), Qp
         )));
     }
     if qp.kernel.iter().any(|z| z.len() != n) {
-        return Err(QpError::BadParameter("kernel vectors must have length N".into()));
+        return Err(QpError::BadParameter(
+            "kernel vectors must have length N".into(),
+        ));
     }
     Ok(())
 }
@@ -215,7 +217,9 @@ pub(crate) fn sym_eigen(a: &[f64], k: usize) -> (Vec<f64>, Vec<Vec<f64>>) {
         }
     }
     let vals = (0..k).map(|i| m[i * k + i]).collect();
-    let vecs = (0..k).map(|j| (0..k).map(|r| v[r * k + j]).collect()).collect();
+    let vecs = (0..k)
+        .map(|j| (0..k).map(|r| v[r * k + j]).collect())
+        .collect();
     (vals, vecs)
 }
 
@@ -280,7 +284,13 @@ pub(crate) trait FaceSolver {
     fn remove(&mut self, pos: usize);
     /// Solve the face problem: C δ + A_Jᵀλ = r, A_J δ = e, δ ⟂ `fk.free`
     /// directions' component left free. Returns (δ, λ_J).
-    fn solve(&mut self, r: &[f64], e: &[f64], jl: &[usize], fk: &FaceKernel) -> Result<(Vec<f64>, Vec<f64>), String>;
+    fn solve(
+        &mut self,
+        r: &[f64],
+        e: &[f64],
+        jl: &[usize],
+        fk: &FaceKernel,
+    ) -> Result<(Vec<f64>, Vec<f64>), String>;
     /// Inner iterations so far (solves with C, CGH steps).
     fn inner(&self) -> usize;
 }
@@ -313,7 +323,10 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
             .map(|i| rker.iter().map(|z| qp.a.row_dot(i, z)).collect())
             .collect();
         let row_norm: Vec<f64> = (0..m).map(|i| norm(qp.a.row(i).1)).collect();
-        let amax = row_norm.iter().fold(0.0f64, |a, &b| a.max(b)).max(f64::MIN_POSITIVE);
+        let amax = row_norm
+            .iter()
+            .fold(0.0f64, |a, &b| a.max(b))
+            .max(f64::MIN_POSITIVE);
         let mut st = ActiveSet {
             qp,
             solver,
@@ -450,7 +463,13 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
         };
         // Multipliers within the release tolerance of 0 are reported as 0.
         let lambda: Vec<f64> = (0..m)
-            .map(|i| if self.in_j[i] { self.lam[i].max(0.0) } else { 0.0 })
+            .map(|i| {
+                if self.in_j[i] {
+                    self.lam[i].max(0.0)
+                } else {
+                    0.0
+                }
+            })
             .collect();
         let energy = self.qp.energy(&self.x);
         QpResult {
@@ -484,7 +503,10 @@ impl<S: FaceSolver> Iterative for ActiveSet<'_, S> {
         if let Some(p) = ray {
             // f is linear and decreasing along the rigid motion p on this face.
             return match self.ratio_test(&p, &ax) {
-                None => Step::Done(Status::Unbounded { direction: p }, self.record(f64::INFINITY)),
+                None => Step::Done(
+                    Status::Unbounded { direction: p },
+                    self.record(f64::INFINITY),
+                ),
                 Some((t, i)) => {
                     axpy(t, &p, &mut self.x);
                     if !self.add(i) {
@@ -511,7 +533,9 @@ impl<S: FaceSolver> Iterative for ActiveSet<'_, S> {
             Some((t, i)) if t < 1.0 => {
                 axpy(t, &delta, &mut self.x);
                 if !self.add(i) {
-                    return self.fail(format!("constraint {i} blocks the step but depends on the working set"));
+                    return self.fail(format!(
+                        "constraint {i} blocks the step but depends on the working set"
+                    ));
                 }
                 Step::Continue(self.record(res))
             }
@@ -585,12 +609,22 @@ impl FaceSolver for SchurSolver<'_> {
         self.s.remove(pos);
     }
 
-    fn solve(&mut self, r: &[f64], e: &[f64], jl: &[usize], fk: &FaceKernel) -> Result<(Vec<f64>, Vec<f64>), String> {
+    fn solve(
+        &mut self,
+        r: &[f64],
+        e: &[f64],
+        jl: &[usize],
+        fk: &FaceKernel,
+    ) -> Result<(Vec<f64>, Vec<f64>), String> {
         let qp = self.qp;
         let mut z = r.to_vec();
         self.zsolve(&mut z);
         // λ0 = S⁻¹ (A_J Z r − e)
-        let mut lam: Vec<f64> = jl.iter().zip(e).map(|(&j, &ej)| qp.a.row_dot(j, &z) - ej).collect();
+        let mut lam: Vec<f64> = jl
+            .iter()
+            .zip(e)
+            .map(|(&j, &ej)| qp.a.row_dot(j, &z) - ej)
+            .collect();
         self.s.solve_in_place(&mut lam);
         // Rigid motions fixed by J: α on range(Gᵀ), Gr = A_J R Q_r.
         let q = fk.range.len();
@@ -615,8 +649,11 @@ impl FaceSolver for SchurSolver<'_> {
                     kmat[a * q + b] = dot(&gr[a], &w[b]);
                 }
             }
-            let rhs: Vec<f64> = (0..q).map(|a| dot(&fk.range_vecs[a], r) - dot(&gr[a], &lam)).collect();
-            alpha = small_spd_solve(&kmat, q, &rhs).ok_or("the rigid-motion system Gᵀ S⁻¹ G is singular")?;
+            let rhs: Vec<f64> = (0..q)
+                .map(|a| dot(&fk.range_vecs[a], r) - dot(&gr[a], &lam))
+                .collect();
+            alpha = small_spd_solve(&kmat, q, &rhs)
+                .ok_or("the rigid-motion system Gᵀ S⁻¹ G is singular")?;
             for (wa, &aa) in w.iter().zip(&alpha) {
                 axpy(aa, wa, &mut lam);
             }
@@ -652,12 +689,14 @@ mod tests {
 
     fn spd(n: usize) -> Vec<f64> {
         // S = BᵀB + I with a deterministic B
-        let b: Vec<f64> = (0..n * n).map(|i| ((i * 7 + 3) % 11) as f64 / 5.0 - 1.0).collect();
+        let b: Vec<f64> = (0..n * n)
+            .map(|i| ((i * 7 + 3) % 11) as f64 / 5.0 - 1.0)
+            .collect();
         let mut s = vec![0.0; n * n];
         for i in 0..n {
             for j in 0..n {
-                s[i * n + j] =
-                    (0..n).map(|k| b[k * n + i] * b[k * n + j]).sum::<f64>() + if i == j { 1.0 } else { 0.0 };
+                s[i * n + j] = (0..n).map(|k| b[k * n + i] * b[k * n + j]).sum::<f64>()
+                    + if i == j { 1.0 } else { 0.0 };
             }
         }
         s

@@ -146,7 +146,8 @@ pub fn cgh(
             let m22 = dot(&q, &bq);
             let det = m11 * m22 - m12 * m12;
             if det.abs() > 1e-12 * ((m11 * m22).abs() + m12 * m12) {
-                let solve2 = |b1: f64, b2: f64| ((m22 * b1 - m12 * b2) / det, (m11 * b2 - m12 * b1) / det);
+                let solve2 =
+                    |b1: f64, b2: f64| ((m22 * b1 - m12 * b2) / det, (m11 * b2 - m12 * b1) / det);
                 let (a0, a1) = solve2(dot(&r, &p), dot(&r, &q));
                 axpy(a0, &p, y);
                 axpy(a1, &q, y);
@@ -194,8 +195,14 @@ struct CghSolver<'a> {
 impl<'a> CghSolver<'a> {
     fn new(qp: &'a QpProblem, tol: f64) -> Self {
         let cmax = qp.c.diag().iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        let amax = (0..qp.m()).map(|i| norm(qp.a.row(i).1)).fold(0.0f64, f64::max);
-        let s = if amax > 0.0 && cmax > 0.0 { cmax / amax } else { 1.0 };
+        let amax = (0..qp.m())
+            .map(|i| norm(qp.a.row(i).1))
+            .fold(0.0f64, f64::max);
+        let s = if amax > 0.0 && cmax > 0.0 {
+            cmax / amax
+        } else {
+            1.0
+        };
         CghSolver {
             qp,
             tol,
@@ -214,7 +221,13 @@ impl FaceSolver for CghSolver<'_> {
 
     fn remove(&mut self, _pos: usize) {}
 
-    fn solve(&mut self, r: &[f64], e: &[f64], jl: &[usize], fk: &FaceKernel) -> Result<(Vec<f64>, Vec<f64>), String> {
+    fn solve(
+        &mut self,
+        r: &[f64],
+        e: &[f64],
+        jl: &[usize],
+        fk: &FaceKernel,
+    ) -> Result<(Vec<f64>, Vec<f64>), String> {
         let qp = self.qp;
         let n = qp.n();
         let nj = jl.len();
@@ -339,7 +352,10 @@ mod tests {
                 b[(i + 1) * n + i] = -1.0;
             }
         }
-        let arows = [[1.0, 0.0, -1.0, 0.0, 0.5, 0.0], [0.0, 1.0, 0.0, 0.0, -1.0, 2.0]];
+        let arows = [
+            [1.0, 0.0, -1.0, 0.0, 0.5, 0.0],
+            [0.0, 1.0, 0.0, 0.0, -1.0, 2.0],
+        ];
         for (r, row) in arows.iter().enumerate() {
             for (c, &v) in row.iter().enumerate() {
                 b[(nc + r) * n + c] = v;

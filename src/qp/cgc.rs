@@ -25,7 +25,10 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     let pc = precond::build(opts.preconditioner, &qp.c, &qp.kernel, opts.omega)?;
     let t_pc = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let x0 = opts.x0.as_deref().filter(|x| x.len() == qp.n() && is_feasible(qp, x));
+    let x0 = opts
+        .x0
+        .as_deref()
+        .filter(|x| x.len() == qp.n() && is_feasible(qp, x));
     let mut state = Cgc::new(qp, pc.as_ref(), opts.tol, opts.multiple_release, x0);
     let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("cgc"));
     let (status, iters) = exec.run(&mut state);

@@ -156,7 +156,11 @@ impl DualCgc<'_> {
             }
             let beta = if k == 0 { 0.0 } else { r / r_old };
             for i in 0..m {
-                p[i] = if self.in_j[i] { 0.0 } else { -self.grad[i] + beta * p[i] };
+                p[i] = if self.in_j[i] {
+                    0.0
+                } else {
+                    -self.grad[i] + beta * p[i]
+                };
             }
             r_old = r;
             self.apply_h(&p, &mut w);
@@ -227,7 +231,9 @@ impl Iterative for DualCgc<'_> {
                 .fold(0.0f64, |a, i| a.max(self.grad[i].abs()));
             let ubar = if ubar > 0.0 { ubar } else { 1.0 };
             let thr = -self.tol * ubar;
-            let neg: Vec<usize> = (0..m).filter(|&i| self.in_j[i] && self.grad[i] < thr).collect();
+            let neg: Vec<usize> = (0..m)
+                .filter(|&i| self.in_j[i] && self.grad[i] < thr)
+                .collect();
             if neg.is_empty() {
                 return Step::Done(Status::Converged, self.record(res));
             }
@@ -235,7 +241,10 @@ impl Iterative for DualCgc<'_> {
                 for &i in &neg {
                     self.in_j[i] = false;
                 }
-            } else if let Some(&i) = neg.iter().min_by(|&&a, &&b| self.grad[a].total_cmp(&self.grad[b])) {
+            } else if let Some(&i) = neg
+                .iter()
+                .min_by(|&&a, &&b| self.grad[a].total_cmp(&self.grad[b]))
+            {
                 self.in_j[i] = false;
             }
         }

@@ -19,19 +19,19 @@ pub mod asm;
 pub mod asm_cgh;
 pub mod cgc;
 pub mod dual;
-pub mod penalty;
-pub mod preelim;
-#[cfg(test)]
-mod tests_methods;
-pub mod uzawa;
 pub mod executor;
 pub mod factor;
 pub mod kkt;
+pub mod mprgp;
+pub mod penalty;
 pub mod precond;
+pub mod preelim;
 pub mod registry;
 pub mod sparse;
-pub mod mprgp;
 pub mod ssn;
+#[cfg(test)]
+mod tests_methods;
+pub mod uzawa;
 
 pub use sparse::Csr;
 

@@ -202,7 +202,12 @@ struct Mprgp<'a> {
 }
 
 impl<'a> Mprgp<'a> {
-    fn new(qp: &'a QpProblem, fac: Cholesky, r: Vec<Vec<f64>>, tol: f64) -> Result<Mprgp<'a>, QpError> {
+    fn new(
+        qp: &'a QpProblem,
+        fac: Cholesky,
+        r: Vec<Vec<f64>>,
+        tol: f64,
+    ) -> Result<Mprgp<'a>, QpError> {
         let m = qp.m();
         let k = r.len();
         // G = RᵀAᵀ (k×m), GGᵀ = LLᵀ, G̃ = L⁻¹G.
@@ -260,7 +265,9 @@ impl<'a> Mprgp<'a> {
         // ‖PHP‖ by power iteration (ρ = 0 here).
         let hnorm = if m == 0 { 1.0 } else { power_norm(&mut op) };
         if !(hnorm > 0.0 && hnorm.is_finite()) {
-            return Err(QpError::Factor(format!("mprgp: ‖H‖ estimate {hnorm} is not positive")));
+            return Err(QpError::Factor(format!(
+                "mprgp: ‖H‖ estimate {hnorm} is not positive"
+            )));
         }
         op.rho = if k > 0 { RHO_FACTOR * hnorm } else { 0.0 };
         // ‖PHP + ρQ‖ = max(‖PHP‖, ρ): PHP and ρQ act on orthogonal subspaces.
@@ -312,7 +319,13 @@ impl<'a> Mprgp<'a> {
 
     fn beta(&self) -> Vec<f64> {
         (0..self.x.len())
-            .map(|i| if self.is_free(i) { 0.0 } else { self.g[i].min(0.0) })
+            .map(|i| {
+                if self.is_free(i) {
+                    0.0
+                } else {
+                    self.g[i].min(0.0)
+                }
+            })
             .collect()
     }
 
@@ -320,7 +333,11 @@ impl<'a> Mprgp<'a> {
     fn gp_norm(&self) -> f64 {
         (0..self.x.len())
             .map(|i| {
-                let v = if self.is_free(i) { self.g[i] } else { self.g[i].min(0.0) };
+                let v = if self.is_free(i) {
+                    self.g[i]
+                } else {
+                    self.g[i].min(0.0)
+                };
                 v * v
             })
             .sum::<f64>()
@@ -483,7 +500,9 @@ impl<'a> Mprgp<'a> {
             let s: Vec<f64> = qp.a.mul(&b).iter().zip(&qp.g).map(|(a, g)| a - g).collect();
             let gs = self.op.gmul(&s);
             let gx = self.op.gmul(&self.x);
-            let mut alpha: Vec<f64> = (0..k).map(|l| self.mu[l] + self.op.rho * gx[l] + gs[l]).collect();
+            let mut alpha: Vec<f64> = (0..k)
+                .map(|l| self.mu[l] + self.op.rho * gx[l] + gs[l])
+                .collect();
             chol_backward(&self.op.l, k, &mut alpha);
             for (rl, &al) in self.op.r.iter().zip(&alpha) {
                 for (xi, ri) in b.iter_mut().zip(rl) {
@@ -514,7 +533,9 @@ impl<'a> Mprgp<'a> {
         let (lambda, x) = self.primal();
         let s: Vec<f64> = qp.a.mul(&x).iter().zip(&qp.g).map(|(a, g)| a - g).collect();
         let gap_tol = 10.0 * self.tol * self.ref_g;
-        let active: Vec<bool> = (0..qp.m()).map(|i| lambda[i] > 0.0 || s[i] >= -gap_tol).collect();
+        let active: Vec<bool> = (0..qp.m())
+            .map(|i| lambda[i] > 0.0 || s[i] >= -gap_tol)
+            .collect();
         // Primal feasibility and complementarity of the recovered x.
         let viol = s.iter().fold(0.0f64, |a, &v| a.max(v));
         let compl = (0..qp.m())
@@ -560,7 +581,10 @@ impl Iterative for Mprgp<'_> {
                 self.p = self.phi();
             }
             if gp <= self.tol * self.ref_g && fe <= self.tol * fe_ref {
-                return Step::Done(Status::Converged, self.record(res(gp, fe, fe_ref, self.ref_g)));
+                return Step::Done(
+                    Status::Converged,
+                    self.record(res(gp, fe, fe_ref, self.ref_g)),
+                );
             }
         }
         let r = res(gp, fe, fe_ref, self.ref_g);
@@ -630,7 +654,11 @@ mod tests {
         }
         let y = fac.solve(&b);
         let cy = qp.c.mul(&y);
-        let err: f64 = cy.iter().zip(&b).map(|(a, c)| (a - c).abs()).fold(0.0, f64::max);
+        let err: f64 = cy
+            .iter()
+            .zip(&b)
+            .map(|(a, c)| (a - c).abs())
+            .fold(0.0, f64::max);
         assert!(err <= 1e-10 * norm_inf(&b), "C K⁻¹ b − b = {err:e}");
     }
 

@@ -50,7 +50,9 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     let eps = match opts.penalty {
         Some(e) => {
             if !(e.is_finite() && e > 0.0) {
-                return Err(QpError::BadParameter(format!("penalty: ε_p must be positive, got {e}")));
+                return Err(QpError::BadParameter(format!(
+                    "penalty: ε_p must be positive, got {e}"
+                )));
             }
             e
         }
@@ -78,7 +80,9 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         }
     }
     let x = vec![0.0; n];
-    let s: Vec<f64> = (0..m).map(|j| (qp.a.row_dot(j, &x) - qp.g[j]).max(0.0)).collect();
+    let s: Vec<f64> = (0..m)
+        .map(|j| (qp.a.row_dot(j, &x) - qp.g[j]).max(0.0))
+        .collect();
     let mut st = Relax {
         qp,
         at: &at,
@@ -96,7 +100,11 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     let (status, iters) = exec.run(&mut st);
     let t_it = t1.elapsed().as_secs_f64();
     let ax = qp.a.mul(&st.x);
-    let viol: Vec<f64> = ax.iter().zip(&qp.g).map(|(a, g)| (a - g).max(0.0)).collect();
+    let viol: Vec<f64> = ax
+        .iter()
+        .zip(&qp.g)
+        .map(|(a, g)| (a - g).max(0.0))
+        .collect();
     let vmax = viol.iter().fold(0.0f64, |a, &b| a.max(b));
     log::info!(
         "penalty: ε_p = {eps:.3e}, ω = {}, {iters} sweeps, max constraint violation {vmax:.3e}",

@@ -102,7 +102,9 @@ pub(crate) fn check_dims(qp: &QpProblem) -> Result<(), QpError> {
         )));
     }
     if qp.kernel.iter().any(|z| z.len() != n) {
-        return Err(QpError::BadParameter("a kernel vector has the wrong length".into()));
+        return Err(QpError::BadParameter(
+            "a kernel vector has the wrong length".into(),
+        ));
     }
     Ok(())
 }
@@ -209,7 +211,10 @@ impl<'a> Ssn<'a> {
             return None;
         }
         // w = S⁻¹(A_J K⁻¹ d − g_J)
-        let mut w: Vec<f64> = jset.iter().map(|&j| qp.a.row_dot(j, &self.x0) - qp.g[j]).collect();
+        let mut w: Vec<f64> = jset
+            .iter()
+            .map(|&j| qp.a.row_dot(j, &self.x0) - qp.g[j])
+            .collect();
         chol_solve(&s, nj, &mut w);
         let mut alpha = vec![0.0; k];
         if k > 0 {
@@ -223,7 +228,11 @@ impl<'a> Ssn<'a> {
             let mut f = vec![0.0; k * k];
             for a in 0..k {
                 for b in 0..k {
-                    let v: f64 = jset.iter().enumerate().map(|(t, &j)| self.ar[j][a] * y[b][t]).sum();
+                    let v: f64 = jset
+                        .iter()
+                        .enumerate()
+                        .map(|(t, &j)| self.ar[j][a] * y[b][t])
+                        .sum();
                     f[a * k + b] = v;
                 }
             }
@@ -239,7 +248,11 @@ impl<'a> Ssn<'a> {
             }
             // F α = e − G_J w
             for (l, al) in alpha.iter_mut().enumerate() {
-                let gw: f64 = jset.iter().enumerate().map(|(t, &j)| self.ar[j][l] * w[t]).sum();
+                let gw: f64 = jset
+                    .iter()
+                    .enumerate()
+                    .map(|(t, &j)| self.ar[j][l] * w[t])
+                    .sum();
                 *al = self.e[l] - gw;
             }
             chol_solve(&f, k, &mut alpha);
@@ -561,7 +574,11 @@ pub(crate) mod tests {
                 let dy = map[2 * node(1, i, j) + 1];
                 let dx = map[2 * node(1, i, j)];
                 let t = i as f64 / (nx - 1) as f64;
-                let fy = if floating { -1.0 + 1.6 * t * t } else { -1.0 + 2.2 * t };
+                let fy = if floating {
+                    -1.0 + 1.6 * t * t
+                } else {
+                    -1.0 + 2.2 * t
+                };
                 if dy != usize::MAX {
                     d[dy] += 0.05 * fy;
                 }
@@ -622,8 +639,16 @@ pub(crate) mod tests {
         let k = kkt::residuals(qp, &r.x, &r.lambda);
         assert!(k.max() <= 1e-8, "{k:?}");
         assert!(r.lambda.iter().all(|&l| l >= 0.0), "λ < 0");
-        let ldiff: Vec<f64> = r.lambda.iter().zip(&refr.lambda).map(|(a, b)| a - b).collect();
-        assert!(norm(&ldiff) <= 1e-6 * norm(&refr.lambda).max(1e-300), "λ differs");
+        let ldiff: Vec<f64> = r
+            .lambda
+            .iter()
+            .zip(&refr.lambda)
+            .map(|(a, b)| a - b)
+            .collect();
+        assert!(
+            norm(&ldiff) <= 1e-6 * norm(&refr.lambda).max(1e-300),
+            "λ differs"
+        );
     }
 
     fn opts() -> SolveOptions {
@@ -635,7 +660,11 @@ pub(crate) mod tests {
 
     fn nontrivial(r: &QpResult) {
         let na = r.active.iter().filter(|b| **b).count();
-        assert!(na > 0 && na < r.active.len(), "active {na} of {}", r.active.len());
+        assert!(
+            na > 0 && na < r.active.len(),
+            "active {na} of {}",
+            r.active.len()
+        );
         // some active row with g > 0 would be nice but is not required
     }
 
@@ -737,7 +766,8 @@ pub(crate) mod tests {
     }
 
     pub(crate) fn example(name: &str) -> crate::pipeline::Prepared {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("meshes/{name}.toml"));
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("meshes/{name}.toml"));
         crate::pipeline::prepare(&path, false).unwrap_or_else(|e| panic!("{name}: {e}"))
     }
 
@@ -783,7 +813,10 @@ pub(crate) mod tests {
         assert!(r.iterations <= 15, "{} iterations", r.iterations);
         // total vertical contact force = 1e5 + 2500·9.81 N/m (meshes/floating_block.toml)
         let f: f64 = r.lambda.iter().sum();
-        assert!((f - 1.24525e5).abs() <= 1e-6 * 1.24525e5, "contact force {f}");
+        assert!(
+            (f - 1.24525e5).abs() <= 1e-6 * 1.24525e5,
+            "contact force {f}"
+        );
         assert!(kkt::residuals(qp, &r.x, &r.lambda).max() <= 1e-8);
     }
 }

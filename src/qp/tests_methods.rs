@@ -121,7 +121,11 @@ fn two_bodies(v: Variant) -> QpProblem {
         atrip.push((i, dof[2 * a + 1], nrm.1));
         atrip.push((i, dof[2 * b], -nrm.0));
         atrip.push((i, dof[2 * b + 1], -nrm.1));
-        g.push(if gaps { 1e-5 * ((i * 5 % 3) as f64) } else { 0.0 });
+        g.push(if gaps {
+            1e-5 * ((i * 5 % 3) as f64)
+        } else {
+            0.0
+        });
     }
     let a = Csr::from_triplets(nx, n, &atrip);
     let mut kernel = vec![];
@@ -182,7 +186,11 @@ fn test_problems_are_nondegenerate() {
         let lmax = norm_inf(&r.lambda);
         let xmax = norm_inf(&r.x);
         let nact = r.active.iter().filter(|b| **b).count();
-        assert!(nact > 0 && nact < qp.m(), "{v:?}: {nact} of {} active", qp.m());
+        assert!(
+            nact > 0 && nact < qp.m(),
+            "{v:?}: {nact} of {} active",
+            qp.m()
+        );
         for i in 0..qp.m() {
             let slack = qp.g[i] - ax[i];
             assert!(
@@ -197,7 +205,11 @@ fn test_problems_are_nondegenerate() {
 
 /// x, active set, KKT and λ ≥ 0 against the reference.
 fn check_exact(name: &str, v: Variant, qp: &QpProblem, r: &QpResult, refr: &QpResult) {
-    assert!(r.status.converged(), "{name} {v:?}: {}", r.status.describe());
+    assert!(
+        r.status.converged(),
+        "{name} {v:?}: {}",
+        r.status.describe()
+    );
     let e = rel_err(&r.x, &refr.x);
     assert!(e < 1e-6, "{name} {v:?}: relative error {e:e}");
     assert_eq!(r.active, refr.active, "{name} {v:?}: active set");
@@ -206,7 +218,10 @@ fn check_exact(name: &str, v: Variant, qp: &QpProblem, r: &QpResult, refr: &QpRe
     let le = rel_err(&r.lambda, &refr.lambda);
     assert!(le < 1e-6, "{name} {v:?}: λ relative error {le:e}");
     assert!((r.energy - qp.energy(&r.x)).abs() <= 1e-12 * r.energy.abs().max(1.0));
-    assert!(!r.timings.is_empty() && r.iterations > 0, "{name}: bookkeeping");
+    assert!(
+        !r.timings.is_empty() && r.iterations > 0,
+        "{name}: bookkeeping"
+    );
 }
 
 #[test]
@@ -216,7 +231,8 @@ fn exact_methods_match_cgc_coercive() {
         let refr = reference(&qp);
         for name in ["preelim", "uzawa", "dual", "asm", "asm-cgh"] {
             let tol = if name == "asm-cgh" { 1e-11 } else { 1e-12 };
-            let r = registry::solve(name, &qp, &opts(tol)).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let r =
+                registry::solve(name, &qp, &opts(tol)).unwrap_or_else(|e| panic!("{name}: {e}"));
             check_exact(name, v, &qp, &r, &refr);
         }
     }
@@ -271,7 +287,9 @@ fn semicoercive_unbounded_is_detected() {
         let r = registry::solve(name, &qp, &opts(1e-11)).unwrap();
         match &r.status {
             Status::Unbounded { direction } => {
-                assert!(norm(&qp.c.mul(direction)) <= 1e-8 * norm(direction) * norm_inf(&qp.c.diag()));
+                assert!(
+                    norm(&qp.c.mul(direction)) <= 1e-8 * norm(direction) * norm_inf(&qp.c.diag())
+                );
                 assert!(
                     super::sparse::dot(direction, &qp.d) > 0.0,
                     "{name}: not a descent direction"
@@ -304,7 +322,11 @@ fn penalty_error_is_first_order_in_eps() {
         let le = rel_err(&r.lambda, &refr.lambda);
         // Stationarity is exact for λ = (Ax − g)⁺/ε; the violation is O(ε).
         assert!(r.kkt.stationarity < 1e-7, "{:?}", r.kkt);
-        assert!(r.kkt.primal < 1e3 * eps * cmax, "ε {eps:e}: primal {:e}", r.kkt.primal);
+        assert!(
+            r.kkt.primal < 1e3 * eps * cmax,
+            "ε {eps:e}: primal {:e}",
+            r.kkt.primal
+        );
         assert!(r.lambda.iter().all(|&l| l >= 0.0));
         assert!(le < 100.0 * eps * cmax, "λ error {le:e}");
         errs.push(e);
@@ -324,7 +346,11 @@ fn penalty_default_eps_and_gauss_seidel() {
     let refr = reference(&qp);
     let gs = penalty_run(&qp, None, 1.0, 1e-13);
     let sor = penalty_run(&qp, None, 1.7, 1e-13);
-    assert!(rel_err(&gs.x, &refr.x) < 1e-2, "{}", rel_err(&gs.x, &refr.x));
+    assert!(
+        rel_err(&gs.x, &refr.x) < 1e-2,
+        "{}",
+        rel_err(&gs.x, &refr.x)
+    );
     assert!(rel_err(&gs.x, &sor.x) < 1e-8);
     assert!(
         sor.iterations < gs.iterations,
@@ -339,7 +365,9 @@ fn no_constraints() {
     let mut qp = two_bodies(Variant::Coercive { gaps: false });
     qp.a = Csr::zeros(0, qp.n());
     qp.g = vec![];
-    let x = super::factor::Cholesky::new(&qp.c, &[]).unwrap().solve(&qp.d);
+    let x = super::factor::Cholesky::new(&qp.c, &[])
+        .unwrap()
+        .solve(&qp.d);
     for name in ["preelim", "uzawa", "dual", "asm", "asm-cgh", "penalty"] {
         let r = registry::solve(name, &qp, &opts(1e-12)).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(r.status.converged(), "{name}: {}", r.status.describe());
@@ -415,7 +443,13 @@ fn preelim_refuses_singular_c11() {
     let c = Csr::from_triplets(
         3,
         3,
-        &[(0, 0, 1.0), (0, 1, -1.0), (1, 0, -1.0), (1, 1, 1.0), (2, 2, 1.0)],
+        &[
+            (0, 0, 1.0),
+            (0, 1, -1.0),
+            (1, 0, -1.0),
+            (1, 1, 1.0),
+            (2, 2, 1.0),
+        ],
     );
     let a = Csr::from_triplets(1, 3, &[(0, 2, 1.0)]);
     let qp = QpProblem {

@@ -39,7 +39,9 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     }
     if let Some(r) = opts.rho {
         if !(r.is_finite() && r > 0.0) {
-            return Err(QpError::BadParameter(format!("uzawa: ρ must be positive, got {r}")));
+            return Err(QpError::BadParameter(format!(
+                "uzawa: ρ must be positive, got {r}"
+            )));
         }
     }
     let t0 = Instant::now();
@@ -83,7 +85,11 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         iterations: iters,
         inner_iterations: st.solves,
         log: exec.log,
-        timings: vec![("factor".into(), t_f), ("rho".into(), t_rho), ("iterate".into(), t_it)],
+        timings: vec![
+            ("factor".into(), t_f),
+            ("rho".into(), t_rho),
+            ("iterate".into(), t_it),
+        ],
         kkt: Default::default(),
         energy,
     })
@@ -95,7 +101,9 @@ pub(crate) fn power_mu_max(qp: &QpProblem, z: &Cholesky, iters: usize) -> f64 {
     if m == 0 {
         return 0.0;
     }
-    let mut v: Vec<f64> = (0..m).map(|i| 1.0 + 0.1 * ((i * 37 % 17) as f64 / 17.0)).collect();
+    let mut v: Vec<f64> = (0..m)
+        .map(|i| 1.0 + 0.1 * ((i * 37 % 17) as f64 / 17.0))
+        .collect();
     let nv = norm(&v);
     v.iter_mut().for_each(|e| *e /= nv);
     let mut mu = 0.0;
