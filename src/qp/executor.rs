@@ -23,42 +23,48 @@ pub trait Observer {
     fn finish(&mut self) {}
 }
 
-/// Prints a progress line to stderr at most once a second, starting after
-/// one second (short solves stay quiet).
+/// A progress bar (indicatif) on stderr for solves longer than one second:
+/// iteration, residual, active-set size, inner iterations. Hidden when stderr
+/// is not a terminal.
 pub struct Progress {
     start: Instant,
-    last: Instant,
     name: String,
-    printed: bool,
+    bar: Option<indicatif::ProgressBar>,
 }
 
 impl Progress {
     pub fn new(name: &str) -> Progress {
-        let now = Instant::now();
         Progress {
-            start: now,
-            last: now,
+            start: Instant::now(),
             name: name.to_string(),
-            printed: false,
+            bar: None,
         }
     }
 }
 
 impl Observer for Progress {
     fn observe(&mut self, rec: &IterRecord) {
-        let now = Instant::now();
-        if now - self.start > Duration::from_secs(1) && now - self.last > Duration::from_secs(1) {
-            self.last = now;
-            self.printed = true;
-            eprint!(
-                "\r{}: iteration {:>7}  residual {:9.3e}  active {:>6}  inner {:>8}   ",
-                self.name, rec.iter, rec.residual, rec.active, rec.inner
-            );
+        if self.bar.is_none() && self.start.elapsed() > Duration::from_secs(1) {
+            let bar = indicatif::ProgressBar::new_spinner();
+            if let Ok(style) =
+                indicatif::ProgressStyle::with_template("{spinner} {prefix} [{elapsed}] {msg}")
+            {
+                bar.set_style(style);
+            }
+            bar.set_prefix(self.name.clone());
+            bar.enable_steady_tick(Duration::from_millis(200));
+            self.bar = Some(bar);
+        }
+        if let Some(bar) = &self.bar {
+            bar.set_message(format!(
+                "iteration {}  residual {:.3e}  active {}  inner {}",
+                rec.iter, rec.residual, rec.active, rec.inner
+            ));
         }
     }
     fn finish(&mut self) {
-        if self.printed {
-            eprintln!();
+        if let Some(bar) = self.bar.take() {
+            bar.finish_and_clear();
         }
     }
 }
