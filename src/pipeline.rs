@@ -158,6 +158,9 @@ pub fn options(
         }
         o.rho = Some(r);
     }
+    if let Some(a) = s.accelerate {
+        o.accelerate = a;
+    }
     Ok((method, o))
 }
 
@@ -180,23 +183,12 @@ pub fn solve_model(
     let res =
         registry::solve(method, &model.qp, opts).map_err(|e| bad(format!("{method}: {e}")))?;
     if let Status::Unbounded { direction } = &res.status {
-        let u = model.displacements(direction);
-        // The bodies that the direction moves (relative to the largest motion).
-        let mut per_body = vec![0.0f64; model.topo.nbodies];
-        for (p, v) in u.iter().enumerate() {
-            let b = model.topo.point_body[p] as usize;
-            per_body[b] = per_body[b].max(v[0].abs().max(v[1].abs()));
-        }
-        let m = per_body.iter().fold(0.0f64, |a, b| a.max(*b));
-        let bodies: Vec<String> = per_body
-            .iter()
-            .enumerate()
-            .filter(|(_, v)| **v > 1e-3 * m)
-            .map(|(b, _)| format!("body {b}"))
-            .collect();
+        // The motion along the direction (the prescribed displacements u0 are
+        // not part of it), described per body as the rigid motion it is.
+        let u = model.motions(direction);
         return Err(bad(format!(
             "the problem is unbounded: {} can move as a rigid body, opening its contacts, while the loads do positive work (a floating body pulled away from its support)",
-            bodies.join(", ")
+            model.describe_rigid_motion(&u)
         )));
     }
     Ok(res)

@@ -143,7 +143,10 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
 
 /// The table as JSON: `reference` = the converged row with the smallest KKT
 /// residual; each row's `rel_diff` = ‖x − x_ref‖/‖x_ref‖ and `agrees` =
-/// rel_diff ≤ 1e-6 and the same active set.
+/// converged, rel_diff ≤ `agree_tol` and the same active set. `agree_tol` =
+/// 1e-6, except for `penalty`, whose minimiser x_ε is O(ε_p) away from x:
+/// there it is max(1e-6, 10·its relative constraint violation), the
+/// violation being the observable O(ε_p) scale of that run.
 pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
     let best = rows
         .iter()
@@ -174,6 +177,11 @@ pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
                     .into_iter()
                     .map(|(n, _, _, v)| (n, json!(v)))
                     .collect();
+                let agree_tol = if r.method == "penalty" {
+                    (10.0 * q.kkt.primal).max(1e-6)
+                } else {
+                    1e-6
+                };
                 let (rel, agrees) = match reference {
                     Some(rf) => {
                         let num: f64 =
@@ -189,7 +197,10 @@ pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
                                 .sqrt()
                                 .max(f64::MIN_POSITIVE);
                         let rel = num / den;
-                        (rel, rel <= 1e-6 && q.active == rf.active)
+                        (
+                            rel,
+                            q.status.converged() && rel <= agree_tol && q.active == rf.active,
+                        )
                     }
                     None => (f64::NAN, false),
                 };
@@ -210,6 +221,7 @@ pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
                 o["probes"] = json!(probes);
                 o["rel_diff"] = json!(rel);
                 o["agrees"] = json!(agrees);
+                o["agree_tol"] = json!(agree_tol);
             }
         }
         out.push(o);

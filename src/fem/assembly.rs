@@ -40,6 +40,96 @@ pub struct Model {
 }
 
 impl Model {
+    /// Point displacements of a change `dx` of the QP unknowns (u0 left out):
+    /// the motion along a direction such as a rigid mode.
+    pub fn motions(&self, dx: &[f64]) -> Vec<[f64; 2]> {
+        self.dofs
+            .iter()
+            .map(|p| {
+                let mut u = [0.0, 0.0];
+                for k in 0..p.ndof {
+                    let xi = dx[p.start + k];
+                    u[0] += p.t[k][0] * xi;
+                    u[1] += p.t[k][1] * xi;
+                }
+                u
+            })
+            .collect()
+    }
+
+    /// The bodies that the point motions `u` move (by more than 10⁻³ of the
+    /// largest motion), each with the rigid motion that fits it best:
+    /// `body 1 (translation along (1, 0))` or `body 1 (rotation about (0.5, 0.25))`.
+    pub fn describe_rigid_motion(&self, u: &[[f64; 2]]) -> String {
+        let umax = u
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v[0].hypot(v[1])))
+            .max(f64::MIN_POSITIVE);
+        let parts: Vec<String> = (0..self.topo.nbodies)
+            .filter_map(|b| {
+                self.body_motion(u, b, 1e-3 * umax)
+                    .map(|what| format!("body {b} ({what})"))
+            })
+            .collect();
+        if parts.is_empty() {
+            "no body".into()
+        } else {
+            parts.join(", ")
+        }
+    }
+
+    /// The rigid motion that fits the point motions `u` of body `b` best
+    /// (least squares): "translation along (dx, dy)" or "rotation about
+    /// (x, y)"; None if no point of the body moves by more than `min`.
+    pub fn body_motion(&self, u: &[[f64; 2]], b: usize, min: f64) -> Option<String> {
+        let pts: Vec<usize> = (0..u.len().min(self.topo.points.len()))
+            .filter(|&p| self.topo.point_body[p] as usize == b)
+            .collect();
+        let bmax = pts
+            .iter()
+            .fold(0.0f64, |m, &p| m.max(u[p][0].hypot(u[p][1])));
+        if pts.is_empty() || !(bmax > min) {
+            return None;
+        }
+        // a + ω × (x − c) about the centroid c.
+        let k = pts.len() as f64;
+        let mut c = [0.0, 0.0];
+        let mut a = [0.0, 0.0];
+        for &p in &pts {
+            let x = self.topo.points[p];
+            c = [c[0] + x[0] / k, c[1] + x[1] / k];
+            a = [a[0] + u[p][0] / k, a[1] + u[p][1] / k];
+        }
+        let (mut num, mut den, mut rmax) = (0.0, 0.0, 0.0f64);
+        for &p in &pts {
+            let r = [self.topo.points[p][0] - c[0], self.topo.points[p][1] - c[1]];
+            num += r[0] * u[p][1] - r[1] * u[p][0];
+            den += r[0] * r[0] + r[1] * r[1];
+            rmax = rmax.max(r[0].hypot(r[1]));
+        }
+        let w = if den > 0.0 { num / den } else { 0.0 };
+        let an = a[0].hypot(a[1]);
+        // 4 decimals, and no "-0".
+        let g = |v: f64| format!("{v:.4}").parse::<f64>().unwrap_or(v) + 0.0;
+        Some(if an > 0.0 && (w * rmax).abs() <= 1e-3 * an {
+            format!("translation along ({}, {})", g(a[0] / an), g(a[1] / an))
+        } else if w != 0.0 && w.is_finite() {
+            // The fixed point of the motion: a + ω × (p − c) = 0, rounded to
+            // 10⁻⁵ of the body's size (no round-off noise such as 1e-17).
+            let q = 10f64.powi(rmax.log10().floor() as i32 - 5);
+            let p = [c[0] - a[1] / w, c[1] + a[0] / w].map(|v| {
+                if q > 0.0 && q.is_finite() {
+                    (v / q).round() * q
+                } else {
+                    v
+                }
+            });
+            format!("rotation about ({}, {})", g_sig(p[0]), g_sig(p[1]))
+        } else {
+            "not a rigid motion".to_string()
+        })
+    }
+
     /// Full point displacements from the QP unknowns.
     pub fn displacements(&self, x: &[f64]) -> Vec<[f64; 2]> {
         self.dofs
@@ -65,11 +155,13 @@ impl Model {
     }
 }
 
-/// One linear condition r·u = v at a point.
+/// One linear condition r·u = v at a point; `src` indexes the names of the
+/// TOML entries that set conditions (for messages).
 #[derive(Clone, Copy)]
 struct Cond {
     r: [f64; 2],
     v: f64,
+    src: usize,
 }
 
 /// Build the whole model: topology, conditions, QP.
@@ -85,6 +177,8 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
 
     // --- conditions per point
     let mut conds: Vec<Vec<Cond>> = vec![vec![]; np];
+    // What set each condition: `[[dirichlet]] on = "NAME"`, `[[slip]] on = "NAME"`.
+    let mut cond_src: Vec<String> = vec![];
     // Points of a group: for a curve, the copies owned by each segment's body.
     let group_points =
         |name: &str,
@@ -152,12 +246,22 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
             .collect();
         pts.sort_unstable();
         pts.dedup();
+        let src = cond_src.len();
+        cond_src.push(format!("[[dirichlet]] on = \"{}\"", dch.on));
         for p in pts {
             if let Some(v) = ux {
-                conds[p].push(Cond { r: [1.0, 0.0], v });
+                conds[p].push(Cond {
+                    r: [1.0, 0.0],
+                    v,
+                    src,
+                });
             }
             if let Some(v) = uy {
-                conds[p].push(Cond { r: [0.0, 1.0], v });
+                conds[p].push(Cond {
+                    r: [0.0, 1.0],
+                    v,
+                    src,
+                });
             }
         }
     }
@@ -183,12 +287,15 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
                 e[1] += n[1];
             }
         }
+        let src = cond_src.len();
+        cond_src.push(format!("[[slip]] on = \"{}\"", s.on));
         for (p, n) in sum {
             let len = (n[0] * n[0] + n[1] * n[1]).sqrt();
             if len > 1e-12 {
                 conds[p].push(Cond {
                     r: [n[0] / len, n[1] / len],
                     v: 0.0,
+                    src,
                 });
             }
         }
@@ -199,9 +306,15 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     let mut next = 0usize;
     for (p, cs) in conds.iter().enumerate() {
         let pd = eliminate(cs).map_err(|m| {
+            let mut from: Vec<usize> = cs.iter().map(|c| c.src).collect();
+            from.sort_unstable();
+            from.dedup();
+            let from: Vec<&str> = from.iter().map(|&i| cond_src[i].as_str()).collect();
             err(format!(
-                "conflicting conditions at node {} (body {}): {m}",
-                mesh.node_tags[topo.point_node[p]], topo.point_body[p]
+                "conflicting conditions at node {} (body {}) from {}: {m}",
+                mesh.node_tags[topo.point_node[p]],
+                topo.point_body[p],
+                from.join(", ")
             ))
         })?;
         let pd = PointDofs { start: next, ..pd };
@@ -519,21 +632,31 @@ fn rigid_modes(
     (kernel, owner)
 }
 
+/// A coordinate for messages: 6 significant digits, no trailing noise.
+fn g_sig(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    format!("{v:.5e}")
+        .parse::<f64>()
+        .map(|x| format!("{}", x + 0.0))
+        .unwrap_or_else(|_| format!("{v}"))
+}
+
+/// The bodies and the rigid motion (translation direction or centre of
+/// rotation) of the kernel combination Σ c_k z_k.
 fn describe_mode(m: &Model, c: &[f64]) -> String {
-    // which rigid motion (translation x/y, rotation) dominates, per body
-    let mut parts = vec![];
-    for (k, &b) in m.kernel_body.iter().enumerate() {
-        if c[k].abs() > 1e-6 {
-            parts.push(b);
+    let n = m.qp.n();
+    let mut z = vec![0.0; n];
+    for (ck, zk) in c.iter().zip(&m.qp.kernel) {
+        for (zi, v) in z.iter_mut().zip(zk) {
+            *zi += ck * v;
         }
     }
-    parts.sort_unstable();
-    parts.dedup();
-    parts
-        .iter()
-        .map(|b| format!("body {b}"))
-        .collect::<Vec<_>>()
-        .join(", ")
+    m.describe_rigid_motion(&m.motions(&z))
 }
 
 /// Semicoercive checks of methods.md §1.7 that need no iteration: a body
@@ -554,14 +677,34 @@ fn check_semicoercive(m: &Model, problem: &Problem) -> Result<(), FemError> {
             touched[m.topo.point_body[p] as usize] = true;
         }
     }
-    for (i, &b) in m.kernel_body.iter().enumerate() {
+    for &b in &m.kernel_body {
         if !touched[b as usize] {
-            let z = &qp.kernel[i];
-            let work: f64 = z.iter().zip(&qp.d).map(|(a, b)| a * b).sum();
+            let modes: Vec<&Vec<f64>> = m
+                .kernel_body
+                .iter()
+                .zip(&qp.kernel)
+                .filter(|(&x, _)| x == b)
+                .map(|(_, z)| z)
+                .collect();
+            let work = modes
+                .iter()
+                .any(|z| z.iter().zip(&qp.d).map(|(a, b)| a * b).sum::<f64>().abs() > 0.0);
+            let free = if modes.len() >= 3 {
+                "no Dirichlet or slip condition fixes it".to_string()
+            } else {
+                let what: Vec<String> = modes
+                    .iter()
+                    .filter_map(|z| m.body_motion(&m.motions(z), b as usize, 0.0))
+                    .collect();
+                format!(
+                    "its Dirichlet and slip conditions leave {} free",
+                    what.join(" and ")
+                )
+            };
             return Err(err(format!(
-                "body {b} is not supported: no Dirichlet or slip condition fixes it and it has no contact ({} free rigid motion(s){})",
-                m.kernel_body.iter().filter(|&&x| x == b).count(),
-                if work.abs() > 0.0 { "; the loads would move it without limit" } else { "" }
+                "body {b} is not supported: {free} and it has no contact ({} free rigid motion(s){})",
+                modes.len(),
+                if work { "; the loads would move it without limit" } else { "" }
             )));
         }
     }

@@ -108,10 +108,19 @@ impl Kind {
 }
 
 fn unsupported_type_msg(t: i64, elem_tag: u64) -> String {
+    let name = element_type_name(t);
+    // What to change in Gmsh: the element order, or the recombination into quadrangles.
+    let hint = if name.contains("quadrangle") {
+        "; mesh with triangles (no Recombine / Mesh.RecombineAll = 0) and first-order \
+         elements (`gmsh -2 -order 1`)"
+    } else if name.contains("order") {
+        "; re-mesh with first-order elements (`gmsh -2 -order 1`, Mesh.ElementOrder = 1)"
+    } else {
+        ""
+    };
     format!(
-        "element {elem_tag} has type {t} ({}), which is not supported: only linear (P1) \
-         3-node triangles (type 2), 2-node lines (type 1) and points (type 15) are supported",
-        element_type_name(t)
+        "element {elem_tag} has type {t} ({name}), which is not supported: only linear (P1) \
+         3-node triangles (type 2), 2-node lines (type 1) and points (type 15) are supported{hint}"
     )
 }
 

@@ -61,7 +61,7 @@ pub enum MeshError {
         #[source]
         source: std::io::Error,
     },
-    #[error("{path}:{line}: {section}: {msg}")]
+    #[error("{}", parse_message(path, *line, section, msg))]
     Parse {
         path: PathBuf,
         /// 1-based line number (ASCII) or byte offset (binary, prefixed in `msg`).
@@ -71,4 +71,15 @@ pub enum MeshError {
     },
     #[error("{path}: {msg}")]
     Invalid { path: PathBuf, msg: String },
+}
+
+/// `file:LINE: section: msg` for ASCII files; `file: section: at byte offset
+/// N: msg` for binary ones (the offset is already in `msg`, and `file:N:`
+/// would read as a line number).
+fn parse_message(path: &std::path::Path, line: usize, section: &str, msg: &str) -> String {
+    if msg.starts_with("at byte offset ") {
+        format!("{}: {section}: {msg}", path.display())
+    } else {
+        format!("{}:{line}: {section}: {msg}", path.display())
+    }
 }

@@ -150,6 +150,9 @@ pub struct SolverSection {
     pub penalty: Option<f64>,
     /// Uzawa step ρ.
     pub rho: Option<f64>,
+    /// Uzawa: Nesterov momentum; penalty: exact subspace correction between
+    /// sweeps. `false` gives the report's plain iterations.
+    pub accelerate: Option<bool>,
 }
 
 #[derive(Debug, Clone, Default, Deserialize)]
@@ -322,6 +325,55 @@ impl Problem {
     fn validate(&self) -> Result<(), ModelError> {
         let f = &self.file;
         let finite = |v: f64| v.is_finite();
+        // Names are echoed in messages, which must stay one line: no control
+        // characters (a TOML escape such as "\n" could put one there).
+        let mut names: Vec<(&str, &str)> = vec![];
+        names.extend(f.materials.keys().map(|n| ("[materials.NAME]", n.as_str())));
+        names.extend(
+            f.dirichlet
+                .iter()
+                .map(|d| ("[[dirichlet]] on", d.on.as_str())),
+        );
+        names.extend(
+            f.traction
+                .iter()
+                .map(|t| ("[[traction]] on", t.on.as_str())),
+        );
+        names.extend(f.slip.iter().map(|s| ("[[slip]] on", s.on.as_str())));
+        names.extend(f.force.iter().map(|x| ("[[force]] on", x.on.as_str())));
+        for c in &f.contact {
+            for (what, n) in [
+                ("[[contact]] on", &c.on),
+                ("[[contact]] slave", &c.slave),
+                ("[[contact]] master", &c.master),
+            ] {
+                if let Some(n) = n {
+                    names.push((what, n.as_str()));
+                }
+            }
+        }
+        for st in &f.steps {
+            names.extend(
+                st.dirichlet
+                    .keys()
+                    .map(|n| ("[[steps]] dirichlet", n.as_str())),
+            );
+        }
+        names.extend(
+            f.output
+                .probes
+                .keys()
+                .map(|n| ("[output] probes", n.as_str())),
+        );
+        let mesh_file = f.mesh.file.to_string_lossy();
+        names.push(("[mesh] file", &mesh_file));
+        for (what, n) in names {
+            if n.chars().any(char::is_control) {
+                return Err(self.invalid(format!(
+                    "{what}: the name {n:?} contains a control character"
+                )));
+            }
+        }
         if !(f.model.thickness > 0.0 && finite(f.model.thickness)) {
             return Err(self.invalid(format!(
                 "[model] thickness = {} must be positive",
@@ -478,7 +530,10 @@ fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
     let msg = e.message().trim().replace('\n', "; ");
     match e.span() {
         Some(span) => {
-            let start = span.start.min(text.len());
+            let mut start = span.start.min(text.len());
+            while !text.is_char_boundary(start) {
+                start -= 1;
+            }
             let line = text[..start].matches('\n').count() + 1;
             let line_start = text[..start].rfind('\n').map(|i| i + 1).unwrap_or(0);
             let col = start - line_start + 1;
@@ -490,7 +545,13 @@ fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
                 .chars()
                 .take(40)
                 .collect();
-            let table = enclosing_table(text, start);
+            // The table the error is in; none when the error is in a table
+            // header itself (the header is the snippet).
+            let table = if line_text.trim_start().starts_with('[') {
+                String::new()
+            } else {
+                enclosing_table(text, line_start)
+            };
             // The key of a `key = value` line, when the error is in its value.
             let key = line_text
                 .split_once('=')
@@ -502,10 +563,11 @@ fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
                 })
                 .map(|k| format!(", key `{k}`"))
                 .unwrap_or_default();
-            format!(
-                "line {line}, column {col}{table}{key}: {msg} (at `{}`)",
-                snippet.trim()
-            )
+            let at = match snippet.trim() {
+                "" => String::new(),
+                sn => format!(" (at `{sn}`)"),
+            };
+            format!("line {line}, column {col}{table}{key}: {msg}{at}")
         }
         None => msg,
     }

@@ -525,7 +525,13 @@ impl<S: FaceSolver> Iterative for ActiveSet<'_, S> {
         if delta.iter().chain(&lam_j).any(|v| !v.is_finite()) {
             return self.fail("NaN or Inf in the face solution".into());
         }
-        let res = norm(&delta) / norm(&self.x).max(norm_inf(&qp.g)).max(1e-300);
+        // Relative size of the correction, in [0, 1]. ‖δ‖ in the denominator
+        // keeps it finite when x = 0 and g = 0 (the first face of a problem
+        // with large displacements: ‖δ‖/1e-300 overflowed to Inf, which the
+        // executor took for a NaN/Inf failure).
+        let dn = norm(&delta);
+        let den = norm(&self.x).max(norm_inf(&qp.g)).max(dn);
+        let res = if den > 0.0 { dn / den } else { 0.0 };
         for (&j, &l) in self.jl.iter().zip(&lam_j) {
             self.lam[j] = l;
         }

@@ -22,13 +22,21 @@
 //! One executor iteration = one face (CG on the free multipliers until the
 //! face minimum or a new bound becomes active).
 //!
-//! Semicoercive C (non-empty `qp.kernel`) is refused: the dual then carries the
-//! equality constraint Rᵀ(d − Aᵀλ) = 0 (FETI), which this bound-constrained CGC
-//! does not handle.
+//! **Semicoercive C** (non-empty `qp.kernel`): the dual carries the equality
+//! constraint Gλ = e, G = RᵀAᵀ, e = Rᵀd (TFETI). It is enforced by the same
+//! SMALBE-M outer loop as [`super::mprgp`] (homogenised bounds λ̂ ≥ −λ̃,
+//! generalised inverse of C by the spring factor), with the report's CGC on
+//! the bounds as the inner solver ([`polyak_step`]): CG on the free face; a
+//! step that would cross a bound stops on it and restarts CG; when the face
+//! is minimised to the precision the current SMALBE step asks for,
+//! ‖φ‖ ≤ max(tol·‖h‖, ½min(M‖G̃λ̂‖, η)), the bounds with negative multipliers
+//! are released (all at once, or the most negative with
+//! `multiple_release = false`) by an exact line search along them.
 
 use super::asm::check_common;
 use super::executor::{Executor, Iterative, Step};
 use super::factor::Cholesky;
+use super::mprgp::{Inner, Mprgp};
 use super::sparse::{axpy, dot, norm};
 use super::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
 use std::time::Instant;
@@ -36,11 +44,10 @@ use std::time::Instant;
 pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     check_common(qp, opts)?;
     if !qp.kernel.is_empty() {
-        return Err(QpError::Unsupported(
-            "dual needs an invertible C; this C is singular (floating bodies: the dual gains the \
-             equality constraint Rᵀ(d − Aᵀλ) = 0, not implemented). Use cgc, preelim, asm or asm-cgh"
-                .into(),
-        ));
+        let inner = Inner::Polyak {
+            multiple: opts.multiple_release,
+        };
+        return super::mprgp::solve_with(qp, opts, inner, "dual");
     }
     let t0 = Instant::now();
     let chol = Cholesky::new(&qp.c, &[])?;
@@ -256,4 +263,90 @@ impl Iterative for DualCgc<'_> {
             }
         }
     }
+}
+
+/// One step of the report's CGC on the bounds λ̂ ≥ ℓ for the SMALBE host:
+/// release (line search along the chopped gradient β, restricted to its most
+/// negative component unless `multiple`) when the face is minimised, else
+/// one CG step on the face, stopped at the first blocking bound.
+pub(crate) fn polyak_step(st: &mut Mprgp, multiple: bool) -> Result<(), String> {
+    let mdim = st.x.len();
+    let phi = st.phi();
+    let mut beta = st.beta();
+    st.fresh = false;
+    let face_tol = if st.op.k() > 0 {
+        let (fe, _) = st.feas();
+        (st.tol * st.ref_g).max(0.5 * (st.mpar * fe).min(st.eta))
+    } else {
+        st.tol * st.ref_g
+    };
+    if norm(&beta) > 0.0 && norm(&phi) <= face_tol {
+        if !multiple {
+            let imin = (0..mdim)
+                .min_by(|&a, &b| beta[a].total_cmp(&beta[b]))
+                .unwrap_or(0);
+            for (i, b) in beta.iter_mut().enumerate() {
+                if i != imin {
+                    *b = 0.0;
+                }
+            }
+        }
+        let ad = st.op.apply(&beta);
+        let dad = dot(&beta, &ad);
+        if !dad.is_finite() || dad <= 0.0 {
+            return Err(format!(
+                "dual: non-positive curvature βᵀHβ = {dad:e} (H should be SPD)"
+            ));
+        }
+        let a = dot(&st.g, &beta) / dad;
+        for i in 0..mdim {
+            st.x[i] = (st.x[i] - a * beta[i]).max(st.lb[i]);
+            st.g[i] -= a * ad[i];
+        }
+        st.p = st.phi();
+        st.counts[2] += 1;
+        return Ok(());
+    }
+    if dot(&st.p, &st.p) == 0.0 {
+        st.p = phi;
+    }
+    let ap = st.op.apply(&st.p);
+    let pap = dot(&st.p, &ap);
+    if !pap.is_finite() || pap <= 0.0 {
+        return Err(format!(
+            "dual: non-positive curvature pᵀHp = {pap:e} (H should be SPD)"
+        ));
+    }
+    let acg = dot(&st.g, &st.p) / pap;
+    let mut af = f64::INFINITY;
+    let mut block = usize::MAX;
+    for i in 0..mdim {
+        if st.p[i] > 0.0 {
+            let t = ((st.x[i] - st.lb[i]) / st.p[i]).max(0.0);
+            if t < af {
+                af = t;
+                block = i;
+            }
+        }
+    }
+    if acg <= af {
+        axpy(-acg, &st.p, &mut st.x);
+        axpy(-acg, &ap, &mut st.g);
+        let phin = st.phi();
+        let gamma = dot(&phin, &ap) / pap;
+        for (pi, fi) in st.p.iter_mut().zip(&phin) {
+            *pi = fi - gamma * *pi;
+        }
+        st.counts[0] += 1;
+    } else {
+        // Stop on the blocking bound; CG restarts on the smaller face.
+        for ((xi, pi), li) in st.x.iter_mut().zip(&st.p).zip(&st.lb) {
+            *xi = (*xi - af * pi).max(*li);
+        }
+        st.x[block] = st.lb[block];
+        axpy(-af, &ap, &mut st.g);
+        st.p = st.phi();
+        st.counts[1] += 1;
+    }
+    Ok(())
 }

@@ -144,6 +144,10 @@ pub struct SolveOptions {
     pub penalty: Option<f64>,
     /// Uzawa ρ (None: estimated).
     pub rho: Option<f64>,
+    /// Uzawa: Nesterov momentum with gradient restart; penalty: exact solve
+    /// on the penalty active set between relaxation sweeps. `false`: the
+    /// report's plain iterations (§4.4, §4.5).
+    pub accelerate: bool,
     /// Print progress to stderr for long solves.
     pub progress: bool,
     /// Warm start (load steps, restart): used by methods that can, when feasible.
@@ -160,6 +164,7 @@ impl Default for SolveOptions {
             multiple_release: true,
             penalty: None,
             rho: None,
+            accelerate: true,
             progress: false,
             x0: None,
         }

@@ -82,10 +82,35 @@ const ETA_FACTOR: f64 = 0.1;
 
 /// Solve `qp` by MPRGP on the dual (SMALBE-M for a semicoercive C).
 pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
+    solve_with(qp, opts, Inner::Mprgp, "mprgp")
+}
+
+/// The bound-constrained solver run inside the SMALBE loop (one step per
+/// executor iteration). With an empty kernel there is no SMALBE loop and
+/// this is the whole method.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Inner {
+    /// MPRGP (this file).
+    Mprgp,
+    /// The report's CGC on the bounds (Polyak: CG on the face, stop at a
+    /// blocking bound, release when the face is minimised), [`super::dual`].
+    Polyak { multiple: bool },
+    /// Uzawa's projected gradient step with fixed step ρ, optionally with
+    /// Nesterov momentum, [`super::uzawa`].
+    Uzawa { rho: Option<f64>, momentum: bool },
+}
+
+/// Dual solve with the given inner solver; `name` prefixes messages.
+pub(crate) fn solve_with(
+    qp: &QpProblem,
+    opts: &SolveOptions,
+    inner: Inner,
+    name: &'static str,
+) -> Result<QpResult, QpError> {
     check_dims(qp)?;
     if !(opts.tol > 0.0 && opts.tol < 1.0) {
         return Err(QpError::BadParameter(format!(
-            "mprgp: tol = {} must lie in (0, 1)",
+            "{name}: tol = {} must lie in (0, 1)",
             opts.tol
         )));
     }
@@ -94,10 +119,10 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     let fac = Cholesky::new(&qp.c, &qp.kernel)?;
     let t_factor = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let mut st = Mprgp::new(qp, fac, r, opts.tol)?;
+    let mut st = Mprgp::new(qp, fac, r, opts.tol, inner, name)?;
     let t_setup = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("mprgp"));
+    let mut exec = Executor::new(opts.max_iter, opts.progress.then_some(name));
     let (status, iters) = exec.run(&mut st);
     let t_it = t2.elapsed().as_secs_f64();
     Ok(st.into_result(
@@ -113,7 +138,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
 }
 
 /// The dual operator λ ↦ (PHP + ρQ)λ and what defines it.
-struct Dual<'a> {
+pub(crate) struct Dual<'a> {
     qp: &'a QpProblem,
     fac: Cholesky,
     /// Orthonormal basis of ker C.
@@ -127,7 +152,7 @@ struct Dual<'a> {
 }
 
 impl Dual<'_> {
-    fn k(&self) -> usize {
+    pub(crate) fn k(&self) -> usize {
         self.gt.len()
     }
     /// H v = A K⁻¹ Aᵀ v
@@ -158,7 +183,7 @@ impl Dual<'_> {
         self.gt_add(&c, v);
     }
     /// (PHP + ρQ) v
-    fn apply(&mut self, v: &[f64]) -> Vec<f64> {
+    pub(crate) fn apply(&mut self, v: &[f64]) -> Vec<f64> {
         if self.k() == 0 {
             return self.h(v);
         }
@@ -174,31 +199,37 @@ impl Dual<'_> {
     }
 }
 
-struct Mprgp<'a> {
-    op: Dual<'a>,
+pub(crate) struct Mprgp<'a> {
+    pub(crate) op: Dual<'a>,
     /// λ̃ (the homogenising shift); the lower bound is ℓ = −λ̃.
-    shift: Vec<f64>,
-    lb: Vec<f64>,
+    pub(crate) shift: Vec<f64>,
+    pub(crate) lb: Vec<f64>,
     /// The current linear term b = b̂ − G̃ᵀμ.
-    b: Vec<f64>,
-    mu: Vec<f64>,
+    pub(crate) b: Vec<f64>,
+    pub(crate) mu: Vec<f64>,
     /// The iterate λ̂.
-    x: Vec<f64>,
+    pub(crate) x: Vec<f64>,
     /// g = (PHP + ρQ)λ̂ − b
-    g: Vec<f64>,
-    p: Vec<f64>,
+    pub(crate) g: Vec<f64>,
+    pub(crate) p: Vec<f64>,
     /// g recomputed from scratch and not updated since.
-    fresh: bool,
-    abar: f64,
-    tol: f64,
-    ref_g: f64,
+    pub(crate) fresh: bool,
+    pub(crate) abar: f64,
+    pub(crate) tol: f64,
+    pub(crate) ref_g: f64,
     /// ‖ẽ‖
-    e_norm: f64,
-    mpar: f64,
-    eta: f64,
-    lag_prev: Option<f64>,
-    outer: usize,
-    counts: [usize; 3],
+    pub(crate) e_norm: f64,
+    pub(crate) mpar: f64,
+    pub(crate) eta: f64,
+    pub(crate) lag_prev: Option<f64>,
+    pub(crate) outer: usize,
+    pub(crate) counts: [usize; 3],
+    pub(crate) inner: Inner,
+    pub(crate) name: &'static str,
+    /// Momentum state of the Uzawa inner step: previous iterate and gradient, FISTA t.
+    pub(crate) x_prev: Vec<f64>,
+    pub(crate) g_prev: Vec<f64>,
+    pub(crate) t_mom: f64,
 }
 
 impl<'a> Mprgp<'a> {
@@ -207,6 +238,8 @@ impl<'a> Mprgp<'a> {
         fac: Cholesky,
         r: Vec<Vec<f64>>,
         tol: f64,
+        inner: Inner,
+        name: &'static str,
     ) -> Result<Mprgp<'a>, QpError> {
         let m = qp.m();
         let k = r.len();
@@ -220,9 +253,10 @@ impl<'a> Mprgp<'a> {
         }
         if !chol_factor(&mut l, k, 1e-10) {
             return Err(QpError::Unsupported(
-                "mprgp: a rigid motion of a floating body is not restrained by any contact row (A·R rank \
-                 deficient), the dual equality constraint is degenerate; use cgc or ssn"
-                    .into(),
+                format!(
+                    "{name}: a rigid motion of a floating body is not restrained by any contact row \
+                     (A·R rank deficient), the dual equality constraint is degenerate; use cgc or ssn"
+                ),
             ));
         }
         let mut gt = vec![vec![0.0; m]; k];
@@ -266,12 +300,22 @@ impl<'a> Mprgp<'a> {
         let hnorm = if m == 0 { 1.0 } else { power_norm(&mut op) };
         if !(hnorm > 0.0 && hnorm.is_finite()) {
             return Err(QpError::Factor(format!(
-                "mprgp: ‖H‖ estimate {hnorm} is not positive"
+                "{name}: ‖H‖ estimate {hnorm} is not positive"
             )));
         }
-        op.rho = if k > 0 { RHO_FACTOR * hnorm } else { 0.0 };
+        // Uzawa's fixed step limits it to ρ_SMALBE = ‖PHP‖ (a larger ρ would
+        // shrink the step on the PHP part).
+        let rho_factor = match inner {
+            Inner::Uzawa { .. } => 1.0,
+            _ => RHO_FACTOR,
+        };
+        op.rho = if k > 0 { rho_factor * hnorm } else { 0.0 };
         // ‖PHP + ρQ‖ = max(‖PHP‖, ρ): PHP and ρQ act on orthogonal subspaces.
-        let abar = STEP_FACTOR / hnorm.max(op.rho);
+        let abar = match inner {
+            Inner::Uzawa { rho: Some(r), .. } => r,
+            Inner::Uzawa { rho: None, .. } => 1.0 / hnorm.max(op.rho),
+            _ => STEP_FACTOR / hnorm.max(op.rho),
+        };
         let ref_g = norm(&h).max(norm(&bhat)).max(f64::MIN_POSITIVE);
         let e_norm = norm(&et);
         let lb: Vec<f64> = shift.iter().map(|s| -s).collect();
@@ -295,13 +339,18 @@ impl<'a> Mprgp<'a> {
             lag_prev: None,
             outer: 0,
             counts: [0; 3],
+            inner,
+            name,
+            x_prev: vec![],
+            g_prev: vec![],
+            t_mom: 1.0,
         };
         st.refresh();
         st.p = st.phi();
         Ok(st)
     }
 
-    fn refresh(&mut self) {
+    pub(crate) fn refresh(&mut self) {
         let ax = self.op.apply(&self.x);
         self.g = ax.iter().zip(&self.b).map(|(a, b)| a - b).collect();
         self.fresh = true;
@@ -311,13 +360,13 @@ impl<'a> Mprgp<'a> {
         self.x[i] > self.lb[i]
     }
 
-    fn phi(&self) -> Vec<f64> {
+    pub(crate) fn phi(&self) -> Vec<f64> {
         (0..self.x.len())
             .map(|i| if self.is_free(i) { self.g[i] } else { 0.0 })
             .collect()
     }
 
-    fn beta(&self) -> Vec<f64> {
+    pub(crate) fn beta(&self) -> Vec<f64> {
         (0..self.x.len())
             .map(|i| {
                 if self.is_free(i) {
@@ -330,7 +379,7 @@ impl<'a> Mprgp<'a> {
     }
 
     /// ‖gᴾ‖
-    fn gp_norm(&self) -> f64 {
+    pub(crate) fn gp_norm(&self) -> f64 {
         (0..self.x.len())
             .map(|i| {
                 let v = if self.is_free(i) {
@@ -345,7 +394,7 @@ impl<'a> Mprgp<'a> {
     }
 
     /// (‖G̃λ̂‖, its reference max(‖ẽ‖, ‖λ‖))
-    fn feas(&self) -> (f64, f64) {
+    pub(crate) fn feas(&self) -> (f64, f64) {
         if self.op.k() == 0 {
             return (0.0, 1.0);
         }
@@ -397,6 +446,10 @@ impl<'a> Mprgp<'a> {
         self.lag_prev = Some(lag);
         self.outer += 1;
         self.p = self.phi();
+        // The gradient changed discontinuously: restart the momentum.
+        self.t_mom = 1.0;
+        self.x_prev = self.x.clone();
+        self.g_prev = self.g.clone();
     }
 
     /// One MPRGP step (CG, expansion or proportioning).
@@ -417,7 +470,8 @@ impl<'a> Mprgp<'a> {
             let pap = dot(&self.p, &ap);
             if !pap.is_finite() || pap <= 0.0 {
                 return Err(format!(
-                    "mprgp: non-positive curvature pᵀHp = {pap:e} (H should be SPD)"
+                    "{}: non-positive curvature pᵀHp = {pap:e} (H should be SPD)",
+                    self.name
                 ));
             }
             let acg = dot(&self.g, &self.p) / pap;
@@ -457,7 +511,8 @@ impl<'a> Mprgp<'a> {
             let dad = dot(&beta, &ad);
             if !dad.is_finite() || dad <= 0.0 {
                 return Err(format!(
-                    "mprgp: non-positive curvature βᵀHβ = {dad:e} (H should be SPD)"
+                    "{}: non-positive curvature βᵀHβ = {dad:e} (H should be SPD)",
+                    self.name
                 ));
             }
             let a = dot(&self.g, &beta) / dad;
@@ -522,7 +577,8 @@ impl<'a> Mprgp<'a> {
     ) -> QpResult {
         let qp = self.op.qp;
         log::debug!(
-            "mprgp: {} CG, {} expansion, {} proportioning steps, {} SMALBE updates, ρ = {:e}, ᾱ = {:e}",
+            "{}: {} CG, {} expansion/blocked, {} proportioning/release steps, {} SMALBE updates, ρ = {:e}, ᾱ = {:e}",
+            self.name,
             self.counts[0],
             self.counts[1],
             self.counts[2],
@@ -545,8 +601,9 @@ impl<'a> Mprgp<'a> {
         let limit = 100.0 * self.tol * self.ref_g + rounding;
         let status = if status.converged() && !(viol <= limit && compl <= limit) {
             Status::Failed(format!(
-                "mprgp: the dual converged but the recovered x violates Ax ≤ g by {viol:e} or complementarity \
-                 by {compl:e} (limit 100·tol·‖h‖ = {limit:e})"
+                "{}: the dual converged but the recovered x violates Ax ≤ g by {viol:e} or complementarity \
+                 by {compl:e} (limit 100·tol·‖h‖ = {limit:e})",
+                self.name
             ))
         } else {
             status
@@ -588,11 +645,21 @@ impl Iterative for Mprgp<'_> {
             }
         }
         let r = res(gp, fe, fe_ref, self.ref_g);
-        if self.op.k() > 0 && gp <= (self.mpar * fe).min(self.eta) {
+        // The floor 0.1·tol·‖h‖: below it the inner problem is solved to the
+        // final precision, and M may have shrunk until M‖G̃λ̂‖ is under rounding.
+        let inner_tol = (self.mpar * fe)
+            .min(self.eta)
+            .max(0.1 * self.tol * self.ref_g);
+        if self.op.k() > 0 && gp <= inner_tol {
             self.smalbe_update();
             return Step::Continue(self.record(r));
         }
-        match self.mprgp_step() {
+        let stepped = match self.inner {
+            Inner::Mprgp => self.mprgp_step(),
+            Inner::Polyak { multiple } => super::dual::polyak_step(self, multiple),
+            Inner::Uzawa { momentum, .. } => super::uzawa::uzawa_step(self, momentum),
+        };
+        match stepped {
             Ok(()) => Step::Continue(self.record(r)),
             Err(msg) => Step::Done(Status::Failed(msg), self.record(r)),
         }

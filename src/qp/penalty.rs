@@ -23,6 +23,20 @@
 //! is reported by `log::info!`. The KKT stationarity holds exactly for this λ
 //! at the penalty minimiser; primal feasibility only to O(ε_p).
 //!
+//! **Subspace correction** (`opts.accelerate`, default on; not in the
+//! report). Gauss–Seidel on h_ε converges at the rate of GS on the stiffened
+//! C + A_JᵀA_J/ε_p: on the shipped models 100 000 sweeps did not reach
+//! tol = 1e-10 (ω = 1 to 1.95 made no difference). So every
+//! [`CORRECTION_EVERY`] sweeps the penalised energy g_ε is minimised exactly on
+//! the current penalty set J = {j : (a_j,x) > g_j}, a linear solve with
+//! C + A_JᵀA_J/ε_p (sparse Cholesky) giving y, followed by an exact line
+//! search of g_ε on the segment [x, y] (a semismooth Newton step for
+//! ∇g_ε = 0), so the iteration stays a descent method on the same g_ε
+//! and converges to the same x_ε; once J is right the next sweep meets the
+//! stopping test. A singular C + A_JᵀA_J/ε_p (a floating body J does not hold
+//! yet) skips the correction. `accelerate = false` runs the report's plain
+//! relaxation.
+//!
 //! Semicoercive C needs nothing special: the relaxation only needs c_ii > 0,
 //! and the penalised problem has a minimiser whenever the contact holds the
 //! floating bodies (otherwise the sweeps drift and MAXIT is reported).
@@ -35,6 +49,10 @@ use std::time::Instant;
 
 /// Default ε_p = 1/(PENALTY_FACTOR · max diag C).
 pub const PENALTY_FACTOR: f64 = 1e3;
+/// Sweeps between two subspace corrections.
+pub const CORRECTION_EVERY: usize = 10;
+/// Newton steps per correction at most.
+pub const NEWTON_STEPS: usize = 30;
 
 pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     check_common(qp, opts)?;
@@ -93,6 +111,11 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         x_old: x.clone(),
         x,
         s,
+        eps,
+        correct: opts.accelerate,
+        sweeps: 0,
+        corrections: 0,
+        factorizations: 0,
     };
     let t_setup = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
@@ -107,8 +130,11 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         .collect();
     let vmax = viol.iter().fold(0.0f64, |a, &b| a.max(b));
     log::info!(
-        "penalty: ε_p = {eps:.3e}, ω = {}, {iters} sweeps, max constraint violation {vmax:.3e}",
-        opts.omega
+        "penalty: ε_p = {eps:.3e}, ω = {}, {iters} sweeps, {} of {} subspace corrections accepted, \
+         max constraint violation {vmax:.3e}",
+        opts.omega,
+        st.corrections,
+        st.factorizations
     );
     let lambda: Vec<f64> = viol.iter().map(|v| v / eps).collect();
     let active = lambda.iter().map(|&l| l > 0.0).collect();
@@ -119,7 +145,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         active,
         status,
         iterations: iters,
-        inner_iterations: 0,
+        inner_iterations: st.factorizations,
         log: exec.log,
         timings: vec![("setup".into(), t_setup), ("iterate".into(), t_it)],
         kkt: Default::default(),
@@ -140,11 +166,133 @@ struct Relax<'a> {
     x_old: Vec<f64>,
     /// s_j = (a_j, x) − g_j + t_j
     s: Vec<f64>,
+    eps: f64,
+    /// Subspace corrections on.
+    correct: bool,
+    sweeps: usize,
+    /// Accepted corrections / factorizations made.
+    corrections: usize,
+    factorizations: usize,
+}
+
+impl Relax<'_> {
+    /// g_ε(x) = f(x) + 1/(2ε_p) Σ ((a_j,x) − g_j)⁺²
+    fn g_eps(&self, x: &[f64]) -> f64 {
+        let pen: f64 = (0..self.qp.m())
+            .map(|j| (self.qp.a.row_dot(j, x) - self.qp.g[j]).max(0.0).powi(2))
+            .sum();
+        self.qp.energy(x) + 0.5 * pen / self.eps
+    }
+
+    /// Minimise g_ε exactly on the current penalty set (see the module doc).
+    /// Semismooth Newton steps until the penalty set stops changing
+    /// (at most [`NEWTON_STEPS`]).
+    fn subspace_correction(&mut self) {
+        for _ in 0..NEWTON_STEPS {
+            let before: Vec<bool> = self.s.iter().map(|&v| v > 0.0).collect();
+            if !self.newton_step() {
+                return;
+            }
+            if self.s.iter().map(|&v| v > 0.0).eq(before.into_iter()) {
+                return;
+            }
+        }
+    }
+
+    /// One step; false if it was not taken.
+    fn newton_step(&mut self) -> bool {
+        let qp = self.qp;
+        let n = qp.n();
+        let set: Vec<usize> = (0..qp.m()).filter(|&j| self.s[j] > 0.0).collect();
+        let mut trip = Vec::with_capacity(qp.c.nnz() + 36 * set.len());
+        for i in 0..n {
+            let (c, v) = qp.c.row(i);
+            trip.extend(c.iter().zip(v).map(|(&k, &a)| (i, k, a)));
+        }
+        let mut rhs = qp.d.clone();
+        for &j in &set {
+            let (c, v) = qp.a.row(j);
+            for (&k, &ak) in c.iter().zip(v) {
+                rhs[k] += ak * qp.g[j] / self.eps;
+                for (&l, &al) in c.iter().zip(v) {
+                    trip.push((k, l, ak * al / self.eps));
+                }
+            }
+        }
+        let k = super::sparse::Csr::from_triplets(n, n, &trip);
+        self.factorizations += 1;
+        // A floating body J does not hold yet makes K singular: then the
+        // spring-regularised K + S (fixing DOFs, [`Cholesky::new`]) still
+        // gives a descent direction −(K + S)⁻¹∇g_ε.
+        let fac = match super::factor::Cholesky::new(&k, &[]) {
+            Ok(f) => f,
+            Err(_) if !qp.kernel.is_empty() => match super::factor::Cholesky::new(&k, &qp.kernel) {
+                Ok(f) => f,
+                Err(_) => return false,
+            },
+            Err(_) => return false,
+        };
+        let kx = k.mul(&self.x);
+        let res: Vec<f64> = rhs.iter().zip(&kx).map(|(a, b)| a - b).collect();
+        let step = fac.solve(&res);
+        if !step.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        let y: Vec<f64> = self.x.iter().zip(&step).map(|(a, b)| a + b).collect();
+        // Exact line search on the convex piecewise quadratic
+        // φ(t) = g_ε(x + t(y − x)), t ∈ [0, 1]: φ'(0) ≤ 0 because J is the
+        // violated set at x; φ' is monotone, so bisect on its sign.
+        let dir: Vec<f64> = y.iter().zip(&self.x).map(|(a, b)| a - b).collect();
+        let cx = qp.c.mul(&self.x);
+        let cd = qp.c.mul(&dir);
+        let lin = super::sparse::dot(&cx, &dir) - super::sparse::dot(&qp.d, &dir);
+        let quad = super::sparse::dot(&cd, &dir);
+        let ax: Vec<f64> = (0..qp.m())
+            .map(|j| qp.a.row_dot(j, &self.x) - qp.g[j])
+            .collect();
+        let ad = qp.a.mul(&dir);
+        let dphi = |t: f64| {
+            lin + t * quad
+                + ax.iter()
+                    .zip(&ad)
+                    .map(|(a, d)| (a + t * d).max(0.0) * d)
+                    .sum::<f64>()
+                    / self.eps
+        };
+        let t = if dphi(1.0) <= 0.0 {
+            1.0
+        } else {
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if dphi(mid) <= 0.0 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
+        };
+        let z: Vec<f64> = self.x.iter().zip(&dir).map(|(a, d)| a + t * d).collect();
+        if t > 0.0 && self.g_eps(&z) <= self.g_eps(&self.x) {
+            self.x = z;
+            for (j, sj) in self.s.iter_mut().enumerate() {
+                *sj = (qp.a.row_dot(j, &self.x) - qp.g[j]).max(0.0);
+            }
+            self.corrections += 1;
+            return true;
+        }
+        false
+    }
 }
 
 impl Iterative for Relax<'_> {
     fn step(&mut self) -> Step {
         let qp = self.qp;
+        self.sweeps += 1;
+        if self.correct && self.sweeps % CORRECTION_EVERY == 0 {
+            self.subspace_correction();
+        }
         self.x_old.copy_from_slice(&self.x);
         // Step 1: relaxation in x with the current s.
         for i in 0..self.x.len() {
