@@ -381,3 +381,50 @@ fn truncated_mesh_is_bad_input() {
         "{stderr}"
     );
 }
+
+/// Penalty's O(ε) violation leaves the KKT certificate above its target: a
+/// warning and exit 0, exit 3 with `--strict`.
+#[test]
+fn strict_turns_the_penalty_violation_into_exit_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    let ex = example("two_blocks_eccentric");
+    let (code, _, err) = signorini(&["solve", &ex, "--method", "penalty", "--out", out, "-q"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("above the target"), "{err}");
+    let (code, _, err) = signorini(&[
+        "solve", &ex, "--method", "penalty", "--out", out, "-q", "--strict",
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("above the target"), "{err}");
+}
+
+/// A divergent Uzawa (ρ far above 2/‖H‖) ends in NaN/Inf: exit 3, outputs
+/// written and flagged, one line naming the failure.
+#[test]
+fn nan_in_an_iteration_gives_exit_3_and_flagged_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = std::fs::read_to_string(example("two_blocks_eccentric")).unwrap();
+    let mesh = root().join("meshes/two_blocks_eccentric.msh");
+    let toml = src.replace("[solver]", "[solver]\nrho = 1e30").replace(
+        "file = \"two_blocks_eccentric.msh\"",
+        &format!("file = \"{}\"", mesh.display()),
+    );
+    let p = dir.path().join("div.toml");
+    std::fs::write(&p, toml).unwrap();
+    let out = dir.path().join("out");
+    let (code, _, err) = signorini(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--method",
+        "uzawa",
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("NaN or Inf"), "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("div.json")).unwrap()).unwrap();
+    assert_eq!(json["converged"], false);
+}

@@ -69,6 +69,11 @@ impl Observer for Progress {
     }
 }
 
+/// Iterations without a new best residual (by a relative 1e-9) after which
+/// a run is stopped as stagnating: far longer than any plateau of the
+/// methods here (CGC faces, MPRGP expansions), far shorter than MAXIT.
+pub const STALL_WINDOW: usize = 10_000;
+
 pub struct Executor {
     pub max_iter: usize,
     pub observers: Vec<Box<dyn Observer>>,
@@ -95,6 +100,8 @@ impl Executor {
     /// number of iterations done.
     pub fn run(&mut self, it: &mut dyn Iterative) -> (Status, usize) {
         let mut n = 0;
+        let mut best = f64::INFINITY;
+        let mut best_at = 0;
         let status = loop {
             if n >= self.max_iter {
                 break Status::MaxIter;
@@ -110,12 +117,23 @@ impl Executor {
                 self.push(rec);
                 break Status::Failed(format!("NaN or Inf in iteration {n}"));
             }
+            if rec.residual < best * (1.0 - 1e-9) {
+                best = rec.residual;
+                best_at = n;
+            }
+            let res = rec.residual;
             for o in self.observers.iter_mut() {
                 o.observe(&rec);
             }
             self.push(rec);
             if let Some(s) = done {
                 break s;
+            }
+            if n - best_at >= STALL_WINDOW {
+                break Status::Failed(format!(
+                    "stagnation: the residual ({res:.3e}) has not gone below its best {best:.3e} \
+                     (iteration {best_at}) in {STALL_WINDOW} iterations"
+                ));
             }
         };
         for o in self.observers.iter_mut() {
@@ -129,5 +147,53 @@ impl Executor {
             self.log.pop();
         }
         self.log.push(rec);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Flat(usize);
+    impl Iterative for Flat {
+        fn step(&mut self) -> Step {
+            self.0 += 1;
+            Step::Continue(IterRecord {
+                iter: 0,
+                residual: 1.0 + (self.0 % 2) as f64,
+                active: 0,
+                inner: 0,
+            })
+        }
+    }
+
+    struct Nan;
+    impl Iterative for Nan {
+        fn step(&mut self) -> Step {
+            Step::Continue(IterRecord {
+                iter: 0,
+                residual: f64::NAN,
+                active: 0,
+                inner: 0,
+            })
+        }
+    }
+
+    #[test]
+    fn stagnation_and_nan_are_failures_maxit_is_maxit() {
+        let (s, n) = Executor::new(1_000_000, None).run(&mut Flat(0));
+        assert!(
+            matches!(&s, Status::Failed(m) if m.contains("stagnation")),
+            "{s:?}"
+        );
+        // The best (1.0) is reached at iteration 2.
+        assert_eq!(n, STALL_WINDOW + 2);
+        let (s, n) = Executor::new(100, None).run(&mut Flat(0));
+        assert!(matches!(s, Status::MaxIter) && n == 100, "{s:?}");
+        let (s, n) = Executor::new(100, None).run(&mut Nan);
+        assert!(
+            matches!(&s, Status::Failed(m) if m.contains("NaN")) && n == 1,
+            "{s:?}"
+        );
     }
 }
