@@ -43,7 +43,9 @@
 //! On ker G̃ this is θ (and independent of the generalised inverse). The
 //! equality is enforced by SMALBE-M (Dostál): MPRGP minimises the augmented
 //! Lagrangian L(λ̂, μ) = ½λ̂ᵀ(PHP + ρQ)λ̂ − λ̂ᵀb̂ + μᵀG̃λ̂ until
-//! ‖gᴾ‖ ≤ min(M‖G̃λ̂‖, η); then μ ← μ + ρG̃λ̂, and M ← M/β if L did not
+//! ‖gᴾ‖ ≤ max(min(M‖G̃λ̂‖, η), 0.1·tol·‖h‖) (the floor is ours: with a small ρ
+//! M can shrink until M‖G̃λ̂‖ lies below rounding and the inner loop never
+//! ends; seen with the Uzawa inner solver on `hertz`); then μ ← μ + ρG̃λ̂, and M ← M/β if L did not
 //! increase by at least ρ/2‖G̃λ̂‖². ρ = 30·‖PHP‖_est ([`RHO_FACTOR`]; then
 //! ‖PHP + ρQ‖ = ρ and ᾱ = 1.9/ρ; Q has rank k, so the large ρ costs CG on the
 //! free set only about k extra steps, while it cut the outer iterations on the
@@ -53,8 +55,10 @@
 //! ‖G̃λ̂‖ ≤ tol·max(‖ẽ‖, ‖λ‖). Finally x = x̂ − Rα with x̂ = K⁻¹(d − Aᵀλ),
 //! α = L⁻ᵀ(μ + ρG̃λ̂ + G̃(Ax̂ − g)): since G̃ᵀc = A R L⁻ᵀc, this makes
 //! −(Ax − g) equal to the Lagrangian gradient up to O(‖G̃λ̂‖). With an empty
-//! kernel all of this reduces to plain MPRGP on θ (k = 0, P = I, λ̃ = 0). If some rigid motion is not seen by any
-//! contact row (G rank deficient) the method refuses with
+//! kernel all of this reduces to plain MPRGP on θ (k = 0, P = I, λ̃ = 0).
+//! The same host runs `dual` (semicoercive) and `uzawa` (semicoercive, or
+//! accelerated) with their own inner step ([`Inner`]). If some rigid motion
+//! is not seen by any contact row (G rank deficient) the method refuses with
 //! [`QpError::Unsupported`].
 //!
 //! Counts: `iterations` = MPRGP steps + SMALBE multiplier updates (one per
