@@ -3,20 +3,24 @@
 use std::path::Path;
 use std::process::Command;
 
-/// Run `signorini compare` on `toml`, check every row, return the rows.
-fn compare_all_agree(toml: &Path) -> Vec<serde_json::Value> {
+/// Run `signorini compare` on `toml` with `--json` and `--csv`: the printed
+/// table, the JSON rows and the CSV text.
+fn run_compare(toml: &Path) -> (String, Vec<serde_json::Value>, String) {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("t.json");
+    let csv = dir.path().join("t.csv");
     let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
         .args([
             "compare",
             toml.to_str().unwrap(),
             "--json",
             json.to_str().unwrap(),
+            "--csv",
+            csv.to_str().unwrap(),
         ])
         .output()
         .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert_eq!(
         out.status.code(),
         Some(0),
@@ -27,6 +31,12 @@ fn compare_all_agree(toml: &Path) -> Vec<serde_json::Value> {
     let t: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let rows = t["rows"].as_array().unwrap().clone();
+    (stdout, rows, std::fs::read_to_string(&csv).unwrap())
+}
+
+/// Run `signorini compare` on `toml`, check every row, return the rows.
+fn compare_all_agree(toml: &Path) -> Vec<serde_json::Value> {
+    let (_, rows, _) = run_compare(toml);
     // 6 CGC preconditioners + preelim, penalty, uzawa, dual, asm, asm-cgh,
     // mprgp, ssn.
     assert_eq!(rows.len(), 14, "{}", toml.display());
@@ -99,41 +109,12 @@ fn every_variant_agrees_on_every_shipped_example() {
 
 #[test]
 fn compare_rows_agree_on_the_eccentric_blocks() {
-    let dir = tempfile::tempdir().unwrap();
-    let json = dir.path().join("t.json");
-    let csv = dir.path().join("t.csv");
-    let toml = format!(
-        "{}/meshes/two_blocks_eccentric.toml",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
-        .args([
-            "compare",
-            &toml,
-            "--json",
-            json.to_str().unwrap(),
-            "--csv",
-            csv.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let t: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    let rows = t["rows"].as_array().unwrap();
+    let toml = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/two_blocks_eccentric.toml");
+    let (stdout, rows, csv) = run_compare(&toml);
     // Six CGC preconditioners at least, one line each in the CSV.
     assert!(rows.len() >= 6);
-    assert_eq!(
-        std::fs::read_to_string(&csv).unwrap().lines().count(),
-        rows.len() + 1
-    );
-    for r in rows {
+    assert_eq!(csv.lines().count(), rows.len() + 1);
+    for r in &rows {
         let name = format!("{} {}", r["method"], r["preconditioner"]);
         assert!(r["error"].is_null(), "{name}: {}", r["error"]);
         assert_eq!(r["converged"], true, "{name}");
