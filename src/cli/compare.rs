@@ -101,6 +101,8 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
         let outcome = match pipeline::options(&prep.problem, &c) {
             Err(e) => Err(e.to_string()),
             Ok((m, opts)) => {
+                // Each method pays for its own factorization.
+                crate::qp::factor::clear_cache();
                 let t = Instant::now();
                 pipeline::solve(&prep, &m, &opts)
                     .map(|r| (r, t.elapsed().as_secs_f64()))

@@ -4,6 +4,8 @@
 //! KKT residual above target.
 
 pub mod compare;
+pub mod export;
+pub mod limit;
 pub mod mesh;
 pub mod plot;
 pub mod solve;
@@ -38,6 +40,10 @@ pub enum Command {
     Plot(plot::PlotArgs),
     /// Mesh a Gmsh .geo file (2D, MSH 4.1) and check it.
     Mesh(mesh::MeshArgs),
+    /// Write the assembled QP (C, d, A, g, ker C) as Matrix Market files + meta.json.
+    Export(export::ExportArgs),
+    /// The benchmark's yardstick: one sparse Cholesky factorization + solve of C (no contact).
+    Limit(limit::LimitArgs),
     /// List the available methods and preconditioners.
     Methods,
 }
@@ -109,6 +115,8 @@ pub fn run(cli: Cli) -> i32 {
         Command::Compare(a) => compare::run(&a, cli.quiet),
         Command::Mesh(a) => mesh::run(&a, cli.quiet),
         Command::Plot(a) => plot::run(&a, cli.quiet),
+        Command::Export(a) => export::run(&a, cli.quiet),
+        Command::Limit(a) => limit::run(&a, cli.quiet),
         Command::Methods => {
             for m in crate::qp::registry::METHODS {
                 println!("{:<10} {}", m.name, m.summary);

@@ -7,6 +7,7 @@
 
 pub mod atomic;
 pub mod hdf5;
+pub mod mtx;
 pub mod vtu;
 
 pub use atomic::{write_atomic, IoError};

@@ -6,6 +6,15 @@
 //! C + Σ_{i∈S} c_ii eᵢeᵢᵀ, which is SPD. This regularised matrix serves as a
 //! preconditioner; with the fixing DOFs' rows and columns removed instead it is the
 //! classical fixing-node generalised inverse (Farhat–Géradin).
+//!
+//! **Reuse.** The last factorization is kept in a per-thread cache keyed by
+//! hashes of the pattern and of the values of the (shifted) lower triangle:
+//! the same matrix again (load steps: C does not change between steps) reuses
+//! the numeric factor, the same pattern with other values (the penalty
+//! method's C + A_JᵀA_J/ε, built on the fixed pattern of C + AᵀA) reuses the
+//! symbolic analysis (AMD ordering, supernodes, elimination tree) and only
+//! refactors numerically. `signorini compare` clears the cache between methods
+//! so that each pays for its own factorization.
 
 use super::sparse::Csr;
 use super::QpError;
@@ -13,10 +22,12 @@ use faer::linalg::solvers::SolveCore;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Side};
+use std::cell::{Cell, RefCell};
+use std::sync::Arc;
 
 pub struct Cholesky {
     n: usize,
-    llt: Llt<usize, f64>,
+    llt: Arc<Llt<usize, f64>>,
     /// DOFs that received a spring (empty for SPD C).
     pub fixing: Vec<usize>,
 }
@@ -35,14 +46,51 @@ impl Cholesky {
             .map(|&i| (i, if diag[i] > 0.0 { diag[i] } else { scale }))
             .collect();
         let (sym, vals) = lower_csc(c, &shift);
-        let symbolic = SymbolicLlt::try_new(sym.as_ref(), Side::Lower)
-            .map_err(|e| QpError::Factor(format!("symbolic analysis: {e:?}")))?;
+        let hp = hash_words(sym.col_ptr().iter().chain(sym.row_idx()).map(|&v| v as u64));
+        let hv = hash_words(vals.iter().map(|v| v.to_bits()));
+        let mut symbolic = None;
+        let mut hit = None;
+        CACHE.with_borrow(|cache| {
+            if let Some(e) = cache.as_ref().filter(|e| e.n == c.nrows && e.pattern == hp) {
+                if e.values == hv {
+                    hit = Some(e.llt.clone());
+                } else {
+                    symbolic = Some(e.symbolic.clone());
+                }
+            }
+        });
+        if let Some(llt) = hit {
+            NUMERIC_REUSED.with(|k| k.set(k.get() + 1));
+            return Ok(Cholesky {
+                n: c.nrows,
+                llt,
+                fixing,
+            });
+        }
+        if symbolic.is_some() {
+            SYMBOLIC_REUSED.with(|k| k.set(k.get() + 1));
+        }
+        let symbolic = match symbolic {
+            Some(s) => s,
+            None => SymbolicLlt::try_new(sym.as_ref(), Side::Lower)
+                .map_err(|e| QpError::Factor(format!("symbolic analysis: {e:?}")))?,
+        };
         let mat = SparseColMatRef::new(sym.as_ref(), &vals);
-        let llt = Llt::try_new_with_symbolic(symbolic, mat, Side::Lower).map_err(|e| {
+        // Drop the cached factor before allocating a new one (peak memory).
+        clear_cache();
+        let llt = Llt::try_new_with_symbolic(symbolic.clone(), mat, Side::Lower).map_err(|e| {
             QpError::Factor(format!(
                 "C is not positive definite ({e:?}); a body may be free to move without the kernel being known"
             ))
         })?;
+        let llt = Arc::new(llt);
+        CACHE.set(Some(CacheEntry {
+            n: c.nrows,
+            pattern: hp,
+            values: hv,
+            symbolic,
+            llt: llt.clone(),
+        }));
         Ok(Cholesky {
             n: c.nrows,
             llt,
@@ -57,11 +105,62 @@ impl Cholesky {
         self.llt.solve_in_place_with_conj(Conj::No, m);
     }
 
+    /// X ← (C + springs)⁻¹ X for the n×k column-major block `x`: one pass
+    /// over the factor for all k columns (supernodal BLAS-3).
+    pub fn solve_many_in_place(&self, x: &mut [f64], k: usize) {
+        debug_assert_eq!(x.len(), self.n * k);
+        if k == 0 {
+            return;
+        }
+        let m = MatMut::from_column_major_slice_mut(x, self.n, k);
+        self.llt.solve_in_place_with_conj(Conj::No, m);
+    }
+
     pub fn solve(&self, b: &[f64]) -> Vec<f64> {
         let mut x = b.to_vec();
         self.solve_in_place(&mut x);
         x
     }
+}
+
+/// The last factorization (see the module doc).
+struct CacheEntry {
+    n: usize,
+    pattern: u64,
+    values: u64,
+    symbolic: SymbolicLlt<usize>,
+    llt: Arc<Llt<usize, f64>>,
+}
+
+thread_local! {
+    static CACHE: RefCell<Option<CacheEntry>> = const { RefCell::new(None) };
+    static NUMERIC_REUSED: Cell<usize> = const { Cell::new(0) };
+    static SYMBOLIC_REUSED: Cell<usize> = const { Cell::new(0) };
+}
+
+/// Forget this thread's cached factorization (frees its memory).
+pub fn clear_cache() {
+    CACHE.set(None);
+}
+
+/// How often this thread reused a numeric factor and a symbolic analysis.
+pub fn reuse_counts() -> (usize, usize) {
+    (NUMERIC_REUSED.get(), SYMBOLIC_REUSED.get())
+}
+
+/// A 64-bit hash of a word stream (multiply–rotate, as FxHash; collisions of
+/// two different matrices of the same size are astronomically unlikely and
+/// would give a wrong factor, so the pattern and the values are hashed apart
+/// and the size is compared too).
+fn hash_words(it: impl Iterator<Item = u64>) -> u64 {
+    const K: u64 = 0x51_7c_c1_b7_27_22_0a_95;
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut len = 0u64;
+    for w in it {
+        h = (h.rotate_left(5) ^ w).wrapping_mul(K);
+        len += 1;
+    }
+    (h.rotate_left(5) ^ len).wrapping_mul(K)
 }
 
 /// The lower triangle of symmetric `c` as a faer CSC pattern + values, with
@@ -199,5 +298,35 @@ mod tests {
         assert!(y[f.fixing[0]].abs() < 1e-10);
         let err: f64 = r.iter().zip(&b).map(|(a, b)| (a - b).abs()).sum();
         assert!(err < 1e-8, "{err}");
+    }
+
+    #[test]
+    fn reuses_numeric_factor_and_symbolic_analysis() {
+        let c = lap1d(40, true);
+        let (n0, s0) = reuse_counts();
+        let f1 = Cholesky::new(&c, &[]).unwrap();
+        let f2 = Cholesky::new(&c, &[]).unwrap();
+        assert!(Arc::ptr_eq(&f1.llt, &f2.llt));
+        assert_eq!(reuse_counts(), (n0 + 1, s0));
+        // Same pattern, other values: a new numeric factor on the old analysis.
+        let mut c2 = c.clone();
+        c2.data.iter_mut().for_each(|v| *v *= 3.0);
+        let f3 = Cholesky::new(&c2, &[]).unwrap();
+        assert_eq!(reuse_counts(), (n0 + 1, s0 + 1));
+        let x: Vec<f64> = (0..40).map(|i| (i as f64).cos()).collect();
+        let y = f3.solve(&c2.mul(&x));
+        for (a, b) in x.iter().zip(&y) {
+            assert!((a - b).abs() < 1e-9, "{a} {b}");
+        }
+        // The old factor is still valid after the cache moved on.
+        let y = f1.solve(&c.mul(&x));
+        assert!(x.iter().zip(&y).all(|(a, b)| (a - b).abs() < 1e-9));
+        // Another pattern: nothing reused.
+        let f4 = Cholesky::new(&lap1d(41, true), &[]).unwrap();
+        assert_eq!(reuse_counts(), (n0 + 1, s0 + 1));
+        drop(f4);
+        clear_cache();
+        let _ = Cholesky::new(&c, &[]).unwrap();
+        assert_eq!(reuse_counts(), (n0 + 1, s0 + 1));
     }
 }

@@ -203,19 +203,22 @@ impl Relax<'_> {
     fn newton_step(&mut self) -> bool {
         let qp = self.qp;
         let n = qp.n();
-        let set: Vec<usize> = (0..qp.m()).filter(|&j| self.s[j] > 0.0).collect();
-        let mut trip = Vec::with_capacity(qp.c.nnz() + 36 * set.len());
+        // K = C + A_JᵀA_J/ε on the fixed pattern of C + AᵀA (rows outside J
+        // enter with weight 0), so every Newton step reuses the symbolic
+        // analysis of the first ([`super::factor`] cache).
+        let mut trip = Vec::with_capacity(qp.c.nnz() + 36 * qp.m());
         for i in 0..n {
             let (c, v) = qp.c.row(i);
             trip.extend(c.iter().zip(v).map(|(&k, &a)| (i, k, a)));
         }
         let mut rhs = qp.d.clone();
-        for &j in &set {
+        for j in 0..qp.m() {
+            let w = if self.s[j] > 0.0 { 1.0 / self.eps } else { 0.0 };
             let (c, v) = qp.a.row(j);
             for (&k, &ak) in c.iter().zip(v) {
-                rhs[k] += ak * qp.g[j] / self.eps;
+                rhs[k] += w * ak * qp.g[j];
                 for (&l, &al) in c.iter().zip(v) {
-                    trip.push((k, l, ak * al / self.eps));
+                    trip.push((k, l, w * ak * al));
                 }
             }
         }

@@ -1,0 +1,598 @@
+#!/usr/bin/env python3
+"""The signorini benchmark: families of the three-body and Hertz models at
+~10 k, 100 k and 1 M nodes, every method, the Cholesky limit, the peers.
+
+Usage (the README's command is `bash scripts/bench`, which installs what the
+peers need first):
+
+    python3 scripts/bench.py [--sizes 10k,100k,1m] [--families three_bodies,hertz]
+                             [--repeats 3] [--budget 600] [--peers clarabel,osqp]
+                             [--no-fenicsx] [--work bench] [--out BENCHMARKS.md]
+
+For each family and size it
+  1. meshes the shipped .geo with Gmsh (`-clscale`, binary MSH 4.1), calibrated
+     so the mesh has the wanted number of nodes within 25 % (cached in --work);
+  2. runs `signorini limit` (one sparse Cholesky factorization + solve of C);
+  3. runs every method variant (`signorini solve --method M [--preconditioner P]`)
+     under /usr/bin/time -v (peak RSS), reading the phase times (read, assemble,
+     factor, solve, write) from the JSON summary; a method is skipped at a size
+     when its time predicted from the smaller sizes (growth exponent fitted so
+     far, at least 1) exceeds --budget, or when it did not converge before:
+     the reason is printed and written;
+  4. exports the QP (`signorini export --qp`) and solves it with Clarabel and
+     OSQP (scripts/bench_peers.py, in .venv), skipped by the same prediction;
+  5. three-body family: the linear elastic problem (contact curves glued) with
+     FEniCSx (scripts/bench_fenicsx.py, Debian's python3-dolfinx-real) and with
+     `signorini solve --no-contact`, timed the same way;
+  6. writes --out (BENCHMARKS.md): machine, date, commands, medians, ratios,
+     fitted growth exponents, and the raw results as JSON next to it.
+
+Runs whose median is longer than --long seconds (default 60) are not repeated.
+Exit status: 0 if the benchmark ran (whatever the methods did), 2 on a setup
+error (no binary, no gmsh).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import os
+import platform
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SIZES = {"10k": 10_000, "100k": 100_000, "1m": 1_000_000}
+# Empirical: nodes ~ clscale^(-p) for these .geo files (p < 2: points with a
+# fixed size and boundary layers).
+CLSCALE_EXPONENT = 1.8
+
+
+def log(msg: str) -> None:
+    print(f"[bench {time.strftime('%H:%M:%S')}] {msg}", flush=True)
+
+
+def run(cmd, timeout=None, env=None, cwd=None):
+    """Run cmd; returns (exit code or None on timeout, stdout, stderr, wall s)."""
+    t0 = time.perf_counter()
+    try:
+        p = subprocess.run(
+            [str(c) for c in cmd], capture_output=True, text=True, timeout=timeout, env=env, cwd=cwd
+        )
+        return p.returncode, p.stdout, p.stderr, time.perf_counter() - t0
+    except subprocess.TimeoutExpired as e:
+        out = e.stdout.decode() if isinstance(e.stdout, bytes) else (e.stdout or "")
+        return None, out, "timeout", time.perf_counter() - t0
+
+
+def median(xs):
+    xs = [x for x in xs if x is not None]
+    return statistics.median(xs) if xs else None
+
+
+# ----------------------------------------------------------------- meshes
+def msh_nodes(path: Path) -> int:
+    """Number of nodes from the $Nodes header (ASCII or binary MSH 4.1)."""
+    with open(path, "rb") as f:
+        data = f.read(1 << 20)
+    i = data.find(b"$Nodes")
+    if i < 0:
+        raise RuntimeError(f"{path}: no $Nodes section")
+    if b"$MeshFormat\n4.1 1" in data:  # binary: numEntityBlocks numNodes min max as size_t
+        import struct
+
+        j = data.index(b"\n", i) + 1
+        _, n, _, _ = struct.unpack("<4Q", data[j : j + 32])
+        return n
+    line = data[i:].split(b"\n")[1].split()
+    return int(line[1])
+
+
+def make_mesh(family: str, target: int, work: Path, gmsh: str) -> tuple[Path, int, float]:
+    """Mesh family.geo with ~target nodes; returns (msh, nodes, gmsh seconds)."""
+    geo = ROOT / "meshes" / f"{family}.geo"
+    out = work / f"{family}_{target}.msh"
+    info = work / f"{family}_{target}.json"
+    if out.exists() and info.exists():
+        d = json.loads(info.read_text())
+        return out, d["nodes"], d["gmsh_s"]
+    shipped = msh_nodes(ROOT / "meshes" / f"{family}.msh")
+    s = (shipped / target) ** (1 / CLSCALE_EXPONENT)
+    for attempt in range(4):
+        tmp = out.with_suffix(".tmp.msh")
+        rc, _, err, dt = run([gmsh, "-2", "-format", "msh41", "-bin", "-algo", "del2d",
+                              "-clscale", f"{s:.5g}", geo, "-o", tmp])
+        if rc != 0:
+            raise RuntimeError(f"gmsh failed on {geo}: {err[-500:]}")
+        n = msh_nodes(tmp)
+        log(f"  gmsh {family} clscale {s:.4g}: {n} nodes ({dt:.1f} s)")
+        if 0.75 * target <= n <= 1.25 * target or attempt == 3:
+            tmp.rename(out)
+            info.write_text(json.dumps({"nodes": n, "clscale": s, "gmsh_s": dt}))
+            return out, n, dt
+        s *= (n / target) ** (1 / CLSCALE_EXPONENT)
+    raise AssertionError
+
+
+def make_toml(family: str, msh: Path, work: Path) -> Path:
+    text = (ROOT / "meshes" / f"{family}.toml").read_text()
+    text, k = re.subn(r'(?m)^file\s*=\s*"[^"]*"', f'file = "{msh.name}"', text, count=1)
+    if k != 1:
+        raise RuntimeError(f"meshes/{family}.toml: no [mesh] file line")
+    path = work / f"{msh.stem}.toml"
+    path.write_text(text)
+    return path
+
+
+# ----------------------------------------------------------------- signorini
+def variants(binary: str):
+    rc, out, _, _ = run([binary, "methods"])
+    methods, pcs = [], []
+    for line in out.splitlines():
+        if line.startswith("preconditioners"):
+            pcs = [p.strip() for p in line.split(":", 1)[1].split(",")]
+        elif line.strip():
+            methods.append(line.split()[0])
+    vs = []
+    for m in methods:
+        if m == "cgc":
+            vs += [("cgc", p) for p in pcs]
+        else:
+            vs.append((m, None))
+    return vs
+
+
+def vname(v) -> str:
+    return v[0] if v[1] is None else f"{v[0]}+{v[1]}"
+
+
+def solve_once(binary, toml: Path, v, outdir: Path, timeout, extra=()):
+    """One `signorini solve`; returns a dict of times, iterations, RSS, status."""
+    if outdir.exists():
+        shutil.rmtree(outdir)
+    timef = outdir.parent / (outdir.name + ".time")
+    cmd = ["/usr/bin/time", "-v", "-o", timef, binary, "solve", toml, "--out", outdir, "--quiet"]
+    if v is not None:
+        cmd += ["--method", v[0]] + (["--preconditioner", v[1]] if v[1] else [])
+    cmd += list(extra)
+    rc, _, err, wall = run(cmd, timeout=timeout)
+    r = {"exit": rc, "wall": wall}
+    if rc is None:
+        r["status"] = f"timeout after {timeout:.0f} s"
+        return r
+    try:
+        t = timef.read_text()
+        r["rss_mb"] = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", t).group(1)) / 1024
+    except (OSError, AttributeError):
+        r["rss_mb"] = None
+    js = list(outdir.glob("*.json"))
+    if rc not in (0, 3) or not js:
+        r["status"] = f"exit {rc}: {err.strip().splitlines()[-1] if err.strip() else ''}"
+        return r
+    d = json.loads(js[0].read_text())
+    ts = d["timings_s"]
+    ph = ts.get("phases", {})
+    r.update(
+        status=d["status"],
+        converged=d["converged"],
+        certified=d["kkt"]["certified"],
+        iterations=d["iterations"],
+        inner=d["inner_iterations"],
+        dofs=d["dofs"],
+        m=d["constraints"],
+        nodes=d["mesh_nodes"],
+        energy=d["energy"],
+        probes={k: p["u"] for k, p in d.get("probes", {}).items()},
+        read=ts["read"],
+        assemble=ts["assemble"],
+        factor=ph.get("factor", ph.get("precondition", 0.0)),
+        solve=ts["solve"],
+        write=ts["write"],
+        total=ts["total"],
+    )
+    return r
+
+
+def repeated(fn, repeats: int, long_s: float):
+    """Run fn() up to `repeats` times (once if it takes longer than long_s);
+    returns the run with the median total and the list of totals."""
+    runs = [fn()]
+    key = lambda r: r.get("total", r.get("t_total", r.get("wall", math.inf))) or math.inf
+    while len(runs) < repeats and key(runs[0]) <= long_s and runs[0].get("converged", True):
+        runs.append(fn())
+    totals = sorted(key(r) for r in runs)
+    med = statistics.median(totals)
+    best = min(runs, key=lambda r: abs(key(r) - med))
+    best = dict(best)
+    best["repeats"] = len(runs)
+    best["totals"] = totals
+    if len(runs) > 1:
+        # medians of every phase, not only of the total
+        for f in ("read", "assemble", "factor", "solve", "write", "total", "rss_mb",
+                  "t_read", "t_setup", "t_solve", "t_total", "t_assemble", "t_factor",
+                  "t_factor_solve", "t_compile"):
+            vals = [r.get(f) for r in runs if isinstance(r.get(f), (int, float))]
+            if len(vals) == len(runs):
+                best[f] = statistics.median(vals)
+    return best
+
+
+def fit_exponent(points):
+    """Least-squares slope of log t against log n."""
+    pts = [(math.log(n), math.log(t)) for n, t in points if n and t and t > 0]
+    if len(pts) < 2:
+        return None
+    mx = sum(p[0] for p in pts) / len(pts)
+    my = sum(p[1] for p in pts) / len(pts)
+    sxx = sum((p[0] - mx) ** 2 for p in pts)
+    if sxx == 0:
+        return None
+    return sum((p[0] - mx) * (p[1] - my) for p in pts) / sxx
+
+
+def predict(history, n):
+    """Predicted time at size n from (n, t) at smaller sizes, exponent ≥ 1."""
+    if not history:
+        return None
+    p = fit_exponent(history)
+    p = max(1.0, p if p is not None else 1.5)
+    n0, t0 = history[-1]
+    return t0 * (n / n0) ** p
+
+
+# ----------------------------------------------------------------- report
+def fmt(x, nd=3):
+    if x is None:
+        return "–"
+    if isinstance(x, str):
+        return x
+    if x == 0:
+        return "0"
+    if abs(x) >= 100:
+        return f"{x:.0f}"
+    if abs(x) >= 1:
+        return f"{x:.{nd - 1}f}"
+    return f"{x:.{nd}g}"
+
+
+def machine() -> dict:
+    cpu = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    mem = ""
+    try:
+        kb = int(re.search(r"MemTotal:\s+(\d+)", Path("/proc/meminfo").read_text()).group(1))
+        mem = f"{kb / 1024 / 1024:.1f} GiB"
+    except (OSError, AttributeError):
+        pass
+    rc, rev, _, _ = run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"])
+    rc2, rustc, _, _ = run(["rustc", "--version"])
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "memory": mem,
+        "os": platform.platform(),
+        "commit": rev.strip() if rc == 0 else "?",
+        "rustc": rustc.strip() if rc2 == 0 else "?",
+        "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+    }
+
+
+def write_report(path: Path, res: dict, args, cmdline: str) -> None:
+    mach = res["machine"]
+    L = []
+    w = L.append
+    w("# signorini benchmarks\n")
+    w("Generated by `scripts/bench` (scripts/bench.py); every number below is from the one run")
+    w("recorded here. Do not edit by hand: rerun the command.\n")
+    w(f"- date: {mach['date']}, commit `{mach['commit']}`, {mach['rustc']}")
+    w(f"- machine: {mach['cpu']}, {mach['cores']} cores, {mach['memory']}, {mach['os']}")
+    w(f"- command: `{cmdline}`")
+    w(f"- repeats: {args.repeats} (median reported; runs over {args.long:.0f} s once), "
+      f"skip budget {args.budget:.0f} s per run, SIGNORINI_THREADS={os.environ.get('SIGNORINI_THREADS', 'unset (faer default)')}")
+    w("- times are wall-clock seconds inside the process (signorini's own phase timers; "
+      "peers: perf_counter around their calls); peak RSS from `/usr/bin/time -v`.\n")
+    w("Phases: read = TOML + mesh; assemble = topology, elimination, C, d, A, g; "
+      "factor = the method's sparse Cholesky (or preconditioner setup); solve = everything the "
+      "method does, factor included; write = VTU + HDF5 + JSON. "
+      "limit = one sparse Cholesky factorization of C plus one solve (`signorini limit`), "
+      "the cost of one linear elastic solve of the same C; ratio = method's solve ÷ limit.\n")
+
+    targets = []
+    for fam, fres in res["families"].items():
+        w(f"## {fam}\n")
+        sizes = fres["sizes"]
+        w("| size | nodes | DOFs | contact rows | gmsh [s] | read [s] | assemble [s] | limit factor [s] | limit solve [s] | limit RSS [MB] |")
+        w("|---|---|---|---|---|---|---|---|---|---|")
+        for s in sizes:
+            lim = s.get("limit") or {}
+            w(f"| {s['size']} | {s['nodes']} | {lim.get('n', '–')} | {s.get('m', '–')} | {fmt(s['gmsh_s'])} | "
+              f"{fmt(lim.get('t_read'))} | {fmt(lim.get('t_assemble'))} | {fmt(lim.get('t_factor'))} | "
+              f"{fmt(lim.get('t_solve'))} | {fmt(lim.get('rss_mb'))} |")
+        w("")
+        for s in sizes:
+            lim = s.get("limit") or {}
+            lt = lim.get("t_factor_solve")
+            w(f"### {fam}, {s['size']} ({s['nodes']} nodes, {lim.get('n', '?')} DOFs)\n")
+            w("| method | status | iterations (inner) | read | assemble | factor | solve | write | total | peak RSS [MB] | solve ÷ limit | runs |")
+            w("|---|---|---|---|---|---|---|---|---|---|---|---|")
+            for name, r in s["methods"].items():
+                if "skipped" in r:
+                    w(f"| {name} | skipped: {r['skipped']} | | | | | | | | | | |")
+                    continue
+                st = r.get("status", "?")
+                if r.get("converged") and r.get("certified"):
+                    st = "converged, certified"
+                ratio = r["solve"] / lt if lt and r.get("solve") is not None else None
+                w(f"| {name} | {st} | {r.get('iterations', '–')} ({r.get('inner', '–')}) | {fmt(r.get('read'))} | "
+                  f"{fmt(r.get('assemble'))} | {fmt(r.get('factor'))} | {fmt(r.get('solve'))} | {fmt(r.get('write'))} | "
+                  f"{fmt(r.get('total'))} | {fmt(r.get('rss_mb'))} | {fmt(ratio)} | {r.get('repeats', 1)} |")
+            w("")
+            comp = s.get("compress")
+            if comp:
+                w(f"VTU/HDF5 writing for {comp['method']}: {fmt(comp['write_plain'])} s uncompressed (default), "
+                  f"{fmt(comp['write_zlib'])} s with `--compress`; output size {fmt(comp['mb_plain'])} MB vs "
+                  f"{fmt(comp['mb_zlib'])} MB.\n")
+            peers = s.get("peers")
+            if peers:
+                w("Peers on the exported QP (`signorini export --qp`, scripts/bench_peers.py):\n")
+                w("| solver | status | iterations | setup [s] | solve [s] | total [s] | rel. objective diff | rel. ‖x − x_signorini‖ | max violation | best signorini solve ÷ this |")
+                w("|---|---|---|---|---|---|---|---|---|---|")
+                best = s.get("best")
+                for p in peers:
+                    if "skipped" in p:
+                        w(f"| {p['solver']} | skipped: {p['skipped']} | | | | | | | | |")
+                        continue
+                    sp = (best["solve"] / p["t_total"]) if best and p.get("t_total") else None
+                    w(f"| {p['solver']} {p.get('version', '')} | {p.get('status')} | {p.get('iterations')} | {fmt(p.get('t_setup'))} | "
+                      f"{fmt(p.get('t_solve'))} | {fmt(p.get('t_total'))} | {fmt(p.get('rel_obj_diff'))} | "
+                      f"{fmt(p.get('rel_x_diff'))} | {fmt(p.get('violation'))} | {fmt(sp)} |")
+                w("")
+            fx = s.get("fenicsx")
+            lin = s.get("linear")
+            if fx or lin:
+                w("Linear elastic problem on the same mesh (contact curves glued):\n")
+                w("| solver | DOFs | read [s] | compile [s] | assemble [s] | solve [s] | total [s] (no compile) |")
+                w("|---|---|---|---|---|---|---|")
+                if lin and "total" in lin:
+                    w(f"| signorini solve --no-contact ({lin.get('method')}) | {lin.get('dofs')} | {fmt(lin.get('read'))} | – | "
+                      f"{fmt(lin.get('assemble'))} | {fmt(lin.get('solve'))} | {fmt(lin.get('read', 0) + lin.get('assemble', 0) + lin.get('solve', 0))} |")
+                if fx and "t_total" in fx:
+                    w(f"| FEniCSx {fx.get('dolfinx', '')} ({fx.get('solver')}, {fx.get('petsc_lu_package', '')}) | {fx.get('dofs')} | "
+                      f"{fmt(fx.get('t_read'))} | {fmt(fx.get('t_compile'))} | {fmt(fx.get('t_assemble'))} | "
+                      f"{fmt(fx.get('t_solve'))} | {fmt(fx.get('t_total'))} |")
+                elif fx:
+                    w(f"| FEniCSx | {fx.get('status', 'failed')} | | | | | |")
+                w("")
+        # growth exponents
+        w(f"### {fam}: growth of the solve time with size\n")
+        w("Exponent p of t ∝ n^p fitted by least squares over the sizes run (n = DOFs).\n")
+        w("| method | " + " | ".join(f"solve [s] at {s['size']}" for s in sizes) + " | p |")
+        w("|---|" + "---|" * len(sizes) + "---|")
+        names = list(sizes[0]["methods"].keys()) if sizes else []
+        rows = [("limit (factor + solve)", [(s.get("limit") or {}).get("t_factor_solve") for s in sizes])]
+        rows += [(nm, [s["methods"].get(nm, {}).get("solve") if s["methods"].get(nm, {}).get("converged") else None
+                       for s in sizes]) for nm in names]
+        for nm, ts in rows:
+            pts = [((s.get("limit") or {}).get("n"), t) for s, t in zip(sizes, ts) if t]
+            p = fit_exponent(pts)
+            w(f"| {nm} | " + " | ".join(fmt(t) for t in ts) + f" | {fmt(p, 2) if p else '–'} |")
+        w("")
+        for s in sizes:
+            targets.append((fam, s))
+
+    # targets
+    w("## Against the targets (issue 4)\n")
+    w("| target | family, size | measured | met |")
+    w("|---|---|---|---|")
+    for fam, s in targets:
+        lim = (s.get("limit") or {}).get("t_factor_solve")
+        best = s.get("best")
+        if best and lim and s["size"] == "1m":
+            r = best["solve"] / lim
+            w(f"| best method ÷ one Cholesky factor+solve ≤ 1.5 at 1 M | {fam}, {s['size']} | {best['name']}: {fmt(r)} | {'yes' if r <= 1.5 else 'no'} |")
+        if best and s["size"] == "100k":
+            for p in s.get("peers") or []:
+                if p.get("t_total"):
+                    sp = p["t_total"] / best["solve"]
+                    ok = sp >= 10 or not p.get("converged")
+                    w(f"| ≥ 10× faster than {p['solver']} at 100 k | {fam}, {s['size']} | {fmt(sp)}× ({p.get('status')}) | {'yes' if sp >= 10 else 'no'} |")
+        fx = s.get("fenicsx")
+        if best and fx and fx.get("t_total"):
+            r = best["total"] / fx["t_total"]
+            w(f"| signorini end to end ≤ 0.5× FEniCSx linear elastic | {fam}, {s['size']} | {best['name']} total {fmt(best['total'])} s ÷ {fmt(fx['t_total'])} s = {fmt(r)} | {'yes' if r <= 0.5 else 'no'} |")
+    w("")
+    w("Raw results: `" + res["raw"] + "`.\n")
+    path.write_text("\n".join(L))
+
+
+# ----------------------------------------------------------------- main
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sizes", default="10k,100k,1m")
+    ap.add_argument("--families", default="three_bodies,hertz")
+    ap.add_argument("--methods", default="", help="comma list of variants (e.g. mprgp,ssn,cgc+cholesky); default all")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--long", type=float, default=60.0, help="runs longer than this are not repeated")
+    ap.add_argument("--budget", type=float, default=600.0, help="skip a run predicted to take longer [s]")
+    ap.add_argument("--peers", default="clarabel,osqp")
+    ap.add_argument("--no-fenicsx", action="store_true")
+    ap.add_argument("--work", default=str(ROOT / "bench"))
+    ap.add_argument("--out", default=str(ROOT / "BENCHMARKS.md"))
+    ap.add_argument("--binary", default=str(ROOT / "target" / "release" / "signorini"))
+    ap.add_argument("--gmsh", default="gmsh")
+    args = ap.parse_args()
+    cmdline = "python3 scripts/bench.py " + " ".join(sys.argv[1:])
+
+    binary = args.binary
+    if not Path(binary).is_file():
+        print(f"bench: {binary} not found; build with cargo build --release", file=sys.stderr)
+        return 2
+    if shutil.which(args.gmsh) is None:
+        print("bench: gmsh not found (apt-get install gmsh)", file=sys.stderr)
+        return 2
+    if not Path("/usr/bin/time").exists():
+        print("bench: /usr/bin/time not found (apt-get install time)", file=sys.stderr)
+        return 2
+    work = Path(args.work)
+    work.mkdir(parents=True, exist_ok=True)
+    venv_py = ROOT / ".venv" / "bin" / "python"
+    sizes = [s.strip().lower() for s in args.sizes.split(",") if s.strip()]
+    for s in sizes:
+        if s not in SIZES:
+            print(f"bench: unknown size {s}; known: {', '.join(SIZES)}", file=sys.stderr)
+            return 2
+    vs = variants(binary)
+    if args.methods:
+        want = [m.strip() for m in args.methods.split(",")]
+        vs = [v for v in vs if vname(v) in want or v[0] in want]
+    peers = [p for p in args.peers.split(",") if p]
+    res = {"machine": machine(), "families": {}, "args": vars(args)}
+    raw = Path(args.out).with_suffix(".json")
+    res["raw"] = raw.name
+
+    for fam in [f.strip() for f in args.families.split(",") if f.strip()]:
+        fres = {"sizes": []}
+        res["families"][fam] = fres
+        history = {vname(v): [] for v in vs}
+        failed = {}
+        peer_hist = {p: [] for p in peers}
+        for size in sizes:
+            target = SIZES[size]
+            log(f"{fam} {size}: meshing")
+            msh, nodes, gmsh_s = make_mesh(fam, target, work, args.gmsh)
+            toml = make_toml(fam, msh, work)
+            srec = {"size": size, "nodes": nodes, "gmsh_s": gmsh_s, "methods": {}}
+            fres["sizes"].append(srec)
+
+            log(f"{fam} {size}: limit")
+
+            def limit_once():
+                tf = work / "limit.time"
+                rc, out, err, wall = run(["/usr/bin/time", "-v", "-o", tf, binary, "limit", toml])
+                if rc != 0:
+                    return {"status": f"exit {rc}: {err.strip()[-300:]}"}
+                d = json.loads(out.strip().splitlines()[-1])
+                d["rss_mb"] = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", tf.read_text()).group(1)) / 1024
+                d["total"] = d["t_factor_solve"]
+                return d
+
+            srec["limit"] = repeated(limit_once, args.repeats, args.long)
+            n = srec["limit"].get("n", nodes * 2)
+            log(f"  limit: factor {fmt(srec['limit'].get('t_factor'))} s, solve {fmt(srec['limit'].get('t_solve'))} s")
+
+            best = None
+            for v in vs:
+                nm = vname(v)
+                if nm in failed:
+                    srec["methods"][nm] = {"skipped": failed[nm]}
+                    log(f"  {nm}: skipped ({failed[nm]})")
+                    continue
+                pr = predict(history[nm], n)
+                if pr is not None and pr > args.budget:
+                    why = f"predicted {pr:.0f} s > budget {args.budget:.0f} s (from smaller sizes)"
+                    srec["methods"][nm] = {"skipped": why}
+                    log(f"  {nm}: skipped ({why})")
+                    continue
+                timeout = max(3 * args.budget, 60.0)
+                r = repeated(lambda: solve_once(binary, toml, v, work / "out", timeout), args.repeats, args.long)
+                srec["methods"][nm] = r
+                srec["m"] = r.get("m", srec.get("m"))
+                log(f"  {nm}: {r.get('status')} it {r.get('iterations')} solve {fmt(r.get('solve'))} s total {fmt(r.get('total'))} s RSS {fmt(r.get('rss_mb'))} MB")
+                if r.get("converged"):
+                    history[nm].append((n, r["solve"]))
+                    if best is None or r["solve"] < best["solve"]:
+                        best = dict(r, name=nm)
+                else:
+                    failed[nm] = f"did not converge at {size} ({r.get('status')})"
+            srec["best"] = best
+
+            if best:
+                # output writing, compressed vs not
+                bv = next(v for v in vs if vname(v) == best["name"])
+                plain = solve_once(binary, toml, bv, work / "out_plain", None)
+                mb_plain = sum(f.stat().st_size for f in (work / "out_plain").iterdir()) / 2**20
+                zl = solve_once(binary, toml, bv, work / "out_zlib", None, extra=["--compress"])
+                mb_zlib = sum(f.stat().st_size for f in (work / "out_zlib").iterdir()) / 2**20
+                srec["compress"] = {"method": best["name"], "write_plain": plain.get("write"), "write_zlib": zl.get("write"),
+                                    "mb_plain": mb_plain, "mb_zlib": mb_zlib}
+                log(f"  write: {fmt(plain.get('write'))} s plain, {fmt(zl.get('write'))} s zlib")
+
+            # peers
+            if peers and best:
+                qpdir = work / f"qp_{fam}_{size}"
+                if qpdir.exists():
+                    shutil.rmtree(qpdir)
+                rc, out, err, wall = run([binary, "export", "--qp", qpdir, toml, "--solution", "--method", best["name"].split("+")[0]]
+                                         + (["--preconditioner", best["name"].split("+")[1]] if "+" in best["name"] else []))
+                plist = []
+                if rc != 0:
+                    log(f"  export failed: {err.strip()[-300:]}")
+                else:
+                    for p in peers:
+                        pr = predict(peer_hist[p], n)
+                        if pr is not None and pr > args.budget:
+                            plist.append({"solver": p, "skipped": f"predicted {pr:.0f} s > budget {args.budget:.0f} s"})
+                            log(f"  {p}: skipped (predicted {pr:.0f} s)")
+                            continue
+                        pj = work / f"peer_{p}.json"
+                        if pj.exists():
+                            pj.unlink()
+                        reps = args.repeats if not peer_hist[p] or peer_hist[p][-1][1] * (n / peer_hist[p][-1][0]) < args.long else 1
+                        rc, out, err, wall = run([venv_py, ROOT / "scripts" / "bench_peers.py", qpdir, "--solvers", p,
+                                                  "--time-limit", str(args.budget), "--repeats", str(reps), "--json", pj],
+                                                 timeout=args.budget * (reps + 1) + 120)
+                        if pj.exists():
+                            d = json.loads(pj.read_text())
+                            d = d[0] if isinstance(d, list) and d else d
+                            plist.append(d)
+                            if d.get("t_total"):
+                                peer_hist[p].append((n, d["t_total"]))
+                            log(f"  {p}: {d.get('status')} {fmt(d.get('t_total'))} s")
+                        else:
+                            plist.append({"solver": p, "status": f"failed (exit {rc}): {(err or '').strip()[-200:]}"})
+                            log(f"  {p}: failed {(err or '').strip()[-200:]}")
+                    shutil.rmtree(qpdir, ignore_errors=True)
+                srec["peers"] = plist
+
+            # linear elastic: signorini --no-contact and FEniCSx (glued contact curves)
+            if fam == "three_bodies":
+                lin = repeated(lambda: solve_once(binary, toml, ("ssn", None), work / "out_lin", None, extra=["--no-contact"]),
+                               args.repeats, args.long)
+                lin["method"] = "ssn"
+                srec["linear"] = lin
+                if not args.no_fenicsx:
+                    fj = work / "fenicsx.json"
+                    if fj.exists():
+                        fj.unlink()
+                    rc, out, err, wall = run(["/usr/bin/python3", ROOT / "scripts" / "bench_fenicsx.py", toml,
+                                              "--repeats", str(args.repeats), "--json", fj],
+                                             timeout=args.budget * (args.repeats + 1) + 300)
+                    if fj.exists():
+                        srec["fenicsx"] = json.loads(fj.read_text())
+                        log(f"  fenicsx: total {fmt(srec['fenicsx'].get('t_total'))} s")
+                    else:
+                        srec["fenicsx"] = {"status": f"failed (exit {rc}): {(err or '').strip()[-300:]}"}
+                        log(f"  fenicsx failed: {(err or '').strip()[-300:]}")
+            raw.write_text(json.dumps(res, indent=1, default=str))
+            write_report(Path(args.out), res, args, cmdline)
+    raw.write_text(json.dumps(res, indent=1, default=str))
+    write_report(Path(args.out), res, args, cmdline)
+    log(f"wrote {args.out} and {raw}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
