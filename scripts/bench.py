@@ -553,7 +553,7 @@ def main() -> int:
                         reps = args.repeats if not peer_hist[p] or peer_hist[p][-1][1] * (n / peer_hist[p][-1][0]) < args.long else 1
                         rc, out, err, wall = run([venv_py, ROOT / "scripts" / "bench_peers.py", qpdir, "--solvers", p,
                                                   "--time-limit", str(args.budget), "--repeats", str(reps), "--json", pj],
-                                                 timeout=args.budget * (reps + 1) + 120)
+                                                 timeout=reps * (2 * args.budget + 60) + 180)
                         if pj.exists():
                             d = json.loads(pj.read_text())
                             d = d[0] if isinstance(d, list) and d else d
