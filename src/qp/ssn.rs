@@ -46,6 +46,17 @@
 //! definite (J leaves a floating body free) or CG stalls, the step falls back
 //! to the Schur-complement path below.
 //!
+//! **Choosing the path per step.** The augmented path costs one numeric
+//! factorization per Newton step; the Schur-complement path one factorization
+//! of C in all, then one (blocked) solve per row that enters J for the first
+//! time. From the second step on, with the measured factorization time t_f,
+//! solve time t_s and per-column time t_c, the Schur path is taken when
+//! [C not yet factored]·t_f + (new rows)·t_c ≤ k·(t_f + 6 t_s), k = 1 in the
+//! second step and 3 later (J still moving after two Newton steps: more steps
+//! will follow, and the Schur path's columns are paid once). A large J that
+//! is nearly settled (the three-body faults) stays on the augmented path; a
+//! small growing J (Hertz) moves to the Schur path.
+//!
 //! **Semicoercive C** (floating bodies; `qp.kernel` = basis R of ker C,
 //! orthonormalised here). With the springs at the fixing DOFs, K⁻¹ is a
 //! generalised inverse of C on range C: for b ⟂ ker C, (C + S)y = b gives
@@ -101,18 +112,31 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
             opts.tol
         )));
     }
-    solve_with(qp, opts, true)
+    solve_with(qp, opts, Path::Auto)
 }
 
-/// [`solve`]; `augmented = false` uses only the Schur-complement path (tests).
+/// Which linear algebra the KKT solves use (module doc).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Path {
+    /// Chosen per step by the cost model.
+    Auto,
+    /// Always K_J = C + ρA_JᵀA_J (falls back to Schur only when it fails).
+    Augmented,
+    /// Always the Schur complement on one factor of C.
+    Schur,
+}
+
+/// [`solve`] with the linear-algebra path fixed (tests).
 pub(crate) fn solve_with(
     qp: &QpProblem,
     opts: &SolveOptions,
-    augmented: bool,
+    path: Path,
 ) -> Result<QpResult, QpError> {
+    let augmented = path != Path::Schur;
     let t0 = Instant::now();
     let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
     let mut st = Ssn::new(qp, r, opts.tol, augmented);
+    st.auto = path == Path::Auto;
     if !augmented {
         st.ensure_dense()?;
     }
@@ -211,6 +235,14 @@ struct Ssn<'a> {
     kfac: Option<Cholesky>,
     /// Time spent in sparse factorizations.
     t_factor: f64,
+    /// Measured: last numeric factorization, one solve, one column in a block.
+    t_fac_last: Option<f64>,
+    t_solve_last: Option<f64>,
+    t_col: Option<f64>,
+    /// KKT solves done (Newton steps).
+    steps_done: usize,
+    /// Choose the path per step (else: augmented whenever it is available).
+    auto: bool,
     error: Option<QpError>,
     /// Orthonormal basis of ker C (k vectors of length n).
     r: Vec<Vec<f64>>,
@@ -257,6 +289,11 @@ impl<'a> Ssn<'a> {
             rho: RHO_FACTOR * if cmax > 0.0 { cmax } else { 1.0 },
             kfac: None,
             t_factor: 0.0,
+            t_fac_last: None,
+            t_solve_last: None,
+            t_col: None,
+            steps_done: 0,
+            auto: true,
             error: None,
             r,
             ar,
@@ -280,8 +317,12 @@ impl<'a> Ssn<'a> {
         if self.fac.is_none() {
             let t = Instant::now();
             let fac = Cholesky::new(&self.qp.c, &self.qp.kernel)?;
-            self.t_factor += t.elapsed().as_secs_f64();
+            let tf = t.elapsed().as_secs_f64();
+            self.t_factor += tf;
+            self.t_fac_last.get_or_insert(tf);
+            let t = Instant::now();
             self.x0 = fac.solve(&self.qp.d);
+            self.t_solve_last = Some(t.elapsed().as_secs_f64());
             self.solves += 1;
             self.fac = Some(fac);
         }
@@ -304,8 +345,10 @@ impl<'a> Ssn<'a> {
         self.kfac = None; // free the old factor first
         let t = Instant::now();
         let fac = Cholesky::new(&aug.k, &[]).ok();
-        self.t_factor += t.elapsed().as_secs_f64();
+        let tf = t.elapsed().as_secs_f64();
+        self.t_factor += tf;
         let fac = fac?;
+        self.t_fac_last = Some(tf);
         let n = qp.n();
         // y0 = K⁻¹(d + ρA_Jᵀg_J)
         let mut y0 = qp.d.clone();
@@ -315,7 +358,9 @@ impl<'a> Ssn<'a> {
                 y0[k] += rho * a * qp.g[j];
             }
         }
+        let t = Instant::now();
         fac.solve_in_place(&mut y0);
+        self.t_solve_last = Some(t.elapsed().as_secs_f64());
         self.solves += 1;
         // s(μ) = K⁻¹A_Jᵀμ (n-vector), S μ = A_J s(μ).
         let mut solves = 0usize;
@@ -407,6 +452,7 @@ impl<'a> Ssn<'a> {
             .collect();
         let mut buf = vec![];
         for chunk in missing.chunks(BLOCK) {
+            let t = Instant::now();
             buf.clear();
             buf.resize(n * chunk.len(), 0.0);
             for (c, &j) in chunk.iter().enumerate() {
@@ -423,13 +469,34 @@ impl<'a> Ssn<'a> {
             for (c, &j) in chunk.iter().enumerate() {
                 self.h[j] = Some(self.qp.a.mul(&buf[c * n..(c + 1) * n]));
             }
+            self.t_col = Some(t.elapsed().as_secs_f64() / chunk.len() as f64);
         }
     }
 
     /// Solve the KKT system on `in_j`; None if it is singular.
     /// Returns (λ over all rows, x).
+    /// The cost model of the module doc: true to take the Schur path for `in_j`.
+    fn prefer_schur(&self, in_j: &[bool]) -> bool {
+        let (Some(tf), Some(ts)) = (self.t_fac_last, self.t_solve_last) else {
+            return false;
+        };
+        if self.steps_done == 0 || !self.auto {
+            return false;
+        }
+        let tc = self.t_col.unwrap_or(0.5 * ts);
+        let new_rows = in_j
+            .iter()
+            .zip(&self.h)
+            .filter(|(j, h)| **j && h.is_none())
+            .count();
+        let schur = if self.fac.is_some() { 0.0 } else { tf } + new_rows as f64 * tc;
+        let k = if self.steps_done >= 2 { 3.0 } else { 1.0 };
+        schur <= k * (tf + 6.0 * ts)
+    }
+
     fn kkt_solve(&mut self, in_j: &[bool]) -> Option<(Vec<f64>, Vec<f64>)> {
-        if self.aug.is_some() {
+        self.steps_done += 1;
+        if self.aug.is_some() && !self.prefer_schur(in_j) {
             if let Some(s) = self.kkt_solve_aug(in_j) {
                 return Some(s);
             }
@@ -1003,9 +1070,12 @@ pub(crate) mod tests {
             let qp = two_blocks(12, 6, floating);
             let refr = reference(&qp);
             let (_, s0) = crate::qp::factor::reuse_counts();
-            let a = solve_with(&qp, &opts(), true).unwrap();
+            let a = solve_with(&qp, &opts(), Path::Augmented).unwrap();
             let (_, s1) = crate::qp::factor::reuse_counts();
-            let b = solve_with(&qp, &opts(), false).unwrap();
+            let b = solve_with(&qp, &opts(), Path::Schur).unwrap();
+            let c = solve_with(&qp, &opts(), Path::Auto).unwrap();
+            compare(&qp, &c, &refr, 1e-6);
+            assert_eq!(a.active, c.active);
             compare(&qp, &a, &refr, 1e-6);
             compare(&qp, &b, &refr, 1e-6);
             assert_eq!(a.active, b.active);
