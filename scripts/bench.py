@@ -433,6 +433,8 @@ def main() -> int:
     ap.add_argument("--out", default=str(ROOT / "BENCHMARKS.md"))
     ap.add_argument("--binary", default=str(ROOT / "target" / "release" / "signorini"))
     ap.add_argument("--gmsh", default="gmsh")
+    ap.add_argument("--check", action="store_true",
+                    help="exit 1 unless every method run converged with a certificate and every peer and FEniCSx ran (CI)")
     args = ap.parse_args()
     cmdline = "python3 scripts/bench.py " + " ".join(sys.argv[1:])
 
@@ -591,6 +593,24 @@ def main() -> int:
     raw.write_text(json.dumps(res, indent=1, default=str))
     write_report(Path(args.out), res, args, cmdline)
     log(f"wrote {args.out} and {raw}")
+    if args.check:
+        bad = []
+        for fam, fres in res["families"].items():
+            for s in fres["sizes"]:
+                if not (s.get("limit") or {}).get("t_factor"):
+                    bad.append(f"{fam} {s['size']}: limit failed")
+                for nm, r in s["methods"].items():
+                    if "skipped" not in r and not (r.get("converged") and r.get("certified")):
+                        bad.append(f"{fam} {s['size']} {nm}: {r.get('status')}")
+                for p in s.get("peers") or []:
+                    if "skipped" not in p and not p.get("converged"):
+                        bad.append(f"{fam} {s['size']} {p.get('solver')}: {p.get('status')}")
+                fx = s.get("fenicsx")
+                if fam == "three_bodies" and not args.no_fenicsx and not (fx and fx.get("t_total")):
+                    bad.append(f"{fam} {s['size']} fenicsx: {(fx or {}).get('status')}")
+        for b in bad:
+            print(f"bench --check: {b}", file=sys.stderr)
+        return 1 if bad else 0
     return 0
 
 

@@ -7,3 +7,8 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 cargo test --all-targets 2>&1
 bash scripts/python_checks.sh
+# The benchmark at its smallest size, to keep it working (numbers not kept).
+bench_tmp=$(mktemp -d)
+bash scripts/bench --sizes 10k --repeats 1 --budget 60 --check \
+    --work "$bench_tmp/work" --out "$bench_tmp/BENCHMARKS.md"
+rm -rf "$bench_tmp"
