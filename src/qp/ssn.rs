@@ -95,6 +95,10 @@ use std::time::Instant;
 pub(crate) const RHO_FACTOR: f64 = 1e2;
 /// CG on the Schur complement of K_J: at most this many steps.
 const AL_MAX_CG: usize = 200;
+/// Low-rank updates of K': at most this many changed rows, and at most
+/// this many bytes for the n×r block K'⁻¹Uᵀ.
+const LOWRANK_MAX: usize = 256;
+const LOWRANK_BYTES: f64 = 1.0e9;
 /// Right-hand sides per multi-column solve when columns of H are computed.
 const BLOCK: usize = 32;
 /// Relative pivot threshold of the dense Cholesky of S_J.
@@ -121,7 +125,11 @@ pub(crate) enum Path {
     /// Chosen per step by the cost model.
     Auto,
     /// Always K_J = C + ρA_JᵀA_J (falls back to Schur only when it fails).
+    #[cfg_attr(not(test), allow(dead_code))]
     Augmented,
+    /// Augmented, refactoring K_J at every step (no low-rank updates).
+    #[cfg_attr(not(test), allow(dead_code))]
+    Refactor,
     /// Always the Schur complement on one factor of C.
     Schur,
 }
@@ -137,6 +145,7 @@ pub(crate) fn solve_with(
     let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
     let mut st = Ssn::new(qp, r, opts.tol, augmented);
     st.auto = path == Path::Auto;
+    st.lowrank = path != Path::Refactor;
     if !augmented {
         st.ensure_dense()?;
     }
@@ -224,6 +233,109 @@ pub(crate) fn check_dims(qp: &QpProblem) -> Result<(), QpError> {
     Ok(())
 }
 
+/// K_J = K' + UᵀΣU for the rows whose membership changed since K' was
+/// factored (σ = +ρ entering, −ρ leaving): Sherman–Morrison–Woodbury,
+/// K_J⁻¹ = K'⁻¹ − Z W⁻¹ Zᵀ with Z = K'⁻¹Uᵀ (n×r, kept) and the small
+/// capacitance W = Σ⁻¹ + U Z (r×r, LU with partial pivoting; indefinite
+/// when rows leave).
+struct LowRank {
+    /// (row of A, σ/ρ ∈ {+1, −1}).
+    rows: Vec<(usize, f64)>,
+    /// Z column-major, n×r.
+    z: Vec<f64>,
+    /// LU of W (row-major) and its pivots.
+    lu: Vec<f64>,
+    piv: Vec<usize>,
+}
+
+impl LowRank {
+    fn new(qp: &QpProblem, fac: &Cholesky, rows: Vec<(usize, f64)>, rho: f64) -> Option<LowRank> {
+        let n = qp.n();
+        let r = rows.len();
+        let mut z = vec![0.0; n * r];
+        for (c, &(j, _)) in rows.iter().enumerate() {
+            let (cols, v) = qp.a.row(j);
+            for (&k, &a) in cols.iter().zip(v) {
+                z[c * n + k] = a;
+            }
+        }
+        for (b, chunk) in z.chunks_mut(n * BLOCK).enumerate() {
+            let _ = b;
+            let k = chunk.len() / n;
+            fac.solve_many_in_place(chunk, k);
+        }
+        // W = Σ⁻¹ + U Z
+        let mut w = vec![0.0; r * r];
+        for (a, &(ja, sa)) in rows.iter().enumerate() {
+            for b in 0..r {
+                w[a * r + b] = qp.a.row_dot(ja, &z[b * n..(b + 1) * n]);
+            }
+            w[a * r + a] += sa / rho;
+        }
+        // symmetrise, then LU with partial pivoting
+        for a in 0..r {
+            for b in 0..a {
+                let v = 0.5 * (w[a * r + b] + w[b * r + a]);
+                w[a * r + b] = v;
+                w[b * r + a] = v;
+            }
+        }
+        let scale = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut piv: Vec<usize> = (0..r).collect();
+        for k in 0..r {
+            let p = (k..r).max_by(|&i, &j| w[i * r + k].abs().total_cmp(&w[j * r + k].abs()))?;
+            if !(w[p * r + k].abs() > 1e-13 * scale) {
+                return None; // K_J singular to working precision: refactor instead
+            }
+            if p != k {
+                for c in 0..r {
+                    w.swap(k * r + c, p * r + c);
+                }
+                piv.swap(k, p);
+            }
+            for i in k + 1..r {
+                let f = w[i * r + k] / w[k * r + k];
+                w[i * r + k] = f;
+                for c in k + 1..r {
+                    w[i * r + c] -= f * w[k * r + c];
+                }
+            }
+        }
+        Some(LowRank {
+            rows,
+            z,
+            lu: w,
+            piv,
+        })
+    }
+
+    /// y ← y − Z W⁻¹ (U y), turning K'⁻¹b into K_J⁻¹b.
+    fn correct(&self, qp: &QpProblem, y: &mut [f64]) {
+        let n = y.len();
+        let r = self.rows.len();
+        let uy: Vec<f64> = self.rows.iter().map(|&(j, _)| qp.a.row_dot(j, y)).collect();
+        let mut t: Vec<f64> = self.piv.iter().map(|&p| uy[p]).collect();
+        for i in 0..r {
+            for k in 0..i {
+                t[i] -= self.lu[i * r + k] * t[k];
+            }
+        }
+        for i in (0..r).rev() {
+            for k in i + 1..r {
+                t[i] -= self.lu[i * r + k] * t[k];
+            }
+            t[i] /= self.lu[i * r + i];
+        }
+        for (c, &tc) in t.iter().enumerate() {
+            if tc != 0.0 {
+                for (yi, zi) in y.iter_mut().zip(&self.z[c * n..(c + 1) * n]) {
+                    *yi -= tc * zi;
+                }
+            }
+        }
+    }
+}
+
 /// The state of the iteration.
 struct Ssn<'a> {
     qp: &'a QpProblem,
@@ -233,6 +345,8 @@ struct Ssn<'a> {
     aug: Option<AugPattern>,
     rho: f64,
     kfac: Option<Cholesky>,
+    /// The working set J' that `kfac` was built for.
+    kfac_set: Option<Vec<bool>>,
     /// Time spent in sparse factorizations.
     t_factor: f64,
     /// Measured: last numeric factorization, one solve, one column in a block.
@@ -243,6 +357,8 @@ struct Ssn<'a> {
     steps_done: usize,
     /// Choose the path per step (else: augmented whenever it is available).
     auto: bool,
+    /// Allow low-rank updates of K'.
+    lowrank: bool,
     error: Option<QpError>,
     /// Orthonormal basis of ker C (k vectors of length n).
     r: Vec<Vec<f64>>,
@@ -288,12 +404,14 @@ impl<'a> Ssn<'a> {
             aug: (augmented && m > 0).then(|| AugPattern::new(qp)),
             rho: RHO_FACTOR * if cmax > 0.0 { cmax } else { 1.0 },
             kfac: None,
+            kfac_set: None,
             t_factor: 0.0,
             t_fac_last: None,
             t_solve_last: None,
             t_col: None,
             steps_done: 0,
             auto: true,
+            lowrank: true,
             error: None,
             r,
             ar,
@@ -333,23 +451,65 @@ impl<'a> Ssn<'a> {
     /// None if K_J is not positive definite or CG does not converge.
     fn kkt_solve_aug(&mut self, in_j: &[bool]) -> Option<(Vec<f64>, Vec<f64>)> {
         let qp = self.qp;
-        let aug = self.aug.as_mut()?;
         let jset: Vec<usize> = (0..qp.m()).filter(|&i| in_j[i]).collect();
         let rho = self.rho;
-        aug.k.data.copy_from_slice(&aug.base);
-        for &j in &jset {
-            for &(pos, v) in &aug.rows[j] {
-                aug.k.data[pos] += rho * v;
+        let n = qp.n();
+        // Reuse K' = C + ρA_{J'}ᵀA_{J'} with a low-rank correction, or refactor.
+        let mut update = None;
+        if let (Some(fac), Some(jb), true) = (&self.kfac, &self.kfac_set, self.lowrank) {
+            let changed: Vec<(usize, f64)> = (0..qp.m())
+                .filter(|&i| jb[i] != in_j[i])
+                .map(|i| (i, if in_j[i] { 1.0 } else { -1.0 }))
+                .collect();
+            let r = changed.len();
+            let tf = self.t_fac_last.unwrap_or(f64::INFINITY);
+            let tc = self
+                .t_col
+                .or(self.t_solve_last.map(|t| 0.5 * t))
+                .unwrap_or(f64::INFINITY);
+            let r_max = ((LOWRANK_BYTES / (8.0 * n.max(1) as f64)) as usize).min(LOWRANK_MAX);
+            if r == 0 {
+                update = Some(None);
+            } else if r <= r_max && r as f64 * tc <= 0.5 * tf {
+                let t = Instant::now();
+                let lr = LowRank::new(qp, fac, changed, rho);
+                if let Some(lr) = &lr {
+                    self.solves += lr.rows.len();
+                    self.t_col = Some(t.elapsed().as_secs_f64() / r as f64);
+                }
+                update = lr.map(Some);
             }
         }
-        self.kfac = None; // free the old factor first
-        let t = Instant::now();
-        let fac = Cholesky::new(&aug.k, &[]).ok();
-        let tf = t.elapsed().as_secs_f64();
-        self.t_factor += tf;
-        let fac = fac?;
-        self.t_fac_last = Some(tf);
-        let n = qp.n();
+        let update = match update {
+            Some(u) => u,
+            None => {
+                let aug = self.aug.as_mut()?;
+                aug.k.data.copy_from_slice(&aug.base);
+                for &j in &jset {
+                    for &(pos, v) in &aug.rows[j] {
+                        aug.k.data[pos] += rho * v;
+                    }
+                }
+                self.kfac = None; // free the old factor first
+                self.kfac_set = None;
+                let t = Instant::now();
+                let fac = Cholesky::new(&aug.k, &[]).ok();
+                let tf = t.elapsed().as_secs_f64();
+                self.t_factor += tf;
+                self.kfac = Some(fac?);
+                self.kfac_set = Some(in_j.to_vec());
+                self.t_fac_last = Some(tf);
+                None
+            }
+        };
+        let fac = self.kfac.as_ref().expect("factor of K'");
+        // x ← K_J⁻¹x: the factor of K', then the Woodbury correction.
+        let kinv = |x: &mut Vec<f64>| {
+            fac.solve_in_place(x);
+            if let Some(lr) = &update {
+                lr.correct(qp, x);
+            }
+        };
         // y0 = K⁻¹(d + ρA_Jᵀg_J)
         let mut y0 = qp.d.clone();
         for &j in &jset {
@@ -359,7 +519,7 @@ impl<'a> Ssn<'a> {
             }
         }
         let t = Instant::now();
-        fac.solve_in_place(&mut y0);
+        kinv(&mut y0);
         self.t_solve_last = Some(t.elapsed().as_secs_f64());
         self.solves += 1;
         // s(μ) = K⁻¹A_Jᵀμ (n-vector), S μ = A_J s(μ).
@@ -372,7 +532,7 @@ impl<'a> Ssn<'a> {
                     t[k] += a * m;
                 }
             }
-            fac.solve_in_place(&mut t);
+            kinv(&mut t);
             solves += 1;
             t
         };
@@ -438,7 +598,6 @@ impl<'a> Ssn<'a> {
         if lam.iter().chain(&x).any(|v| !v.is_finite()) {
             return None;
         }
-        self.kfac = Some(fac);
         Some((lam, x))
     }
 
@@ -490,8 +649,18 @@ impl<'a> Ssn<'a> {
             .filter(|(j, h)| **j && h.is_none())
             .count();
         let schur = if self.fac.is_some() { 0.0 } else { tf } + new_rows as f64 * tc;
+        // The augmented step: a refactor, or a low-rank update of K' when few
+        // rows changed since it was factored.
+        let changed = self.kfac_set.as_ref().map_or(usize::MAX, |jb| {
+            jb.iter().zip(in_j).filter(|(a, b)| a != b).count()
+        });
+        let aug_fac = if changed <= LOWRANK_MAX {
+            tf.min(changed as f64 * tc)
+        } else {
+            tf
+        };
         let k = if self.steps_done >= 2 { 3.0 } else { 1.0 };
-        schur <= k * (tf + 6.0 * ts)
+        schur <= k * (aug_fac + 6.0 * ts)
     }
 
     fn kkt_solve(&mut self, in_j: &[bool]) -> Option<(Vec<f64>, Vec<f64>)> {
@@ -502,6 +671,7 @@ impl<'a> Ssn<'a> {
             }
         }
         self.kfac = None;
+        self.kfac_set = None;
         if let Err(e) = self.ensure_dense() {
             self.error = Some(e);
             return None;
@@ -1070,8 +1240,11 @@ pub(crate) mod tests {
             let qp = two_blocks(12, 6, floating);
             let refr = reference(&qp);
             let (_, s0) = crate::qp::factor::reuse_counts();
-            let a = solve_with(&qp, &opts(), Path::Augmented).unwrap();
+            let a = solve_with(&qp, &opts(), Path::Refactor).unwrap();
             let (_, s1) = crate::qp::factor::reuse_counts();
+            let u = solve_with(&qp, &opts(), Path::Augmented).unwrap();
+            compare(&qp, &u, &refr, 1e-6);
+            assert_eq!(a.active, u.active);
             let b = solve_with(&qp, &opts(), Path::Schur).unwrap();
             let c = solve_with(&qp, &opts(), Path::Auto).unwrap();
             compare(&qp, &c, &refr, 1e-6);
@@ -1098,6 +1271,58 @@ pub(crate) mod tests {
                 "{} solves",
                 a.inner_iterations
             );
+        }
+    }
+
+    /// The Woodbury update of K' (rows leaving and entering J) solves the
+    /// KKT system of the new J exactly as a fresh factorization does.
+    #[test]
+    fn low_rank_update_matches_refactorization() {
+        for floating in [false, true] {
+            let qp = two_blocks(10, 6, floating);
+            let m = qp.m();
+            let r = orthonormal_kernel(&qp.c, &qp.kernel).unwrap();
+            let j1: Vec<bool> = vec![true; m];
+            let mut j2 = j1.clone();
+            j2[0] = false;
+            j2[m / 2] = false;
+            let mut st = Ssn::new(&qp, r.clone(), 1e-12, true);
+            st.kkt_solve_aug(&j1).expect("J1");
+            st.t_fac_last = Some(1e9); // make the update look cheap
+            let solves = st.solves;
+            let (l_up, x_up) = st.kkt_solve_aug(&j2).expect("J2 by update");
+            assert!(st.kfac_set.as_ref().unwrap() == &j1, "K' was refactored");
+            assert!(st.solves > solves);
+            let mut fresh = Ssn::new(&qp, r, 1e-12, true);
+            let (l_ref, x_ref) = fresh.kkt_solve_aug(&j2).expect("J2 fresh");
+            let dx = x_up
+                .iter()
+                .zip(&x_ref)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            let dl = l_up
+                .iter()
+                .zip(&l_ref)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(dx <= 1e-8 * norm_inf(&x_ref), "x: {dx}");
+            assert!(dl <= 1e-6 * norm_inf(&l_ref), "λ: {dl}");
+            assert_eq!(l_up[0], 0.0);
+            // Now back to J1: the update is empty (r = 0), the factor is K' itself.
+            let (_, x_back) = st.kkt_solve_aug(&j1).expect("J1 again");
+            let mut fresh1 = Ssn::new(
+                &qp,
+                orthonormal_kernel(&qp.c, &qp.kernel).unwrap(),
+                1e-12,
+                true,
+            );
+            let (_, x1) = fresh1.kkt_solve_aug(&j1).unwrap();
+            let d1 = x_back
+                .iter()
+                .zip(&x1)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(d1 <= 1e-8 * norm_inf(&x1), "{d1}");
         }
     }
 
