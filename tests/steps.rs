@@ -160,3 +160,41 @@ fn restart_from_a_foreign_checkpoint_is_bad_input() {
     assert_eq!(code, 2, "{log}");
     assert!(log.contains("does not match"), "{log}");
 }
+
+/// C is the same in every load step: the later steps reuse the numeric
+/// Cholesky factor of the first (qp::factor cache), and the answer is the
+/// one a fresh factorization gives.
+#[test]
+fn load_steps_reuse_the_factorization() {
+    use signorini::pipeline;
+    use signorini::qp::{factor, registry, SolveOptions};
+    let prep = pipeline::prepare(std::path::Path::new(&example()), false).unwrap();
+    let opts = SolveOptions::default();
+    factor::clear_cache();
+    let (n0, _) = factor::reuse_counts();
+    let mut xs = vec![];
+    for s in 0..prep.problem.file.nsteps() {
+        let model = pipeline::step_model(&prep, s).unwrap();
+        let r = registry::solve("mprgp", &model.qp, &opts).unwrap();
+        assert!(r.status.converged());
+        xs.push((model, r.x));
+    }
+    let (n1, _) = factor::reuse_counts();
+    assert!(
+        n1 - n0 >= xs.len() - 1,
+        "{} reuses over {} steps",
+        n1 - n0,
+        xs.len()
+    );
+    // The last step again from a cold cache: the same solution.
+    factor::clear_cache();
+    let (model, x) = xs.last().unwrap();
+    let r = registry::solve("mprgp", &model.qp, &opts).unwrap();
+    let dx =
+        r.x.iter()
+            .zip(x)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+    let xm = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(dx <= 1e-8 * xm, "{dx}");
+}
