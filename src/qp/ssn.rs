@@ -88,7 +88,8 @@ use super::executor::{Executor, Iterative, Step};
 use super::factor::Cholesky;
 use super::sparse::{dot, norm, norm_inf, Csr};
 use super::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
+use std::rc::Rc;
 use std::time::Instant;
 
 /// ρ = RHO_FACTOR · max diag C in K_J = C + ρA_JᵀA_J.
@@ -178,21 +179,48 @@ struct AugPattern {
 impl AugPattern {
     fn new(qp: &QpProblem) -> AugPattern {
         let n = qp.n();
-        let mut trip = Vec::with_capacity(qp.c.nnz() + 36 * qp.m());
-        for i in 0..n {
-            let (c, v) = qp.c.row(i);
-            trip.extend(c.iter().zip(v).map(|(&k, &a)| (i, k, a)));
-        }
+        // Columns that AᵀA adds to each row, merged row by row into C's
+        // (sorted) pattern: O(nnz) with no global sort.
+        let mut extra: Vec<Vec<usize>> = vec![vec![]; n];
         for j in 0..qp.m() {
             let (c, _) = qp.a.row(j);
             for &k in c {
-                for &l in c {
-                    trip.push((k, l, 0.0));
-                }
+                extra[k].extend_from_slice(c);
             }
         }
-        let k = Csr::from_triplets(n, n, &trip);
-        drop(trip);
+        let mut indptr = Vec::with_capacity(n + 1);
+        let mut indices = Vec::with_capacity(qp.c.nnz() + 4 * qp.a.nnz());
+        let mut data = Vec::with_capacity(qp.c.nnz() + 4 * qp.a.nnz());
+        indptr.push(0);
+        for (i, ex) in extra.iter_mut().enumerate() {
+            let (c, v) = qp.c.row(i);
+            ex.sort_unstable();
+            ex.dedup();
+            let (mut a, mut b) = (0, 0);
+            while a < c.len() || b < ex.len() {
+                if b == ex.len() || (a < c.len() && c[a] <= ex[b]) {
+                    if b < ex.len() && c[a] == ex[b] {
+                        b += 1;
+                    }
+                    indices.push(c[a]);
+                    data.push(v[a]);
+                    a += 1;
+                } else {
+                    indices.push(ex[b]);
+                    data.push(0.0);
+                    b += 1;
+                }
+            }
+            indptr.push(indices.len());
+        }
+        drop(extra);
+        let k = Csr {
+            nrows: n,
+            ncols: n,
+            indptr,
+            indices,
+            data,
+        };
         let rows = (0..qp.m())
             .map(|j| {
                 let (c, v) = qp.a.row(j);
@@ -241,34 +269,61 @@ pub(crate) fn check_dims(qp: &QpProblem) -> Result<(), QpError> {
 struct LowRank {
     /// (row of A, σ/ρ ∈ {+1, −1}).
     rows: Vec<(usize, f64)>,
-    /// Z column-major, n×r.
-    z: Vec<f64>,
+    /// Columns of Z = K'⁻¹Uᵀ, shared with the cache of the current K'.
+    z: Vec<Rc<Vec<f64>>>,
     /// LU of W (row-major) and its pivots.
     lu: Vec<f64>,
     piv: Vec<usize>,
 }
 
 impl LowRank {
-    fn new(qp: &QpProblem, fac: &Cholesky, rows: Vec<(usize, f64)>, rho: f64) -> Option<LowRank> {
+    /// The update for `rows`; columns K'⁻¹a_j missing from `cache` are
+    /// computed (BLOCK per solve) and added. Returns the update and the
+    /// number of new columns.
+    fn new(
+        qp: &QpProblem,
+        fac: &Cholesky,
+        rows: Vec<(usize, f64)>,
+        rho: f64,
+        cache: &mut HashMap<usize, Rc<Vec<f64>>>,
+    ) -> (Option<LowRank>, usize) {
         let n = qp.n();
-        let r = rows.len();
-        let mut z = vec![0.0; n * r];
-        for (c, &(j, _)) in rows.iter().enumerate() {
-            let (cols, v) = qp.a.row(j);
-            for (&k, &a) in cols.iter().zip(v) {
-                z[c * n + k] = a;
+        let missing: Vec<usize> = rows
+            .iter()
+            .map(|&(j, _)| j)
+            .filter(|j| !cache.contains_key(j))
+            .collect();
+        let mut buf = vec![];
+        for chunk in missing.chunks(BLOCK) {
+            buf.clear();
+            buf.resize(n * chunk.len(), 0.0);
+            for (c, &j) in chunk.iter().enumerate() {
+                let (cols, v) = qp.a.row(j);
+                for (&k, &a) in cols.iter().zip(v) {
+                    buf[c * n + k] = a;
+                }
+            }
+            fac.solve_many_in_place(&mut buf, chunk.len());
+            for (c, &j) in chunk.iter().enumerate() {
+                cache.insert(j, Rc::new(buf[c * n..(c + 1) * n].to_vec()));
             }
         }
-        for (b, chunk) in z.chunks_mut(n * BLOCK).enumerate() {
-            let _ = b;
-            let k = chunk.len() / n;
-            fac.solve_many_in_place(chunk, k);
-        }
+        let z: Vec<Rc<Vec<f64>>> = rows.iter().map(|(j, _)| cache[j].clone()).collect();
+        (Self::with_columns(qp, rows, z, rho), missing.len())
+    }
+
+    fn with_columns(
+        qp: &QpProblem,
+        rows: Vec<(usize, f64)>,
+        z: Vec<Rc<Vec<f64>>>,
+        rho: f64,
+    ) -> Option<LowRank> {
+        let r = rows.len();
         // W = Σ⁻¹ + U Z
         let mut w = vec![0.0; r * r];
         for (a, &(ja, sa)) in rows.iter().enumerate() {
             for b in 0..r {
-                w[a * r + b] = qp.a.row_dot(ja, &z[b * n..(b + 1) * n]);
+                w[a * r + b] = qp.a.row_dot(ja, &z[b]);
             }
             w[a * r + a] += sa / rho;
         }
@@ -326,9 +381,10 @@ impl LowRank {
             }
             t[i] /= self.lu[i * r + i];
         }
+        debug_assert!(self.z.iter().all(|z| z.len() == n));
         for (c, &tc) in t.iter().enumerate() {
             if tc != 0.0 {
-                for (yi, zi) in y.iter_mut().zip(&self.z[c * n..(c + 1) * n]) {
+                for (yi, zi) in y.iter_mut().zip(self.z[c].iter()) {
                     *yi -= tc * zi;
                 }
             }
@@ -347,6 +403,8 @@ struct Ssn<'a> {
     kfac: Option<Cholesky>,
     /// The working set J' that `kfac` was built for.
     kfac_set: Option<Vec<bool>>,
+    /// Columns K'⁻¹a_j of the current K' (low-rank updates).
+    zcache: HashMap<usize, Rc<Vec<f64>>>,
     /// Time spent in sparse factorizations.
     t_factor: f64,
     /// Measured: last numeric factorization, one solve, one column in a block.
@@ -405,6 +463,7 @@ impl<'a> Ssn<'a> {
             rho: RHO_FACTOR * if cmax > 0.0 { cmax } else { 1.0 },
             kfac: None,
             kfac_set: None,
+            zcache: HashMap::new(),
             t_factor: 0.0,
             t_fac_last: None,
             t_solve_last: None,
@@ -472,10 +531,10 @@ impl<'a> Ssn<'a> {
                 update = Some(None);
             } else if r <= r_max && r as f64 * tc <= 0.5 * tf {
                 let t = Instant::now();
-                let lr = LowRank::new(qp, fac, changed, rho);
-                if let Some(lr) = &lr {
-                    self.solves += lr.rows.len();
-                    self.t_col = Some(t.elapsed().as_secs_f64() / r as f64);
+                let (lr, new_cols) = LowRank::new(qp, fac, changed, rho, &mut self.zcache);
+                self.solves += new_cols;
+                if new_cols > 0 {
+                    self.t_col = Some(t.elapsed().as_secs_f64() / new_cols as f64);
                 }
                 update = lr.map(Some);
             }
@@ -492,6 +551,7 @@ impl<'a> Ssn<'a> {
                 }
                 self.kfac = None; // free the old factor first
                 self.kfac_set = None;
+                self.zcache.clear();
                 let t = Instant::now();
                 let fac = Cholesky::new(&aug.k, &[]).ok();
                 let tf = t.elapsed().as_secs_f64();
@@ -510,12 +570,14 @@ impl<'a> Ssn<'a> {
                 lr.correct(qp, x);
             }
         };
-        // y0 = K⁻¹(d + ρA_Jᵀg_J)
+        // y0 = K⁻¹(d + ρA_Jᵀg_J − A_Jᵀμ0), μ0 = the last λ_J (warm start):
+        // then A_J y0 − g_J is the residual of S μ = A_J K⁻¹(d + ρA_Jᵀg_J) − g_J at μ0.
+        let mu0: Vec<f64> = jset.iter().map(|&j| self.lam[j]).collect();
         let mut y0 = qp.d.clone();
-        for &j in &jset {
+        for (&j, &m0) in jset.iter().zip(&mu0) {
             let (c, v) = qp.a.row(j);
             for (&k, &a) in c.iter().zip(v) {
-                y0[k] += rho * a * qp.g[j];
+                y0[k] += a * (rho * qp.g[j] - m0);
             }
         }
         let t = Instant::now();
@@ -537,20 +599,24 @@ impl<'a> Ssn<'a> {
             t
         };
         let aj = |t: &[f64]| -> Vec<f64> { jset.iter().map(|&j| qp.a.row_dot(j, t)).collect() };
-        // b = A_J y0 − g_J; solve S μ = b from the last λ (warm start).
-        let b: Vec<f64> = aj(&y0)
+        // CG on S δ = r0 = A_J y0 − g_J; μ = μ0 + δ, x = y0 − K⁻¹A_Jᵀδ.
+        let ay0 = aj(&y0);
+        let mut r: Vec<f64> = ay0.iter().zip(&jset).map(|(v, &j)| v - qp.g[j]).collect();
+        // Scale of the terms that cancel in A_J x − g_J: ‖|A_J||y0|‖ + ‖g_J‖.
+        let abs_ay: Vec<f64> = jset
             .iter()
-            .zip(&jset)
-            .map(|(v, &j)| v - qp.g[j])
+            .map(|&j| {
+                let (c, v) = qp.a.row(j);
+                c.iter()
+                    .zip(v)
+                    .map(|(&k, &a)| (a * y0[k]).abs())
+                    .sum::<f64>()
+            })
             .collect();
-        let bnorm = norm(&b);
-        let mut mu: Vec<f64> = jset.iter().map(|&j| self.lam[j]).collect();
-        let mut z = if norm_inf(&mu) > 0.0 {
-            apply(&mu)
-        } else {
-            vec![0.0; n]
-        };
-        let mut r: Vec<f64> = aj(&z).iter().zip(&b).map(|(s, b)| b - s).collect();
+        let gj: Vec<f64> = jset.iter().map(|&j| qp.g[j]).collect();
+        let bnorm = norm(&abs_ay) + norm(&gj);
+        let mut mu = mu0;
+        let mut z = vec![0.0; n];
         let goal = (1e-2 * self.tol).min(1e-12) * bnorm.max(f64::MIN_POSITIVE);
         let mut p = r.clone();
         let mut rr = dot(&r, &r);
@@ -585,6 +651,16 @@ impl<'a> Ssn<'a> {
             }
         }
         self.solves += solves;
+        log::debug!(
+            "ssn: |J| = {}, K' {}, CG {} solves, ‖r‖/‖b‖ = {:.2e}",
+            jset.len(),
+            match &update {
+                Some(u) => format!("+ rank-{} update", u.rows.len()),
+                None => "factored".into(),
+            },
+            solves,
+            rr.sqrt() / bnorm.max(f64::MIN_POSITIVE)
+        );
         if !ok {
             log::debug!("ssn: CG on the augmented Schur complement did not converge; falling back");
             return None;
@@ -672,6 +748,7 @@ impl<'a> Ssn<'a> {
         }
         self.kfac = None;
         self.kfac_set = None;
+        self.zcache.clear();
         if let Err(e) = self.ensure_dense() {
             self.error = Some(e);
             return None;
