@@ -49,7 +49,8 @@
 //! **Choosing the path per step.** The augmented path costs one numeric
 //! factorization per Newton step; the Schur-complement path one factorization
 //! of C in all, then one (blocked) solve per row that enters J for the first
-//! time. From the second step on, with the measured factorization time t_f,
+//! time. The first step takes the Schur path when |J| ≤ 6/[`COL_FRACTION`]
+//! (both paths need one factorization then). Later, with the measured factorization time t_f,
 //! solve time t_s and per-column time t_c, the Schur path is taken when
 //! [C not yet factored]·t_f + (new rows)·t_c ≤ k·(t_f + 6 t_s), k = 1 in the
 //! second step and 3 later (J still moving after two Newton steps: more steps
@@ -100,6 +101,10 @@ const AL_MAX_CG: usize = 200;
 /// this many bytes for the n×r block K'⁻¹Uᵀ.
 const LOWRANK_MAX: usize = 256;
 const LOWRANK_BYTES: f64 = 1.0e9;
+/// Estimated cost of one column in a blocked solve, as a fraction of one
+/// single solve, until measured (32 columns took ≈ 5.6 single solves on the
+/// 43k-node three-body model).
+const COL_FRACTION: f64 = 0.2;
 /// Right-hand sides per multi-column solve when columns of H are computed.
 const BLOCK: usize = 32;
 /// Relative pivot threshold of the dense Cholesky of S_J.
@@ -117,7 +122,14 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
             opts.tol
         )));
     }
-    solve_with(qp, opts, Path::Auto)
+    // Diagnostic override of the per-step choice (README, Performance).
+    let path = match std::env::var("SIGNORINI_SSN_PATH").as_deref() {
+        Ok("augmented") => Path::Augmented,
+        Ok("refactor") => Path::Refactor,
+        Ok("schur") => Path::Schur,
+        _ => Path::Auto,
+    };
+    solve_with(qp, opts, path)
 }
 
 /// Which linear algebra the KKT solves use (module doc).
@@ -126,10 +138,8 @@ pub(crate) enum Path {
     /// Chosen per step by the cost model.
     Auto,
     /// Always K_J = C + ρA_JᵀA_J (falls back to Schur only when it fails).
-    #[cfg_attr(not(test), allow(dead_code))]
     Augmented,
     /// Augmented, refactoring K_J at every step (no low-rank updates).
-    #[cfg_attr(not(test), allow(dead_code))]
     Refactor,
     /// Always the Schur complement on one factor of C.
     Schur,
@@ -524,16 +534,22 @@ impl<'a> Ssn<'a> {
             let tf = self.t_fac_last.unwrap_or(f64::INFINITY);
             let tc = self
                 .t_col
-                .or(self.t_solve_last.map(|t| 0.5 * t))
+                .or(self.t_solve_last.map(|t| COL_FRACTION * t))
                 .unwrap_or(f64::INFINITY);
             let r_max = ((LOWRANK_BYTES / (8.0 * n.max(1) as f64)) as usize).min(LOWRANK_MAX);
             if r == 0 {
                 update = Some(None);
-            } else if r <= r_max && r as f64 * tc <= 0.5 * tf {
+            } else if r <= r_max && {
+                let new_cols = changed
+                    .iter()
+                    .filter(|(j, _)| !self.zcache.contains_key(j))
+                    .count();
+                new_cols as f64 * tc <= 0.5 * tf
+            } {
                 let t = Instant::now();
                 let (lr, new_cols) = LowRank::new(qp, fac, changed, rho, &mut self.zcache);
                 self.solves += new_cols;
-                if new_cols > 0 {
+                if new_cols >= BLOCK / 4 {
                     self.t_col = Some(t.elapsed().as_secs_f64() / new_cols as f64);
                 }
                 update = lr.map(Some);
@@ -704,7 +720,10 @@ impl<'a> Ssn<'a> {
             for (c, &j) in chunk.iter().enumerate() {
                 self.h[j] = Some(self.qp.a.mul(&buf[c * n..(c + 1) * n]));
             }
-            self.t_col = Some(t.elapsed().as_secs_f64() / chunk.len() as f64);
+            if chunk.len() >= BLOCK / 4 {
+                // Small blocks cost nearly a full solve each: not representative.
+                self.t_col = Some(t.elapsed().as_secs_f64() / chunk.len() as f64);
+            }
         }
     }
 
@@ -712,13 +731,15 @@ impl<'a> Ssn<'a> {
     /// Returns (λ over all rows, x).
     /// The cost model of the module doc: true to take the Schur path for `in_j`.
     fn prefer_schur(&self, in_j: &[bool]) -> bool {
-        let (Some(tf), Some(ts)) = (self.t_fac_last, self.t_solve_last) else {
-            return false;
-        };
-        if self.steps_done == 0 || !self.auto {
+        if !self.auto {
             return false;
         }
-        let tc = self.t_col.unwrap_or(0.5 * ts);
+        let (Some(tf), Some(ts)) = (self.t_fac_last, self.t_solve_last) else {
+            // Nothing factored yet: both paths need one factorization; the
+            // Schur path then needs |J|·COL_FRACTION solves, the augmented ≈ 6.
+            return in_j.iter().filter(|b| **b).count() as f64 * COL_FRACTION <= 6.0;
+        };
+        let tc = self.t_col.unwrap_or(COL_FRACTION * ts);
         let new_rows = in_j
             .iter()
             .zip(&self.h)
@@ -728,7 +749,9 @@ impl<'a> Ssn<'a> {
         // The augmented step: a refactor, or a low-rank update of K' when few
         // rows changed since it was factored.
         let changed = self.kfac_set.as_ref().map_or(usize::MAX, |jb| {
-            jb.iter().zip(in_j).filter(|(a, b)| a != b).count()
+            (0..jb.len())
+                .filter(|&i| jb[i] != in_j[i] && !self.zcache.contains_key(&i))
+                .count()
         });
         let aug_fac = if changed <= LOWRANK_MAX {
             tf.min(changed as f64 * tc)
