@@ -166,7 +166,17 @@ struct Cond {
 
 /// Build the whole model: topology, conditions, QP.
 pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
+    let clock = std::time::Instant::now();
+    let mut lap = {
+        let mut last = 0.0;
+        move |what: &str| {
+            let t = clock.elapsed().as_secs_f64();
+            log::debug!("fem::build: {what} {:.3} s", t - last);
+            last = t;
+        }
+    };
     let topo = Topology::build(mesh, problem)?;
+    lap("topology");
     let f = &problem.file;
     let err = |msg: String| FemError::new(&problem.path, msg);
     let np = topo.points.len();
@@ -301,6 +311,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         }
     }
 
+    lap("conditions");
     // --- eliminate per point
     let mut dofs = Vec::with_capacity(np);
     let mut next = 0usize;
@@ -323,9 +334,8 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     }
     let n = next;
 
+    lap("elimination");
     // --- stiffness and body force
-    let mut trip: Vec<(usize, usize, f64)> = Vec::with_capacity(topo.triangles.len() * 36);
-    let mut d = vec![0.0; n];
     let mats: Vec<&crate::model::Material> = topo
         .material_names
         .iter()
@@ -335,48 +345,14 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         .iter()
         .map(|m| element::d_matrix(m, f.model.plane))
         .collect();
-    let gvec = f.model.gravity.unwrap_or([0.0, 0.0]);
-    for (t, tri) in topo.triangles.iter().enumerate() {
-        let mi = topo.tri_material[t] as usize;
-        let pts = [
-            topo.points[tri[0]],
-            topo.points[tri[1]],
-            topo.points[tri[2]],
-        ];
-        let ke = element::stiffness(&pts, &dmats[mi], th);
-        let area = element::area2(&pts) / 2.0;
-        let fb = [mats[mi].rho * gvec[0], mats[mi].rho * gvec[1]];
-        let mut fe = [0.0; 6];
-        for a in 0..3 {
-            fe[2 * a] = th * area / 3.0 * fb[0];
-            fe[2 * a + 1] = th * area / 3.0 * fb[1];
-        }
-        // fe − Ke u0
-        for i in 0..6 {
-            for b in 0..3 {
-                let u0 = dofs[tri[b]].u0;
-                fe[i] -= ke[i][2 * b] * u0[0] + ke[i][2 * b + 1] * u0[1];
-            }
-        }
-        for a in 0..3 {
-            let pa = dofs[tri[a]];
-            for ka in 0..pa.ndof {
-                let ta = pa.t[ka];
-                let ia = pa.start + ka;
-                d[ia] += ta[0] * fe[2 * a] + ta[1] * fe[2 * a + 1];
-                for b in 0..3 {
-                    let pb = dofs[tri[b]];
-                    for kb in 0..pb.ndof {
-                        let tb = pb.t[kb];
-                        let v = ta[0] * (ke[2 * a][2 * b] * tb[0] + ke[2 * a][2 * b + 1] * tb[1])
-                            + ta[1]
-                                * (ke[2 * a + 1][2 * b] * tb[0] + ke[2 * a + 1][2 * b + 1] * tb[1]);
-                        trip.push((ia, pb.start + kb, v));
-                    }
-                }
-            }
-        }
-    }
+    let bforce: Vec<[f64; 2]> = {
+        let gvec = f.model.gravity.unwrap_or([0.0, 0.0]);
+        mats.iter()
+            .map(|m| [m.rho * gvec[0], m.rho * gvec[1]])
+            .collect()
+    };
+    let (c, mut d) = assemble_stiffness(&topo, &dofs, n, &dmats, &bforce, th, parallel_assembly());
+    lap("stiffness");
     let add_force = |d: &mut Vec<f64>, p: usize, fv: [f64; 2]| {
         let pd = dofs[p];
         for k in 0..pd.ndof {
@@ -433,9 +409,8 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
             }
         }
     }
-    let c = Csr::from_triplets(n, n, &trip);
-    drop(trip);
 
+    lap("loads");
     // --- contact rows in the reduced DOFs
     let mut atrip = vec![];
     let mut g = vec![];
@@ -472,6 +447,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     }
     let a = Csr::from_triplets(qp_rows.len(), n, &atrip);
 
+    lap("contact rows");
     // --- rigid modes left after the conditions (per body)
     let (kernel, kernel_body) = rigid_modes(&topo, &dofs, &conds, n);
     let qp = QpProblem { c, d, a, g, kernel };
@@ -484,8 +460,536 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         plane: f.model.plane,
         thickness: f.model.thickness,
     };
+    lap("rigid modes");
     check_semicoercive(&model, problem)?;
+    lap("semicoercivity check");
     Ok(model)
+}
+
+/// Points per parallel work item of the assembly.
+const CHUNK_POINTS: usize = 2048;
+
+/// Whether to assemble on rayon's threads: yes unless `SIGNORINI_THREADS`
+/// ≤ 1 (the variable that also makes faer sequential).
+fn parallel_assembly() -> bool {
+    !std::env::var("SIGNORINI_THREADS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .map(|t| t <= 1)
+        .unwrap_or(false)
+}
+
+/// `f` of every item, in order, on rayon's threads if `parallel`. The
+/// results never depend on it: every item works on its own data.
+fn map_items<T: Send, R: Send>(
+    parallel: bool,
+    items: Vec<T>,
+    f: impl Fn(T) -> R + Sync + Send,
+) -> Vec<R> {
+    use rayon::prelude::*;
+    if !parallel || items.len() <= 1 {
+        items.into_iter().map(f).collect()
+    } else {
+        items.into_par_iter().map(f).collect()
+    }
+}
+
+/// Run `f` on every item, on rayon's threads if `parallel`.
+fn for_each_mut<T: Send>(parallel: bool, items: &mut [T], f: impl Fn(&mut T) + Sync + Send) {
+    use rayon::prelude::*;
+    if !parallel || items.len() <= 1 {
+        items.iter_mut().for_each(f);
+    } else {
+        items.par_iter_mut().for_each(f);
+    }
+}
+
+/// The row blocks of a chunk of points (in rank order): columns and values
+/// (point i of the chunk at `at[i]..at[i + 1]`), two d entries per point;
+/// `coff` is scratch.
+#[derive(Default)]
+struct Block {
+    cols: Vec<usize>,
+    vals: Vec<f64>,
+    at: Vec<usize>,
+    d: Vec<f64>,
+    coff: Vec<usize>,
+}
+
+/// Where a thread copies the blocks of its DOF rows: the rows, and C's
+/// indices and values from entry `off` on, and d, of those rows.
+struct Target<'a> {
+    rows: std::ops::Range<usize>,
+    off: usize,
+    ind: &'a mut [usize],
+    dat: &'a mut [f64],
+    d: &'a mut [f64],
+}
+
+/// A point without conditions: ndof 2, T = I, u0 = 0 (the assembly skips
+/// the transformation, which changes nothing but the sign of zeros).
+fn is_free(pd: &PointDofs) -> bool {
+    pd.ndof == 2 && pd.t == [[1.0, 0.0], [0.0, 1.0]] && pd.u0 == [0.0, 0.0]
+}
+
+/// Z-order (Morton) keys of 2D positions: 16 bits per axis over the box of
+/// all of them. Sorting by key puts nearby positions near each other.
+struct Morton {
+    lo: [f64; 2],
+    scale: [f64; 2],
+}
+
+impl Morton {
+    fn new(pts: &[[f64; 2]]) -> Morton {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for x in pts {
+            for k in 0..2 {
+                lo[k] = lo[k].min(x[k]);
+                hi[k] = hi[k].max(x[k]);
+            }
+        }
+        let scale = [0, 1].map(|k| {
+            let e = hi[k] - lo[k];
+            if e > 0.0 && e.is_finite() {
+                65535.0 / e
+            } else {
+                0.0
+            }
+        });
+        Morton { lo, scale }
+    }
+
+    fn key(&self, x: [f64; 2]) -> u64 {
+        let q = [0, 1].map(|k| ((x[k] - self.lo[k]) * self.scale[k]).clamp(0.0, 65535.0) as u64);
+        let spread = |mut v: u64| {
+            v = (v | (v << 8)) & 0x00FF_00FF;
+            v = (v | (v << 4)) & 0x0F0F_0F0F;
+            v = (v | (v << 2)) & 0x3333_3333;
+            (v | (v << 1)) & 0x5555_5555
+        };
+        spread(q[0]) | (spread(q[1]) << 1)
+    }
+}
+
+/// Indices 0..keys.len() sorted by (key, index).
+fn sorted_by_key(parallel: bool, keys: impl Iterator<Item = u64>) -> Vec<u32> {
+    use rayon::prelude::*;
+    let mut k: Vec<u64> = keys
+        .enumerate()
+        .map(|(i, key)| (key << 32) | i as u64)
+        .collect();
+    if parallel {
+        k.par_sort_unstable();
+    } else {
+        k.sort_unstable();
+    }
+    k.into_iter().map(|x| x as u32).collect()
+}
+
+/// A point as the assembly reads it, stored in Z-order.
+#[derive(Clone, Copy, Default)]
+struct RankPoint {
+    x: [f64; 2],
+    start: usize,
+    /// The point's index.
+    p: u32,
+    ndof: u8,
+    free: bool,
+}
+
+/// A triangle as the assembly reads it: its vertices (Z-order ranks), mesh
+/// index and material.
+#[derive(Clone, Copy, Default)]
+struct TriRec {
+    v: [u32; 3],
+    t: u32,
+    mat: u32,
+}
+
+/// C = Σ T_eᵀC_eT_e and the element part of d = Σ T_eᵀ(f_e − C_e u0_e).
+///
+/// The pattern of C is the point adjacency of the mesh expanded to the
+/// DOFs of each point (sorted columns, both triangles). The values are
+/// gathered row block by row block: the rows of point p take the rows of
+/// p's vertex in the element matrices of its triangles, in increasing
+/// triangle order, so every entry is summed in triangle order whatever
+/// the number of threads (the same sums as a sequential loop over the
+/// triangles), and every work item computes only its own row blocks: no
+/// triplets, no sort of C, no allocation per element.
+///
+/// Gmsh numbers nodes (and so points) in no spatial order, and at a
+/// million nodes nearly every access in point order misses the cache. So
+/// the work runs over a copy of the point data in Z-order ("ranks") and
+/// the triangles grouped by their lowest rank: the triangles around a
+/// point and their vertices are then mostly in cache. The row blocks,
+/// computed a few chunks of ranks at a time, are copied to their place.
+fn assemble_stiffness(
+    topo: &Topology,
+    dofs: &[PointDofs],
+    n: usize,
+    dmats: &[[[f64; 3]; 3]],
+    bforce: &[[f64; 2]],
+    th: f64,
+    parallel: bool,
+) -> (Csr, Vec<f64>) {
+    let np = topo.points.len();
+    let clock = std::time::Instant::now();
+    let mut lap = {
+        let mut last = 0.0;
+        move |what: &str| {
+            let t = clock.elapsed().as_secs_f64();
+            log::debug!("assemble_stiffness: {what} {:.3} s", t - last);
+            last = t;
+        }
+    };
+    // Points in Z-order: rank r holds point rp[r].p.
+    let mut rank = vec![0u32; np];
+    let rp: Vec<RankPoint> = {
+        let z = Morton::new(&topo.points);
+        let order = sorted_by_key(parallel, topo.points.iter().map(|&x| z.key(x)));
+        order
+            .iter()
+            .enumerate()
+            .map(|(r, &p)| {
+                let p = p as usize;
+                rank[p] = r as u32;
+                let pd = &dofs[p];
+                RankPoint {
+                    x: topo.points[p],
+                    start: pd.start,
+                    p: p as u32,
+                    ndof: pd.ndof as u8,
+                    free: is_free(pd),
+                }
+            })
+            .collect()
+    };
+    lap("point order");
+    // Triangles bucketed by their lowest vertex rank (mesh order within a
+    // bucket), vertices as ranks.
+    let trec: Vec<TriRec> = {
+        let recs = || {
+            topo.triangles.iter().enumerate().map(|(t, tri)| TriRec {
+                v: tri.map(|v| rank[v]),
+                t: t as u32,
+                mat: topo.tri_material[t],
+            })
+        };
+        let low = |rec: &TriRec| rec.v.iter().copied().min().unwrap_or(0) as usize;
+        super::bucket_sort(recs, low, np).0
+    };
+    drop(rank);
+    lap("triangle order");
+    // Rank → its triangles (indices into trec), in increasing mesh order.
+    let mut inc_ptr = vec![0usize; np + 1];
+    for rec in &trec {
+        for &v in &rec.v {
+            inc_ptr[v as usize + 1] += 1;
+        }
+    }
+    for r in 0..np {
+        inc_ptr[r + 1] += inc_ptr[r];
+    }
+    let mut inc = vec![0u32; inc_ptr[np]];
+    {
+        let mut fill = inc_ptr[..np].to_vec();
+        for (i, rec) in trec.iter().enumerate() {
+            for &v in &rec.v {
+                inc[fill[v as usize]] = i as u32;
+                fill[v as usize] += 1;
+            }
+        }
+    }
+    {
+        // Each list in mesh order, chunk by chunk.
+        let mut items = Vec::with_capacity(np.div_ceil(CHUNK_POINTS));
+        let mut rest = &mut inc[..];
+        for s in (0..np).step_by(CHUNK_POINTS) {
+            let e = (s + CHUNK_POINTS).min(np);
+            let (part, r) = std::mem::take(&mut rest).split_at_mut(inc_ptr[e] - inc_ptr[s]);
+            rest = r;
+            items.push((s, e, part));
+        }
+        map_items(parallel, items, |(s, e, part)| {
+            for r in s..e {
+                part[inc_ptr[r] - inc_ptr[s]..inc_ptr[r + 1] - inc_ptr[s]]
+                    .sort_unstable_by_key(|&i| trec[i as usize].t);
+            }
+        });
+    }
+    let (rp, trec, inc_ptr, inc) = (&rp[..], &trec[..], &inc_ptr[..], &inc[..]);
+    let tris_of = |r: usize| &inc[inc_ptr[r]..inc_ptr[r + 1]];
+    lap("incidence");
+
+    let chunks: Vec<(usize, usize)> = (0..np)
+        .step_by(CHUNK_POINTS)
+        .map(|s| (s, (s + CHUNK_POINTS).min(np)))
+        .collect();
+
+    // Pass 1, by rank: the neighbours of each point with DOFs (the vertices
+    // with DOFs of its triangles, itself included) as ranks, in increasing
+    // point order, and the length of the point's rows.
+    // Kept per chunk (rank r is entry r % CHUNK_POINTS of chunk r / CHUNK_POINTS).
+    struct Nbrs {
+        adj: Vec<u32>,
+        ptr: Vec<u32>,
+        len: Vec<u32>,
+    }
+    let parts: Vec<Nbrs> = map_items(parallel, chunks.clone(), |(s, e)| {
+        let mut adj: Vec<u32> = Vec::with_capacity((e - s) * 8);
+        let mut ptr: Vec<u32> = Vec::with_capacity(e - s + 1);
+        let mut len: Vec<u32> = Vec::with_capacity(e - s);
+        let mut buf: Vec<u64> = Vec::with_capacity(64);
+        ptr.push(0);
+        for r in s..e {
+            if rp[r].ndof == 0 {
+                ptr.push(adj.len() as u32);
+                len.push(0);
+                continue;
+            }
+            buf.clear();
+            for &i in tris_of(r) {
+                for &q in &trec[i as usize].v {
+                    let x = &rp[q as usize];
+                    let key = ((x.p as u64) << 32) | q as u64;
+                    if x.ndof > 0 && !buf.contains(&key) {
+                        buf.push(key);
+                    }
+                }
+            }
+            buf.sort_unstable();
+            let mut l = 0u32;
+            for &k in &buf {
+                let q = k as u32;
+                adj.push(q);
+                l += rp[q as usize].ndof as u32;
+            }
+            ptr.push(adj.len() as u32);
+            len.push(l);
+        }
+        Nbrs { adj, ptr, len }
+    });
+    let parts = &parts[..];
+    let nbrs = |r: usize| {
+        let (c, k) = (&parts[r / CHUNK_POINTS], r % CHUNK_POINTS);
+        &c.adj[c.ptr[k] as usize..c.ptr[k + 1] as usize]
+    };
+    lap("neighbours");
+    // CSR row pointers in DOF order.
+    let mut len_of = vec![0u32; np];
+    for (r, x) in rp.iter().enumerate() {
+        len_of[x.p as usize] = parts[r / CHUNK_POINTS].len[r % CHUNK_POINTS];
+    }
+    let mut indptr = Vec::with_capacity(n + 1);
+    indptr.push(0usize);
+    for (pd, &len) in dofs.iter().zip(&len_of) {
+        for _ in 0..pd.ndof {
+            indptr.push(indptr[indptr.len() - 1] + len as usize);
+        }
+    }
+    drop(len_of);
+    let nnz = indptr[n];
+    let indptr_ref = &indptr[..];
+    lap("row pointers");
+
+    // Pass 2, by rank: each chunk's row blocks (columns, values, d) into
+    // its own buffers; a few chunks per thread at a time, then copied.
+    let block = |((s, e), mut buf): ((usize, usize), Block)| -> Block {
+        let Block {
+            cols,
+            vals,
+            at,
+            d: dv,
+            coff,
+        } = &mut buf;
+        cols.clear();
+        vals.clear();
+        at.clear();
+        at.push(0);
+        dv.clear();
+        dv.resize(2 * (e - s), 0.0);
+        for r in s..e {
+            let pr = rp[r];
+            if pr.ndof == 0 {
+                at.push(cols.len());
+                continue;
+            }
+            let nb = nbrs(r);
+            coff.clear();
+            let c0 = cols.len();
+            for &q in nb {
+                let x = &rp[q as usize];
+                coff.push(cols.len() - c0);
+                cols.extend(x.start..x.start + x.ndof as usize);
+            }
+            let len = cols.len() - c0;
+            for _ in 1..pr.ndof {
+                cols.extend_from_within(c0..c0 + len);
+            }
+            let v0 = vals.len();
+            vals.resize(v0 + pr.ndof as usize * len, 0.0);
+            let blk = &mut vals[v0..];
+            let dr = &mut dv[2 * (r - s)..2 * (r - s) + 2];
+            let pp = if pr.free {
+                None
+            } else {
+                Some(&dofs[pr.p as usize])
+            };
+            for &i in tris_of(r) {
+                let rec = trec[i as usize];
+                let vx = rec.v.map(|v| &rp[v as usize]);
+                let a = if rec.v[0] as usize == r {
+                    0
+                } else if rec.v[1] as usize == r {
+                    1
+                } else {
+                    2
+                };
+                let mi = rec.mat as usize;
+                let pts = [vx[0].x, vx[1].x, vx[2].x];
+                let ke = element::stiffness_rows(&pts, &dmats[mi], th, a);
+                let area = element::area2(&pts) / 2.0;
+                let fb = bforce[mi];
+                let mut fe = [th * area / 3.0 * fb[0], th * area / 3.0 * fb[1]];
+                // fe − Ke u0
+                for (k, fk) in fe.iter_mut().enumerate() {
+                    for b in 0..3 {
+                        if vx[b].free {
+                            continue;
+                        }
+                        let u0 = dofs[vx[b].p as usize].u0;
+                        *fk -= ke[k][2 * b] * u0[0] + ke[k][2 * b + 1] * u0[1];
+                    }
+                }
+                match pp {
+                    None => {
+                        dr[0] += fe[0];
+                        dr[1] += fe[1];
+                    }
+                    Some(pp) => {
+                        for ka in 0..pp.ndof {
+                            let ta = pp.t[ka];
+                            dr[ka] += ta[0] * fe[0] + ta[1] * fe[1];
+                        }
+                    }
+                }
+                for b in 0..3 {
+                    if vx[b].ndof == 0 {
+                        continue;
+                    }
+                    let col = nb
+                        .iter()
+                        .position(|&q| q == rec.v[b])
+                        .map(|k| coff[k])
+                        .unwrap_or(0);
+                    match pp {
+                        None if vx[b].free => {
+                            blk[col] += ke[0][2 * b];
+                            blk[col + 1] += ke[0][2 * b + 1];
+                            blk[len + col] += ke[1][2 * b];
+                            blk[len + col + 1] += ke[1][2 * b + 1];
+                        }
+                        _ => {
+                            let pa = &dofs[pr.p as usize];
+                            let pb = &dofs[vx[b].p as usize];
+                            for ka in 0..pa.ndof {
+                                let ta = pa.t[ka];
+                                let row = ka * len + col;
+                                for kb in 0..pb.ndof {
+                                    let tb = pb.t[kb];
+                                    let v = ta[0]
+                                        * (ke[0][2 * b] * tb[0] + ke[0][2 * b + 1] * tb[1])
+                                        + ta[1] * (ke[1][2 * b] * tb[0] + ke[1][2 * b + 1] * tb[1]);
+                                    blk[row + kb] += v;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            at.push(cols.len());
+        }
+        buf
+    };
+    let mut indices = vec![0usize; nnz];
+    let mut data = vec![0.0f64; nnz];
+    let mut d = vec![0.0f64; n];
+    let threads = if parallel {
+        rayon::current_num_threads().max(1)
+    } else {
+        1
+    };
+    // The copy goes to `threads` disjoint ranges of DOFs, each scanning
+    // the round's blocks for its own points.
+    let mut targets = Vec::with_capacity(threads);
+    {
+        let (mut ind_rest, mut dat_rest, mut d_rest) =
+            (&mut indices[..], &mut data[..], &mut d[..]);
+        let (mut lo, mut off) = (0usize, 0usize);
+        for k in 1..=threads {
+            // The rows [lo, hi) of whole points, with about k/threads of
+            // the entries.
+            let hi = if k == threads {
+                n
+            } else {
+                let q = dofs.partition_point(|pd| indptr[pd.start] < nnz / threads * k);
+                dofs.get(q).map(|pd| pd.start).unwrap_or(n).max(lo)
+            };
+            let end = indptr[hi];
+            let (ind, ir) = std::mem::take(&mut ind_rest).split_at_mut(end - off);
+            let (dat, dr) = std::mem::take(&mut dat_rest).split_at_mut(end - off);
+            let (dd, ddr) = std::mem::take(&mut d_rest).split_at_mut(hi - lo);
+            ind_rest = ir;
+            dat_rest = dr;
+            d_rest = ddr;
+            targets.push(Target {
+                rows: lo..hi,
+                off,
+                ind,
+                dat,
+                d: dd,
+            });
+            lo = hi;
+            off = end;
+        }
+    }
+    let per_round = 2 * threads;
+    let mut pool: Vec<Block> = (0..per_round).map(|_| Block::default()).collect();
+    for round in chunks.chunks(per_round) {
+        let items: Vec<_> = round.iter().copied().zip(pool.drain(..)).collect();
+        let out = map_items(parallel, items, block);
+        let copy = |t: &mut Target| {
+            for (&(s, e), b) in round.iter().zip(&out) {
+                for r in s..e {
+                    let x = rp[r];
+                    let k = x.ndof as usize;
+                    if k == 0 || !t.rows.contains(&x.start) {
+                        continue;
+                    }
+                    let (b0, b1) = (b.at[r - s], b.at[r - s + 1]);
+                    let i0 = indptr_ref[x.start] - t.off;
+                    let i1 = i0 + (b1 - b0);
+                    t.ind[i0..i1].copy_from_slice(&b.cols[b0..b1]);
+                    t.dat[i0..i1].copy_from_slice(&b.vals[b0..b1]);
+                    let (d0, dk) = (x.start - t.rows.start, 2 * (r - s));
+                    t.d[d0..d0 + k].copy_from_slice(&b.d[dk..dk + k]);
+                }
+            }
+        };
+        for_each_mut(parallel, &mut targets, copy);
+        pool = out;
+    }
+    drop(targets);
+    lap("values");
+    let c = Csr {
+        nrows: n,
+        ncols: n,
+        indptr,
+        indices,
+        data,
+    };
+    (c, d)
 }
 
 /// Combine the conditions r·u = v at one point into u = u0 + Tξ.
@@ -590,12 +1094,29 @@ fn rigid_modes(
         let z = basis(b, topo.points[p]);
         for c in cs {
             let r = normalize(c.r);
-            let row: Vec<f64> = z.iter().map(|zi| r[0] * zi[0] + r[1] * zi[1]).collect();
+            let row: [f64; 3] = z.map(|zi| r[0] * zi[0] + r[1] * zi[1]);
             for i in 0..3 {
                 for j in 0..3 {
                     gtg[b][i][j] += row[i] * row[j];
                 }
             }
+        }
+    }
+    // Points of each body (they are numbered body after body, but do not
+    // rely on it): CSR by counting.
+    let mut bptr = vec![0usize; nb + 1];
+    for &b in &topo.point_body {
+        bptr[b as usize + 1] += 1;
+    }
+    for b in 0..nb {
+        bptr[b + 1] += bptr[b];
+    }
+    let mut bpts = vec![0usize; topo.point_body.len()];
+    {
+        let mut fill = bptr[..nb].to_vec();
+        for (p, &b) in topo.point_body.iter().enumerate() {
+            bpts[fill[b as usize]] = p;
+            fill[b as usize] += 1;
         }
     }
     let mut kernel = vec![];
@@ -608,10 +1129,8 @@ fn rigid_modes(
             }
             let c = &vecs[k];
             let mut v = vec![0.0; n];
-            for (p, pd) in dofs.iter().enumerate() {
-                if topo.point_body[p] as usize != b {
-                    continue;
-                }
+            for &p in &bpts[bptr[b]..bptr[b + 1]] {
+                let pd = &dofs[p];
                 let z = basis(b, topo.points[p]);
                 let u = [
                     c[0] * z[0][0] + c[1] * z[1][0] + c[2] * z[2][0],
@@ -621,9 +1140,16 @@ fn rigid_modes(
                     v[pd.start + j] = pd.t[j][0] * u[0] + pd.t[j][1] * u[1];
                 }
             }
-            let nv = v.iter().map(|a| a * a).sum::<f64>().sqrt();
+            // Only the body's DOFs are nonzero (in increasing order: the
+            // same sum as over all of v).
+            let body_dofs = bpts[bptr[b]..bptr[b + 1]]
+                .iter()
+                .flat_map(|&p| dofs[p].start..dofs[p].start + dofs[p].ndof);
+            let nv = body_dofs.clone().map(|i| v[i] * v[i]).sum::<f64>().sqrt();
             if nv > 0.0 {
-                v.iter_mut().for_each(|a| *a /= nv);
+                for i in body_dofs {
+                    v[i] /= nv;
+                }
                 kernel.push(v);
                 owner.push(b as u32);
             }
@@ -795,4 +1321,123 @@ pub fn sym_eigen(a: &[Vec<f64>]) -> (Vec<f64>, Vec<Vec<f64>>) {
     let vals = (0..n).map(|i| a[i][i]).collect();
     let vecs = (0..n).map(|k| (0..n).map(|i| v[i][k]).collect()).collect();
     (vals, vecs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The former assembly: 36 triplets per triangle, then
+    /// `Csr::from_triplets` (the reference for the gathered assembly).
+    fn reference_stiffness(
+        topo: &Topology,
+        dofs: &[PointDofs],
+        n: usize,
+        dmats: &[[[f64; 3]; 3]],
+        bforce: &[[f64; 2]],
+        th: f64,
+    ) -> (Csr, Vec<f64>) {
+        let mut trip: Vec<(usize, usize, f64)> = Vec::with_capacity(topo.triangles.len() * 36);
+        let mut d = vec![0.0; n];
+        for (t, tri) in topo.triangles.iter().enumerate() {
+            let mi = topo.tri_material[t] as usize;
+            let pts = [
+                topo.points[tri[0]],
+                topo.points[tri[1]],
+                topo.points[tri[2]],
+            ];
+            let ke = element::stiffness(&pts, &dmats[mi], th);
+            let area = element::area2(&pts) / 2.0;
+            let fb = bforce[mi];
+            let mut fe = [0.0; 6];
+            for a in 0..3 {
+                fe[2 * a] = th * area / 3.0 * fb[0];
+                fe[2 * a + 1] = th * area / 3.0 * fb[1];
+            }
+            for i in 0..6 {
+                for b in 0..3 {
+                    let u0 = dofs[tri[b]].u0;
+                    fe[i] -= ke[i][2 * b] * u0[0] + ke[i][2 * b + 1] * u0[1];
+                }
+            }
+            for a in 0..3 {
+                let pa = dofs[tri[a]];
+                for ka in 0..pa.ndof {
+                    let ta = pa.t[ka];
+                    let ia = pa.start + ka;
+                    d[ia] += ta[0] * fe[2 * a] + ta[1] * fe[2 * a + 1];
+                    for b in 0..3 {
+                        let pb = dofs[tri[b]];
+                        for kb in 0..pb.ndof {
+                            let tb = pb.t[kb];
+                            let v = ta[0]
+                                * (ke[2 * a][2 * b] * tb[0] + ke[2 * a][2 * b + 1] * tb[1])
+                                + ta[1]
+                                    * (ke[2 * a + 1][2 * b] * tb[0]
+                                        + ke[2 * a + 1][2 * b + 1] * tb[1]);
+                            trip.push((ia, pb.start + kb, v));
+                        }
+                    }
+                }
+            }
+        }
+        (Csr::from_triplets(n, n, &trip), d)
+    }
+
+    #[test]
+    fn gathered_assembly_matches_triplets_on_shipped_models() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes");
+        let mut tomls: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().map(|x| x == "toml").unwrap_or(false))
+            .collect();
+        tomls.sort();
+        assert!(tomls.len() >= 5);
+        for path in tomls {
+            let problem = Problem::load(&path).unwrap();
+            let mesh = crate::mesh::read_msh(&problem.mesh_path()).unwrap();
+            let m = build(&mesh, &problem).unwrap();
+            let f = &problem.file;
+            let th = match f.model.plane {
+                Plane::Stress => f.model.thickness,
+                Plane::Strain => 1.0,
+            };
+            let mats: Vec<&crate::model::Material> = m
+                .topo
+                .material_names
+                .iter()
+                .map(|x| &f.materials[x])
+                .collect();
+            let dmats: Vec<_> = mats
+                .iter()
+                .map(|x| element::d_matrix(x, f.model.plane))
+                .collect();
+            let gvec = f.model.gravity.unwrap_or([0.0, 0.0]);
+            let bforce: Vec<_> = mats
+                .iter()
+                .map(|x| [x.rho * gvec[0], x.rho * gvec[1]])
+                .collect();
+            let n = m.qp.n();
+            let (cr, dr) = reference_stiffness(&m.topo, &m.dofs, n, &dmats, &bforce, th);
+            let (cs, ds) = assemble_stiffness(&m.topo, &m.dofs, n, &dmats, &bforce, th, false);
+            let (cp, dp) = assemble_stiffness(&m.topo, &m.dofs, n, &dmats, &bforce, th, true);
+            // Threads change nothing, bit for bit.
+            assert_eq!(cs, cp, "{}", path.display());
+            assert_eq!(ds, dp);
+            // Same pattern; values equal up to the order of summation.
+            assert_eq!(cs.indptr, cr.indptr, "{}", path.display());
+            assert_eq!(cs.indices, cr.indices, "{}", path.display());
+            let cmax = cr.data.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for (x, y) in cs.data.iter().zip(&cr.data) {
+                assert!(
+                    (x - y).abs() <= 1e-14 * cmax,
+                    "{}: {x} vs {y}",
+                    path.display()
+                );
+            }
+            // d is summed in triangle order in both: bit for bit.
+            assert_eq!(ds, dr, "{}", path.display());
+        }
+    }
 }

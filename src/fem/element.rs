@@ -46,19 +46,48 @@ pub fn b_matrix(p: &[[f64; 2]; 3]) -> ([[f64; 6]; 3], f64) {
     (bm, a2 / 2.0)
 }
 
-/// C_e = t_h |T| BᵀDB (6×6).
-pub fn stiffness(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64) -> [[f64; 6]; 6] {
-    let (b, area) = b_matrix(p);
+/// D B (3×6).
+#[inline]
+fn d_times_b(d: &[[f64; 3]; 3], b: &[[f64; 6]; 3]) -> [[f64; 6]; 3] {
     let mut db = [[0.0; 6]; 3];
     for i in 0..3 {
         for j in 0..6 {
             db[i][j] = (0..3).map(|k| d[i][k] * b[k][j]).sum();
         }
     }
+    db
+}
+
+/// Entry (i, j) of C_e from B, |T| and D B: the one expression that both
+/// [`stiffness`] and [`stiffness_rows`] use, so that they agree bit for bit.
+#[inline]
+fn ke_entry(b: &[[f64; 6]; 3], db: &[[f64; 6]; 3], th: f64, area: f64, i: usize, j: usize) -> f64 {
+    th * area * (0..3).map(|l| b[l][i] * db[l][j]).sum::<f64>()
+}
+
+/// C_e = t_h |T| BᵀDB (6×6).
+pub fn stiffness(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64) -> [[f64; 6]; 6] {
+    let (b, area) = b_matrix(p);
+    let db = d_times_b(d, &b);
     let mut k = [[0.0; 6]; 6];
     for i in 0..6 {
         for j in 0..6 {
-            k[i][j] = th * area * (0..3).map(|l| b[l][i] * db[l][j]).sum::<f64>();
+            k[i][j] = ke_entry(&b, &db, th, area, i, j);
+        }
+    }
+    k
+}
+
+/// Rows 2a and 2a+1 of C_e (the two rows of vertex `a`), bit for bit equal
+/// to those of [`stiffness`].
+#[inline]
+pub fn stiffness_rows(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64, a: usize) -> [[f64; 6]; 2] {
+    let (b, area) = b_matrix(p);
+    let db = d_times_b(d, &b);
+    let mut k = [[0.0; 6]; 2];
+    for (r, row) in k.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = ke_entry(&b, &db, th, area, 2 * a + r, j);
         }
     }
     k
@@ -131,6 +160,25 @@ mod tests {
             for row in k.iter() {
                 let f: f64 = row.iter().zip(&z).map(|(a, b)| a * b).sum();
                 assert!(f.abs() < 1e-6 * k[0][0].abs(), "{f}");
+            }
+        }
+    }
+
+    #[test]
+    fn stiffness_rows_equal_stiffness_bit_for_bit() {
+        let p = [[0.1, -0.2], [2.3, 0.35], [0.45, 1.7]];
+        let m = Material {
+            e: 3.1e10,
+            nu: 0.27,
+            rho: 0.0,
+        };
+        for plane in [Plane::Strain, Plane::Stress] {
+            let d = d_matrix(&m, plane);
+            let k = stiffness(&p, &d, 0.7);
+            for a in 0..3 {
+                let r = stiffness_rows(&p, &d, 0.7, a);
+                assert_eq!(r[0], k[2 * a]);
+                assert_eq!(r[1], k[2 * a + 1]);
             }
         }
     }
