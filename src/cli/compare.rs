@@ -3,7 +3,7 @@
 //! time per phase, KKT residuals, energy, agreement with the most accurate
 //! result. A failing variant shows that in its row; the others go on.
 
-use super::solve::{choice, EXIT_BAD_INPUT};
+use super::solve::{bad_input, choice, EXIT_BAD_INPUT};
 use super::SolverFlags;
 use crate::pipeline::{self, Prepared};
 use crate::qp::{precond::PrecondKind, registry, QpResult};
@@ -80,10 +80,7 @@ pub fn variants(spec: Option<&str>) -> Result<Vec<(String, Option<PrecondKind>)>
 pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
     let prep = match pipeline::prepare(&a.problem, a.no_contact) {
         Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return EXIT_BAD_INPUT;
-        }
+        Err(e) => return bad_input(&e),
     };
     let list = match variants(a.methods.as_deref()) {
         Ok(l) => l,

@@ -4,7 +4,7 @@
 //! problem signorini solves. The format is documented in the README
 //! ("Exported QP").
 
-use super::solve::{choice, EXIT_BAD_INPUT};
+use super::solve::{bad_input, choice, EXIT_BAD_INPUT};
 use super::SolverFlags;
 use crate::io::mtx;
 use crate::pipeline;
@@ -35,10 +35,7 @@ pub fn run(a: &ExportArgs, quiet: bool) -> i32 {
     let t0 = Instant::now();
     let prep = match pipeline::prepare(&a.problem, a.no_contact) {
         Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return EXIT_BAD_INPUT;
-        }
+        Err(e) => return bad_input(&e),
     };
     let qp = &prep.model.qp;
     let mut solved = None;

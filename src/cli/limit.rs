@@ -5,7 +5,7 @@
 //! semicoercive C; that regularisation costs nothing extra).
 //! Prints one JSON line with the phase times.
 
-use super::solve::EXIT_BAD_INPUT;
+use super::solve::{bad_input, EXIT_BAD_INPUT};
 use crate::pipeline;
 use crate::qp::factor::Cholesky;
 use clap::Args;
@@ -28,10 +28,7 @@ pub struct LimitArgs {
 pub fn run(a: &LimitArgs, _quiet: bool) -> i32 {
     let prep = match pipeline::prepare(&a.problem, a.no_contact) {
         Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return EXIT_BAD_INPUT;
-        }
+        Err(e) => return bad_input(&e),
     };
     let qp = &prep.model.qp;
     let (mut tf, mut ts) = (vec![], vec![]);

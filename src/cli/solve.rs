@@ -1,7 +1,7 @@
 //! `signorini solve`: one problem, one method, all outputs and the report.
 
 use super::{SolveArgs, SolverFlags};
-use crate::pipeline::{self, InputError, Prepared, SolverChoice};
+use crate::pipeline::{self, Prepared, SolverChoice};
 use crate::post;
 use crate::qp::QpResult;
 use serde_json::json;
@@ -287,7 +287,8 @@ pub fn preconditioner_label(method: &str, opts: &crate::qp::SolveOptions) -> Str
     }
 }
 
-fn bad_input(e: &InputError) -> i32 {
+/// Print the one error line of bad input; the exit code for it.
+pub(crate) fn bad_input(e: &impl std::fmt::Display) -> i32 {
     eprintln!("error: {e}");
     EXIT_BAD_INPUT
 }

@@ -166,17 +166,9 @@ struct Cond {
 
 /// Build the whole model: topology, conditions, QP.
 pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
-    let clock = std::time::Instant::now();
-    let mut lap = {
-        let mut last = 0.0;
-        move |what: &str| {
-            let t = clock.elapsed().as_secs_f64();
-            log::debug!("fem::build: {what} {:.3} s", t - last);
-            last = t;
-        }
-    };
+    let mut lap = super::Lap::new("fem::build");
     let topo = Topology::build(mesh, problem)?;
-    lap("topology");
+    lap.lap("topology");
     let f = &problem.file;
     let err = |msg: String| FemError::new(&problem.path, msg);
     let np = topo.points.len();
@@ -311,7 +303,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         }
     }
 
-    lap("conditions");
+    lap.lap("conditions");
     // --- eliminate per point
     let mut dofs = Vec::with_capacity(np);
     let mut next = 0usize;
@@ -334,7 +326,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     }
     let n = next;
 
-    lap("elimination");
+    lap.lap("elimination");
     // --- stiffness and body force
     let mats: Vec<&crate::model::Material> = topo
         .material_names
@@ -352,7 +344,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
             .collect()
     };
     let (c, mut d) = assemble_stiffness(&topo, &dofs, n, &dmats, &bforce, th, parallel_assembly());
-    lap("stiffness");
+    lap.lap("stiffness");
     let add_force = |d: &mut Vec<f64>, p: usize, fv: [f64; 2]| {
         let pd = dofs[p];
         for k in 0..pd.ndof {
@@ -410,7 +402,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         }
     }
 
-    lap("loads");
+    lap.lap("loads");
     // --- contact rows in the reduced DOFs
     let mut atrip = vec![];
     let mut g = vec![];
@@ -447,7 +439,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     }
     let a = Csr::from_triplets(qp_rows.len(), n, &atrip);
 
-    lap("contact rows");
+    lap.lap("contact rows");
     // --- rigid modes left after the conditions (per body)
     let (kernel, kernel_body) = rigid_modes(&topo, &dofs, &conds, n);
     let qp = QpProblem { c, d, a, g, kernel };
@@ -460,9 +452,9 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         plane: f.model.plane,
         thickness: f.model.thickness,
     };
-    lap("rigid modes");
+    lap.lap("rigid modes");
     check_semicoercive(&model, problem)?;
-    lap("semicoercivity check");
+    lap.lap("semicoercivity check");
     Ok(model)
 }
 
@@ -634,15 +626,7 @@ fn assemble_stiffness(
     parallel: bool,
 ) -> (Csr, Vec<f64>) {
     let np = topo.points.len();
-    let clock = std::time::Instant::now();
-    let mut lap = {
-        let mut last = 0.0;
-        move |what: &str| {
-            let t = clock.elapsed().as_secs_f64();
-            log::debug!("assemble_stiffness: {what} {:.3} s", t - last);
-            last = t;
-        }
-    };
+    let mut lap = super::Lap::new("assemble_stiffness");
     // Points in Z-order: rank r holds point rp[r].p.
     let mut rank = vec![0u32; np];
     let rp: Vec<RankPoint> = {
@@ -665,7 +649,7 @@ fn assemble_stiffness(
             })
             .collect()
     };
-    lap("point order");
+    lap.lap("point order");
     // Triangles bucketed by their lowest vertex rank (mesh order within a
     // bucket), vertices as ranks.
     let trec: Vec<TriRec> = {
@@ -680,7 +664,7 @@ fn assemble_stiffness(
         super::bucket_sort(recs, low, np).0
     };
     drop(rank);
-    lap("triangle order");
+    lap.lap("triangle order");
     // Rank → its triangles (indices into trec), in increasing mesh order.
     let mut inc_ptr = vec![0usize; np + 1];
     for rec in &trec {
@@ -720,7 +704,7 @@ fn assemble_stiffness(
     }
     let (rp, trec, inc_ptr, inc) = (&rp[..], &trec[..], &inc_ptr[..], &inc[..]);
     let tris_of = |r: usize| &inc[inc_ptr[r]..inc_ptr[r + 1]];
-    lap("incidence");
+    lap.lap("incidence");
 
     let chunks: Vec<(usize, usize)> = (0..np)
         .step_by(CHUNK_POINTS)
@@ -775,7 +759,7 @@ fn assemble_stiffness(
         let (c, k) = (&parts[r / CHUNK_POINTS], r % CHUNK_POINTS);
         &c.adj[c.ptr[k] as usize..c.ptr[k + 1] as usize]
     };
-    lap("neighbours");
+    lap.lap("neighbours");
     // CSR row pointers in DOF order.
     let mut len_of = vec![0u32; np];
     for (r, x) in rp.iter().enumerate() {
@@ -791,7 +775,7 @@ fn assemble_stiffness(
     drop(len_of);
     let nnz = indptr[n];
     let indptr_ref = &indptr[..];
-    lap("row pointers");
+    lap.lap("row pointers");
 
     // Pass 2, by rank: each chunk's row blocks (columns, values, d) into
     // its own buffers; a few chunks per thread at a time, then copied.
@@ -981,7 +965,7 @@ fn assemble_stiffness(
         pool = out;
     }
     drop(targets);
-    lap("values");
+    lap.lap("values");
     let c = Csr {
         nrows: n,
         ncols: n,

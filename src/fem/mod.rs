@@ -18,6 +18,30 @@ pub struct FemError {
     pub msg: String,
 }
 
+/// Debug log of the time each phase of a build takes (`--log-level debug`).
+pub(crate) struct Lap {
+    what: &'static str,
+    clock: std::time::Instant,
+    last: f64,
+}
+
+impl Lap {
+    pub(crate) fn new(what: &'static str) -> Lap {
+        Lap {
+            what,
+            clock: std::time::Instant::now(),
+            last: 0.0,
+        }
+    }
+
+    /// Log the time since the last call (or since `new`) under `phase`.
+    pub(crate) fn lap(&mut self, phase: &str) {
+        let t = self.clock.elapsed().as_secs_f64();
+        log::debug!("{}: {phase} {:.3} s", self.what, t - self.last);
+        self.last = t;
+    }
+}
+
 impl FemError {
     pub fn new(path: &Path, msg: String) -> FemError {
         FemError {

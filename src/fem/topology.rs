@@ -223,15 +223,7 @@ impl Topology {
         let mpath = mesh.path.display().to_string();
         let nt = mesh.triangles.len();
         let nn = mesh.nodes.len();
-        let clock = std::time::Instant::now();
-        let mut lap = {
-            let mut last = 0.0;
-            move |what: &str| {
-                let t = clock.elapsed().as_secs_f64();
-                log::debug!("Topology::build: {what} {:.3} s", t - last);
-                last = t;
-            }
-        };
+        let mut lap = super::Lap::new("Topology::build");
 
         // --- materials per triangle
         let mut material_names: Vec<String> = vec![];
@@ -278,7 +270,7 @@ impl Topology {
             }));
         }
 
-        lap("materials");
+        lap.lap("materials");
         // --- orientation and degenerate triangles
         let mut mesh_tris = mesh.triangles.clone();
         let mut signs: Vec<f64> = Vec::with_capacity(nt);
@@ -306,7 +298,7 @@ impl Topology {
             )));
         }
 
-        lap("areas");
+        lap.lap("areas");
         // --- edges → triangles
         let edges = match Edges::build(nn, &mesh_tris) {
             Ok(e) => e,
@@ -318,7 +310,7 @@ impl Topology {
             }
         };
 
-        lap("edges");
+        lap.lap("edges");
         // --- conforming contact edges: sorted (a < b) node pairs with their
         // interface; a segment in two contact groups belongs to the last one.
         let mut interface_names: Vec<String> = vec![];
@@ -386,7 +378,7 @@ impl Topology {
         drop(body_of_root);
         let nbodies = roots.len();
 
-        lap("bodies");
+        lap.lap("bodies");
         // Orientation: flip a body whose triangles are all clockwise; a mix is an inverted element.
         let mut pos = vec![0usize; nbodies];
         let mut neg = vec![0usize; nbodies];
@@ -412,7 +404,7 @@ impl Topology {
         }
         drop(signs);
 
-        lap("orientation");
+        lap.lap("orientation");
         // --- points: (body, node tag) order
         // The distinct bodies of each node: the first one seen, and the rare
         // others (nodes on a contact curve) as sorted (node, body) pairs.
@@ -536,11 +528,11 @@ impl Topology {
             .collect();
         drop(single);
 
-        lap("points");
+        lap.lap("points");
         topo.build_conforming(mesh, problem, &contact_edges)?;
-        lap("conforming contact");
+        lap.lap("conforming contact");
         topo.build_nonmatching(mesh, problem)?;
-        lap("non-matching contact");
+        lap.lap("non-matching contact");
         Ok(topo)
     }
 

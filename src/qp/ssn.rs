@@ -985,6 +985,23 @@ impl Iterative for Ssn<'_> {
                 new_j[add.1] = true;
             }
         }
+        log::debug!(
+            "ssn: step {}: |J| = {}, next |J| = {} ({} enter, {} leave), residual {:.2e}",
+            self.history.len(),
+            self.in_j.iter().filter(|&&b| b).count(),
+            new_j.iter().filter(|&&b| b).count(),
+            new_j
+                .iter()
+                .zip(&self.in_j)
+                .filter(|(n, o)| **n && !**o)
+                .count(),
+            new_j
+                .iter()
+                .zip(&self.in_j)
+                .filter(|(n, o)| !**n && **o)
+                .count(),
+            residual
+        );
         self.in_j = new_j;
         Step::Continue(self.record(residual))
     }
