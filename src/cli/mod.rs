@@ -106,9 +106,11 @@ pub fn run(cli: Cli) -> i32 {
     } else {
         cli.log_level.as_str()
     };
+    // Debug and trace lines carry a millisecond timestamp (phase timing).
+    let verbose = level.contains("debug") || level.contains("trace");
     let _ = env_logger::Builder::new()
         .parse_filters(level)
-        .format_timestamp(None)
+        .format_timestamp(verbose.then_some(env_logger::TimestampPrecision::Millis))
         .try_init();
     match cli.command {
         Command::Solve(a) => solve::run(&a, cli.quiet),

@@ -35,6 +35,7 @@ pub struct Cholesky {
 impl Cholesky {
     /// Factor C, regularised along `kernel` (may be empty).
     pub fn new(c: &Csr, kernel: &[Vec<f64>]) -> Result<Cholesky, QpError> {
+        let t0 = std::time::Instant::now();
         let fixing = fixing_dofs(kernel, c.nrows);
         let diag = c.diag();
         let scale = diag
@@ -70,11 +71,14 @@ impl Cholesky {
         if symbolic.is_some() {
             SYMBOLIC_REUSED.with(|k| k.set(k.get() + 1));
         }
+        let t_prep = t0.elapsed().as_secs_f64();
+        let reused = symbolic.is_some();
         let symbolic = match symbolic {
             Some(s) => s,
             None => SymbolicLlt::try_new(sym.as_ref(), Side::Lower)
                 .map_err(|e| QpError::Factor(format!("symbolic analysis: {e:?}")))?,
         };
+        let t_sym = t0.elapsed().as_secs_f64() - t_prep;
         let mat = SparseColMatRef::new(sym.as_ref(), &vals);
         // Drop the cached factor before allocating a new one (peak memory).
         clear_cache();
@@ -84,6 +88,13 @@ impl Cholesky {
             ))
         })?;
         let llt = Arc::new(llt);
+        log::debug!(
+            "Cholesky: n = {}, nnz(lower C) = {}, prepare {t_prep:.3} s, symbolic {t_sym:.3} s{}, numeric {:.3} s",
+            c.nrows,
+            vals.len(),
+            if reused { " (reused)" } else { "" },
+            t0.elapsed().as_secs_f64() - t_prep - t_sym
+        );
         CACHE.set(Some(CacheEntry {
             n: c.nrows,
             pattern: hp,

@@ -482,7 +482,15 @@ impl<'a> Ssn<'a> {
         Ssn {
             qp,
             fac: None,
-            aug: (augmented && m > 0).then(|| AugPattern::new(qp)),
+            aug: (augmented && m > 0).then(|| {
+                let t = Instant::now();
+                let p = AugPattern::new(qp);
+                log::debug!(
+                    "ssn: pattern of C + AᵀA in {:.3} s",
+                    t.elapsed().as_secs_f64()
+                );
+                p
+            }),
             rho: RHO_FACTOR * if cmax > 0.0 { cmax } else { 1.0 },
             kfac: None,
             kfac_set: None,
