@@ -127,7 +127,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn round_trip_is_exact() {
+    fn round_trip_is_exact() -> Result<(), Box<dyn std::error::Error>> {
         let c = Csr::from_triplets(
             3,
             3,
@@ -141,18 +141,19 @@ mod tests {
         );
         let a = Csr::from_triplets(2, 3, &[(0, 2, 0.1), (1, 0, -7.0)]);
         let d = vec![1.0 / 7.0, -0.0, 3e200];
-        let dir = tempfile::tempdir().unwrap();
+        let dir = tempfile::tempdir()?;
         let p = |n: &str| dir.path().join(n);
-        write_sparse(&p("C.mtx"), &c, true, "C").unwrap();
-        write_sparse(&p("A.mtx"), &a, false, "A").unwrap();
-        write_vector(&p("d.mtx"), &d, "d").unwrap();
-        let c2 = read_sparse(&p("C.mtx")).unwrap();
-        let a2 = read_sparse(&p("A.mtx")).unwrap();
+        write_sparse(&p("C.mtx"), &c, true, "C")?;
+        write_sparse(&p("A.mtx"), &a, false, "A")?;
+        write_vector(&p("d.mtx"), &d, "d")?;
+        let c2 = read_sparse(&p("C.mtx"))?;
+        let a2 = read_sparse(&p("A.mtx"))?;
         assert_eq!(c2, c);
         assert_eq!(a2, a);
-        assert_eq!(read_vector(&p("d.mtx")).unwrap(), d);
+        assert_eq!(read_vector(&p("d.mtx"))?, d);
         // The symmetric file holds the lower triangle only: 4 entries, not 5.
-        let text = std::fs::read_to_string(p("C.mtx")).unwrap();
+        let text = std::fs::read_to_string(p("C.mtx"))?;
         assert!(text.lines().any(|l| l == "3 3 4"), "{text}");
+        Ok(())
     }
 }
