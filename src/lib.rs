@@ -13,3 +13,25 @@ pub mod model;
 pub mod pipeline;
 pub mod post;
 pub mod qp;
+
+/// The shipped examples (`meshes/*.toml`, sorted) loaded with their meshes:
+/// the inputs of the unit tests that run over every model.
+#[cfg(test)]
+pub(crate) fn shipped_examples() -> Vec<(std::path::PathBuf, model::Problem, mesh::Mesh)> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes");
+    let mut tomls: Vec<_> = std::fs::read_dir(&dir)
+        .expect("meshes/")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    tomls.sort();
+    assert!(tomls.len() >= 5, "{tomls:?}");
+    tomls
+        .into_iter()
+        .map(|p| {
+            let problem = model::Problem::load(&p).unwrap_or_else(|e| panic!("{e}"));
+            let mesh = mesh::read_msh(&problem.mesh_path()).unwrap_or_else(|e| panic!("{e}"));
+            (p, problem, mesh)
+        })
+        .collect()
+}

@@ -1370,17 +1370,7 @@ mod tests {
 
     #[test]
     fn gathered_assembly_matches_triplets_on_shipped_models() {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes");
-        let mut tomls: Vec<_> = std::fs::read_dir(&dir)
-            .unwrap()
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().map(|x| x == "toml").unwrap_or(false))
-            .collect();
-        tomls.sort();
-        assert!(tomls.len() >= 5);
-        for path in tomls {
-            let problem = Problem::load(&path).unwrap();
-            let mesh = crate::mesh::read_msh(&problem.mesh_path()).unwrap();
+        for (path, problem, mesh) in crate::shipped_examples() {
             let m = build(&mesh, &problem).unwrap();
             let f = &problem.file;
             let th = match f.model.plane {

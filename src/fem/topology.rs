@@ -1085,23 +1085,11 @@ impl UnionFind {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::Path;
 
     fn shipped() -> Vec<(Problem, Mesh)> {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes");
-        let mut tomls: Vec<_> = std::fs::read_dir(&dir)
-            .unwrap()
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().map(|x| x == "toml").unwrap_or(false))
-            .collect();
-        tomls.sort();
-        tomls
-            .iter()
-            .map(|p| {
-                let problem = Problem::load(p).unwrap();
-                let mesh = crate::mesh::read_msh(&problem.mesh_path()).unwrap();
-                (problem, mesh)
-            })
+        crate::shipped_examples()
+            .into_iter()
+            .map(|(_, problem, mesh)| (problem, mesh))
             .collect()
     }
 
