@@ -183,11 +183,13 @@ pub fn solve_model(
     let res =
         registry::solve(method, &model.qp, opts).map_err(|e| bad(format!("{method}: {e}")))?;
     if let Status::Unbounded { direction } = &res.status {
-        // The motion along the direction (the prescribed displacements u0 are
-        // not part of it), described per body as the rigid motion it is.
+        // registry::solve returns Unbounded only with a verified recession
+        // direction r (Cr = 0 per body, Ar ≤ 0, dᵀr > 0), scaled to a largest
+        // component of 1; described per body as the rigid motion it is.
         let u = model.motions(direction);
+        let work = crate::qp::sparse::dot(&model.qp.d, direction);
         return Err(bad(format!(
-            "the problem is unbounded: {} can move as a rigid body, opening its contacts, while the loads do positive work (a floating body pulled away from its support)",
+            "the problem is unbounded: {} can move as a rigid body without closing any contact, and the loads do positive work on it (dᵀr = {work:.4e} J for a motion of 1 m; a body pulled away from its support, methods.md §1.7)",
             model.describe_rigid_motion(&u)
         )));
     }

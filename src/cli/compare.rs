@@ -29,6 +29,10 @@ pub struct CompareArgs {
     /// Ignore every [[contact]].
     #[arg(long)]
     pub no_contact: bool,
+    /// Wall-clock budget per variant [s]; a variant that reaches it is
+    /// stopped and its row says so.
+    #[arg(long)]
+    pub time_limit: Option<f64>,
     #[command(flatten)]
     pub solver: SolverFlags,
 }
@@ -89,27 +93,73 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
             return EXIT_BAD_INPUT;
         }
     };
+    if let Some(t) = a.time_limit {
+        if !(t > 0.0 && t.is_finite()) {
+            eprintln!(
+                "error: {}: --time-limit {t} must be a positive number of seconds",
+                a.problem.display()
+            );
+            return EXIT_BAD_INPUT;
+        }
+    }
+    // Frictionless elastic contact does not depend on the loading path: the
+    // last load step (full load) is the answer of a multi-step problem.
+    let nsteps = prep.problem.file.nsteps();
+    let step_model;
+    let model = if nsteps > 1 {
+        step_model = match pipeline::step_model(&prep, nsteps - 1) {
+            Ok(m) => m,
+            Err(e) => return bad_input(&e),
+        };
+        if !quiet {
+            eprintln!(
+                "compare: {} has {nsteps} load steps; every variant solves the last one (step {nsteps}, t = {}) from a cold start",
+                prep.problem.name,
+                prep.problem.file.step_time(nsteps - 1)
+            );
+        }
+        &step_model
+    } else {
+        &prep.model
+    };
     let base = choice(&a.solver);
     let mut rows = vec![];
-    for (method, pc) in list {
+    let total = list.len();
+    for (k, (method, pc)) in list.into_iter().enumerate() {
         let mut c = base.clone();
         c.method = Some(method.clone());
         c.preconditioner = pc.map(|k| k.name().to_string());
+        let label = match pc {
+            Some(p) => format!("[{}/{total}] {method}:{}", k + 1, p.name()),
+            None => format!("[{}/{total}] {method}", k + 1),
+        };
+        if !quiet {
+            eprintln!("compare: {label} …");
+        }
+        let t = Instant::now();
         let outcome = match pipeline::options(&prep.problem, &c) {
             Err(e) => Err(e.to_string()),
-            Ok((m, opts)) => {
+            Ok((m, mut opts)) => {
                 // Each method pays for its own factorization.
                 crate::qp::factor::clear_cache();
-                let t = Instant::now();
-                pipeline::solve(&prep, &m, &opts)
+                opts.progress = !quiet;
+                opts.label = Some(label.clone());
+                opts.deadline = a
+                    .time_limit
+                    .map(|s| t + std::time::Duration::from_secs_f64(s));
+                pipeline::solve_model(&prep, model, &m, &opts)
                     .map(|r| (r, t.elapsed().as_secs_f64()))
                     .map_err(|e| e.to_string())
             }
         };
         if !quiet {
+            let how = match &outcome {
+                Ok((r, _)) => r.status.describe(),
+                Err(e) => format!("error: {e}"),
+            };
             eprintln!(
-                "compare: {method} {} done",
-                pc.map(|k| k.name()).unwrap_or("-")
+                "compare: {label} {how} ({:.3} s)",
+                t.elapsed().as_secs_f64()
             );
         }
         rows.push(Row {
@@ -120,7 +170,11 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
             outcome,
         });
     }
-    let table = table_json(&prep, &rows);
+    let mut table = table_json(&prep, model, &rows, a.solver.kkt_target);
+    table["steps"] = json!({ "count": nsteps, "compared": nsteps });
+    if let Some(t) = a.time_limit {
+        table["time_limit_s"] = json!(t);
+    }
     if !quiet {
         print_table(&prep, &table);
     }
@@ -140,13 +194,39 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
     0
 }
 
-/// The table as JSON: `reference` = the converged row with the smallest KKT
-/// residual; each row's `rel_diff` = ‖x − x_ref‖/‖x_ref‖ and `agrees` =
-/// converged, rel_diff ≤ `agree_tol` and the same active set. `agree_tol` =
-/// 1e-6, except for `penalty`, whose minimiser x_ε is O(ε_p) away from x:
-/// there it is max(1e-6, 10·its relative constraint violation), the
-/// violation being the observable O(ε_p) scale of that run.
-pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
+/// ‖a − b‖ / ‖b‖ (0 when both vanish).
+fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
+    let num = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt();
+    let den = b.iter().map(|y| y * y).sum::<f64>().sqrt();
+    if den > 0.0 {
+        num / den
+    } else {
+        num
+    }
+}
+
+/// The table as JSON. `reference` = the converged, certified row with the
+/// smallest KKT residual; each row's `rel_diff` = ‖x − x_ref‖/‖x_ref‖ and
+/// `rel_diff_lambda` = ‖λ − λ_ref‖/‖λ_ref‖ (the contact forces), and
+/// `agrees` = converged, certified (KKT ≤ `kkt_target`), both differences
+/// ≤ `agree_tol` and the same active set. `agree_tol` = 1e-6, except for
+/// `penalty`, whose minimiser x_ε is O(ε_p) away from x: there it is
+/// max(1e-6, 10·its relative constraint violation), the violation being the
+/// observable O(ε_p) scale of that run.
+pub fn table_json(
+    prep: &Prepared,
+    model: &crate::fem::Model,
+    rows: &[Row],
+    kkt_target: f64,
+) -> serde_json::Value {
+    let certified = |r: &Row, q: &QpResult| {
+        q.status.converged() && registry::certified(&r.method, &q.kkt, kkt_target, false)
+    };
     let best = rows
         .iter()
         .enumerate()
@@ -154,7 +234,7 @@ pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
             r.outcome
                 .as_ref()
                 .ok()
-                .filter(|(q, _)| q.status.converged())
+                .filter(|(q, _)| certified(r, q) && r.method != "penalty")
                 .map(|(q, _)| (i, q.kkt.max()))
         })
         .min_by(|a, b| a.1.total_cmp(&b.1))
@@ -169,9 +249,11 @@ pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
             Err(e) => {
                 o["error"] = json!(e);
                 o["converged"] = json!(false);
+                o["certified"] = json!(false);
+                o["agrees"] = json!(false);
             }
             Ok((q, t)) => {
-                let u = prep.model.displacements(&q.x);
+                let u = model.displacements(&q.x);
                 let probes: serde_json::Map<String, serde_json::Value> = pipeline::probes(prep, &u)
                     .into_iter()
                     .map(|(n, _, _, v)| (n, json!(v)))
@@ -181,29 +263,21 @@ pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
                 } else {
                     1e-6
                 };
-                let (rel, agrees) = match reference {
+                let cert = certified(r, q);
+                let (rel, rel_l, agrees) = match reference {
                     Some(rf) => {
-                        let num: f64 =
-                            q.x.iter()
-                                .zip(&rf.x)
-                                .map(|(a, b)| (a - b) * (a - b))
-                                .sum::<f64>()
-                                .sqrt();
-                        let den: f64 =
-                            rf.x.iter()
-                                .map(|a| a * a)
-                                .sum::<f64>()
-                                .sqrt()
-                                .max(f64::MIN_POSITIVE);
-                        let rel = num / den;
+                        let rel = rel_diff(&q.x, &rf.x);
+                        let rel_l = rel_diff(&q.lambda, &rf.lambda);
                         (
                             rel,
-                            q.status.converged() && rel <= agree_tol && q.active == rf.active,
+                            rel_l,
+                            cert && rel <= agree_tol && rel_l <= agree_tol && q.active == rf.active,
                         )
                     }
-                    None => (f64::NAN, false),
+                    None => (f64::NAN, f64::NAN, false),
                 };
                 o["converged"] = json!(q.status.converged());
+                o["certified"] = json!(cert);
                 o["status"] = json!(q.status.describe());
                 o["iterations"] = json!(q.iterations);
                 o["inner_iterations"] = json!(q.inner_iterations);
@@ -219,13 +293,15 @@ pub fn table_json(prep: &Prepared, rows: &[Row]) -> serde_json::Value {
                 o["active"] = json!(q.active.iter().filter(|a| **a).count());
                 o["probes"] = json!(probes);
                 o["rel_diff"] = json!(rel);
+                o["rel_diff_lambda"] = json!(rel_l);
                 o["agrees"] = json!(agrees);
                 o["agree_tol"] = json!(agree_tol);
+                o["notes"] = json!(q.notes);
             }
         }
         out.push(o);
     }
-    json!({ "problem": prep.problem.name, "dofs": prep.model.qp.n(), "constraints": prep.model.qp.m(), "rows": out })
+    json!({ "problem": prep.problem.name, "dofs": model.qp.n(), "constraints": model.qp.m(), "kkt_target": kkt_target, "rows": out })
 }
 
 fn print_table(prep: &Prepared, t: &serde_json::Value) {
@@ -241,8 +317,8 @@ fn print_table(prep: &Prepared, t: &serde_json::Value) {
         head += &format!(" {:>12} {:>12}", format!("u1({n})"), format!("u2({n})"));
     }
     head += &format!(
-        " {:>7} {:>8} {:>9} {:>9} {:>15} {:>9}  agrees",
-        "outer", "inner", "time[s]", "KKT", "energy", "rel.diff"
+        " {:>7} {:>8} {:>9} {:>9} {:>15} {:>9} {:>9}  agrees",
+        "outer", "inner", "time[s]", "KKT", "energy", "diff(x)", "diff(λ)"
     );
     println!("{head}");
     for r in t["rows"].as_array().into_iter().flatten() {
@@ -255,6 +331,10 @@ fn print_table(prep: &Prepared, t: &serde_json::Value) {
             println!("{line} FAILED: {e}");
             continue;
         }
+        if r["converged"] == false {
+            println!("{line} {}", r["status"].as_str().unwrap_or("NOT CONVERGED"));
+            continue;
+        }
         for n in &names {
             let u = &r["probes"][n];
             line += &format!(
@@ -264,15 +344,18 @@ fn print_table(prep: &Prepared, t: &serde_json::Value) {
             );
         }
         line += &format!(
-            " {:>7} {:>8} {:>9.4} {:>9.2e} {:>15.8e} {:>9.2e}  {}",
+            " {:>7} {:>8} {:>9.4} {:>9.2e} {:>15.8e} {:>9.2e} {:>9.2e}  {}",
             r["iterations"].as_u64().unwrap_or(0),
             r["inner_iterations"].as_u64().unwrap_or(0),
             r["time_s"].as_f64().unwrap_or(f64::NAN),
             r["kkt_max"].as_f64().unwrap_or(f64::NAN),
             r["energy"].as_f64().unwrap_or(f64::NAN),
             r["rel_diff"].as_f64().unwrap_or(f64::NAN),
+            r["rel_diff_lambda"].as_f64().unwrap_or(f64::NAN),
             if r["converged"] == false {
                 "NOT CONVERGED"
+            } else if r["certified"] == false {
+                "NOT CERTIFIED"
             } else if r["agrees"] == true {
                 "yes"
             } else {
@@ -284,7 +367,7 @@ fn print_table(prep: &Prepared, t: &serde_json::Value) {
 }
 
 fn to_csv(t: &serde_json::Value) -> String {
-    let mut s = String::from("method,preconditioner,converged,iterations,inner_iterations,time_s,kkt_max,energy,rel_diff,agrees,probes,error\n");
+    let mut s = String::from("method,preconditioner,converged,certified,iterations,inner_iterations,time_s,kkt_max,energy,rel_diff,rel_diff_lambda,agrees,probes,error\n");
     for r in t["rows"].as_array().into_iter().flatten() {
         let probes = r["probes"]
             .as_object()
@@ -296,16 +379,18 @@ fn to_csv(t: &serde_json::Value) -> String {
             })
             .unwrap_or_default();
         s += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},\"{}\"\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\"\n",
             r["method"].as_str().unwrap_or(""),
             r["preconditioner"].as_str().unwrap_or(""),
             r["converged"],
+            r["certified"],
             r["iterations"],
             r["inner_iterations"],
             r["time_s"],
             r["kkt_max"],
             r["energy"],
             r["rel_diff"],
+            r["rel_diff_lambda"],
             r["agrees"],
             probes,
             r["error"].as_str().unwrap_or("").replace('"', "'")

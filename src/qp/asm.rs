@@ -55,7 +55,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     let t1 = Instant::now();
     let solver = SchurSolver::new(qp, chol);
     let mut state = ActiveSet::new(qp, solver, opts);
-    let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("asm"));
+    let mut exec = Executor::for_opts(opts, "asm");
     let (status, iters) = exec.run(&mut state);
     let t_it = t1.elapsed().as_secs_f64();
     Ok(state.into_result(
@@ -483,6 +483,7 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
             timings,
             kkt: Default::default(),
             energy,
+            notes: vec![],
         }
     }
 

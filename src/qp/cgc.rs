@@ -30,7 +30,8 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         .as_deref()
         .filter(|x| x.len() == qp.n() && is_feasible(qp, x));
     let mut state = Cgc::new(qp, pc.as_ref(), opts.tol, opts.multiple_release, x0);
-    let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("cgc"));
+    state.kmax_cap = opts.max_iter.max(1);
+    let mut exec = Executor::for_opts(opts, "cgc");
     let (status, iters) = exec.run(&mut state);
     let t_it = t1.elapsed().as_secs_f64();
     Ok(state.into_result(
@@ -56,12 +57,20 @@ pub struct Cgc<'a> {
     lam: Vec<f64>,
     /// Scale of the projected gradient (W⁻¹-norm of d, or of the first one).
     ref_norm: f64,
-    /// max diag(C): scale for the zero-curvature test.
-    cmax: f64,
+    /// Rounding level of the projected gradient at the current x, relative
+    /// to `ref_norm` ([`Cgc::rounding_floor`]); the stopping test is
+    /// max(tol, floor).
+    floor: f64,
+    /// Orthonormal basis of ker C (empty: C is positive definite).
+    kernel: Vec<Vec<f64>>,
+    /// diag(C): the weights of the zero-curvature test without a kernel.
+    cdiag: Vec<f64>,
     /// Every column of A occurs in at most one row and W = I: λ_J is explicit.
     direct: bool,
     row_norm2: Vec<f64>,
     pub inner: usize,
+    /// At most this many CG steps per face (MAXIT bounds every loop).
+    pub kmax_cap: usize,
 }
 
 enum FaceEnd {
@@ -106,7 +115,7 @@ impl<'a> Cgc<'a> {
             .collect();
         let mut wd = vec![0.0; n];
         pc.apply(&qp.d, &mut wd);
-        let cmax = norm_inf(&qp.c.diag()).max(f64::MIN_POSITIVE);
+        let kernel = super::ssn::orthonormal_kernel(&qp.c, &qp.kernel).unwrap_or_default();
         let mut st = Cgc {
             qp,
             pc,
@@ -118,10 +127,13 @@ impl<'a> Cgc<'a> {
             in_j,
             lam: vec![0.0; m],
             ref_norm: dot(&qp.d, &wd).max(0.0).sqrt(),
-            cmax,
+            floor: 0.0,
+            kernel,
+            cdiag: qp.c.diag(),
             direct: disjoint && pc.is_identity(),
             row_norm2,
             inner: 0,
+            kmax_cap: usize::MAX,
         };
         let (_, r) = st.project();
         st.ref_norm = st.ref_norm.max(r.sqrt()).max(1e-300);
@@ -211,7 +223,7 @@ impl<'a> Cgc<'a> {
         let qp = self.qp;
         let n = qp.n();
         let nj = self.in_j.iter().filter(|b| **b).count();
-        let kmax = 2 * n.saturating_sub(nj) + 10;
+        let kmax = (2 * n.saturating_sub(nj) + 10).min(self.kmax_cap);
         let mut p = vec![0.0; n];
         let mut w = vec![0.0; n];
         let mut r_old = 0.0;
@@ -220,7 +232,7 @@ impl<'a> Cgc<'a> {
             if !r.is_finite() {
                 return FaceEnd::Unbounded(vec![f64::NAN]);
             }
-            if r.max(0.0).sqrt() <= self.tol * self.ref_norm {
+            if r.max(0.0).sqrt() <= self.tol.max(self.floor) * self.ref_norm {
                 return FaceEnd::Min;
             }
             if k == 0 {
@@ -240,7 +252,7 @@ impl<'a> Cgc<'a> {
             let ap = qp.a.mul(&p);
             let pp = dot(&p, &p);
             // (g,p) = −r; a step of length r/a2 is the exact line search.
-            let alpha = if a2 > 1e-13 * self.cmax * pp && r < a2 * MAXVAL {
+            let alpha = if !self.zero_curvature(&p, a2, pp) && r < a2 * MAXVAL {
                 r / a2
             } else {
                 MAXVAL
@@ -307,6 +319,7 @@ impl<'a> Cgc<'a> {
             timings,
             kkt: Default::default(),
             energy,
+            notes: vec![],
         }
     }
 }
@@ -314,9 +327,10 @@ impl<'a> Cgc<'a> {
 impl Iterative for Cgc<'_> {
     fn step(&mut self) -> Step {
         self.restore_face();
+        self.floor = self.rounding_floor();
         let (_, r) = self.project();
         let res = r.max(0.0).sqrt() / self.ref_norm;
-        if res <= self.tol {
+        if res <= self.tol.max(self.floor) {
             // Face minimum: λ_J are the KKT multipliers of this face.
             let jset = self.working_set();
             let lbar = jset.iter().fold(0.0f64, |m, &j| m.max(self.lam[j].abs()));
@@ -360,6 +374,58 @@ impl Iterative for Cgc<'_> {
 }
 
 impl Cgc<'_> {
+    /// The level below which the projected gradient is rounding noise, relative
+    /// to `ref_norm`: ∇f = Cx − d is computed with an error of about
+    /// ε·(|C||x| + |d|) entry by entry, which is ‖·‖_{W⁻¹} = sqrt(eᵀW⁻¹e) for
+    /// e = 64ε(|C||x| + |d|). With a stiff body resting on a soft one, |C||x|
+    /// (a large rigid motion of the stiff body) can put this floor above a
+    /// requested tol of 1e-10: the face minimum then cannot be resolved
+    /// further, and the KKT certificate judges the answer.
+    fn rounding_floor(&self) -> f64 {
+        let c = &self.qp.c;
+        let e: Vec<f64> = (0..self.qp.n())
+            .map(|i| {
+                let (cols, vals) = c.row(i);
+                let s: f64 = cols
+                    .iter()
+                    .zip(vals)
+                    .map(|(&j, v)| (v * self.x[j]).abs())
+                    .sum();
+                64.0 * f64::EPSILON * (s + self.qp.d[i].abs())
+            })
+            .collect();
+        let mut z = vec![0.0; e.len()];
+        self.pc.apply(&e, &mut z);
+        let f = dot(&e, &z).max(0.0).sqrt() / self.ref_norm;
+        if f.is_finite() {
+            f
+        } else {
+            0.0
+        }
+    }
+
+    /// Is pᵀCp = `a2` a zero curvature? Scale-invariant (methods.md §4.1):
+    /// with a kernel basis R, only a direction in span R (‖p − RRᵀp‖ ≤ 10⁻⁸‖p‖,
+    /// pure geometry) or a non-positive rounding of a2 counts; without one,
+    /// a2 is compared with pᵀdiag(C)p, each entry in its own body's scale.
+    /// A stiff body on a soft one gives small but positive curvatures that
+    /// must be stepped along, not taken for a rigid motion. Any unbounded
+    /// claim is checked again by the driver (recession::certify).
+    fn zero_curvature(&self, p: &[f64], a2: f64, pp: f64) -> bool {
+        if !(a2 > 0.0) {
+            return true;
+        }
+        if self.kernel.is_empty() {
+            let pdp: f64 = p.iter().zip(&self.cdiag).map(|(v, c)| v * v * c).sum();
+            return a2 <= 1e-14 * pdp;
+        }
+        let mut rest = p.to_vec();
+        for z in &self.kernel {
+            axpy(-dot(z, p), z, &mut rest);
+        }
+        dot(&rest, &rest) <= 1e-16 * pp
+    }
+
     /// Does the first FACE_CG direction after releasing `released` move every
     /// released row inward? (the non-cycling condition of §4.1).
     fn release_moves_inward(&mut self, released: &[usize]) -> bool {

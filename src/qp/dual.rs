@@ -94,6 +94,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         timings: vec![("factor".into(), t_f), ("iterate".into(), t_it)],
         kkt: Default::default(),
         energy,
+        notes: vec![],
     })
 }
 

@@ -80,6 +80,8 @@ pub struct Executor {
     pub log: Vec<IterRecord>,
     /// Keep at most this many log records (the first and last are kept).
     pub log_limit: usize,
+    /// Stop when this instant has passed (a user's time budget).
+    pub deadline: Option<Instant>,
 }
 
 impl Executor {
@@ -93,7 +95,17 @@ impl Executor {
             observers,
             log: vec![],
             log_limit: 10_000,
+            deadline: None,
         }
+    }
+
+    /// The executor of method `name` for `opts`: MAXIT, the deadline and a
+    /// progress bar labelled with `opts.label` (or `name`).
+    pub fn for_opts(opts: &super::SolveOptions, name: &str) -> Executor {
+        let label = opts.label.clone().unwrap_or_else(|| name.to_string());
+        let mut e = Executor::new(opts.max_iter, opts.progress.then_some(label.as_str()));
+        e.deadline = opts.deadline;
+        e
     }
 
     /// Run `it` until it finishes or MAXIT; returns the status and the
@@ -105,6 +117,12 @@ impl Executor {
         let status = loop {
             if n >= self.max_iter {
                 break Status::MaxIter;
+            }
+            if let Some(d) = self.deadline {
+                let now = Instant::now();
+                if now >= d {
+                    break Status::Failed(format!("time limit reached after {n} iterations"));
+                }
             }
             n += 1;
             let (rec, done) = match it.step() {

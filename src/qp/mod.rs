@@ -26,6 +26,7 @@ pub mod mprgp;
 pub mod penalty;
 pub mod precond;
 pub mod preelim;
+pub mod recession;
 pub mod registry;
 pub mod sparse;
 pub mod ssn;
@@ -109,6 +110,10 @@ pub struct Kkt {
     pub dual: f64,
     pub complementarity: f64,
     pub stationarity: f64,
+    /// Force balance at the contact unknowns relative to the contact forces
+    /// ([`kkt::residuals`]).
+    #[serde(default)]
+    pub contact_balance: f64,
 }
 
 /// What every method returns.
@@ -127,6 +132,9 @@ pub struct QpResult {
     pub timings: Vec<(String, f64)>,
     pub kkt: Kkt,
     pub energy: f64,
+    /// What the driver did beyond the method: a fallback, a refused claim
+    /// (registry::solve). Printed as warnings and written to the JSON.
+    pub notes: Vec<String>,
 }
 
 /// Options shared by all methods.
@@ -150,6 +158,12 @@ pub struct SolveOptions {
     pub accelerate: bool,
     /// Print progress to stderr for long solves.
     pub progress: bool,
+    /// Prefix of the progress line (e.g. the variant in `compare`).
+    pub label: Option<String>,
+    /// Stop with `Status::Failed("time limit …")` after this instant
+    /// (`compare --time-limit`; a budget the user sets, never a decision
+    /// of a method).
+    pub deadline: Option<std::time::Instant>,
     /// Warm start (load steps, restart): used by methods that can, when feasible.
     pub x0: Option<Vec<f64>>,
 }
@@ -166,6 +180,8 @@ impl Default for SolveOptions {
             rho: None,
             accelerate: true,
             progress: false,
+            label: None,
+            deadline: None,
             x0: None,
         }
     }

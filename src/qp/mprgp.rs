@@ -624,6 +624,7 @@ impl<'a> Mprgp<'a> {
             timings,
             kkt: Default::default(),
             energy,
+            notes: vec![],
         }
     }
 }

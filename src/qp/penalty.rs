@@ -119,7 +119,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     };
     let t_setup = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("penalty"));
+    let mut exec = Executor::for_opts(opts, "penalty");
     let (status, iters) = exec.run(&mut st);
     let t_it = t1.elapsed().as_secs_f64();
     let ax = qp.a.mul(&st.x);
@@ -150,6 +150,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         timings: vec![("setup".into(), t_setup), ("iterate".into(), t_it)],
         kkt: Default::default(),
         energy,
+        notes: vec![],
     })
 }
 

@@ -245,5 +245,6 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         timings,
         kkt: Default::default(),
         energy,
+        notes: vec![],
     })
 }

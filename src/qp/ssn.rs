@@ -930,6 +930,7 @@ impl<'a> Ssn<'a> {
             timings,
             kkt: Default::default(),
             energy,
+            notes: vec![],
         }
     }
 }

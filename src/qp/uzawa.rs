@@ -108,6 +108,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         ],
         kkt: Default::default(),
         energy,
+        notes: vec![],
     })
 }
 
