@@ -170,7 +170,10 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
             outcome,
         });
     }
-    let mut table = table_json(&prep, model, &rows, a.solver.kkt_target);
+    let penalty_eps = pipeline::options(&prep.problem, &base)
+        .ok()
+        .and_then(|(_, o)| o.penalty);
+    let mut table = table_json(&prep, model, &rows, a.solver.kkt_target, penalty_eps);
     table["steps"] = json!({ "count": nsteps, "compared": nsteps });
     if let Some(t) = a.time_limit {
         table["time_limit_s"] = json!(t);
@@ -214,16 +217,25 @@ fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
 /// smallest KKT residual; each row's `rel_diff` = ‖x − x_ref‖/‖x_ref‖ and
 /// `rel_diff_lambda` = ‖λ − λ_ref‖/‖λ_ref‖ (the contact forces), and
 /// `agrees` = converged, certified (KKT ≤ `kkt_target`), both differences
-/// ≤ `agree_tol` and the same active set. `agree_tol` = 1e-6, except for
-/// `penalty`, whose minimiser x_ε is O(ε_p) away from x: there it is
-/// max(1e-6, 10·its relative constraint violation), the violation being the
-/// observable O(ε_p) scale of that run.
+/// ≤ its tolerance and the same active set. Both tolerances are 1e-6, except
+/// for `penalty`, whose minimiser x_ε is O(ε_p) away from x: its x tolerance
+/// (`agree_tol`) is max(1e-6, 10·its relative constraint violation), the
+/// violation being the observable O(ε_p) scale of that run; its contact
+/// forces are those of contact springs of compliance ε_j, off by about
+/// ε_j·c_kk relative (10⁻³ by default, methods.md §4.4), so its λ tolerance
+/// (`agree_tol_lambda`) is 10·max(ε_p·max diag C) for a given ε_p, or
+/// 10/PENALTY_FACTOR for the default one.
 pub fn table_json(
     prep: &Prepared,
     model: &crate::fem::Model,
     rows: &[Row],
     kkt_target: f64,
+    penalty_eps: Option<f64>,
 ) -> serde_json::Value {
+    let penalty_lambda_tol = match penalty_eps {
+        Some(e) => 10.0 * e * model.qp.c.diag().iter().fold(0.0f64, |a, b| a.max(*b)),
+        None => 10.0 / crate::qp::penalty::PENALTY_FACTOR,
+    };
     let certified = |r: &Row, q: &QpResult| {
         q.status.converged() && registry::certified(&r.method, &q.kkt, kkt_target, false)
     };
@@ -258,10 +270,13 @@ pub fn table_json(
                     .into_iter()
                     .map(|(n, _, _, v)| (n, json!(v)))
                     .collect();
-                let agree_tol = if r.method == "penalty" {
-                    (10.0 * q.kkt.primal).max(1e-6)
+                let (agree_tol, agree_tol_l) = if r.method == "penalty" {
+                    (
+                        (10.0 * q.kkt.primal).max(1e-6),
+                        penalty_lambda_tol.max(1e-6),
+                    )
                 } else {
-                    1e-6
+                    (1e-6, 1e-6)
                 };
                 let cert = certified(r, q);
                 let (rel, rel_l, agrees) = match reference {
@@ -271,7 +286,9 @@ pub fn table_json(
                         (
                             rel,
                             rel_l,
-                            cert && rel <= agree_tol && rel_l <= agree_tol && q.active == rf.active,
+                            cert && rel <= agree_tol
+                                && rel_l <= agree_tol_l
+                                && q.active == rf.active,
                         )
                     }
                     None => (f64::NAN, f64::NAN, false),
@@ -296,6 +313,7 @@ pub fn table_json(
                 o["rel_diff_lambda"] = json!(rel_l);
                 o["agrees"] = json!(agrees);
                 o["agree_tol"] = json!(agree_tol);
+                o["agree_tol_lambda"] = json!(agree_tol_l);
                 o["notes"] = json!(q.notes);
             }
         }

@@ -1,0 +1,154 @@
+//! Trust on hard models (docs/methods.md §8): a stiff body held only by
+//! contact on a soft one is solved, never refused as unbounded; certified
+//! means the contact forces are right; the same input gives the same bits;
+//! NaN, overflowing data and absurd warm starts are never certified.
+//!
+//! The model is tests/data/punch (a steel punch floating on a soft
+//! foundation, stiffness contrast 4200 and 1000, non-matching contact).
+
+use signorini::fem::Model;
+use signorini::model::Problem;
+use signorini::qp::{registry, SolveOptions, Status};
+use std::path::PathBuf;
+
+fn dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/punch")
+}
+
+/// The punch model with the punch's Young's modulus replaced.
+fn punch(e_punch: f64) -> Model {
+    let path = dir().join("punch.toml");
+    let text = std::fs::read_to_string(&path)
+        .expect("punch.toml")
+        .replace("E = 2.1e11", &format!("E = {e_punch:e}"));
+    let problem = Problem::parse(&path, &text).expect("problem");
+    let mesh = signorini::mesh::read_msh(&problem.mesh_path()).expect("mesh");
+    signorini::fem::build(&mesh, &problem).expect("model")
+}
+
+fn rel(a: &[f64], b: &[f64]) -> f64 {
+    let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
+    let den: f64 = b.iter().map(|y| y * y).sum();
+    (num / den).sqrt()
+}
+
+/// Every exact method solves the floating punch, certifies its KKT residuals
+/// and agrees with the others on x and on the contact forces λ to 1e-6; the
+/// vertical contact resultant equals the load 1 MPa × 2 m.
+#[test]
+fn a_stiff_punch_floating_on_a_soft_foundation_is_solved_not_refused() {
+    for e in [2.1e11, 5.0e10] {
+        let model = punch(e);
+        assert!(!model.qp.kernel.is_empty(), "the punch must float");
+        let reference = registry::solve("asm", &model.qp, &SolveOptions::default()).expect("asm");
+        assert!(
+            reference.status.converged() && reference.kkt.within(1e-8),
+            "{:?}",
+            reference.kkt
+        );
+        for method in ["cgc", "preelim", "ssn", "mprgp", "dual"] {
+            let r = registry::solve(method, &model.qp, &SolveOptions::default())
+                .unwrap_or_else(|err| panic!("E = {e:e}, {method}: {err}"));
+            assert!(
+                matches!(r.status, Status::Converged),
+                "E = {e:e}, {method}: {}",
+                r.status.describe()
+            );
+            assert!(r.kkt.within(1e-6), "E = {e:e}, {method}: {:?}", r.kkt);
+            let (dx, dl) = (rel(&r.x, &reference.x), rel(&r.lambda, &reference.lambda));
+            assert!(
+                dx < 1e-6 && dl < 1e-6,
+                "E = {e:e}, {method}: x {dx:.2e}, λ {dl:.2e}"
+            );
+            // Σλ·n_y: the rows of a horizontal master carry unit normals, so
+            // the resultant is the sum of the multipliers.
+            let total: f64 = r.lambda.iter().sum();
+            assert!(
+                (total - 2.0e6).abs() < 1e-6 * 2.0e6,
+                "E = {e:e}, {method}: {total}"
+            );
+        }
+    }
+}
+
+/// Same input, same bits: iterations, active set, x and λ.
+#[test]
+fn the_same_input_gives_the_same_bits() {
+    let model = punch(2.1e11);
+    for method in ["cgc", "ssn", "mprgp", "penalty"] {
+        let a = registry::solve(method, &model.qp, &SolveOptions::default()).expect(method);
+        let b = registry::solve(method, &model.qp, &SolveOptions::default()).expect(method);
+        assert_eq!(a.iterations, b.iterations, "{method}");
+        assert_eq!(a.active, b.active, "{method}");
+        assert!(
+            a.x.iter()
+                .zip(&b.x)
+                .all(|(p, q)| p.to_bits() == q.to_bits()),
+            "{method}: x differs between two runs"
+        );
+        assert!(
+            a.lambda
+                .iter()
+                .zip(&b.lambda)
+                .all(|(p, q)| p.to_bits() == q.to_bits()),
+            "{method}: λ differs between two runs"
+        );
+    }
+}
+
+/// A warm start holding 1e300 or NaN (a corrupt checkpoint) is not used, the
+/// result says so and is still certified; data that overflow are refused.
+#[test]
+fn absurd_warm_starts_and_overflowing_data_are_never_certified() {
+    let model = punch(2.1e11);
+    for bad in [1e300, f64::NAN] {
+        let opts = SolveOptions {
+            x0: Some(vec![bad; model.qp.n()]),
+            ..SolveOptions::default()
+        };
+        for method in ["cgc", "ssn"] {
+            let r = registry::solve(method, &model.qp, &opts).expect(method);
+            assert!(
+                r.notes.iter().any(|n| n.contains("warm start not used")),
+                "{:?}",
+                r.notes
+            );
+            assert!(
+                r.status.converged() && r.kkt.within(1e-6),
+                "{method}: {:?}",
+                r.kkt
+            );
+        }
+    }
+    let mut qp = model.qp.clone();
+    qp.d[0] = f64::INFINITY;
+    let err = registry::solve("cgc", &qp, &SolveOptions::default()).expect_err("Inf load");
+    assert!(err.to_string().contains("non-finite"), "{err}");
+}
+
+/// Pulling the punch up instead of pressing it down is unbounded: refused
+/// with a verified recession direction (an upward translation, dᵀr > 0),
+/// before any method runs, for every method.
+#[test]
+fn a_punch_pulled_away_is_unbounded_with_a_certificate() {
+    let mut model = punch(2.1e11);
+    for v in model.qp.d.iter_mut() {
+        *v = -*v;
+    }
+    for method in ["cgc", "ssn", "asm", "uzawa"] {
+        let r = registry::solve(method, &model.qp, &SolveOptions::default()).expect(method);
+        let Status::Unbounded { direction } = &r.status else {
+            panic!("{method}: {}", r.status.describe());
+        };
+        let c = signorini::qp::recession::certify(&model.qp, direction).expect("certificate");
+        assert!(c.work > 0.0);
+        let u = model.motions(direction);
+        assert!(
+            model
+                .describe_rigid_motion(&u)
+                .contains("translation along (0, 1)"),
+            "{}",
+            model.describe_rigid_motion(&u)
+        );
+    }
+}
