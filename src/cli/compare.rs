@@ -222,9 +222,10 @@ fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
 /// (`agree_tol`) is max(1e-6, 10·its relative constraint violation), the
 /// violation being the observable O(ε_p) scale of that run; its contact
 /// forces are those of contact springs of compliance ε_j, off by about
-/// ε_j·c_kk relative (10⁻³ by default, methods.md §4.4), so its λ tolerance
-/// (`agree_tol_lambda`) is 10·max(ε_p·max diag C) for a given ε_p, or
-/// 10/PENALTY_FACTOR for the default one.
+/// ε_j·c_kk relative per row (10⁻³ by default, methods.md §4.4) and by more
+/// at the edge of a contact zone (2.4·10⁻² measured on the floating punch of
+/// tests/hard), so its λ tolerance (`agree_tol_lambda`) is 100·ε_p·max diag C
+/// for a given ε_p, or 100/PENALTY_FACTOR for the default one.
 pub fn table_json(
     prep: &Prepared,
     model: &crate::fem::Model,
@@ -233,8 +234,8 @@ pub fn table_json(
     penalty_eps: Option<f64>,
 ) -> serde_json::Value {
     let penalty_lambda_tol = match penalty_eps {
-        Some(e) => 10.0 * e * model.qp.c.diag().iter().fold(0.0f64, |a, b| a.max(*b)),
-        None => 10.0 / crate::qp::penalty::PENALTY_FACTOR,
+        Some(e) => 100.0 * e * model.qp.c.diag().iter().fold(0.0f64, |a, b| a.max(*b)),
+        None => 100.0 / crate::qp::penalty::PENALTY_FACTOR,
     };
     let certified = |r: &Row, q: &QpResult| {
         q.status.converged() && registry::certified(&r.method, &q.kkt, kkt_target, false)

@@ -61,6 +61,13 @@ pub struct Cgc<'a> {
     /// to `ref_norm` ([`Cgc::rounding_floor`]); the stopping test is
     /// max(tol, floor).
     floor: f64,
+    /// The energy-norm tolerance in force: `tol`, divided by 10 (at most
+    /// [`TIGHTEN`] times) while a face minimum misses the Euclidean test.
+    tol_eff: f64,
+    tightened: usize,
+    /// ‖∇f + A_Jᵀλ_J‖₂ of the last projection, and the scale it is
+    /// measured against, max(‖d‖, ‖Cx‖).
+    gp_norm: f64,
     /// Orthonormal basis of ker C (empty: C is positive definite).
     kernel: Vec<Vec<f64>>,
     /// diag(C): the weights of the zero-curvature test without a kernel.
@@ -72,6 +79,11 @@ pub struct Cgc<'a> {
     /// At most this many CG steps per face (MAXIT bounds every loop).
     pub kmax_cap: usize,
 }
+
+/// A face minimum must also have ‖∇f + A_Jᵀλ_J‖₂ ≤ EUCLID·tol·max(‖d‖, ‖Cx‖).
+const EUCLID: f64 = 1e3;
+/// At most this many tenfold tightenings of the energy-norm tolerance.
+const TIGHTEN: usize = 6;
 
 enum FaceEnd {
     Min,
@@ -128,6 +140,9 @@ impl<'a> Cgc<'a> {
             lam: vec![0.0; m],
             ref_norm: dot(&qp.d, &wd).max(0.0).sqrt(),
             floor: 0.0,
+            tol_eff: tol,
+            tightened: 0,
+            gp_norm: f64::INFINITY,
             kernel,
             cdiag: qp.c.diag(),
             direct: disjoint && pc.is_identity(),
@@ -178,6 +193,7 @@ impl<'a> Cgc<'a> {
         let mut z = vec![0.0; n];
         self.pc.apply(&gp, &mut z);
         let r = dot(&gp, &z);
+        self.gp_norm = norm(&gp);
         (z, r)
     }
 
@@ -232,7 +248,7 @@ impl<'a> Cgc<'a> {
             if !r.is_finite() {
                 return FaceEnd::Unbounded(vec![f64::NAN]);
             }
-            if r.max(0.0).sqrt() <= self.tol.max(self.floor) * self.ref_norm {
+            if r.max(0.0).sqrt() <= self.tol_eff.max(self.floor) * self.ref_norm {
                 return FaceEnd::Min;
             }
             if k == 0 {
@@ -330,7 +346,7 @@ impl Iterative for Cgc<'_> {
         self.floor = self.rounding_floor();
         let (_, r) = self.project();
         let res = r.max(0.0).sqrt() / self.ref_norm;
-        if res <= self.tol.max(self.floor) {
+        if res <= self.tol_eff.max(self.floor) {
             // Face minimum: λ_J are the KKT multipliers of this face.
             let jset = self.working_set();
             let lbar = jset.iter().fold(0.0f64, |m, &j| m.max(self.lam[j].abs()));
@@ -342,23 +358,37 @@ impl Iterative for Cgc<'_> {
                 .filter(|&j| self.lam[j] < thr)
                 .collect();
             if neg.is_empty() {
-                return Step::Done(Status::Converged, self.record(res));
-            }
-            let worst = *neg
-                .iter()
-                .min_by(|&&a, &&b| self.lam[a].total_cmp(&self.lam[b]))
-                .unwrap_or(&neg[0]);
-            let released = if self.multiple { neg } else { vec![worst] };
-            for &j in &released {
-                self.in_j[j] = false;
-            }
-            // Multiple release is safe only if the first direction moves every
-            // released row inward; otherwise fall back to the single release.
-            if released.len() > 1 && !self.release_moves_inward(&released) {
-                for &j in &released {
-                    self.in_j[j] = true;
+                // The W⁻¹-norm weighs a residual on a stiff body by
+                // 1/stiffness: at a contrast of 10⁸ it hid a Euclidean
+                // stationarity of 10⁻⁵. Tighten until the Euclidean
+                // residual meets EUCLID·tol too (or the rounding floor).
+                let cx = self.qp.c.mul(&self.x);
+                let scale = norm(&self.qp.d).max(norm(&cx)).max(f64::MIN_POSITIVE);
+                if self.gp_norm / scale <= EUCLID * self.tol
+                    || self.tightened >= TIGHTEN
+                    || self.tol_eff <= self.floor
+                {
+                    return Step::Done(Status::Converged, self.record(res));
                 }
-                self.in_j[worst] = false;
+                self.tol_eff /= 10.0;
+                self.tightened += 1;
+            } else {
+                let worst = *neg
+                    .iter()
+                    .min_by(|&&a, &&b| self.lam[a].total_cmp(&self.lam[b]))
+                    .unwrap_or(&neg[0]);
+                let released = if self.multiple { neg } else { vec![worst] };
+                for &j in &released {
+                    self.in_j[j] = false;
+                }
+                // Multiple release is safe only if the first direction moves
+                // every released row inward; otherwise release the worst only.
+                if released.len() > 1 && !self.release_moves_inward(&released) {
+                    for &j in &released {
+                        self.in_j[j] = true;
+                    }
+                    self.in_j[worst] = false;
+                }
             }
         }
         match self.face_cg() {

@@ -8,8 +8,9 @@
 //! threshold on a curvature (a soft body under a stiff one has tiny but
 //! positive curvature).
 //!
-//! **Decision** ([`boundedness`]). With R an orthonormal basis of ker C (the
-//! rigid motions the FEM layer computes from the geometry), r = Rα and the
+//! **Decision** ([`boundedness`]). With R a basis of ker C (the rigid motions
+//! the FEM layer computes from the geometry, each scaled to unit norm but not
+//! orthogonalised, so that a translation stays a translation), r = Rα and the
 //! question is a cone problem in α ∈ ℝᵏ (k = 3 per floating body at most):
 //! with B = (AR)ᵀ and w = Rᵀd, solve the non-negative least-squares problem
 //! min ‖Bμ − w‖, μ ≥ 0 (Lawson–Hanson). Its optimality conditions give
@@ -59,7 +60,7 @@ pub enum Boundedness {
 /// Decide boundedness from `qp.kernel` (module doc). Without a kernel, C is
 /// taken as the FEM layer built it: positive definite.
 pub fn boundedness(qp: &QpProblem) -> Boundedness {
-    let r = orthonormal(&qp.kernel);
+    let r = normalized(&qp.kernel);
     let k = r.len();
     if k == 0 {
         return Boundedness::Bounded;
@@ -176,30 +177,18 @@ pub fn blocks(c: &Csr) -> (Vec<usize>, usize) {
     (block, nb)
 }
 
-/// Orthonormal basis of the span of `kernel` (modified Gram–Schmidt, twice).
-fn orthonormal(kernel: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    let mut out: Vec<Vec<f64>> = vec![];
-    for z in kernel {
-        let nz = norm(z);
-        if !(nz > 0.0) || !nz.is_finite() {
-            continue;
-        }
-        let mut v: Vec<f64> = z.iter().map(|a| a / nz).collect();
-        for _ in 0..2 {
-            for q in &out {
-                let p = dot(&v, q);
-                for (a, b) in v.iter_mut().zip(q) {
-                    *a -= p * b;
-                }
-            }
-        }
-        let nv = norm(&v);
-        if nv > 1e-8 {
-            v.iter_mut().for_each(|a| *a /= nv);
-            out.push(v);
-        }
-    }
-    out
+/// The kernel vectors scaled to unit norm. The NNLS argument needs no
+/// orthogonality (r = Rρ satisfies Ar ≤ 0 and dᵀr = ‖ρ‖² for any R), and
+/// keeping the FEM's modes (a translation, a rotation about a fixed point)
+/// makes the direction found the one a user recognises.
+fn normalized(kernel: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    kernel
+        .iter()
+        .filter_map(|z| {
+            let nz = norm(z);
+            (nz > 0.0 && nz.is_finite()).then(|| z.iter().map(|a| a / nz).collect())
+        })
+        .collect()
 }
 
 /// Lawson–Hanson NNLS for min ‖Bμ − w‖, μ ≥ 0, with the columns b_i of B
