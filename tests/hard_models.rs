@@ -333,7 +333,7 @@ fn mul(tr: &[(usize, usize, f64)], n_out: usize, v: &[f64], t: bool) -> Vec<f64>
 /// (stationarity, primal, dual, complementarity), all relative. Stationarity
 /// ‖Cx − d + Aᵀλ‖ is divided by the smaller of max(‖d‖, ‖Cx‖) and ‖Aᵀλ‖
 /// (when λ ≠ 0), so a small error in the contact forces shows.
-fn independent_kkt(dir: &Path) -> Result<([f64; 4], Vec<f64>), String> {
+fn independent_kkt(dir: &Path) -> Result<([f64; 4], f64, Vec<f64>), String> {
     let (n, _, c) = read_mtx(&dir.join("C.mtx"));
     let (m, na, a) = read_mtx(&dir.join("A.mtx"));
     let d = read_vec(&dir.join("d.mtx"));
@@ -362,15 +362,35 @@ fn independent_kkt(dir: &Path) -> Result<([f64; 4], Vec<f64>), String> {
     } else {
         level
     };
-    let stat = if scale > 0.0 { norm(&r) / scale } else { norm(&r) };
+    let stat = if scale > 0.0 {
+        norm(&r) / scale
+    } else {
+        norm(&r)
+    };
+    // What rounding alone leaves in r when it is evaluated in f64: ~√k ε per
+    // row of k ≈ 18 terms, times |C||x| + |A|ᵀ|λ| + |d|. At contrast 1e8 the
+    // exact solution's r is ~1e-6 of the contact forces (C x of the nearly
+    // rigid stiff block cancels), so the reference is then held to this
+    // floor, and to the closed form or the force balance where there is one.
+    let abs_c: Vec<(usize, usize, f64)> = c.iter().map(|&(i, j, v)| (i, j, v.abs())).collect();
+    let abs_a: Vec<(usize, usize, f64)> = a.iter().map(|&(i, j, v)| (i, j, v.abs())).collect();
+    let xa: Vec<f64> = x.iter().map(|v| v.abs()).collect();
+    let la: Vec<f64> = lam.iter().map(|v| v.abs()).collect();
+    let cxa = mul(&abs_c, n, &xa, false);
+    let ala = mul(&abs_a, n, &la, true);
+    let bound: Vec<f64> = (0..n).map(|i| cxa[i] + ala[i] + d[i].abs()).collect();
+    let floor = 4.0 * f64::EPSILON * norm(&bound) / if scale > 0.0 { scale } else { 1.0 };
     let ax = mul(&a, m, &x, false);
-    let xs = x.iter().fold(0.0f64, |s, v| s.max(v.abs())).max(f64::MIN_POSITIVE);
+    let xs = x
+        .iter()
+        .fold(0.0f64, |s, v| s.max(v.abs()))
+        .max(f64::MIN_POSITIVE);
     let ls = lam.iter().fold(0.0f64, |s, v| s.max(v.abs()));
     let primal = (0..m).fold(0.0f64, |s, i| s.max(ax[i] - g[i])) / xs;
     let dual = lam.iter().fold(0.0f64, |s, v| s.max(-v)) / ls.max(f64::MIN_POSITIVE);
     let compl = (0..m).fold(0.0f64, |s, i| s.max((lam[i] * (ax[i] - g[i])).abs()))
         / (ls * xs).max(f64::MIN_POSITIVE);
-    Ok(([stat, primal, dual, compl], lam))
+    Ok(([stat, primal, dual, compl], floor, lam))
 }
 
 /// The model's closed form or equilibrium, on a run's u and λ.
@@ -454,7 +474,7 @@ fn reference(
             ));
             continue;
         }
-        let (k, lam) = match independent_kkt(&qp) {
+        let (k, floor, lam) = match independent_kkt(&qp) {
             Ok(v) => v,
             Err(e) => {
                 why.push(format!("{name}: {e}"));
@@ -462,9 +482,10 @@ fn reference(
             }
         };
         let kmax = k.iter().fold(0.0f64, |s, v| s.max(*v));
-        if kmax.is_nan() || kmax > REF_KKT {
+        let tol = REF_KKT.max(floor);
+        if kmax.is_nan() || k[0] > tol || k[1..].iter().any(|v| *v > REF_KKT) {
             why.push(format!(
-                "{name}: KKT evaluated here (stat {:.1e}, primal {:.1e}, dual {:.1e}, compl {:.1e}) > {REF_KKT:.0e}",
+                "{name}: KKT evaluated here (stat {:.1e} [rounding floor {floor:.1e}], primal {:.1e}, dual {:.1e}, compl {:.1e}) > {REF_KKT:.0e}",
                 k[0], k[1], k[2], k[3]
             ));
             continue;
@@ -481,7 +502,7 @@ fn reference(
                 return Ok((
                     i,
                     format!(
-                        "reference {name}: KKT here {kmax:.1e}{}{}",
+                        "reference {name}: KKT here {kmax:.1e} (rounding floor {floor:.1e}){}{}",
                         if note.is_empty() { "" } else { "; " },
                         note
                     ),
@@ -504,10 +525,7 @@ fn judge(c: &mut Cell, refc: Option<&Cell>) {
     } else {
         match run.code {
             Some(3) => ("exit 3 (honest failure)".to_string(), true),
-            Some(2) => (
-                format!("FAIL exit 2: {}", first_error(&run.output)),
-                false,
-            ),
+            Some(2) => (format!("FAIL exit 2: {}", first_error(&run.output)), false),
             Some(0) => {
                 if c.certified != Some(true) {
                     ("FAIL exit 0 but not certified".to_string(), false)
@@ -594,7 +612,10 @@ fn every_variant_certifies_and_agrees_or_exits_3_on_every_hard_model() {
     }
     let variants: Vec<usize> = match env_list("SIGNORINI_HARD_VARIANTS") {
         Some(sel) => (0..VARIANTS.len())
-            .filter(|&i| sel.iter().any(|s| variant_name(&VARIANTS[i]) == *s || VARIANTS[i].0 == s))
+            .filter(|&i| {
+                sel.iter()
+                    .any(|s| variant_name(&VARIANTS[i]) == *s || VARIANTS[i].0 == s)
+            })
             .collect(),
         None => (0..VARIANTS.len()).collect(),
     };
@@ -643,7 +664,9 @@ fn every_variant_certifies_and_agrees_or_exits_3_on_every_hard_model() {
         let scratch = tmp.path().join(format!("ref-m{mi}"));
         let refr = reference(m, cells, budget, &scratch);
         let refc = refr.as_ref().ok().map(|(i, _)| cells[*i].clone());
-        let any = variants.iter().find_map(|&i| cells[i].nodes.map(|_| &cells[i]));
+        let any = variants
+            .iter()
+            .find_map(|&i| cells[i].nodes.map(|_| &cells[i]));
         table += &format!(
             "\n### {}{}\n\n{} nodes, {} contact rows, {} rigid modes. {}\n\n",
             m.name,
@@ -652,9 +675,12 @@ fn every_variant_certifies_and_agrees_or_exits_3_on_every_hard_model() {
             } else {
                 format!(" (`{}`)", m.extra.join(" "))
             },
-            any.and_then(|c| c.nodes).map_or("?".into(), |v| v.to_string()),
-            any.and_then(|c| c.constraints).map_or("?".into(), |v| v.to_string()),
-            any.and_then(|c| c.rigid_modes).map_or("?".into(), |v| v.to_string()),
+            any.and_then(|c| c.nodes)
+                .map_or("?".into(), |v| v.to_string()),
+            any.and_then(|c| c.constraints)
+                .map_or("?".into(), |v| v.to_string()),
+            any.and_then(|c| c.rigid_modes)
+                .map_or("?".into(), |v| v.to_string()),
             match &refr {
                 Ok((_, note)) => note.clone(),
                 Err(e) => format!("NO verified reference: {e}"),
@@ -675,7 +701,8 @@ fn every_variant_certifies_and_agrees_or_exits_3_on_every_hard_model() {
                 } else {
                     r.code.map_or("signal".into(), |k| k.to_string())
                 },
-                c.certified.map_or("-".into(), |b| if b { "yes" } else { "no" }.to_string()),
+                c.certified
+                    .map_or("-".into(), |b| if b { "yes" } else { "no" }.to_string()),
                 c.iterations.map_or("-".into(), |v| v.to_string()),
                 fmt_opt(c.kkt),
                 fmt_opt(c.rel_u),
