@@ -18,9 +18,10 @@
 //! solution (uniaxial strain) or the equilibrium of the contact forces holds.
 //!
 //! `SIGNORINI_HARD_REPORT=1` prints the table and does not fail (the before /
-//! after tables of issue 11). `SIGNORINI_HARD_MODELS=punch,arch` and
-//! `SIGNORINI_HARD_VARIANTS=ssn,cgc:cholesky` select a subset (substrings of
-//! the names), `SIGNORINI_HARD_BUDGET_S` sets the time budget of one run
+//! after tables of issue 11). `SIGNORINI_HARD_MODELS=punch,arch` (substrings
+//! of model names) and `SIGNORINI_HARD_VARIANTS=ssn,cgc:cholesky` (variant
+//! names; a bare method name selects all its variants) select a subset,
+//! `SIGNORINI_HARD_BUDGET_S` sets the time budget of one run
 //! (default 30 s) and `SIGNORINI_HARD_JOBS` the number of runs at a time
 //! (default 2).
 
