@@ -431,10 +431,11 @@ impl Problem {
                 )));
             }
         }
-        // A curve both fixed (or sliding) and in contact: the contact rows
-        // of its fixed points would be dropped without a word.
+        // A contact curve (conforming, or the slave side) that is also fixed
+        // or sliding: the contact rows of its points would be dropped without
+        // a word. A fixed master is an obstacle and stays allowed.
         for (i, c) in f.contact.iter().enumerate() {
-            for n in [&c.on, &c.slave, &c.master].into_iter().flatten() {
+            for n in [&c.on, &c.slave].into_iter().flatten() {
                 let fixed = f
                     .dirichlet
                     .iter()
