@@ -859,14 +859,15 @@ impl<'a> Parser<'a> {
         }
     }
 
-    /// Refuses a header count that the rest of the file cannot hold
-    /// (`min_bytes` per item), before anything is reserved for it.
+    /// Refuses a header count that the whole file could never hold
+    /// (`min_bytes` per item). (A file merely cut short is reported where it
+    /// ends; reservations are bounded by the remaining bytes in any case.)
     fn check_count(&self, count: u64, min_bytes: u64, what: &str) -> Result<(), MeshError> {
-        let room = self.remaining() as u64 / min_bytes;
+        let room = self.b.len() as u64 / min_bytes;
         if count > room {
             return Err(self.err_pos(format!(
-                "the header declares {count} {what} but only {} bytes remain in the file",
-                self.remaining()
+                "the header declares {count} {what} but the whole file has only {} bytes",
+                self.b.len()
             )));
         }
         Ok(())
