@@ -115,7 +115,8 @@ fn check_probes(problem: &Problem, model: &Model) -> Result<(), InputError> {
     for (name, x) in &problem.file.output.probes {
         let p = post::nearest_point(pts, *x);
         let dist = (pts[p][0] - x[0]).hypot(pts[p][1] - x[1]);
-        if !(dist <= PROBE_REACH * diag) {
+        let near = dist <= PROBE_REACH * diag;
+        if !near {
             return Err(InputError::Solver {
                 path: problem.path.clone(),
                 msg: format!(
@@ -291,13 +292,13 @@ pub fn options(
         };
     }
     if let Some(p) = s.penalty {
-        if !(p > 0.0) {
+        if p.is_nan() || p <= 0.0 {
             return Err(bad(format!("penalty = {p} must be positive")));
         }
         o.penalty = Some(p);
     }
     if let Some(r) = s.rho {
-        if !(r > 0.0) {
+        if r.is_nan() || r <= 0.0 {
             return Err(bad(format!("rho = {r} must be positive")));
         }
         o.rho = Some(r);
@@ -327,6 +328,13 @@ pub fn solve_model(
     let res =
         registry::solve(method, &model.qp, opts).map_err(|e| bad(format!("{method}: {e}")))?;
     if let Status::Unbounded { direction } = &res.status {
+        // A direction that is not a finite vector of the unknowns is no
+        // certificate of unboundedness: round-off gone wrong (NaN).
+        if direction.len() != model.qp.n() || !direction.iter().all(|v| v.is_finite()) {
+            return Err(bad(format!(
+                "{method}: the iteration broke down (a non-finite value); check the scale of E, the loads and the coordinates"
+            )));
+        }
         // The motion along the direction (the prescribed displacements u0 are
         // not part of it), described per body as the rigid motion it is.
         let u = model.motions(direction);

@@ -624,3 +624,37 @@ fn out_of_memory_is_exit_2_not_an_abort() {
         "{line}"
     );
 }
+
+#[test]
+fn messages_stay_one_short_line() {
+    let d = tempfile::tempdir().unwrap();
+    // A path with a newline: escaped, not a second line.
+    let odd = d.path().join("two\nlines.toml");
+    let (code, log) = run(&[
+        "solve",
+        odd.to_str().unwrap(),
+        "--out",
+        d.path().join("o").to_str().unwrap(),
+    ]);
+    let line = assert_bad_input(code, &log, "newline in the path");
+    assert!(line.contains("two\\nlines.toml"), "{line}");
+    // A 1 MB group name: cut with `…`, the line stays short.
+    let long = "g".repeat(1 << 20);
+    let toml = problem_copy(
+        d.path(),
+        "two_blocks",
+        &[("on = \"top\"", &format!("on = \"{long}\""))],
+    );
+    let (code, log) = run(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--out",
+        d.path().join("o").to_str().unwrap(),
+    ]);
+    let line = assert_bad_input(code, &log, "1 MB name");
+    assert!(
+        line.contains('…') && line.len() < 1000,
+        "{} bytes",
+        line.len()
+    );
+}

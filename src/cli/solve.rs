@@ -88,7 +88,8 @@ fn check_restart(
             .displacement
             .iter()
             .all(|u| u[0].is_finite() && u[1].is_finite());
-        if !finite || !(umax <= 1e3 * diag) {
+        let plausible = umax <= 1e3 * diag;
+        if !finite || !plausible {
             return Err(format!(
                 "{shown}: step {} holds displacements that are not finite or implausibly large (max |u| = {umax:e}, mesh size {diag:e}); it cannot be a warm start",
                 k + 1

@@ -4,7 +4,8 @@
 //!
 //! ```text
 //! /                       attrs: one string attribute per `attrs` entry
-//!                                (e.g. problem, toml, version),
+//!                                (e.g. problem, toml, version, and the
+//!                                fingerprint `--restart` compares),
 //!                                plane_strain (u8 0/1), last_step (u64, once a step exists)
 //! /mesh/nodes             f64  [n, 2]   undeformed point coordinates
 //! /mesh/node_tags         u64  [n]      Gmsh node tag of each point
@@ -29,8 +30,11 @@
 //!            converged (u8 0/1); method, preconditioner (strings)
 //! ```
 //!
-//! Every write is crash-safe: the file is built (or copied and extended)
-//! under a temporary name, closed, fsynced and renamed over the target.
+//! Every write is crash-safe: the file is built (or copied and extended) in
+//! a private staging directory, closed, fsynced and renamed over the target.
+//! Every read is bounded by the file: a dataset or attribute whose shape
+//! needs more bytes than the file holds is refused before any allocation
+//! (checkpoints are written uncompressed, so a genuine one always fits).
 
 use std::path::Path;
 use std::str::FromStr;

@@ -451,7 +451,10 @@ impl Problem {
                 }
             }
         }
-        let big = |v: f64| !(v.abs() <= MAX_MAGNITUDE);
+        let big = |v: f64| {
+            let within = v.abs() <= MAX_MAGNITUDE;
+            !within
+        };
         let too_big = |what: String, v: f64| {
             self.invalid(format!(
                 "{what} = {v:e} is beyond ±{MAX_MAGNITUDE:e}: products with it would overflow; change the units"
@@ -588,7 +591,7 @@ impl Problem {
                 )));
             }
             if let Some(g) = c.max_gap {
-                if !(g >= 0.0) {
+                if g.is_nan() || g < 0.0 {
                     return Err(
                         self.invalid(format!("[[contact]] #{}: max_gap must be >= 0", i + 1))
                     );
