@@ -23,10 +23,18 @@ fn out_of_memory(size: usize) -> ! {
     }
     let mut m = Buf { b: [0; 320], n: 0 };
     let gib = size as f64 / (1u64 << 30) as f64;
-    let _ = writeln!(
-        m,
-        "error: out of memory: an allocation of {gib:.2} GiB failed; this problem needs about {gib:.2} GiB more than the memory available (RAM, ulimit -v)"
-    );
+    let _ = if gib >= 0.01 {
+        writeln!(
+            m,
+            "error: out of memory: an allocation of {gib:.2} GiB failed; this problem needs about {gib:.2} GiB more than the memory available (RAM, ulimit -v)"
+        )
+    } else {
+        writeln!(
+            m,
+            "error: out of memory: an allocation of {:.1} kiB failed: the memory (RAM, ulimit -v) is exhausted",
+            size as f64 / 1024.0
+        )
+    };
     // SAFETY: write(2) and _exit(2) on a valid buffer; no allocation, no unwinding.
     unsafe {
         libc::write(2, m.b.as_ptr().cast(), m.n);
@@ -67,6 +75,20 @@ unsafe impl GlobalAlloc for ExitOnOom {
 static ALLOC: ExitOnOom = ExitOnOom;
 
 fn main() {
+    // Start rayon's worker threads now, where a failure (thread stacks beyond
+    // `ulimit -v`) can be reported: rayon would panic at first use. One
+    // thread is tried when the default count cannot be started.
+    if rayon::ThreadPoolBuilder::new().build_global().is_err() {
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build_global()
+        {
+            eprintln!(
+                "error: out of memory: cannot start a worker thread ({e}); raise the memory limit (ulimit -v)"
+            );
+            std::process::exit(2);
+        }
+    }
     // Threads for faer's dense/supernodal kernels: SIGNORINI_THREADS=1 runs
     // sequentially (the default is faer's: all cores, via rayon).
     if let Some(t) = std::env::var("SIGNORINI_THREADS")
