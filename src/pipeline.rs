@@ -26,6 +26,8 @@ pub enum InputError {
 /// A problem read and assembled.
 pub struct Prepared {
     pub problem: Problem,
+    /// FNV-1a 64 of the mesh file's bytes (part of the checkpoint's fingerprint).
+    pub mesh_hash: u64,
     pub mesh: Mesh,
     pub model: Model,
     pub t_read: f64,
@@ -39,17 +41,160 @@ pub fn prepare(path: &Path, no_contact: bool) -> Result<Prepared, InputError> {
     if no_contact {
         problem.file.contact.clear();
     }
-    let mesh = mesh::read_msh(&problem.mesh_path())?;
+    let mesh_path = problem.mesh_path();
+    let bytes = mesh::gmsh::read_mesh_bytes(&mesh_path)?;
+    let mesh_hash = fnv1a(&bytes);
+    let mesh = mesh::gmsh::parse_msh(&mesh_path, &bytes)?;
+    drop(bytes);
+    check_contact_groups(&problem, &mesh)?;
     let t_read = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let model = fem::build(&mesh, &problem)?;
+    check_probes(&problem, &model)?;
     Ok(Prepared {
         problem,
+        mesh_hash,
         mesh,
         model,
         t_read,
         t_assemble: t1.elapsed().as_secs_f64(),
     })
+}
+
+/// FNV-1a, 64 bits: a fingerprint, not a defence against a forger (the
+/// checkpoint is the user's own file; this catches the wrong file).
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// A contact curve that exists but holds no segment would give no
+/// constraint at all: the bodies would pass through each other unnoticed.
+fn check_contact_groups(problem: &Problem, mesh: &Mesh) -> Result<(), InputError> {
+    for (i, c) in problem.file.contact.iter().enumerate() {
+        for name in [&c.on, &c.slave, &c.master].into_iter().flatten() {
+            if let Some(g) = mesh.group_any(name) {
+                if g.elements.is_empty() {
+                    return Err(InputError::Solver {
+                        path: problem.path.clone(),
+                        msg: format!(
+                            "[[contact]] #{}: the physical group \"{}\" in {} has no elements, so it would give no contact constraint",
+                            i + 1,
+                            crate::model::shorten(name),
+                            mesh.path.display()
+                        ),
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A probe farther from every node than this fraction of the mesh's
+/// diagonal is refused: it cannot mean any node of this mesh.
+const PROBE_REACH: f64 = 0.1;
+
+fn check_probes(problem: &Problem, model: &Model) -> Result<(), InputError> {
+    let pts = &model.topo.points;
+    if pts.is_empty() || problem.file.output.probes.is_empty() {
+        return Ok(());
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in pts {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let diag = (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
+    for (name, x) in &problem.file.output.probes {
+        let p = post::nearest_point(pts, *x);
+        let dist = (pts[p][0] - x[0]).hypot(pts[p][1] - x[1]);
+        let near = dist <= PROBE_REACH * diag;
+        if !near {
+            return Err(InputError::Solver {
+                path: problem.path.clone(),
+                msg: format!(
+                    "[output] probe {}: ({:e}, {:e}) lies {dist:.3e} from the nearest node, outside the mesh ([{:e}, {:e}] x [{:e}, {:e}])",
+                    crate::model::shorten(name),
+                    x[0],
+                    x[1],
+                    lo[0],
+                    hi[0],
+                    lo[1],
+                    hi[1]
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The fingerprint of the problem stored in the checkpoint: one FNV-1a hash
+/// per part that fixes the sequence of load steps, as `part=hex` pairs
+/// joined by `;`. The parts are the mesh file's bytes and each top-level
+/// table of the TOML except `[mesh]` (its path), `[solver]` and `[output]`
+/// (they change how, not what, is solved), normalised by re-serialising, plus
+/// `--no-contact`. A restart compares part by part and names what differs.
+pub fn fingerprint(prep: &Prepared, no_contact: bool) -> String {
+    let mut parts = vec![("mesh".to_string(), prep.mesh_hash)];
+    let table: toml::Table = toml::from_str(&prep.problem.text).unwrap_or_default();
+    for key in [
+        "model",
+        "materials",
+        "dirichlet",
+        "traction",
+        "slip",
+        "force",
+        "contact",
+        "steps",
+    ] {
+        let text = table
+            .get(key)
+            .map(|v| toml::to_string(&toml::Table::from_iter([(key.to_string(), v.clone())])))
+            .and_then(Result::ok)
+            .unwrap_or_default();
+        parts.push((key.to_string(), fnv1a(text.as_bytes())));
+    }
+    parts.push(("no_contact".to_string(), u64::from(no_contact)));
+    parts
+        .iter()
+        .map(|(k, h)| format!("{k}={h:016x}"))
+        .collect::<Vec<_>>()
+        .join(";")
+}
+
+/// The parts of two fingerprints that differ (names; `all` if one is malformed).
+pub fn fingerprint_diff(a: &str, b: &str) -> Vec<String> {
+    let parse = |s: &str| -> Option<Vec<(String, String)>> {
+        s.split(';')
+            .map(|p| {
+                p.split_once('=')
+                    .map(|(k, v)| (k.to_string(), v.to_string()))
+            })
+            .collect()
+    };
+    match (parse(a), parse(b)) {
+        (Some(x), Some(y)) if x.len() == y.len() => x
+            .iter()
+            .zip(&y)
+            .filter(|(p, q)| p != q)
+            .map(|(p, q)| {
+                if p.0 == q.0 {
+                    p.0.clone()
+                } else {
+                    format!("{}/{}", p.0, q.0)
+                }
+            })
+            .collect(),
+        _ if a == b => vec![],
+        _ => vec!["all".to_string()],
+    }
 }
 
 /// The model of load step `s` (0-based): the same mesh and DOF numbering,
@@ -147,13 +292,13 @@ pub fn options(
         };
     }
     if let Some(p) = s.penalty {
-        if !(p > 0.0) {
+        if p.is_nan() || p <= 0.0 {
             return Err(bad(format!("penalty = {p} must be positive")));
         }
         o.penalty = Some(p);
     }
     if let Some(r) = s.rho {
-        if !(r > 0.0) {
+        if r.is_nan() || r <= 0.0 {
             return Err(bad(format!("rho = {r} must be positive")));
         }
         o.rho = Some(r);
@@ -219,20 +364,29 @@ pub fn output_paths(dir: &Path, name: &str, step: Option<usize>) -> Outputs {
     }
 }
 
-/// A new checkpoint holding the mesh (steps are appended one by one).
-pub fn create_checkpoint(prep: &Prepared, out: &Outputs, om: &OutMesh) -> Result<(), IoError> {
+/// A new checkpoint at `h5` holding the mesh and the problem's
+/// [`fingerprint`] (steps are appended one by one).
+pub fn create_checkpoint(
+    prep: &Prepared,
+    h5: &Path,
+    om: &OutMesh,
+    fingerprint: &str,
+) -> Result<(), IoError> {
     let attrs = [
         ("problem", prep.problem.name.clone()),
         ("problem_toml", prep.problem.text.clone()),
+        ("fingerprint", fingerprint.to_string()),
         (
             "program",
             format!("signorini {}", env!("CARGO_PKG_VERSION")),
         ),
     ];
-    io::hdf5::create_checkpoint(&out.h5, om, &attrs)
+    io::hdf5::create_checkpoint(h5, om, &attrs)
 }
 
-/// Write the VTU pair of a step and append it to the checkpoint (each file atomically).
+/// Write the VTU pair of a step at `out` and append the step to the
+/// checkpoint `out.h5` in place: `out` names files in a staging directory
+/// ([`crate::io::atomic::Stage`]), moved into place once all are complete.
 pub fn write_step(
     out: &Outputs,
     om: &OutMesh,
@@ -242,7 +396,7 @@ pub fn write_step(
 ) -> Result<(), IoError> {
     io::vtu::write_vtu(&out.vtu, om, step, compress)?;
     io::vtu::write_contact_vtu(&out.contact_vtu, om, step, compress)?;
-    io::hdf5::append_step(&out.h5, index, step)
+    io::hdf5::append_step_in_place(&out.h5, index, step)
 }
 
 /// Probes: nearest output point to each requested point.

@@ -9,6 +9,7 @@
 //! exit = 2
 //! words = ["problem.toml", "roof", "no physical group"]
 //! out = "problem.toml/out"   # optional: --out relative to the case directory
+//! args = ["--max-steps", "0"] # optional: more flags; `{case}` = the case directory
 //! ```
 
 use serde::Deserialize;
@@ -16,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// Fewer cases than this means cases were deleted.
-const MIN_CASES: usize = 30;
+const MIN_CASES: usize = 95;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -26,6 +27,9 @@ struct Expect {
     /// Output directory relative to the case directory (default: a fresh
     /// temporary directory).
     out: Option<String>,
+    /// More command-line flags (`{case}` is replaced by the case directory).
+    #[serde(default)]
+    args: Vec<String>,
 }
 
 fn cases_dir() -> PathBuf {
@@ -85,6 +89,12 @@ fn run_case(case: &Path) -> Result<(), String> {
     let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
         .args(["solve", problem.to_str().unwrap(), "--out"])
         .arg(&out)
+        .args(
+            expect
+                .args
+                .iter()
+                .map(|a| a.replace("{case}", &case.display().to_string())),
+        )
         .arg("--quiet")
         // Write nothing relative to the working directory by accident.
         .current_dir(tmp.path())

@@ -40,9 +40,11 @@ fn solve(out: &Path, extra: &[&str]) -> (i32, String) {
     )
 }
 
-/// A temporary file of the atomic writer: `.NAME.tmp-PID-N`.
+/// What a killed run may leave besides its outputs: a staging directory
+/// (`.signorini-stage-…`) and its lock file (`.NAME.lock`, whose lock died
+/// with the process).
 fn is_temporary(name: &str) -> bool {
-    name.starts_with('.') && name.contains(".tmp-")
+    name.starts_with(".signorini-stage-") || name == format!(".{NAME}.lock")
 }
 
 /// The names a run may leave under their final name.
@@ -137,8 +139,8 @@ enum KillAt {
     After(Duration),
     /// As soon as the checkpoint holds this many steps (or the run ends).
     Steps(usize),
-    /// While a step is being appended to an existing checkpoint (its
-    /// temporary copy exists), or when the run ends.
+    /// While a step is being appended to an existing checkpoint (its staged
+    /// copy exists), or when the run ends.
     WhileAppending,
 }
 
@@ -175,13 +177,13 @@ fn run_and_kill(dir: &Path, at: KillAt) -> usize {
         }
         KillAt::WhileAppending => {
             let t0 = Instant::now();
-            let tmp = format!(".{NAME}.h5.tmp-");
+            let stage = format!(".signorini-stage-{NAME}-");
             loop {
                 let appending = h5.is_file()
-                    && std::fs::read_dir(dir)
-                        .unwrap()
-                        .flatten()
-                        .any(|e| e.file_name().to_string_lossy().starts_with(&tmp));
+                    && std::fs::read_dir(dir).unwrap().flatten().any(|e| {
+                        e.file_name().to_string_lossy().starts_with(&stage)
+                            && e.path().join(format!("{NAME}.h5")).is_file()
+                    });
                 if appending || child.try_wait().unwrap().is_some() {
                     break;
                 }
@@ -239,14 +241,14 @@ fn killed_runs_leave_complete_files_and_restart_to_the_same_result() {
         if have > 0 {
             after_checkpoint += 1;
         }
-        let temporaries: Vec<String> = std::fs::read_dir(dir.path())
+        let left: Vec<String> = std::fs::read_dir(dir.path())
             .unwrap()
             .flatten()
             .map(|e| e.file_name().to_string_lossy().into_owned())
             .filter(|n| is_temporary(n))
             .collect();
         eprintln!(
-            "{when}: checkpoint {}, {have} step(s); temporary files left: {temporaries:?}",
+            "{when}: checkpoint {}, {have} step(s); staging and lock files left: {left:?}",
             if ck.is_some() { "present" } else { "absent" }
         );
         let h5 = dir.path().join(format!("{NAME}.h5"));
@@ -260,6 +262,17 @@ fn killed_runs_leave_complete_files_and_restart_to_the_same_result() {
         let done = check_outputs(dir.path(), &format!("{when}, then continued"))
             .expect("a checkpoint after the continued run");
         assert_eq!(done.steps.len(), NSTEPS, "{when}");
+        // The continued run removed what the killed one left behind.
+        let hidden: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with('.'))
+            .collect();
+        assert!(
+            hidden.is_empty(),
+            "{when}: left after the continued run: {hidden:?}"
+        );
         for (k, (a, b)) in reference.steps.iter().zip(&done.steps).enumerate() {
             let err = a
                 .displacement

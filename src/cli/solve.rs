@@ -1,11 +1,12 @@
 //! `signorini solve`: one problem, one method, all outputs and the report.
 
 use super::{SolveArgs, SolverFlags};
+use crate::io::atomic::{self, OutputLock, Stage};
 use crate::pipeline::{self, Prepared, SolverChoice};
 use crate::post;
 use crate::qp::{registry, QpResult};
 use serde_json::json;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 pub const EXIT_BAD_INPUT: i32 = 2;
@@ -22,8 +23,93 @@ pub fn choice(f: &SolverFlags) -> SolverChoice {
     }
 }
 
+/// The prefix of the staging directories of the problem `name`.
+fn stage_prefix(name: &str) -> String {
+    format!("{}{name}-", crate::io::atomic::STAGE_PREFIX)
+}
+
+/// The file name of an output path.
+fn fname(p: &Path) -> String {
+    p.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// Checks of a restart checkpoint before its steps are trusted: the same
+/// problem (fingerprint), the same mesh sizes, and a plausible warm start.
+fn check_restart(
+    rp: &Path,
+    ck: &crate::io::hdf5::Checkpoint,
+    fingerprint: &str,
+    om: &crate::io::OutMesh,
+    problem: &Path,
+) -> Result<(), String> {
+    let shown = rp.display();
+    let Some((_, theirs)) = ck.attrs.iter().find(|(k, _)| k == "fingerprint") else {
+        return Err(format!(
+            "{shown}: the checkpoint has no problem fingerprint (written by another program or an older signorini), so it cannot be matched to {}; solve from the start",
+            problem.display()
+        ));
+    };
+    let diff = pipeline::fingerprint_diff(theirs, fingerprint);
+    if !diff.is_empty() {
+        return Err(format!(
+            "{shown}: the checkpoint does not match {}: it was written for a different {} (restart needs the same mesh and the same loads, materials, contacts and steps)",
+            problem.display(),
+            diff.join(", ")
+        ));
+    }
+    if ck.mesh.points.len() != om.points.len() || ck.mesh.triangles.len() != om.triangles.len() {
+        return Err(format!(
+            "{shown}: checkpoint mesh ({} points, {} triangles) does not match {} ({} points, {} triangles)",
+            ck.mesh.points.len(),
+            ck.mesh.triangles.len(),
+            problem.display(),
+            om.points.len(),
+            om.triangles.len()
+        ));
+    }
+    // A warm start beyond 10³ mesh diagonals is no displacement this
+    // problem produced: refuse it rather than start the solver from it.
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in &om.points {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let diag = (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
+    for (k, st) in ck.steps.iter().enumerate() {
+        let umax = st
+            .displacement
+            .iter()
+            .fold(0.0f64, |m, u| m.max(u[0].abs().max(u[1].abs())));
+        let finite = st
+            .displacement
+            .iter()
+            .all(|u| u[0].is_finite() && u[1].is_finite());
+        let plausible = umax <= 1e3 * diag;
+        if !finite || !plausible {
+            return Err(format!(
+                "{shown}: step {} holds displacements that are not finite or implausibly large (max |u| = {umax:e}, mesh size {diag:e}); it cannot be a warm start",
+                k + 1
+            ));
+        }
+    }
+    Ok(())
+}
+
 pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
     let t0 = Instant::now();
+    let target = a.solver.kkt_target;
+    if !(target > 0.0 && target.is_finite()) {
+        return bad_input(&format!(
+            "--kkt-target {target}: the KKT target must be a positive number"
+        ));
+    }
+    if a.max_steps == Some(0) {
+        return bad_input(&"--max-steps 0: load steps count from 1");
+    }
     let prep = match pipeline::prepare(&a.problem, a.no_contact) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
@@ -41,61 +127,61 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         .unwrap_or_else(|| PathBuf::from("out"));
     // Fail on an unwritable output directory before spending time solving.
     if let Err(e) = std::fs::create_dir_all(&dir) {
-        eprintln!(
-            "error: {}: cannot create output directory: {e}",
+        return bad_input(&format!(
+            "{}: cannot create output directory: {e}",
             dir.display()
-        );
-        return EXIT_BAD_INPUT;
+        ));
     }
     let name = prep.problem.name.clone();
+    // One run per output name at a time; released (and its file removed)
+    // when `_lock` drops, after the last output is in place.
+    let _lock = match OutputLock::acquire(&dir, &name) {
+        Ok(l) => l,
+        Err(msg) => return bad_input(&msg),
+    };
+    atomic::remove_stale_stages(&dir, &stage_prefix(&name));
+    // Every file of the run is written here and moved into place by commits;
+    // an error (an early return) drops the stage, which puts the previous
+    // files back.
+    let mut stage = match Stage::new(&dir, &stage_prefix(&name)) {
+        Ok(s) => s,
+        Err(e) => return bad_input(&e),
+    };
+    let sdir = stage.dir().to_path_buf();
+    // Errors name the final file, not its staged copy.
+    let fail = |e: &dyn std::fmt::Display| -> i32 {
+        let msg = e.to_string().replace(
+            &format!("{}/", sdir.display()),
+            &format!("{}/", dir.display()),
+        );
+        bad_input(&msg)
+    };
     let file = &prep.problem.file;
     let multi = !file.steps.is_empty();
     let nsteps = file.nsteps();
     let last = a.max_steps.unwrap_or(nsteps).min(nsteps);
     let om = post::out_mesh(&prep.model, &prep.mesh);
-    let h5 = pipeline::output_paths(&dir, &name, None).h5;
+    let fingerprint = pipeline::fingerprint(&prep, a.no_contact);
+    let h5_name = fname(&pipeline::output_paths(&dir, &name, None).h5);
+    let staged_h5 = stage.path(&h5_name);
     let compress = a.compress || file.output.compress;
 
     // Restart: the steps already in the checkpoint are kept; warm start from the last.
     let mut first = 0usize;
     let mut u_prev: Option<Vec<[f64; 2]>> = None;
+    // The checkpoint the next step extends (None: a new one).
+    let mut base: Option<PathBuf> = None;
     if let Some(rp) = &a.restart {
         let ck = match crate::io::hdf5::read_checkpoint(rp) {
             Ok(c) => c,
-            Err(e) => {
-                eprintln!("error: --restart: {e}");
-                return EXIT_BAD_INPUT;
-            }
+            Err(e) => return bad_input(&format!("--restart: {e}")),
         };
-        if ck.mesh.points.len() != om.points.len() || ck.mesh.triangles.len() != om.triangles.len()
-        {
-            eprintln!(
-                "error: {}: checkpoint mesh ({} points, {} triangles) does not match {} ({} points, {} triangles)",
-                rp.display(),
-                ck.mesh.points.len(),
-                ck.mesh.triangles.len(),
-                a.problem.display(),
-                om.points.len(),
-                om.triangles.len()
-            );
-            return EXIT_BAD_INPUT;
+        if let Err(msg) = check_restart(rp, &ck, &fingerprint, &om, &a.problem) {
+            return bad_input(&msg);
         }
         first = ck.steps.len();
         u_prev = ck.steps.last().map(|s| s.displacement.clone());
-        if rp.canonicalize().ok() != h5.canonicalize().ok() {
-            if let Err(e) = crate::io::atomic::write_atomic(&h5, |tmp| {
-                std::fs::copy(rp, tmp)
-                    .map(|_| ())
-                    .map_err(|cause| crate::io::IoError::Io {
-                        path: h5.clone(),
-                        action: "copy the checkpoint",
-                        cause,
-                    })
-            }) {
-                eprintln!("error: {e}");
-                return EXIT_BAD_INPUT;
-            }
-        }
+        base = Some(rp.clone());
         if !quiet {
             println!(
                 "restart     from step {first} of {} ({})",
@@ -104,9 +190,34 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
             );
         }
     }
-    // A new checkpoint is created only once the first step has solved, so bad
-    // input (e.g. an unbounded problem) leaves no output file behind.
-    let mut need_checkpoint = a.restart.is_none();
+    if first >= last {
+        // Nothing to solve; a checkpoint restarted from elsewhere is still
+        // copied to the output directory, as a run would have left it.
+        if let Some(rp) = &base {
+            if rp.canonicalize().ok() != stage.target(&h5_name).canonicalize().ok() {
+                if let Err(e) = std::fs::copy(rp, &staged_h5) {
+                    return fail(&format!(
+                        "{}: cannot copy the checkpoint: {e}",
+                        rp.display()
+                    ));
+                }
+                if let Err(e) = stage.commit(&[&h5_name]) {
+                    return fail(&e);
+                }
+            }
+        }
+        stage.finish();
+        if !quiet {
+            if first >= nsteps {
+                println!("nothing to do: the checkpoint already holds all {nsteps} steps");
+            } else {
+                println!(
+                    "nothing to do: the checkpoint already holds {first} steps (--max-steps {last})"
+                );
+            }
+        }
+        return 0;
+    }
 
     let mut code = 0;
     let mut step_rows = vec![];
@@ -139,6 +250,7 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         let t_solve = t_solve0.elapsed().as_secs_f64();
         let t_w = Instant::now();
         let out = pipeline::output_paths(&dir, &name, multi.then_some(s + 1));
+        let staged = pipeline::output_paths(&sdir, &name, multi.then_some(s + 1));
         let mut problem_s = prep.problem.clone();
         problem_s.file = file.at_step(s);
         let mut step = post::step_output(model_ref, &problem_s, &res, file.step_time(s));
@@ -147,36 +259,49 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         step.info.time_assemble = t_assemble;
         step.info.time_solve = t_solve;
         step.info.time_total = ts.elapsed().as_secs_f64();
-        if need_checkpoint {
-            if let Err(e) = pipeline::create_checkpoint(&prep, &out, &om) {
-                eprintln!("error: {e}");
-                return EXIT_BAD_INPUT;
+        // The staged checkpoint: a copy of the one this step extends, or new.
+        if !staged_h5.exists() {
+            let made = match &base {
+                Some(b) => std::fs::copy(b, &staged_h5)
+                    .map(|_| ())
+                    .map_err(|e| format!("{}: cannot copy the checkpoint: {e}", b.display())),
+                None => pipeline::create_checkpoint(&prep, &staged_h5, &om, &fingerprint)
+                    .map_err(|e| e.to_string()),
+            };
+            if let Err(msg) = made {
+                return fail(&msg);
             }
-            need_checkpoint = false;
         }
-        if let Err(e) = pipeline::write_step(&out, &om, &step, s + 1, compress) {
-            eprintln!("error: {e}");
-            return EXIT_BAD_INPUT;
+        if let Err(e) = pipeline::write_step(&staged, &om, &step, s + 1, compress) {
+            return fail(&e);
         }
+        let pvd_name = format!("{name}.pvd");
         if multi {
             let entries: Vec<(f64, String)> = (0..=s)
                 .flat_map(|k| {
                     let o = pipeline::output_paths(&dir, &name, Some(k + 1));
-                    let f = |p: &std::path::Path| {
-                        p.file_name()
-                            .map(|n| n.to_string_lossy().into_owned())
-                            .unwrap_or_default()
-                    };
                     [
-                        (file.step_time(k), f(&o.vtu)),
-                        (file.step_time(k), f(&o.contact_vtu)),
+                        (file.step_time(k), fname(&o.vtu)),
+                        (file.step_time(k), fname(&o.contact_vtu)),
                     ]
                 })
                 .collect();
-            if let Err(e) = crate::io::vtu::write_pvd(&dir.join(format!("{name}.pvd")), &entries) {
-                eprintln!("error: {e}");
-                return EXIT_BAD_INPUT;
+            if let Err(e) = crate::io::vtu::write_pvd(&stage.path(&pvd_name), &entries) {
+                return fail(&e);
             }
+            // A load step is one commit: its VTU pair, the time series and
+            // the checkpoint grown by this step.
+            let names = [
+                fname(&out.vtu),
+                fname(&out.contact_vtu),
+                pvd_name.clone(),
+                h5_name.clone(),
+            ];
+            let names: Vec<&str> = names.iter().map(String::as_str).collect();
+            if let Err(e) = stage.commit(&names) {
+                return fail(&e);
+            }
+            base = Some(out.h5.clone());
         }
         let t_write = t_w.elapsed().as_secs_f64();
         if multi && !quiet {
@@ -236,10 +361,8 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         final_state = Some((model, res, step, out, timings));
     }
     let Some((model, res, step, out, mut timings)) = final_state else {
-        if !quiet {
-            println!("nothing to do: the checkpoint already holds all {nsteps} steps");
-        }
-        return 0;
+        // Unreachable: first < last, so the loop ran at least once.
+        return bad_input(&"no load step was solved");
     };
     timings.total = t0.elapsed().as_secs_f64();
     let model_ref = model.as_ref().unwrap_or(&prep.model);
@@ -261,15 +384,30 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
     }
     let text = match serde_json::to_string_pretty(&summary) {
         Ok(t) => t,
-        Err(e) => {
-            eprintln!("error: JSON summary: {e}");
-            return EXIT_BAD_INPUT;
-        }
+        Err(e) => return bad_input(&format!("JSON summary: {e}")),
     };
-    if let Err(e) = crate::io::atomic::write_atomic_bytes(&out.json, text.as_bytes()) {
-        eprintln!("error: {e}");
-        return EXIT_BAD_INPUT;
+    let json_name = fname(&out.json);
+    if let Err(e) = crate::io::atomic::write_atomic_bytes(&stage.path(&json_name), text.as_bytes())
+    {
+        return fail(&e);
     }
+    // The last commit: the JSON summary (the commit record) and, for a
+    // single solve, every other file with it.
+    let names = if multi {
+        vec![json_name]
+    } else {
+        vec![
+            fname(&out.vtu),
+            fname(&out.contact_vtu),
+            h5_name.clone(),
+            json_name,
+        ]
+    };
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    if let Err(e) = stage.commit(&names) {
+        return fail(&e);
+    }
+    stage.finish();
     if !quiet {
         print_report(
             &prep,
@@ -295,8 +433,29 @@ pub fn preconditioner_label(method: &str, opts: &crate::qp::SolveOptions) -> Str
 
 /// Print the one error line of bad input; the exit code for it.
 pub(crate) fn bad_input(e: &impl std::fmt::Display) -> i32 {
-    eprintln!("error: {e}");
+    eprintln!("error: {}", one_line(&e.to_string()));
     EXIT_BAD_INPUT
+}
+
+/// Longest error line printed (a longer one is cut with `…`).
+const MAX_LINE: usize = 2000;
+
+/// A message as one line: control characters (a newline in a path) are
+/// escaped, and an overlong message (a huge name) is cut.
+pub(crate) fn one_line(msg: &str) -> String {
+    let mut out = String::with_capacity(msg.len().min(MAX_LINE + 16));
+    for (n, c) in msg.chars().enumerate() {
+        if n >= MAX_LINE {
+            out.push('…');
+            break;
+        }
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 pub struct Timings {

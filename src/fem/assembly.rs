@@ -402,6 +402,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         }
     }
 
+    check_scale(&c, &d, &dofs, &topo, mesh, problem)?;
     lap.lap("loads");
     // --- contact rows in the reduced DOFs
     let mut atrip = vec![];
@@ -456,6 +457,67 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     check_semicoercive(&model, problem)?;
     lap.lap("semicoercivity check");
     Ok(model)
+}
+
+/// Refuses a C or d that is not finite, or whose displacement scale
+/// max|d| / max C_ii is so large that energies would overflow (a NaN in the
+/// solver otherwise). Names the body and node of the largest load.
+fn check_scale(
+    c: &Csr,
+    d: &[f64],
+    dofs: &[PointDofs],
+    topo: &Topology,
+    mesh: &Mesh,
+    problem: &Problem,
+) -> Result<(), FemError> {
+    let err = |msg: String| FemError::new(&problem.path, msg);
+    let point_of = |j: usize| {
+        dofs.iter()
+            .position(|p| j >= p.start && j < p.start + p.ndof)
+    };
+    let at = |j: usize| {
+        point_of(j)
+            .map(|p| {
+                format!(
+                    "node {} (body {})",
+                    mesh.node_tags[topo.point_node[p]], topo.point_body[p]
+                )
+            })
+            .unwrap_or_default()
+    };
+    if let Some(k) = c.data.iter().position(|v| !v.is_finite()) {
+        let row = c.indptr.partition_point(|&s| s <= k).saturating_sub(1);
+        return Err(err(format!(
+            "the stiffness matrix C is not finite at {}: check E and the coordinates",
+            at(row)
+        )));
+    }
+    if let Some(j) = d.iter().position(|v| !v.is_finite()) {
+        return Err(err(format!(
+            "the load vector d is not finite at {}: the loads overflow; change the units",
+            at(j)
+        )));
+    }
+    let cmax = c.diag().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let (jmax, dmax) = d.iter().enumerate().fold((0, 0.0f64), |(jm, m), (j, v)| {
+        if v.abs() > m {
+            (j, v.abs())
+        } else {
+            (jm, m)
+        }
+    });
+    if cmax > 0.0 && dmax > 0.0 {
+        // Displacement and energy scales; 1e250 leaves the solver's own
+        // products (norms, squares) room before overflow.
+        let u = dmax / cmax;
+        if !(u.is_finite() && u * dmax < 1e250 && u < 1e150) {
+            return Err(err(format!(
+                "the loads (largest |d| = {dmax:e} at {}) on a stiffness of scale {cmax:e} give displacements of about {u:e}: beyond the range of double precision; check E and the loads, or change the units",
+                at(jmax)
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Points per parallel work item of the assembly.

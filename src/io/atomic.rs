@@ -1,15 +1,19 @@
-//! Atomic file replacement and the error type of the output writers.
+//! Atomic file replacement, staged transactions of several files, the
+//! per-output-name lock, and the error type of the output writers.
 //!
-//! A file is written under a temporary name in the target directory
-//! (`.NAME.tmp-PID-N`), flushed to disk, then renamed over the target. A
-//! reader (or a crash) therefore sees either the previous complete file or
-//! the new complete file, never a partial one. On error the temporary file
-//! is removed.
+//! Every file is written inside a private staging directory of the target
+//! directory (`.signorini-stage-…`, a random name created exclusively with
+//! mode 0700 by the `tempfile` crate), flushed to disk, then renamed over the
+//! target. Nothing is ever created under a predictable name, so a symbolic
+//! link planted in the output directory is never followed; a reader (or a
+//! crash) sees either the previous complete file or the new complete file.
+//! A [`Stage`] commits several files together and, if the run fails later,
+//! puts the previous files back.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::fs::{File, OpenOptions};
+use std::io::{BufWriter, Read, Write};
+use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Errors of the output writers and readers. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
@@ -91,21 +95,8 @@ impl IoError {
     }
 }
 
-static COUNTER: AtomicUsize = AtomicUsize::new(0);
-
-/// The temporary name used for `path`: `.NAME.tmp-PID-N` in the same directory
-/// (unique within the process, so concurrent writers of one target do not
-/// collide).
-pub fn temp_path_for(path: &Path) -> Result<PathBuf, IoError> {
-    let name = path
-        .file_name()
-        .ok_or_else(|| IoError::format(path, "output path has no file name"))?;
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(".tmp-{}-{}", std::process::id(), n));
-    Ok(parent_dir(path).join(tmp_name))
-}
+/// The prefix of every staging directory.
+pub const STAGE_PREFIX: &str = ".signorini-stage-";
 
 /// The directory holding `path` (`.` for a bare file name).
 fn parent_dir(path: &Path) -> PathBuf {
@@ -115,53 +106,242 @@ fn parent_dir(path: &Path) -> PathBuf {
     }
 }
 
-/// Writes `path` atomically: `f` receives a temporary path in the same
-/// directory and must create and fill that file (closing it before it
-/// returns). The file is then fsynced and renamed over `path`, and the
-/// directory is fsynced (best effort). If `f` or any later step fails, the
-/// temporary file is removed and `path` is left untouched.
-///
-/// Errors from `f` that name the temporary file are rewritten to name `path`.
-pub fn write_atomic<F>(path: &Path, f: F) -> Result<(), IoError>
-where
-    F: FnOnce(&Path) -> Result<(), IoError>,
-{
-    let tmp = temp_path_for(path)?;
-    let dir = parent_dir(path);
-    if !dir.is_dir() {
-        return Err(IoError::io(
-            path,
-            "cannot write",
-            std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                format!("directory {} does not exist", dir.display()),
-            ),
-        ));
+fn file_name(path: &Path) -> Result<std::ffi::OsString, IoError> {
+    path.file_name()
+        .map(|n| n.to_os_string())
+        .ok_or_else(|| IoError::format(path, "output path has no file name"))
+}
+
+fn missing_dir(path: &Path, dir: &Path) -> IoError {
+    IoError::io(
+        path,
+        "cannot write",
+        std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            format!("directory {} does not exist", dir.display()),
+        ),
+    )
+}
+
+/// Creates `path` for writing; fails if anything (a file, a symbolic link)
+/// is already there, so a planted link is never followed.
+pub fn create_new(path: &Path) -> std::io::Result<File> {
+    OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .mode(0o644)
+        .open(path)
+}
+
+/// fsync a directory; some file systems refuse, and the data itself is
+/// already on disk then, so errors are ignored.
+fn sync_dir(dir: &Path) {
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all();
     }
-    let result = f(&tmp).and_then(|()| finish(&tmp, path));
-    match result {
-        Ok(()) => Ok(()),
-        Err(e) => {
-            // Best effort: the temporary may not exist (f failed before creating it).
-            let _ = std::fs::remove_file(&tmp);
-            Err(e.retarget(&tmp, path))
+}
+
+/// A set of output files written in a private staging directory of the
+/// output directory and moved into place together by [`Stage::commit`].
+///
+/// Every file a commit replaces is first hard-linked into the staging
+/// directory, so that until [`Stage::finish`] the previous files can be put
+/// back: dropping an unfinished stage (an error, an early return) restores
+/// the output directory to what it held before the run. A process killed
+/// mid-run leaves the committed files (each complete) and the staging
+/// directory, which the next run of the same name removes
+/// ([`remove_stale_stages`]).
+pub struct Stage {
+    target: PathBuf,
+    dir: Option<tempfile::TempDir>,
+    /// Files replaced or created by commits, with the backup of the previous
+    /// file (None: there was none), in commit order.
+    touched: Vec<(PathBuf, Option<PathBuf>)>,
+    keep_backups: bool,
+}
+
+impl Stage {
+    /// A new staging directory in `target` named `PREFIX` + random characters.
+    pub fn new(target: &Path, prefix: &str) -> Result<Stage, IoError> {
+        if !target.is_dir() {
+            return Err(missing_dir(target, target));
+        }
+        let dir = tempfile::Builder::new()
+            .prefix(prefix)
+            .tempdir_in(target)
+            .map_err(|e| IoError::io(target, "cannot create a staging directory", e))?;
+        Ok(Stage {
+            target: target.to_path_buf(),
+            dir: Some(dir),
+            touched: vec![],
+            keep_backups: true,
+        })
+    }
+
+    /// The staging directory.
+    pub fn dir(&self) -> &Path {
+        self.stage_dir()
+    }
+
+    fn stage_dir(&self) -> &Path {
+        self.dir.as_ref().map(|d| d.path()).unwrap_or(&self.target)
+    }
+
+    /// The staged path of the output file `name`.
+    pub fn path(&self, name: &str) -> PathBuf {
+        self.stage_dir().join(name)
+    }
+
+    /// The final path of the output file `name`.
+    pub fn target(&self, name: &str) -> PathBuf {
+        self.target.join(name)
+    }
+
+    /// Moves the staged files `names` into place (each fsynced first, then
+    /// renamed; the directory is fsynced once). A file is replaced by a
+    /// rename, so it is never seen half-written. On error the files of this
+    /// commit that were already moved are put back.
+    pub fn commit(&mut self, names: &[&str]) -> Result<(), IoError> {
+        for n in names {
+            let staged = self.path(n);
+            let f = File::open(&staged)
+                .map_err(|e| IoError::io(&self.target(n), "cannot reopen staged file", e))?;
+            f.sync_all()
+                .map_err(|e| IoError::io(&self.target(n), "cannot sync to disk", e))?;
+        }
+        let before = self.touched.len();
+        for n in names {
+            if let Err(e) = self.move_into_place(n) {
+                self.restore_from(before);
+                return Err(e);
+            }
+        }
+        sync_dir(&self.target);
+        Ok(())
+    }
+
+    fn move_into_place(&mut self, name: &str) -> Result<(), IoError> {
+        let fin = self.target(name);
+        if !self.keep_backups {
+            return std::fs::rename(self.path(name), &fin)
+                .map_err(|e| IoError::io(&fin, "cannot rename into place", e));
+        }
+        let already = self.touched.iter().any(|(p, _)| *p == fin);
+        if !already {
+            let backup = if std::fs::symlink_metadata(&fin).is_ok() {
+                let prev = self.stage_dir().join(".prev");
+                if !prev.is_dir() {
+                    std::fs::create_dir(&prev)
+                        .map_err(|e| IoError::io(&fin, "cannot keep the previous file", e))?;
+                }
+                let b = prev.join(name);
+                // A hard link keeps the previous file in place until the rename.
+                if std::fs::hard_link(&fin, &b).is_err() {
+                    std::fs::copy(&fin, &b)
+                        .map_err(|e| IoError::io(&fin, "cannot keep the previous file", e))?;
+                }
+                Some(b)
+            } else {
+                None
+            };
+            self.touched.push((fin.clone(), backup));
+        }
+        std::fs::rename(self.path(name), &fin)
+            .map_err(|e| IoError::io(&fin, "cannot rename into place", e))
+    }
+
+    /// Put back the previous files of every commit from index `from` of
+    /// `touched` on (best effort: this runs on an error path).
+    fn restore_from(&mut self, from: usize) {
+        while self.touched.len() > from {
+            let Some((fin, backup)) = self.touched.pop() else {
+                break;
+            };
+            match backup {
+                Some(b) => {
+                    let _ = std::fs::rename(&b, &fin);
+                }
+                None => {
+                    let _ = std::fs::remove_file(&fin);
+                }
+            }
+        }
+        sync_dir(&self.target);
+    }
+
+    /// Undo every commit: the output directory holds what it held before.
+    pub fn rollback(mut self) {
+        self.restore_from(0);
+    }
+
+    /// The run is complete: drop the backups and the staging directory.
+    pub fn finish(mut self) {
+        self.touched.clear();
+        if let Some(d) = self.dir.take() {
+            let _ = d.close();
         }
     }
 }
 
-/// fsync the finished temporary file, rename it into place, fsync the directory.
-fn finish(tmp: &Path, path: &Path) -> Result<(), IoError> {
-    let file = File::open(tmp).map_err(|e| IoError::io(path, "cannot reopen temporary file", e))?;
-    file.sync_all()
-        .map_err(|e| IoError::io(path, "cannot sync to disk", e))?;
-    drop(file);
-    std::fs::rename(tmp, path).map_err(|e| IoError::io(path, "cannot rename into place", e))?;
-    // Make the rename durable. Some file systems refuse to fsync a directory;
-    // the data itself is already on disk, so ignore that.
-    if let Ok(dir) = File::open(parent_dir(path)) {
-        let _ = dir.sync_all();
+impl Drop for Stage {
+    fn drop(&mut self) {
+        if !self.touched.is_empty() {
+            self.restore_from(0);
+        }
     }
-    Ok(())
+}
+
+/// Removes staging directories `PREFIX` + 6 random characters left in `dir`
+/// by a run that was killed (call only while holding the name's lock).
+pub fn remove_stale_stages(dir: &Path, prefix: &str) {
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in rd.flatten() {
+        let name = e.file_name();
+        let Some(name) = name.to_str() else { continue };
+        let is_stale = name
+            .strip_prefix(prefix)
+            .is_some_and(|r| r.len() == 6 && r.bytes().all(|b| b.is_ascii_alphanumeric()));
+        if is_stale && e.file_type().is_ok_and(|t| t.is_dir()) {
+            let _ = std::fs::remove_dir_all(e.path());
+        }
+    }
+}
+
+/// Writes `path` atomically: `f` receives a path in a private staging
+/// directory next to `path` and must create and fill that file (closing it
+/// before it returns). The file is then fsynced and renamed over `path`, and
+/// the directory is fsynced (best effort). If `f` or any later step fails,
+/// the staging directory is removed and `path` is left untouched.
+///
+/// Errors from `f` that name the staged file are rewritten to name `path`.
+pub fn write_atomic<F>(path: &Path, f: F) -> Result<(), IoError>
+where
+    F: FnOnce(&Path) -> Result<(), IoError>,
+{
+    let name = file_name(path)?;
+    let dir = parent_dir(path);
+    if !dir.is_dir() {
+        return Err(missing_dir(path, &dir));
+    }
+    let mut stage = Stage::new(&dir, STAGE_PREFIX).map_err(|e| e.retarget(&dir, path))?;
+    stage.keep_backups = false;
+    let tmp = stage.stage_dir().join(&name);
+    let result = f(&tmp).and_then(|()| {
+        let n = name.to_string_lossy().into_owned();
+        if Path::new(&n).file_name() != Some(name.as_os_str()) {
+            return Err(IoError::format(path, "output file name is not valid UTF-8"));
+        }
+        stage.commit(&[&n])
+    });
+    match result {
+        Ok(()) => {
+            stage.finish();
+            Ok(())
+        }
+        Err(e) => Err(e.retarget(&tmp, path)),
+    }
 }
 
 /// Writes `path` atomically through a buffered writer.
@@ -170,7 +350,7 @@ where
     F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
 {
     write_atomic(path, |tmp| {
-        let file = File::create(tmp).map_err(|e| IoError::io(path, "cannot create", e))?;
+        let file = create_new(tmp).map_err(|e| IoError::io(path, "cannot create", e))?;
         let mut w = BufWriter::new(file);
         f(&mut w).map_err(|e| IoError::io(path, "cannot write", e))?;
         w.flush()
@@ -182,4 +362,87 @@ where
 /// Writes `bytes` to `path` atomically.
 pub fn write_atomic_bytes(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
     write_atomic_with(path, |w| w.write_all(bytes))
+}
+
+/// An advisory lock (`flock`) on `.NAME.lock` in an output directory: one
+/// run per output name at a time. The lock file holds the PID of its holder
+/// and is removed when the lock is released.
+pub struct OutputLock {
+    path: PathBuf,
+    file: Option<File>,
+}
+
+impl OutputLock {
+    /// Takes the lock of `name` in `dir` or fails at once, naming the holder.
+    pub fn acquire(dir: &Path, name: &str) -> Result<OutputLock, String> {
+        let path = dir.join(format!(".{name}.lock"));
+        let shown = path.display();
+        // The file may be unlinked by its previous holder between our open and
+        // our lock; then the lock is on a dead inode: open again.
+        for _ in 0..100 {
+            let mut file = OpenOptions::new()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(false)
+                .mode(0o644)
+                .custom_flags(libc::O_NOFOLLOW)
+                .open(&path)
+                .map_err(|e| {
+                    if e.raw_os_error() == Some(libc::ELOOP) {
+                        format!("{shown}: is a symbolic link; refusing to follow it")
+                    } else {
+                        format!("{shown}: cannot open the lock file: {e}")
+                    }
+                })?;
+            match file.try_lock() {
+                Ok(()) => {}
+                Err(std::fs::TryLockError::WouldBlock) => {
+                    let mut pid = String::new();
+                    let _ = file.read_to_string(&mut pid);
+                    let pid = pid.trim();
+                    let holder = if !pid.is_empty()
+                        && pid.len() < 12
+                        && pid.bytes().all(|b| b.is_ascii_digit())
+                    {
+                        format!("process {pid}")
+                    } else {
+                        "another process".to_string()
+                    };
+                    return Err(format!(
+                        "{shown}: {holder} is writing the outputs of \"{name}\" in {}; wait for it to end or choose another --out",
+                        dir.display()
+                    ));
+                }
+                Err(std::fs::TryLockError::Error(e)) => {
+                    return Err(format!("{shown}: cannot lock: {e}"));
+                }
+            }
+            let same = match (file.metadata(), std::fs::symlink_metadata(&path)) {
+                (Ok(a), Ok(b)) => a.ino() == b.ino() && a.dev() == b.dev(),
+                _ => false,
+            };
+            if !same {
+                continue;
+            }
+            let _ = file.set_len(0);
+            let _ = file.write_all(format!("{}\n", std::process::id()).as_bytes());
+            let _ = file.flush();
+            return Ok(OutputLock {
+                path,
+                file: Some(file),
+            });
+        }
+        Err(format!(
+            "{shown}: cannot lock: the lock file keeps changing"
+        ))
+    }
+}
+
+impl Drop for OutputLock {
+    fn drop(&mut self) {
+        // Unlink while still holding the lock, then release it.
+        let _ = std::fs::remove_file(&self.path);
+        drop(self.file.take());
+    }
 }

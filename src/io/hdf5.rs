@@ -4,7 +4,8 @@
 //!
 //! ```text
 //! /                       attrs: one string attribute per `attrs` entry
-//!                                (e.g. problem, toml, version),
+//!                                (e.g. problem, toml, version, and the
+//!                                fingerprint `--restart` compares),
 //!                                plane_strain (u8 0/1), last_step (u64, once a step exists)
 //! /mesh/nodes             f64  [n, 2]   undeformed point coordinates
 //! /mesh/node_tags         u64  [n]      Gmsh node tag of each point
@@ -29,8 +30,11 @@
 //!            converged (u8 0/1); method, preconditioner (strings)
 //! ```
 //!
-//! Every write is crash-safe: the file is built (or copied and extended)
-//! under a temporary name, closed, fsynced and renamed over the target.
+//! Every write is crash-safe: the file is built (or copied and extended) in
+//! a private staging directory, closed, fsynced and renamed over the target.
+//! Every read is bounded by the file: a dataset or attribute whose shape
+//! needs more bytes than the file holds is refused before any allocation
+//! (checkpoints are written uncompressed, so a genuine one always fits).
 
 use std::path::Path;
 use std::str::FromStr;
@@ -57,6 +61,33 @@ const RESERVED_ROOT_ATTRS: [&str; 2] = ["plane_strain", "last_step"];
 /// Error context: the file the user named plus an HDF5 location.
 struct Ctx<'a> {
     path: &'a Path,
+    /// The size of the file being read (u64::MAX when writing): no dataset
+    /// of an uncompressed checkpoint can hold more bytes, so a shape that
+    /// claims more is refused before anything is allocated.
+    limit: u64,
+}
+
+impl<'a> Ctx<'a> {
+    fn writing(path: &'a Path) -> Ctx<'a> {
+        Ctx {
+            path,
+            limit: u64::MAX,
+        }
+    }
+
+    /// Refuses `count` values of `size` bytes at `loc` if the file cannot hold them.
+    fn check_fits(&self, loc: &str, shape: &[usize], size: usize) -> Result<(), IoError> {
+        let bytes = shape
+            .iter()
+            .try_fold(size as u128, |a, &d| a.checked_mul(d as u128));
+        match bytes {
+            Some(b) if b <= self.limit as u128 => Ok(()),
+            _ => Err(self.format(format!(
+                "{loc}: shape {shape:?} needs more bytes than the file holds ({} bytes); the checkpoint is corrupt",
+                self.limit
+            ))),
+        }
+    }
 }
 
 impl Ctx<'_> {
@@ -183,7 +214,7 @@ pub fn create_checkpoint(
     mesh: &OutMesh,
     attrs: &[(&str, String)],
 ) -> Result<(), IoError> {
-    let ctx = Ctx { path };
+    let ctx = Ctx::writing(path);
     check_mesh(&ctx, mesh)?;
     for (k, _) in attrs {
         if RESERVED_ROOT_ATTRS.contains(k) {
@@ -254,44 +285,54 @@ pub fn step_name(index: usize) -> String {
 /// Crash-safe: the checkpoint is copied to a temporary file in the same
 /// directory, extended, closed, fsynced and renamed over the original.
 pub fn append_step(path: &Path, index: usize, step: &StepOutput) -> Result<(), IoError> {
-    let ctx = Ctx { path };
+    let ctx = Ctx::writing(path);
     if index == 0 {
         return Err(ctx.format("step indices start at 1"));
     }
     write_atomic(path, |tmp| {
         std::fs::copy(path, tmp).map_err(|e| IoError::io(path, "cannot copy checkpoint", e))?;
-        let file = File::open_rw(tmp).map_err(ctx.h5("/"))?;
-        {
-            if !file.link_exists("mesh") {
-                return Err(ctx.missing("group /mesh"));
-            }
-            let mesh = file.group("mesh").map_err(ctx.h5("/mesh"))?;
-            let n = dataset_len(&ctx, &mesh, "nodes")?;
-            let m = dataset_len(&ctx, &mesh, "triangles")?;
-            let r = dataset_len(&ctx, &mesh, "contact_first")?;
-            check_step(&ctx, step, n, m, r)?;
-
-            let steps = if file.link_exists("steps") {
-                file.group("steps").map_err(ctx.h5("/steps"))?
-            } else {
-                file.create_group("steps").map_err(ctx.h5("/steps"))?
-            };
-            for name in steps.member_names().map_err(ctx.h5("/steps"))? {
-                if parse_step_name(&name).is_some_and(|i| i >= index) {
-                    steps
-                        .unlink(&name)
-                        .map_err(ctx.h5(format!("/steps/{name}")))?;
-                }
-            }
-            let name = step_name(index);
-            let g = steps
-                .create_group(&name)
-                .map_err(ctx.h5(format!("/steps/{name}")))?;
-            write_step(&ctx, &g, step)?;
-            set_attr_scalar(&ctx, &file, "last_step", &(index as u64))?;
-        }
-        file.close().map_err(ctx.h5("/"))
+        append_step_in_place(tmp, index, step)
     })
+}
+
+/// [`append_step`] without the copy: extends the checkpoint `path` itself
+/// (a file in a staging directory, which is renamed into place once complete).
+pub fn append_step_in_place(path: &Path, index: usize, step: &StepOutput) -> Result<(), IoError> {
+    let ctx = Ctx::writing(path);
+    if index == 0 {
+        return Err(ctx.format("step indices start at 1"));
+    }
+    let file = File::open_rw(path).map_err(ctx.h5("/"))?;
+    {
+        if !file.link_exists("mesh") {
+            return Err(ctx.missing("group /mesh"));
+        }
+        let mesh = file.group("mesh").map_err(ctx.h5("/mesh"))?;
+        let n = dataset_len(&ctx, &mesh, "nodes")?;
+        let m = dataset_len(&ctx, &mesh, "triangles")?;
+        let r = dataset_len(&ctx, &mesh, "contact_first")?;
+        check_step(&ctx, step, n, m, r)?;
+
+        let steps = if file.link_exists("steps") {
+            file.group("steps").map_err(ctx.h5("/steps"))?
+        } else {
+            file.create_group("steps").map_err(ctx.h5("/steps"))?
+        };
+        for name in steps.member_names().map_err(ctx.h5("/steps"))? {
+            if parse_step_name(&name).is_some_and(|i| i >= index) {
+                steps
+                    .unlink(&name)
+                    .map_err(ctx.h5(format!("/steps/{name}")))?;
+            }
+        }
+        let name = step_name(index);
+        let g = steps
+            .create_group(&name)
+            .map_err(ctx.h5(format!("/steps/{name}")))?;
+        write_step(&ctx, &g, step)?;
+        set_attr_scalar(&ctx, &file, "last_step", &(index as u64))?;
+    }
+    file.close().map_err(ctx.h5("/"))
 }
 
 fn check_step(ctx: &Ctx, s: &StepOutput, n: usize, m: usize, r: usize) -> Result<(), IoError> {
@@ -406,6 +447,7 @@ fn read_ds<T: H5Type>(
             return Err(ctx.format(format!("{loc}: {nrows} rows, expected {want}")));
         }
     }
+    ctx.check_fits(&loc, &shape, std::mem::size_of::<T>())?;
     let data = ds.read_raw::<T>().map_err(ctx.h5(loc.clone()))?;
     let expected = nrows * cols.unwrap_or(1);
     if data.len() != expected {
@@ -458,6 +500,8 @@ fn get_attr_str_list(ctx: &Ctx, loc: &Location, name: &str) -> Result<Vec<String
         return Err(ctx.missing(format!("attribute {where_}")));
     }
     let a = loc.attr(name).map_err(ctx.h5(where_.clone()))?;
+    // Each string takes at least one byte of the file besides its pointer.
+    ctx.check_fits(&where_, &a.shape(), 1)?;
     let v = a.read_raw::<VarLenUnicode>().map_err(ctx.h5(where_))?;
     Ok(v.iter().map(|s| s.as_str().to_string()).collect())
 }
@@ -466,14 +510,24 @@ fn get_attr_str_list(ctx: &Ctx, loc: &Location, name: &str) -> Result<Vec<String
 /// root attributes. A file without `/steps` gives zero steps; a file without
 /// `/mesh` or with a missing dataset is rejected, naming the missing path.
 pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
-    let ctx = Ctx { path };
-    if !path.is_file() {
+    let meta =
+        std::fs::metadata(path).map_err(|e| IoError::io(path, "cannot open checkpoint", e))?;
+    if !meta.is_file() {
+        let what = if meta.is_dir() {
+            "is a directory, not a checkpoint file"
+        } else {
+            "is not a regular file (a FIFO, socket or device)"
+        };
         return Err(IoError::io(
             path,
             "cannot open checkpoint",
-            std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
+            std::io::Error::new(std::io::ErrorKind::InvalidInput, what),
         ));
     }
+    let ctx = Ctx {
+        path,
+        limit: meta.len(),
+    };
     let file = File::open(path).map_err(ctx.h5("/"))?;
 
     let mut attrs = Vec::new();

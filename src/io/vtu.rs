@@ -6,7 +6,6 @@
 //! zlib-compressed (`vtkZLibDataCompressor`, level 6) as well. Floating-point
 //! arrays are Float64, so values read back bit-exactly.
 
-use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
@@ -125,7 +124,8 @@ fn write_piece(path: &Path, piece: UnstructuredGridPiece, compress: bool) -> Res
     xml.write(&mut buf).map_err(|e| vtk_err(&e))?;
     let buf = add_zero_counts(buf);
     write_atomic(path, |tmp| {
-        let file = File::create(tmp).map_err(|e| IoError::io(path, "cannot create", e))?;
+        let file =
+            super::atomic::create_new(tmp).map_err(|e| IoError::io(path, "cannot create", e))?;
         let mut w = BufWriter::new(file);
         w.write_all(&buf)
             .and_then(|()| w.flush())

@@ -17,11 +17,50 @@ use super::{Dim, Mesh, MeshError, PhysicalGroup};
 
 /// Read and parse a Gmsh `.msh` file.
 pub fn read_msh(path: &Path) -> Result<Mesh, MeshError> {
-    let bytes = std::fs::read(path).map_err(|source| MeshError::Io {
+    let bytes = read_mesh_bytes(path)?;
+    parse_msh(path, &bytes)
+}
+
+/// Largest magnitude of a node coordinate: products of coordinates (areas,
+/// stiffness entries) must stay far from overflow.
+pub const MAX_COORDINATE: f64 = 1e100;
+
+/// The bytes of a mesh file, which must be a regular file (a FIFO or a
+/// device such as `/dev/zero` would block or never end). The buffer is
+/// reserved for the file's size up front with `try_reserve`, so a file too
+/// large for memory is an error, not an abort.
+pub fn read_mesh_bytes(path: &Path) -> Result<Vec<u8>, MeshError> {
+    use std::io::Read;
+    let io = |source: std::io::Error| MeshError::Io {
         path: path.to_path_buf(),
         source,
+    };
+    let invalid = |msg: String| MeshError::Invalid {
+        path: path.to_path_buf(),
+        msg,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if meta.is_dir() {
+        return Err(invalid("is a directory, not a mesh file".into()));
+    }
+    if !meta.is_file() {
+        return Err(invalid(
+            "is not a regular file (a FIFO, socket or device); give a .msh file".into(),
+        ));
+    }
+    let len = usize::try_from(meta.len())
+        .map_err(|_| invalid(format!("{} bytes is too large", meta.len())))?;
+    let mut bytes = Vec::new();
+    bytes.try_reserve_exact(len).map_err(|_| {
+        invalid(format!(
+            "not enough memory to read it: needs about {:.1} GiB",
+            len as f64 / (1u64 << 30) as f64
+        ))
     })?;
-    parse_msh(path, &bytes)
+    let file = std::fs::File::open(path).map_err(io)?;
+    // Never more than the size seen above (the file may grow meanwhile).
+    file.take(meta.len()).read_to_end(&mut bytes).map_err(io)?;
+    Ok(bytes)
 }
 
 /// Parse the contents of a Gmsh `.msh` file; `path` is only used for the
@@ -802,14 +841,36 @@ impl<'a> Parser<'a> {
     }
 
     fn check_finite(&self, tag: u64, x: f64, y: f64, z: f64) -> Result<(), MeshError> {
-        if x.is_finite() && y.is_finite() && z.is_finite() {
+        let ok = |v: f64| v.abs() <= MAX_COORDINATE;
+        if ok(x) && ok(y) && ok(z) {
             Ok(())
+        } else if x.is_finite() && y.is_finite() && z.is_finite() {
+            Err(self.err_at(
+                self.here(),
+                format!(
+                    "node {tag} has a coordinate beyond ±{MAX_COORDINATE:e} ({x:e}, {y:e}, {z:e}): areas and stiffnesses would overflow; change the length unit"
+                ),
+            ))
         } else {
             Err(self.err_at(
                 self.here(),
                 format!("node {tag} has a non-finite coordinate ({x}, {y}, {z})"),
             ))
         }
+    }
+
+    /// Refuses a header count that the whole file could never hold
+    /// (`min_bytes` per item). (A file merely cut short is reported where it
+    /// ends; reservations are bounded by the remaining bytes in any case.)
+    fn check_count(&self, count: u64, min_bytes: u64, what: &str) -> Result<(), MeshError> {
+        let room = self.b.len() as u64 / min_bytes;
+        if count > room {
+            return Err(self.err_pos(format!(
+                "the header declares {count} {what} but the whole file has only {} bytes",
+                self.b.len()
+            )));
+        }
+        Ok(())
     }
 
     fn nodes41(&mut self) -> Result<(), MeshError> {
@@ -820,6 +881,8 @@ impl<'a> Parser<'a> {
         let nnodes = self.size("the number of nodes")?;
         self.size("the minimum node tag")?;
         self.size("the maximum node tag")?;
+        // A node takes at least 8 bytes (ASCII: tag and three coordinates).
+        self.check_count(nnodes, 8, "nodes")?;
         let c = cap(nnodes, self.remaining(), 8);
         self.node_tags.reserve(c);
         self.node_xy.reserve(c);
@@ -863,7 +926,8 @@ impl<'a> Parser<'a> {
                     let x = self.f64_of(chunk.get(0..8).unwrap_or_default());
                     let y = self.f64_of(chunk.get(8..16).unwrap_or_default());
                     let z = self.f64_of(chunk.get(16..24).unwrap_or_default());
-                    if !(x.is_finite() && y.is_finite() && z.is_finite()) {
+                    let ok = |v: f64| v.abs() <= MAX_COORDINATE;
+                    if !(ok(x) && ok(y) && ok(z)) {
                         self.tok_start = start + k * per * 8;
                         self.check_finite(tag, x, y, z)?;
                     }
@@ -898,6 +962,7 @@ impl<'a> Parser<'a> {
 
     fn nodes22(&mut self) -> Result<(), MeshError> {
         let n = self.a_u64("the number of nodes")?;
+        self.check_count(n, 8, "nodes")?;
         let c = cap(n, self.remaining(), 8);
         self.node_tags.reserve(c);
         self.node_xy.reserve(c);
@@ -921,6 +986,8 @@ impl<'a> Parser<'a> {
         let nelems = self.size("the number of elements")?;
         self.size("the minimum element tag")?;
         self.size("the maximum element tag")?;
+        // An element takes at least 4 bytes (ASCII: a tag and a node).
+        self.check_count(nelems, 4, "elements")?;
         let mut total: u64 = 0;
         for _ in 0..nblocks {
             let dim = self.int("the entity dimension of an element block")?;
@@ -997,6 +1064,7 @@ impl<'a> Parser<'a> {
 
     fn elements22(&mut self) -> Result<(), MeshError> {
         let n = self.a_u64("the number of elements")?;
+        self.check_count(n, 4, "elements")?;
         // The previous element: gmsh writes an element once per physical group
         // of its entity, consecutively; such copies are merged here.
         let mut prev: Option<(Kind, i32, [u64; 3], usize)> = None;

@@ -5,9 +5,56 @@
 //! (E > 0, −1 < ν < 0.5, ρ ≥ 0, …); names are checked against the mesh in
 //! `fem::topology`.
 
-use serde::Deserialize;
+use serde::{Deserialize, Deserializer};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+/// Largest magnitude accepted for E, loads and prescribed displacements:
+/// their products (stiffness × displacement, energy) must stay far inside
+/// the range of double precision. The smallest accepted E is its inverse.
+pub const MAX_MAGNITUDE: f64 = 1e100;
+
+/// Longest name (group, material, probe) accepted: names are echoed in
+/// messages, which must stay one short line.
+pub const MAX_NAME: usize = 256;
+
+/// A name as shown in a message: at most 60 characters, then `…`.
+pub fn shorten(s: &str) -> String {
+    const KEEP: usize = 60;
+    if s.chars().count() <= KEEP {
+        s.to_string()
+    } else {
+        let head: String = s.chars().take(KEEP).collect();
+        format!("{head}… ({} characters)", s.chars().count())
+    }
+}
+
+fn two<E: serde::de::Error>(v: Vec<f64>) -> Result<[f64; 2], E> {
+    match v.as_slice() {
+        [a, b] => Ok([*a, *b]),
+        _ => Err(E::custom(format!(
+            "expected 2 components [x, y], found {}",
+            v.len()
+        ))),
+    }
+}
+
+/// `[x, y]` with exactly two components (serde's fixed-size arrays would
+/// drop a third one silently).
+fn pair<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    two(Vec::<f64>::deserialize(d)?)
+}
+
+fn opt_pair<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    Option::<Vec<f64>>::deserialize(d)?.map(two).transpose()
+}
+
+fn map_pair<'de, D: Deserializer<'de>>(d: D) -> Result<BTreeMap<String, [f64; 2]>, D::Error> {
+    BTreeMap::<String, Vec<f64>>::deserialize(d)?
+        .into_iter()
+        .map(|(k, v)| two(v).map(|p| (k, p)))
+        .collect()
+}
 
 /// Errors of the problem file. The message names the file, and the key or
 /// table where it applies.
@@ -49,7 +96,7 @@ pub struct ModelSection {
     #[serde(default = "one")]
     pub thickness: f64,
     /// Gravity vector: body force F = ρ·gravity (methods.md §1.2).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "opt_pair")]
     pub gravity: Option<[f64; 2]>,
 }
 
@@ -81,6 +128,7 @@ pub struct Material {
 #[serde(deny_unknown_fields)]
 pub struct Dirichlet {
     pub on: String,
+    #[serde(default, deserialize_with = "opt_pair")]
     pub u: Option<[f64; 2]>,
     pub ux: Option<f64>,
     pub uy: Option<f64>,
@@ -91,6 +139,7 @@ pub struct Dirichlet {
 pub struct Traction {
     pub on: String,
     /// Traction vector P [N/m²].
+    #[serde(default, deserialize_with = "opt_pair")]
     pub p: Option<[f64; 2]>,
     /// Normal pressure, positive outward (compression negative).
     pub pn: Option<f64>,
@@ -107,6 +156,7 @@ pub struct Slip {
 #[serde(deny_unknown_fields)]
 pub struct Force {
     pub on: String,
+    #[serde(deserialize_with = "pair")]
     pub f: [f64; 2],
 }
 
@@ -158,7 +208,7 @@ pub struct SolverSection {
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSection {
-    #[serde(default)]
+    #[serde(default, deserialize_with = "map_pair")]
     pub probes: BTreeMap<String, [f64; 2]>,
     /// Directory for outputs (the `--out` flag overrides it).
     pub dir: Option<PathBuf>,
@@ -183,7 +233,7 @@ pub struct LoadStep {
     pub displacement: Option<f64>,
     /// Explicit prescribed displacement per `[[dirichlet]] on` name: [ux, uy]
     /// (replaces the group's values and its factor in this step).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "map_pair")]
     pub dirichlet: BTreeMap<String, [f64; 2]>,
 }
 
@@ -370,7 +420,85 @@ impl Problem {
         for (what, n) in names {
             if n.chars().any(char::is_control) {
                 return Err(self.invalid(format!(
-                    "{what}: the name {n:?} contains a control character"
+                    "{what}: the name {:?} contains a control character",
+                    shorten(n)
+                )));
+            }
+            if n.len() > MAX_NAME {
+                return Err(self.invalid(format!(
+                    "{what}: the name \"{}\" is longer than {MAX_NAME} bytes",
+                    shorten(n)
+                )));
+            }
+        }
+        // A contact curve (conforming, or the slave side) that is also fixed
+        // or sliding: the contact rows of its points would be dropped without
+        // a word. A fixed master is an obstacle and stays allowed.
+        for (i, c) in f.contact.iter().enumerate() {
+            for n in [&c.on, &c.slave].into_iter().flatten() {
+                let fixed = f
+                    .dirichlet
+                    .iter()
+                    .map(|d| ("[[dirichlet]]", &d.on))
+                    .chain(f.slip.iter().map(|s| ("[[slip]]", &s.on)))
+                    .find(|(_, on)| *on == n);
+                if let Some((what, _)) = fixed {
+                    return Err(self.invalid(format!(
+                        "[[contact]] #{}: curve \"{}\" is also in {what}; a curve is either in contact or supported, not both",
+                        i + 1,
+                        shorten(n)
+                    )));
+                }
+            }
+        }
+        let big = |v: f64| {
+            let within = v.abs() <= MAX_MAGNITUDE;
+            !within
+        };
+        let too_big = |what: String, v: f64| {
+            self.invalid(format!(
+                "{what} = {v:e} is beyond ±{MAX_MAGNITUDE:e}: products with it would overflow; change the units"
+            ))
+        };
+        let mut loads: Vec<(String, f64)> = vec![];
+        if let Some(g) = f.model.gravity {
+            loads.extend(g.iter().map(|v| ("[model] gravity".to_string(), *v)));
+        }
+        for d in &f.dirichlet {
+            let what = format!("[[dirichlet]] on = \"{}\": u", shorten(&d.on));
+            loads.extend(
+                d.u.iter()
+                    .flatten()
+                    .chain(&d.ux)
+                    .chain(&d.uy)
+                    .map(|v| (what.clone(), *v)),
+            );
+        }
+        for t in &f.traction {
+            let what = format!("[[traction]] on = \"{}\": p", shorten(&t.on));
+            loads.extend(
+                t.p.iter()
+                    .flatten()
+                    .chain(&t.pn)
+                    .map(|v| (what.clone(), *v)),
+            );
+        }
+        for x in &f.force {
+            let what = format!("[[force]] on = \"{}\": f", shorten(&x.on));
+            loads.extend(x.f.iter().map(|v| (what.clone(), *v)));
+        }
+        for (what, v) in loads {
+            if v.is_finite() && big(v) {
+                return Err(too_big(what, v));
+            }
+        }
+        for (name, m) in &f.materials {
+            if m.e.is_finite() && m.e > 0.0 && (big(m.e) || m.e < 1.0 / MAX_MAGNITUDE) {
+                return Err(self.invalid(format!(
+                    "[materials.{}] E = {:e} lies outside [{:e}, {MAX_MAGNITUDE:e}]: stiffness products would underflow or overflow; change the units",
+                    shorten(name),
+                    m.e,
+                    1.0 / MAX_MAGNITUDE
                 )));
             }
         }
@@ -463,7 +591,7 @@ impl Problem {
                 )));
             }
             if let Some(g) = c.max_gap {
-                if !(g >= 0.0) {
+                if g.is_nan() || g < 0.0 {
                     return Err(
                         self.invalid(format!("[[contact]] #{}: max_gap must be >= 0", i + 1))
                     );
