@@ -35,6 +35,7 @@ fn mesh(plane_strain: bool) -> OutMesh {
             segments: vec![[0, 1]],
             interface: vec![0, 0],
             interface_names: vec!["fault1".into()],
+            nonmatching: vec![false, true],
         },
     }
 }
@@ -56,6 +57,7 @@ fn step(t: f64, scale: f64) -> StepOutput {
         contact_pressure: vec![2e5 * s, 0.0],
         gap: vec![0.0, 1e-3 / 3.0],
         active: vec![1, 0],
+        reaction: vec![],
         info: StepInfo {
             method: "cgc".into(),
             preconditioner: "cholesky".into(),
