@@ -156,7 +156,11 @@ fn reactions_carry_the_load_by_hand() {
     let (_, f) = solved("column");
     let g = |on: &str| f.groups.iter().find(|g| g.on == on).unwrap().resultant;
     let w = 2000.0 * 9.81 * 10.0 * 1.0;
-    assert!((g("bottom").force[1] - w).abs() <= 1e-9 * w, "{:?}", g("bottom"));
+    assert!(
+        (g("bottom").force[1] - w).abs() <= 1e-9 * w,
+        "{:?}",
+        g("bottom")
+    );
     assert!(g("left").force[1].abs() <= 1e-9 * w);
     assert!((g("left").force[0] + g("right").force[0]).abs() <= 1e-8 * w);
     // Hertz: the traction on the cylinder top goes through the contact

@@ -731,7 +731,13 @@ fn draw_mesh<DB: DrawingBackend>(
     };
     let widest = labels.iter().map(|s| tw(s)).fold(0.0, f64::max);
     let strip_w = (fs + bar_w + fs * 0.5 + widest + fs)
-        .max(tw(&opts.field.label()) + 2.0 * fs)
+        .max(
+            tw(&format!(
+                "{}{}",
+                opts.field.label(),
+                if cs.log { " (log)" } else { "" }
+            )) + 2.0 * fs,
+        )
         .min(body.dim_in_pixel().0 as f64 * 0.45) as u32;
     let (main, strip) = body.split_horizontally(body.dim_in_pixel().0.saturating_sub(strip_w));
 
@@ -805,9 +811,7 @@ fn draw_mesh<DB: DrawingBackend>(
             let flat = cell_color(i);
             fill_triangle([px[t[0]], px[t[1]], px[t[2]]], clip, |x, y, l| {
                 let c = match nodal {
-                    Some(v) => {
-                        viridis(cs.t(l[0] * v[0] + l[1] * v[1] + l[2] * v[2]))
-                    }
+                    Some(v) => viridis(cs.t(l[0] * v[0] + l[1] * v[1] + l[2] * v[2])),
                     None => flat,
                 };
                 let _ = root.draw_pixel((x, y), &c);
