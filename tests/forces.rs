@@ -178,3 +178,36 @@ fn reactions_carry_the_load_by_hand() {
     assert!(it.max_pressure > 0.0);
     assert!(prep.model.body_names.contains(&"block".to_string()));
 }
+
+#[test]
+fn vtu_names_components_and_writes_reactions() {
+    // The shipped column model through the pipeline's writer: ParaView's
+    // ComponentName attributes in the XML, and the file still reads back.
+    let (prep, _) = solved("column");
+    let path = root().join("meshes/column.toml");
+    let (method, opts) = pipeline::options(&prep.problem, &SolverChoice::default()).unwrap();
+    let res = pipeline::solve(&prep, &method, &opts).unwrap();
+    let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let om = post::out_mesh(&prep.model, &prep.mesh);
+    let dir = tempfile::tempdir().unwrap();
+    let out = pipeline::output_paths(dir.path(), "column", None);
+    signorini::io::vtu::write_vtu(&out.vtu, &om, &step, false).unwrap();
+    let xml = std::fs::read_to_string(&out.vtu).unwrap();
+    for want in [
+        r#"Name="stress" NumberOfComponents="4""#,
+        r#"ComponentName0="sxx" ComponentName1="syy" ComponentName2="sxy" ComponentName3="szz""#,
+        r#"ComponentName0="ux" ComponentName1="uy" ComponentName2="uz""#,
+        r#"ComponentName0="s1" ComponentName1="s2""#,
+        r#"ComponentName0="Rx""#,
+    ] {
+        assert!(xml.contains(want), "{want} missing in {}", path.display());
+    }
+    let back = signorini::io::vtu::read_vtu_arrays(&out.vtu).unwrap();
+    let r = back.point_array("reaction").expect("reaction array");
+    assert_eq!(r.num_comp, 3);
+    // The reaction of the bottom (u_y = 0) carries the column's weight.
+    let sum_y: f64 = r.values.chunks(3).map(|c| c[1]).sum();
+    let w = 2000.0 * 9.81 * 10.0;
+    assert!((sum_y - w).abs() <= 1e-8 * w, "{sum_y} vs {w}");
+    assert!(back.point_array("contact_role").is_some());
+}
