@@ -213,7 +213,7 @@ pub fn compute(
                 })
                 .collect();
             let wsum: f64 = w.iter().sum();
-            if !(wsum > 0.0) {
+            if wsum.is_nan() || wsum <= 0.0 {
                 continue;
             }
             let fe = [comp * e[0], comp * e[1]];

@@ -255,7 +255,7 @@ fn check_options(opts: &PlotOptions) -> Result<(), PlotError> {
                 "--range {lo},{hi}: expected two finite numbers MIN,MAX with MIN < MAX"
             )));
         }
-        if opts.log && !(lo > 0.0) {
+        if opts.log && lo <= 0.0 {
             return Err(err(format!(
                 "--range {lo},{hi} with --log: MIN must be positive"
             )));
