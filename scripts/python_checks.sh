@@ -10,9 +10,12 @@
 #      of an independent FEniCSx model against signorini's.
 #
 # Usage: bash scripts/python_checks.sh [NAME ...]   (default: the examples below)
-#   SIGNORINI_WITH_PARAVIEW=1  also install Debian's python3-paraview (pvpython,
-#                              ~450 MB) so check_outputs.py opens the files with
-#                              ParaView's readers too (skipped with a note otherwise)
+#   SIGNORINI_WITH_PARAVIEW=1  also install Debian's python3-paraview (it provides
+#                              pvpython, ~450 MB) so check_outputs.py opens the files
+#                              with ParaView's readers too, and run pvpython headless
+#                              under `xvfb-run -a` on the first example: arrays and
+#                              their ComponentName (sxx, ux, ...) as ParaView sees
+#                              them (skipped with a note otherwise)
 #   SIGNORINI_CHECK_OUT=DIR    keep the outputs and PNGs there (default: temp dir)
 # Exit status: 0 when every check passed.
 set -uo pipefail
@@ -119,6 +122,42 @@ rm -f "$steps_toml"
 stamp "check_outputs.py $OUT"
 "$VENV/bin/python" scripts/check_outputs.py "$OUT"
 record check_outputs $?
+
+# ParaView itself (opt-in): Debian's python3-paraview provides pvpython; it
+# needs a display even for reading, so it runs under xvfb-run -a.
+if [ "${SIGNORINI_WITH_PARAVIEW:-0}" = 1 ]; then
+    stamp "pvpython (xvfb-run -a): component names in $OUT/${EXAMPLES[0]}.vtu"
+    pv_script=$OUT/pv_component_names.py
+    cat > "$pv_script" <<'PYEOF'
+import sys
+from paraview import simple
+r = simple.XMLUnstructuredGridReader(FileName=[sys.argv[1]])
+r.UpdatePipeline()
+want = {"displacement": ["ux", "uy", "uz"], "reaction": ["Rx", "Ry", "Rz"],
+        "stress": ["sxx", "syy", "sxy", "szz"], "principal_stress": ["s1", "s2"]}
+bad = []
+for arrays in (r.PointData, r.CellData):
+    for name in arrays.keys():
+        info = arrays[name]
+        if name in want:
+            got = [info.GetComponentName(k) for k in range(info.GetNumberOfComponents())]
+            exp = want[name][:info.GetNumberOfComponents()]
+            print(f"pvpython: {name}: {got}")
+            if got != exp:
+                bad.append(f"{name}: ParaView shows {got}, expected {exp}")
+missing = [n for n in ("displacement", "stress", "reaction") if n not in list(r.PointData.keys()) + list(r.CellData.keys())]
+bad += [f"array {n} missing" for n in missing]
+print("pvpython: " + ("; ".join(bad) if bad else "component names OK"))
+sys.exit(1 if bad else 0)
+PYEOF
+    if command -v pvpython >/dev/null 2>&1 && command -v xvfb-run >/dev/null 2>&1; then
+        xvfb-run -a pvpython "$pv_script" "$OUT/${EXAMPLES[0]}.vtu"
+        record "pvpython component names" $?
+    else
+        echo "note: pvpython or xvfb-run not found: the ParaView component-name check is skipped"
+    fi
+    rm -f "$pv_script"
+fi
 
 for n in "${EXAMPLES[@]}"; do
     stamp "fenicsx_crosscheck.py meshes/$n.toml"

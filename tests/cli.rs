@@ -325,7 +325,7 @@ fn bad_body_without_support() {
         &GOOD
             .replace("[[dirichlet]]\non = \"bottom\"\nu = [0.0, 0.0]\n", "")
             .replace("[[contact]]\non = \"interface\"\n", ""),
-        &["not supported", "body 0"],
+        &["not supported", "body 'body_left+body_right'"],
     );
 }
 
@@ -334,14 +334,14 @@ fn bad_floating_body_with_sliding_load_is_unbounded() {
     // Right half held only by contact on a vertical interface; a vertical
     // load on it slides it along the interface: unbounded.
     let t = "[mesh]\nfile = \"MESH\"\n[materials.body_left]\nE = 1e9\nnu = 0.3\n[materials.body_right]\nE = 1e9\nnu = 0.3\n[[dirichlet]]\non = \"left\"\nu = [0.0, 0.0]\n[[traction]]\non = \"right\"\np = [-1e5, -1e5]\n[[contact]]\non = \"interface\"\n";
-    bad(t, &["unbounded", "body 1"]);
+    bad(t, &["unbounded", "body 'body_right'"]);
 }
 
 #[test]
 fn bad_floating_body_pulled_away_is_unbounded() {
     // Pulled away from its only support: the contact opens and nothing holds it.
     let t = "[mesh]\nfile = \"MESH\"\n[materials.body_left]\nE = 1e9\nnu = 0.3\n[materials.body_right]\nE = 1e9\nnu = 0.3\n[[dirichlet]]\non = \"left\"\nu = [0.0, 0.0]\n[[dirichlet]]\non = \"corner\"\nu = [0.0, 0.0]\n[[slip]]\non = \"bottom\"\n[[traction]]\non = \"right\"\np = [1e5, 0.0]\n[[contact]]\non = \"interface\"\n";
-    bad(t, &["unbounded", "body 1"]);
+    bad(t, &["unbounded", "body 'body_right'"]);
 }
 
 #[test]

@@ -35,6 +35,7 @@ fn mesh(plane_strain: bool) -> OutMesh {
             segments: vec![[0, 1]],
             interface: vec![0, 0],
             interface_names: vec!["fault1".into()],
+            nonmatching: vec![false, true],
         },
     }
 }
@@ -56,6 +57,7 @@ fn step(t: f64, scale: f64) -> StepOutput {
         contact_pressure: vec![2e5 * s, 0.0],
         gap: vec![0.0, 1e-3 / 3.0],
         active: vec![1, 0],
+        reaction: vec![],
         info: StepInfo {
             method: "cgc".into(),
             preconditioner: "cholesky".into(),
@@ -106,7 +108,17 @@ fn check_bulk_vtu(path: &Path, m: &OutMesh, s: &StepOutput) {
     let pts: Vec<f64> = m.points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect();
     assert_eq!(r.points, pts);
 
-    assert_eq!(names(&r.point_data), vec!["displacement", "body"]);
+    assert_eq!(
+        names(&r.point_data),
+        vec!["displacement", "body", "contact_role"]
+    );
+    // Row 0 pairs points 0 and 3 (conforming); row 1 puts slave 1 on the
+    // master segment (4, 3): 1 conforming, 2 slave, 3 master.
+    let role = r.point_array("contact_role").unwrap();
+    assert_eq!(role.values, vec![1.0, 2.0, 0.0, 3.0, 3.0, 0.0]);
+    let xml = std::fs::read_to_string(path).unwrap();
+    assert!(xml.contains(r#"ComponentName0="ux" ComponentName1="uy" ComponentName2="uz""#));
+    assert!(xml.contains(r#"ComponentName0="sxx" ComponentName1="syy" ComponentName2="sxy""#));
     assert_eq!(
         names(&r.cell_data),
         vec!["stress", "von_mises", "principal_stress", "material"]
@@ -197,9 +209,14 @@ fn contact_vtu_roundtrip() {
                 "active",
                 "normal",
                 "multiplier",
-                "interface"
+                "interface",
+                "tangent",
+                "role"
             ]
         );
+        let t = r.point_array("tangent").unwrap();
+        assert_eq!(t.values, vec![-1.0, 0.0, 0.0, -1.0, 0.0, 0.0]);
+        assert_eq!(r.point_array("role").unwrap().values, vec![1.0, 2.0]);
         assert!(r.cell_data.is_empty());
         let get = |n: &str| r.point_array(n).unwrap();
         assert_eq!(get("contact_pressure").values, s.contact_pressure);
@@ -228,7 +245,7 @@ fn contact_vtu_empty() {
         write_contact_vtu(&p, &m, &s, compress).unwrap();
         let r = read_vtu_arrays(&p).unwrap();
         assert_eq!((r.num_points, r.num_cells), (0, 0));
-        assert_eq!(r.point_data.len(), 6);
+        assert_eq!(r.point_data.len(), 8);
         assert!(r.point_data.iter().all(|a| a.values.is_empty()));
         // VTK's reader requires both counts on <Piece>, even when zero.
         let text = std::fs::read_to_string(&p).unwrap();

@@ -174,7 +174,53 @@ fn contact_svg_names_the_interface() {
     let text = std::fs::read_to_string(&fig).unwrap();
     assert!(text.contains("interface"));
     assert!(text.contains("contact pressure [Pa]"));
-    assert!(text.contains("arc length [m]"));
+    assert!(text.contains("arc length s [m]"));
+    // Each interface says where its arc length starts.
+    assert!(text.contains("arc length from ("), "no arc-length origin");
+}
+
+#[test]
+fn range_and_log_set_the_colour_bar() {
+    let dir = out_dir();
+    let fig = dir.path().join("range.svg");
+    let (code, stdout, stderr) = signorini(&[
+        "plot",
+        h5(),
+        "--range",
+        "-2e6,3e6",
+        "--field",
+        "syy",
+        "-o",
+        fig.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    assert!(
+        stdout.contains("range: -2e6 to 3e6 Pa (--range)"),
+        "{stdout}"
+    );
+    let text = std::fs::read_to_string(&fig).unwrap();
+    // The ends of the colour bar are the given range, with the unit in its title.
+    let labels: Vec<&str> = text.lines().map(str::trim).collect();
+    assert!(labels.contains(&"-2e6") && labels.contains(&"3e6"), "ticks");
+    assert!(text.contains("syy [Pa]"));
+    let fig = dir.path().join("log.svg");
+    let (code, stdout, stderr) = signorini(&["plot", h5(), "--log", "-o", fig.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    assert!(stdout.contains("log scale"), "{stdout}");
+    let text = std::fs::read_to_string(&fig).unwrap();
+    assert!(text.contains("von_mises [Pa] (log)"));
+}
+
+#[test]
+fn bad_range_is_exit_2() {
+    let e = fails(&["--range", "5,1"], "fig.png");
+    assert!(e.contains("--range") && e.contains("MIN < MAX"), "{e}");
+    let e = fails(&["--range", "abc"], "fig.png");
+    assert!(e.contains("--range") && e.contains("MIN,MAX"), "{e}");
+    let e = fails(&["--log", "--range", "0,1e6"], "fig.png");
+    assert!(e.contains("positive"), "{e}");
+    let e = fails(&["--log", "--field", "sxy", "--range", "-1,1"], "fig.png");
+    assert!(e.contains("positive"), "{e}");
 }
 
 /// Runs a failing plot: exit 2, one line on stderr, no file left behind.

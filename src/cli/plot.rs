@@ -41,6 +41,22 @@ pub struct PlotArgs {
     /// Never draw the triangle edges.
     #[arg(long)]
     pub no_edges: bool,
+    /// Colour range MIN,MAX of the field (or the pressure axis with
+    /// --contact); values outside get the end colours. Default: the data's range.
+    #[arg(long, allow_hyphen_values = true, value_name = "MIN,MAX")]
+    pub range: Option<String>,
+    /// Logarithmic colour scale (values ≤ 0 get the bottom colour).
+    #[arg(long)]
+    pub log: bool,
+}
+
+/// "MIN,MAX" as two numbers.
+fn parse_range(s: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("--range {s}: expected MIN,MAX (two numbers, e.g. 0,2e8)");
+    let (a, b) = s.split_once(',').ok_or_else(bad)?;
+    let lo: f64 = a.trim().parse().map_err(|_| bad())?;
+    let hi: f64 = b.trim().parse().map_err(|_| bad())?;
+    Ok((lo, hi))
 }
 
 pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
@@ -51,7 +67,16 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
             return EXIT_BAD_INPUT;
         }
     };
+    let range = match a.range.as_deref().map(parse_range).transpose() {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_BAD_INPUT;
+        }
+    };
     let opts = PlotOptions {
+        range,
+        log: a.log,
         step: a.step,
         field,
         scale: a.scale,
@@ -84,9 +109,15 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                 println!("step {} of {}, {what}", s.step, s.steps);
                 if let Some((lo, hi)) = s.range {
                     println!(
-                        "range: {} to {}{unit}",
+                        "range: {} to {}{unit}{}",
                         plot::fmt_num(lo),
-                        plot::fmt_num(hi)
+                        plot::fmt_num(hi),
+                        match (a.range.is_some(), a.log) {
+                            (true, true) => " (--range, log scale)",
+                            (true, false) => " (--range)",
+                            (false, true) => " (positive values, log scale)",
+                            (false, false) => "",
+                        }
                     );
                 }
                 if let Some(k) = s.scale {

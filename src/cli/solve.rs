@@ -484,6 +484,20 @@ pub fn summary_json(
     }
     let max_p = step.contact_pressure.iter().fold(0.0f64, |a, b| a.max(*b));
     let total: f64 = step.multipliers.iter().sum();
+    let fo = post::forces::compute(
+        m,
+        &prep.problem,
+        &step.displacement,
+        &step.multipliers,
+        &step.contact_pressure,
+    );
+    let reactions: serde_json::Map<String, serde_json::Value> =
+        fo.groups.iter().map(|g| (g.on.clone(), json!(g))).collect();
+    let interfaces: serde_json::Map<String, serde_json::Value> = fo
+        .interfaces
+        .iter()
+        .map(|i| (i.name.clone(), json!(i)))
+        .collect();
     json!({
         "problem": prep.problem.name,
         "method": method,
@@ -501,6 +515,8 @@ pub fn summary_json(
         "constraints": m.qp.m(),
         "active": res.active.iter().filter(|a| **a).count(),
         "energy": res.energy,
+        "strain_energy": fo.strain_energy,
+        "load_work": fo.load_work,
         "kkt": {
             "primal": res.kkt.primal,
             "dual": res.kkt.dual,
@@ -510,7 +526,9 @@ pub fn summary_json(
             "target": target,
             "certified": certified,
         },
-        "contact": { "max_pressure": max_p, "total_force": total },
+        "contact": { "max_pressure": max_p, "total_force": total, "interfaces": interfaces },
+        "loads": fo.loads,
+        "reactions": reactions,
         "notes": res.notes,
         "probes": probes,
         "timings_s": {
@@ -545,7 +563,7 @@ fn print_report(
     let floating: Vec<String> = {
         let mut b: Vec<u32> = m.kernel_body.clone();
         b.dedup();
-        b.iter().map(|b| b.to_string()).collect()
+        b.iter().map(|&b| m.body_label(b as usize)).collect()
     };
     println!(
         "mesh        {} nodes ({} with interface copies), {} triangles, {} bodies{}",
@@ -557,7 +575,7 @@ fn print_report(
             String::new()
         } else {
             format!(
-                "; semicoercive: body {} ({} rigid modes)",
+                "; semicoercive: {} ({} rigid modes)",
                 floating.join(", "),
                 m.qp.kernel.len()
             )
@@ -592,7 +610,12 @@ fn print_report(
             format!("NOT certified (target {target:.0e})")
         }
     );
-    println!("energy      {:.6e}", res.energy);
+    println!(
+        "energy      {:.6e} (QP objective); strain energy {:.6e}, work of the loads {:.6e}",
+        res.energy,
+        summary["strain_energy"].as_f64().unwrap_or(f64::NAN),
+        summary["load_work"].as_f64().unwrap_or(f64::NAN)
+    );
     println!(
         "contact     {} active of {}, max pressure {:.4e}, total force {:.4e}",
         summary["active"],
@@ -600,6 +623,54 @@ fn print_report(
         summary["contact"]["max_pressure"].as_f64().unwrap_or(0.0),
         summary["contact"]["total_force"].as_f64().unwrap_or(0.0)
     );
+    // Global balance: loads + reactions = 0 (contact forces are internal).
+    let res2 = |v: &serde_json::Value| -> ([f64; 2], f64) {
+        let f = |k: usize| v["force"][k].as_f64().unwrap_or(f64::NAN);
+        ([f(0), f(1)], v["moment"].as_f64().unwrap_or(f64::NAN))
+    };
+    let (lf, lm) = res2(&summary["loads"]);
+    let mut rf = [0.0, 0.0];
+    let mut rm = 0.0;
+    if let Some(groups) = summary["reactions"].as_object() {
+        for (name, g) in groups {
+            let (f, mo) = res2(g);
+            rf = [rf[0] + f[0], rf[1] + f[1]];
+            rm += mo;
+            println!(
+                "reaction    {:<14} ({}) F = ({:.4e}, {:.4e}), M = {:.4e}",
+                format!("'{name}'"),
+                g["kind"].as_str().unwrap_or(""),
+                f[0],
+                f[1],
+                mo
+            );
+        }
+    }
+    println!(
+        "balance     loads F = ({:.4e}, {:.4e}), M = {:.4e}; loads + reactions F = ({:.2e}, {:.2e}), M = {:.2e}",
+        lf[0],
+        lf[1],
+        lm,
+        lf[0] + rf[0],
+        lf[1] + rf[1],
+        lm + rm
+    );
+    if let Some(ifs) = summary["contact"]["interfaces"].as_object() {
+        for (name, i) in ifs {
+            let (f, mo) = res2(i);
+            println!(
+                "interface   {:<14} on '{}': F = ({:.4e}, {:.4e}), M = {:.4e}; {} of {} rows active, max pressure {:.4e}",
+                format!("'{name}'"),
+                i["on_body"].as_str().unwrap_or(""),
+                f[0],
+                f[1],
+                mo,
+                i["active"],
+                i["rows"],
+                i["max_pressure"].as_f64().unwrap_or(f64::NAN)
+            );
+        }
+    }
     for (name, x, node, u) in pipeline::probes(prep, &step.displacement) {
         println!(
             "probe {name:<5} ({:.6}, {:.6}) node {node}: u = ({:.6e}, {:.6e})",

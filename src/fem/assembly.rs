@@ -37,9 +37,29 @@ pub struct Model {
     pub kernel_body: Vec<u32>,
     pub plane: Plane,
     pub thickness: f64,
+    /// The Dirichlet and slip conditions r·u = v, kept for the reactions:
+    /// (point, unit direction r, index into `cond_groups`).
+    pub conditions: Vec<(usize, [f64; 2], u32)>,
+    /// What set each condition: (kind "dirichlet" | "slip", physical group name).
+    pub cond_groups: Vec<(&'static str, String)>,
+    /// Nodal external force on each point [N] (tractions, point forces,
+    /// gravity; thickness included), before the elimination: the load side
+    /// of the balance R = K u − f.
+    pub loads: Vec<[f64; 2]>,
+    /// The name of each body: its physical surface name(s), "+"-joined,
+    /// with " #b" when bodies share a material.
+    pub body_names: Vec<String>,
 }
 
 impl Model {
+    /// "body 'punch'": a body as messages name it.
+    pub fn body_label(&self, b: usize) -> String {
+        match self.body_names.get(b) {
+            Some(n) => format!("body '{n}'"),
+            None => format!("body {b}"),
+        }
+    }
+
     /// Point displacements of a change `dx` of the QP unknowns (u0 left out):
     /// the motion along a direction such as a rigid mode.
     pub fn motions(&self, dx: &[f64]) -> Vec<[f64; 2]> {
@@ -68,7 +88,7 @@ impl Model {
         let parts: Vec<String> = (0..self.topo.nbodies)
             .filter_map(|b| {
                 self.body_motion(u, b, 1e-3 * umax)
-                    .map(|what| format!("body {b} ({what})"))
+                    .map(|what| format!("{} ({what})", self.body_label(b)))
             })
             .collect();
         if parts.is_empty() {
@@ -181,6 +201,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     let mut conds: Vec<Vec<Cond>> = vec![vec![]; np];
     // What set each condition: `[[dirichlet]] on = "NAME"`, `[[slip]] on = "NAME"`.
     let mut cond_src: Vec<String> = vec![];
+    let mut cond_groups: Vec<(&'static str, String)> = vec![];
     // Points of a group: for a curve, the copies owned by each segment's body.
     let group_points =
         |name: &str,
@@ -250,6 +271,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         pts.dedup();
         let src = cond_src.len();
         cond_src.push(format!("[[dirichlet]] on = \"{}\"", dch.on));
+        cond_groups.push(("dirichlet", dch.on.clone()));
         for p in pts {
             if let Some(v) = ux {
                 conds[p].push(Cond {
@@ -291,6 +313,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         }
         let src = cond_src.len();
         cond_src.push(format!("[[slip]] on = \"{}\"", s.on));
+        cond_groups.push(("slip", s.on.clone()));
         for (p, n) in sum {
             let len = (n[0] * n[0] + n[1] * n[1]).sqrt();
             if len > 1e-12 {
@@ -305,6 +328,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
 
     lap.lap("conditions");
     // --- eliminate per point
+    let body_names = body_names(&topo);
     let mut dofs = Vec::with_capacity(np);
     let mut next = 0usize;
     for (p, cs) in conds.iter().enumerate() {
@@ -314,9 +338,12 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
             from.dedup();
             let from: Vec<&str> = from.iter().map(|&i| cond_src[i].as_str()).collect();
             err(format!(
-                "conflicting conditions at node {} (body {}) from {}: {m}",
+                "conflicting conditions at node {} ({}) from {}: {m}",
                 mesh.node_tags[topo.point_node[p]],
-                topo.point_body[p],
+                match body_names.get(topo.point_body[p] as usize) {
+                    Some(n) => format!("body '{n}'"),
+                    None => format!("body {}", topo.point_body[p]),
+                },
                 from.join(", ")
             ))
         })?;
@@ -345,7 +372,24 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     };
     let (c, mut d) = assemble_stiffness(&topo, &dofs, n, &dmats, &bforce, th, parallel_assembly());
     lap.lap("stiffness");
-    let add_force = |d: &mut Vec<f64>, p: usize, fv: [f64; 2]| {
+    // Full nodal loads: gravity first (th |T|/3 F per vertex, as in d).
+    let mut loads = vec![[0.0f64; 2]; np];
+    for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
+        let pts = [
+            topo.points[tri[0]],
+            topo.points[tri[1]],
+            topo.points[tri[2]],
+        ];
+        let w = th * element::area2(&pts) / 6.0;
+        let fb = bforce[mi as usize];
+        for &p in tri {
+            loads[p][0] += w * fb[0];
+            loads[p][1] += w * fb[1];
+        }
+    }
+    let mut add_force = |d: &mut Vec<f64>, p: usize, fv: [f64; 2]| {
+        loads[p][0] += fv[0];
+        loads[p][1] += fv[1];
         let pd = dofs[p];
         for k in 0..pd.ndof {
             d[pd.start + k] += pd.t[k][0] * fv[0] + pd.t[k][1] * fv[1];
@@ -444,6 +488,11 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
     // --- rigid modes left after the conditions (per body)
     let (kernel, kernel_body) = rigid_modes(&topo, &dofs, &conds, n);
     let qp = QpProblem { c, d, a, g, kernel };
+    let conditions = conds
+        .iter()
+        .enumerate()
+        .flat_map(|(p, cs)| cs.iter().map(move |c| (p, c.r, c.src as u32)))
+        .collect();
     let model = Model {
         topo,
         dofs,
@@ -452,6 +501,10 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
         kernel_body,
         plane: f.model.plane,
         thickness: f.model.thickness,
+        conditions,
+        cond_groups,
+        loads,
+        body_names,
     };
     lap.lap("rigid modes");
     check_semicoercive(&model, problem)?;
@@ -518,6 +571,39 @@ fn check_scale(
         }
     }
     Ok(())
+}
+
+/// Each body's name: the physical surface names of its triangles in order
+/// of first appearance, "+"-joined (one name unless a body spans several).
+fn body_names(topo: &Topology) -> Vec<String> {
+    let mut names: Vec<Vec<u32>> = vec![vec![]; topo.nbodies];
+    for (&b, &m) in topo.tri_body.iter().zip(&topo.tri_material) {
+        let v = &mut names[b as usize];
+        if !v.contains(&m) {
+            v.push(m);
+        }
+    }
+    let joined: Vec<String> = names
+        .iter()
+        .map(|ms| {
+            ms.iter()
+                .map(|&m| topo.material_names[m as usize].as_str())
+                .collect::<Vec<_>>()
+                .join("+")
+        })
+        .collect();
+    // Bodies of one material share a name: the body number tells them apart.
+    joined
+        .iter()
+        .enumerate()
+        .map(|(b, n)| {
+            if joined.iter().filter(|m| *m == n).count() > 1 {
+                format!("{n} #{b}")
+            } else {
+                n.clone()
+            }
+        })
+        .collect()
 }
 
 /// Points per parallel work item of the assembly.
@@ -1274,9 +1360,14 @@ fn check_semicoercive(m: &Model, problem: &Problem) -> Result<(), FemError> {
                 )
             };
             return Err(err(format!(
-                "body {b} is not supported: {free} and it has no contact ({} free rigid motion(s){})",
+                "{} is not supported: {free} and it has no contact ({} free rigid motion(s){})",
+                m.body_label(b as usize),
                 modes.len(),
-                if work { "; the loads would move it without limit" } else { "" }
+                if work {
+                    "; the loads would move it without limit"
+                } else {
+                    ""
+                }
             )));
         }
     }

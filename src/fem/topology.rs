@@ -394,8 +394,12 @@ impl Topology {
             let majority_pos = pos[b] >= neg[b];
             if (a > 0.0) != majority_pos {
                 return Err(err(format!(
-                    "{mpath}: triangle {} is inverted (its orientation differs from the rest of body {b})",
-                    mesh.triangle_tags[t]
+                    "{mpath}: triangle {} of physical surface '{}' is inverted (its orientation differs from the rest of body {b})",
+                    mesh.triangle_tags[t],
+                    material_names
+                        .get(tri_material[t] as usize)
+                        .map(String::as_str)
+                        .unwrap_or("?")
                 )));
             }
             if !majority_pos {

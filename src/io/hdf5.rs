@@ -612,6 +612,16 @@ fn read_mesh(ctx: &Ctx, g: &Group) -> Result<OutMesh, IoError> {
             normal: pairs(&normal),
             gap0,
             segments: pairs(&seg),
+            // The checkpoint keeps no row kind: a non-matching interface is
+            // named "slave->master" (fem::topology).
+            nonmatching: interface
+                .iter()
+                .map(|&i| {
+                    interface_names
+                        .get(i as usize)
+                        .is_some_and(|n| n.contains("->"))
+                })
+                .collect(),
             interface,
             interface_names,
         },
@@ -660,6 +670,7 @@ fn read_step(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<StepOutput, IoError
         contact_pressure,
         gap,
         active,
+        reaction: vec![],
         info,
     })
 }

@@ -51,6 +51,9 @@ pub struct ContactGeometry {
     /// Interface index of each row (into `interface_names`).
     pub interface: Vec<u32>,
     pub interface_names: Vec<String>,
+    /// Whether each row is node-to-segment (slave point, two master points)
+    /// rather than a conforming node pair.
+    pub nonmatching: Vec<bool>,
 }
 
 /// The fields of one solved (load) step.
@@ -71,6 +74,9 @@ pub struct StepOutput {
     pub contact_pressure: Vec<f64>,
     pub gap: Vec<f64>,
     pub active: Vec<u8>,
+    /// Per point: the reaction force of the Dirichlet/slip conditions
+    /// (zero where nothing is prescribed; empty if not computed).
+    pub reaction: Vec<[f64; 2]>,
     /// Solver record stored as attributes.
     pub info: StepInfo,
 }

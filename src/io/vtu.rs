@@ -99,6 +99,64 @@ fn i32_array(name: &str, data: impl Iterator<Item = i64>) -> Attribute {
     array(name, ElementType::Generic(1), IOBuffer::I32(v))
 }
 
+/// Component names of the multi-component arrays, as ParaView shows them.
+const COMPONENT_NAMES: &[(&str, &[&str])] = &[
+    ("displacement", &["ux", "uy", "uz"]),
+    ("reaction", &["Rx", "Ry", "Rz"]),
+    ("stress", &["sxx", "syy", "sxy", "szz"]),
+    ("principal_stress", &["s1", "s2"]),
+    ("normal", &["nx", "ny", "nz"]),
+    ("tangent", &["tx", "ty", "tz"]),
+];
+
+/// vtkio 0.7's `DataArray` has no component names, so they are added to
+/// the XML it writes: `ComponentName0="sxx"`, … on each `<DataArray>` whose
+/// `Name` is listed in [`COMPONENT_NAMES`] (as many as it has components).
+fn add_component_names(buf: Vec<u8>) -> Vec<u8> {
+    let Ok(text) = String::from_utf8(buf) else {
+        unreachable!("vtkio writes UTF-8 XML")
+    };
+    let mut out = String::with_capacity(text.len() + 512);
+    let mut rest = text.as_str();
+    while let Some(at) = rest.find("<DataArray") {
+        let (head, tail) = rest.split_at(at);
+        out.push_str(head);
+        let end = tail.find('>').unwrap_or(tail.len());
+        let tag = &tail[..end];
+        let attr = |key: &str| -> Option<&str> {
+            let k = format!(" {key}=\"");
+            let s = tag.find(&k)? + k.len();
+            let e = tag[s..].find('"')?;
+            Some(&tag[s..s + e])
+        };
+        let mut extra = String::new();
+        if let Some(name) = attr("Name") {
+            let ncomp: usize = attr("NumberOfComponents")
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(1);
+            if let Some((_, names)) = COMPONENT_NAMES.iter().find(|(n, _)| *n == name) {
+                if ncomp > 1 {
+                    for (k, c) in names.iter().take(ncomp).enumerate() {
+                        extra.push_str(&format!(" ComponentName{k}=\"{c}\""));
+                    }
+                }
+            }
+        }
+        let self_closing = tag.ends_with('/');
+        let (t, close) = if self_closing {
+            (&tag[..tag.len() - 1], "/")
+        } else {
+            (tag, "")
+        };
+        out.push_str(t);
+        out.push_str(&extra);
+        out.push_str(close);
+        rest = &tail[end..];
+    }
+    out.push_str(rest);
+    out.into_bytes()
+}
+
 /// Encodes `piece` as an XML UnstructuredGrid and writes it atomically.
 fn write_piece(path: &Path, piece: UnstructuredGridPiece, compress: bool) -> Result<(), IoError> {
     let vtk = Vtk {
@@ -122,7 +180,7 @@ fn write_piece(path: &Path, piece: UnstructuredGridPiece, compress: bool) -> Res
         .map_err(|e| vtk_err(&e))?;
     let mut buf = Vec::new();
     xml.write(&mut buf).map_err(|e| vtk_err(&e))?;
-    let buf = add_zero_counts(buf);
+    let buf = add_component_names(add_zero_counts(buf));
     write_atomic(path, |tmp| {
         let file =
             super::atomic::create_new(tmp).map_err(|e| IoError::io(path, "cannot create", e))?;
@@ -164,7 +222,9 @@ fn add_zero_counts(mut buf: Vec<u8>) -> Vec<u8> {
 
 /// Writes the bulk mesh with its step fields (see the module doc for the encoding).
 ///
-/// Point data: `displacement` (3 components, z = 0), `body`. Cell data:
+/// Point data: `displacement` (3 components, z = 0), `body`,
+/// `contact_role` (0 none, 1 conforming pair, 2 slave, 3 master), and
+/// `reaction` (3 components) when the step has one. Cell data:
 /// `stress` (σxx, σyy, σxy, and σzz in plane strain), `von_mises`,
 /// `principal_stress` (2), `material`. Points are the undeformed coordinates
 /// with z = 0.
@@ -214,7 +274,21 @@ pub fn write_vtu(
             IOBuffer::F64(displacement),
         ),
         i32_array("body", mesh.point_body.iter().map(|&b| i64::from(b))),
+        i32_array("contact_role", contact_roles(mesh).into_iter()),
     ];
+    let mut point = point;
+    if step.reaction.len() == n {
+        point.push(array(
+            "reaction",
+            ElementType::Vectors,
+            IOBuffer::F64(
+                step.reaction
+                    .iter()
+                    .flat_map(|f| [f[0], f[1], 0.0])
+                    .collect(),
+            ),
+        ));
+    }
 
     let ncomp: usize = if mesh.plane_strain { 4 } else { 3 };
     let stress: Vec<f64> = step
@@ -241,11 +315,37 @@ pub fn write_vtu(
     write_piece(path, piece, compress)
 }
 
+/// Each point's part in the contact: 0 none, 1 a conforming pair, 2 a
+/// slave node, 3 a master node (a point both slave and master gets 2).
+fn contact_roles(mesh: &OutMesh) -> Vec<i64> {
+    let c = &mesh.contact;
+    let mut role = vec![0i64; mesh.points.len()];
+    for (r, &first) in c.first.iter().enumerate() {
+        let nm = c.nonmatching.get(r).copied().unwrap_or(false);
+        if let Some(x) = role.get_mut(first) {
+            *x = if nm { 2 } else { 1 };
+        }
+        for &(p, w) in &c.second[r] {
+            if let Some(x) = role.get_mut(p) {
+                if nm && (w != 0.0 || *x == 0) && *x != 2 {
+                    *x = 3;
+                } else if !nm && w != 0.0 {
+                    *x = 1;
+                }
+            }
+        }
+    }
+    role
+}
+
 /// Writes the contact boundary: one point per constraint row
 /// (`mesh.contact.points`), `mesh.contact.segments` as line cells.
 ///
 /// Point data: `contact_pressure`, `gap`, `active` (Int32 0/1), `normal`
-/// (3 components, z = 0), `multiplier`, `interface` (Int32). With no
+/// (3 components, z = 0), `multiplier`, `interface` (Int32), `tangent`
+/// (n rotated by +90°: the direction of increasing arc length along a
+/// counter-clockwise boundary of the first side), `role` (1 conforming,
+/// 2 slave). With no
 /// contact rows a valid empty grid is written.
 pub fn write_contact_vtu(
     path: &Path,
@@ -293,6 +393,21 @@ pub fn write_contact_vtu(
         ),
         f64_array("multiplier", 1, step.multipliers.clone()),
         i32_array("interface", c.interface.iter().map(|&i| i64::from(i))),
+        f64_array(
+            "tangent",
+            3,
+            c.normal.iter().flat_map(|n| [-n[1], n[0], 0.0]).collect(),
+        ),
+        i32_array(
+            "role",
+            (0..r).map(|k| {
+                if c.nonmatching.get(k).copied().unwrap_or(false) {
+                    2
+                } else {
+                    1
+                }
+            }),
+        ),
     ];
 
     let piece = UnstructuredGridPiece {

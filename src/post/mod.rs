@@ -2,6 +2,7 @@
 //! triangle (σ = D B u_e, §2.2), the report's τe, principal stresses,
 //! contact pressure (λ / tributary length), current gap and active flag.
 
+pub mod forces;
 pub mod plot;
 
 use crate::fem::{element, Model};
@@ -21,6 +22,11 @@ pub fn out_mesh(model: &Model, mesh: &crate::mesh::Mesh) -> OutMesh {
         segments: t.contact_segments.clone(),
         interface: t.contact.iter().map(|r| r.interface).collect(),
         interface_names: t.interface_names.clone(),
+        nonmatching: t
+            .contact
+            .iter()
+            .map(|r| r.kind == crate::fem::topology::RowKind::NonMatching)
+            .collect(),
     };
     OutMesh {
         points: t.points.clone(),
@@ -62,7 +68,7 @@ pub fn step_output(model: &Model, problem: &Problem, res: &QpResult, time: f64) 
         active[r] = res.active[qi] as u8;
     }
     let te = model.t_eff();
-    let contact_pressure = t
+    let contact_pressure: Vec<f64> = t
         .contact
         .iter()
         .zip(&multipliers)
@@ -79,9 +85,11 @@ pub fn step_output(model: &Model, problem: &Problem, res: &QpResult, time: f64) 
                 .sum();
             r.gap0 - s
         })
-        .collect();
+        .collect::<Vec<f64>>();
+    let forces = forces::compute(model, problem, &u, &multipliers, &contact_pressure);
     StepOutput {
         time,
+        reaction: forces.point_reaction,
         von_mises: stress.iter().map(element::von_mises).collect(),
         principal: stress.iter().map(element::principal).collect(),
         stress,

@@ -178,6 +178,11 @@ pub struct PlotOptions {
     pub height: u32,
     /// Triangle edges: Some(on/off), None = when triangles are large enough.
     pub edges: Option<bool>,
+    /// Colour range (min, max) of the field, or the pressure axis of the
+    /// contact plot; values outside get the end colours. None = the data's range.
+    pub range: Option<(f64, f64)>,
+    /// Logarithmic colour scale (positive values; others get the bottom colour).
+    pub log: bool,
 }
 
 impl Default for PlotOptions {
@@ -190,6 +195,8 @@ impl Default for PlotOptions {
             width: 1200,
             height: 900,
             edges: None,
+            range: None,
+            log: false,
         }
     }
 }
@@ -241,6 +248,23 @@ fn check_options(opts: &PlotOptions) -> Result<(), PlotError> {
         if !s.is_finite() {
             return Err(err(format!("--scale {s}: must be a finite number")));
         }
+    }
+    if let Some((lo, hi)) = opts.range {
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            return Err(err(format!(
+                "--range {lo},{hi}: expected two finite numbers MIN,MAX with MIN < MAX"
+            )));
+        }
+        if opts.log && lo <= 0.0 {
+            return Err(err(format!(
+                "--range {lo},{hi} with --log: MIN must be positive"
+            )));
+        }
+    }
+    if opts.log && opts.contact {
+        return Err(err(
+            "--log applies to the mesh fields, not to the contact plot (--contact)",
+        ));
     }
     Ok(())
 }
@@ -321,7 +345,7 @@ fn draw<DB: DrawingBackend>(
     let fs = font_size(opts.width, opts.height);
     if opts.contact {
         let title = format!("{name} — step {step_no} — contact pressure");
-        summary.range = draw_contact(root, &mesh.contact, step, &title, fs)?;
+        summary.range = draw_contact(root, &mesh.contact, step, &title, fs, opts.range)?;
     } else {
         let title = format!("{name} — step {step_no} — {}", opts.field.name());
         let scale = match opts.scale {
@@ -550,7 +574,28 @@ fn field_values(mesh: &OutMesh, step: &StepOutput, field: Field) -> Values {
                 .map(|t| mesh.point_body[t[0]] as usize)
                 .collect();
             let n = cats.iter().max().map_or(0, |&m| m + 1);
-            let names = (0..n).map(|i| format!("body {i}")).collect();
+            // A body is named by the materials (physical surfaces) it holds.
+            let mut mats: Vec<Vec<u32>> = vec![vec![]; n];
+            for (&b, &m) in cats.iter().zip(&mesh.material) {
+                if !mats[b].contains(&m) {
+                    mats[b].push(m);
+                }
+            }
+            let names = mats
+                .iter()
+                .enumerate()
+                .map(|(i, ms)| {
+                    let n: Vec<&str> = ms
+                        .iter()
+                        .filter_map(|&m| mesh.material_names.get(m as usize).map(|s| s.as_str()))
+                        .collect();
+                    if n.is_empty() {
+                        format!("body {i}")
+                    } else {
+                        format!("{i}: {}", n.join("+"))
+                    }
+                })
+                .collect();
             Values::Categories(cats, names)
         }
     }
@@ -568,6 +613,67 @@ fn finite_range(v: &[f64]) -> (f64, f64) {
     } else {
         (0.0, 0.0)
     }
+}
+
+/// The colour scale of a figure: linear or logarithmic over (lo, hi).
+#[derive(Debug, Clone, Copy)]
+struct ColorScale {
+    lo: f64,
+    hi: f64,
+    log: bool,
+}
+
+impl ColorScale {
+    /// Position of `v` on the colour map (0 bottom, 1 top, clamped by the
+    /// map); on a log scale a value ≤ 0 sits at the bottom.
+    fn t(&self, v: f64) -> f64 {
+        if self.log {
+            if v > 0.0 {
+                normalize(v.log10(), self.lo.log10(), self.hi.log10())
+            } else if v.is_nan() {
+                v
+            } else {
+                0.0
+            }
+        } else {
+            normalize(v, self.lo, self.hi)
+        }
+    }
+
+    /// Tick values: five, evenly spaced on the scale.
+    fn ticks(&self) -> Vec<f64> {
+        if self.log && self.hi > self.lo && self.lo > 0.0 {
+            let r = self.hi / self.lo;
+            (0..5).map(|i| self.lo * r.powf(i as f64 / 4.0)).collect()
+        } else {
+            ticks(self.lo, self.hi)
+        }
+    }
+}
+
+/// The colour scale for `values`: `opts.range` if given, else the finite
+/// values' range (the positive values' range on a log scale).
+fn color_scale(v: &[f64], opts: &PlotOptions) -> Result<ColorScale, PlotError> {
+    if let Some((lo, hi)) = opts.range {
+        return Ok(ColorScale {
+            lo,
+            hi,
+            log: opts.log,
+        });
+    }
+    if opts.log {
+        let pos: Vec<f64> = v.iter().copied().filter(|x| *x > 0.0).collect();
+        if pos.is_empty() {
+            return Err(err(format!(
+                "--log: {} has no positive value (give --range MIN,MAX or drop --log)",
+                opts.field.name()
+            )));
+        }
+        let (lo, hi) = finite_range(&pos);
+        return Ok(ColorScale { lo, hi, log: true });
+    }
+    let (lo, hi) = finite_range(v);
+    Ok(ColorScale { lo, hi, log: false })
 }
 
 /// Position of `v` on the colour map of range (lo, hi).
@@ -591,10 +697,16 @@ fn draw_mesh<DB: DrawingBackend>(
     fs: f64,
 ) -> Result<Option<(f64, f64)>, PlotError> {
     let values = field_values(mesh, step, opts.field);
-    let range = match &values {
-        Values::Cell(v) | Values::Nodal(v) => Some(finite_range(v)),
+    let cs = match &values {
+        Values::Cell(v) | Values::Nodal(v) => Some(color_scale(v, opts)?),
         Values::Categories(..) => None,
     };
+    let range = cs.map(|c| (c.lo, c.hi));
+    let cs = cs.unwrap_or(ColorScale {
+        lo: 0.0,
+        hi: 0.0,
+        log: false,
+    });
     let pts: Vec<(f64, f64)> = mesh
         .points
         .iter()
@@ -614,12 +726,18 @@ fn draw_mesh<DB: DrawingBackend>(
     let bar_w = (fs * 1.6).round();
     let labels: Vec<String> = match (&values, range) {
         (Values::Categories(_, names), _) => names.clone(),
-        (_, Some((lo, hi))) => ticks(lo, hi).iter().map(|&v| fmt_num(v)).collect(),
+        (_, Some(_)) => cs.ticks().iter().map(|&v| fmt_num(v)).collect(),
         _ => vec![],
     };
     let widest = labels.iter().map(|s| tw(s)).fold(0.0, f64::max);
     let strip_w = (fs + bar_w + fs * 0.5 + widest + fs)
-        .max(tw(&opts.field.label()) + 2.0 * fs)
+        .max(
+            tw(&format!(
+                "{}{}",
+                opts.field.label(),
+                if cs.log { " (log)" } else { "" }
+            )) + 2.0 * fs,
+        )
         .min(body.dim_in_pixel().0 as f64 * 0.45) as u32;
     let (main, strip) = body.split_horizontally(body.dim_in_pixel().0.saturating_sub(strip_w));
 
@@ -661,14 +779,13 @@ fn draw_mesh<DB: DrawingBackend>(
         .map_err(de)?;
 
     // Colour of triangle i (cell values) or of a value (nodal).
-    let (vlo, vhi) = range.unwrap_or((0.0, 0.0));
     let cell_color = |i: usize| -> RGBColor {
         match &values {
-            Values::Cell(v) => viridis(normalize(v[i], vlo, vhi)),
+            Values::Cell(v) => viridis(cs.t(v[i])),
             Values::Categories(c, _) => category_color(c[i]),
             Values::Nodal(v) => {
                 let t = mesh.triangles[i];
-                viridis(normalize((v[t[0]] + v[t[1]] + v[t[2]]) / 3.0, vlo, vhi))
+                viridis(cs.t((v[t[0]] + v[t[1]] + v[t[2]]) / 3.0))
             }
         }
     };
@@ -694,9 +811,7 @@ fn draw_mesh<DB: DrawingBackend>(
             let flat = cell_color(i);
             fill_triangle([px[t[0]], px[t[1]], px[t[2]]], clip, |x, y, l| {
                 let c = match nodal {
-                    Some(v) => {
-                        viridis(normalize(l[0] * v[0] + l[1] * v[1] + l[2] * v[2], vlo, vhi))
-                    }
+                    Some(v) => viridis(cs.t(l[0] * v[0] + l[1] * v[1] + l[2] * v[2])),
                     None => flat,
                 };
                 let _ = root.draw_pixel((x, y), &c);
@@ -726,7 +841,7 @@ fn draw_mesh<DB: DrawingBackend>(
                         let value = l[0] * val[0] + l[1] * val[1] + l[2] * val[2];
                         polys.push((
                             vec![at(tri[0]), at(tri[1]), at(tri[2])],
-                            viridis(normalize(value, vlo, vhi)),
+                            viridis(cs.t(value)),
                         ));
                     }
                 }
@@ -765,7 +880,7 @@ fn draw_mesh<DB: DrawingBackend>(
 
     match &values {
         Values::Categories(_, names) => draw_legend(&strip, names, opts.field, fs)?,
-        _ => draw_colorbar(&strip, vlo, vhi, opts.field, fs, bar_w, margin + yl / 8)?,
+        _ => draw_colorbar(&strip, cs, opts.field, fs, bar_w, margin + yl / 8)?,
     }
     Ok(range)
 }
@@ -874,8 +989,7 @@ fn ticks(lo: f64, hi: f64) -> Vec<f64> {
 
 fn draw_colorbar<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
-    lo: f64,
-    hi: f64,
+    cs: ColorScale,
     field: Field,
     fs: f64,
     bar_w: f64,
@@ -890,8 +1004,13 @@ fn draw_colorbar<DB: DrawingBackend>(
         return Ok(());
     }
     let label = ("sans-serif", fs).into_font().color(&BLACK);
+    let title = if cs.log {
+        format!("{} (log)", field.label())
+    } else {
+        field.label()
+    };
     area.draw(&Text::new(
-        field.label(),
+        title,
         (x0 - (fs * 0.5) as i32, top as i32),
         label.clone(),
     ))
@@ -902,8 +1021,8 @@ fn draw_colorbar<DB: DrawingBackend>(
     area.draw(&Rectangle::new([(x0, y0), (x1, y1)], BLACK.stroke_width(1)))
         .map_err(de)?;
     let tick_style = label.pos(Pos::new(HPos::Left, VPos::Center));
-    for v in ticks(lo, hi) {
-        let t = normalize(v, lo, hi);
+    for v in cs.ticks() {
+        let t = cs.t(v);
         let y = y1 - (t * span).round() as i32;
         area.draw(&PathElement::new(
             vec![(x1, y), (x1 + (fs * 0.4) as i32, y)],
@@ -1041,12 +1160,17 @@ pub fn arc_lengths(c: &ContactGeometry, chains: &[Vec<usize>]) -> Vec<Vec<(f64, 
         .collect()
 }
 
+/// The contact pressure against arc length, one panel per interface (each
+/// with its own pressure axis unless `range` fixes it). Each panel says
+/// where its arc length starts: the first contact point of the interface's
+/// first chain (at the first side: the lower body, or the slave).
 fn draw_contact<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     c: &ContactGeometry,
     step: &StepOutput,
     title: &str,
     fs: f64,
+    range: Option<(f64, f64)>,
 ) -> Result<Option<(f64, f64)>, PlotError> {
     if c.points.is_empty() {
         return Err(err("no contact interface in the checkpoint"));
@@ -1058,8 +1182,8 @@ fn draw_contact<DB: DrawingBackend>(
         .max()
         .unwrap_or(0)
         .max(c.interface_names.len());
-    // (interface name, polyline pieces of (arc length, pressure)).
-    type Series = (String, Vec<Vec<(f64, f64)>>);
+    // (interface name, start point, polyline pieces of (arc length, pressure)).
+    type Series = (String, [f64; 2], Vec<Vec<(f64, f64)>>);
     let mut series: Vec<Series> = Vec::new();
     for i in 0..n_if {
         let chains = interface_chains(c, i as u32);
@@ -1071,6 +1195,7 @@ fn draw_contact<DB: DrawingBackend>(
             .get(i)
             .cloned()
             .unwrap_or_else(|| format!("interface {i}"));
+        let start = c.points[chains[0][0]];
         let pieces = arc_lengths(c, &chains)
             .into_iter()
             .map(|p| {
@@ -1079,61 +1204,76 @@ fn draw_contact<DB: DrawingBackend>(
                     .collect()
             })
             .collect();
-        series.push((name, pieces));
+        series.push((name, start, pieces));
     }
     if series.is_empty() {
         return Err(err("no contact segment in the checkpoint"));
     }
-    let all = || {
-        series
-            .iter()
-            .flat_map(|(_, p)| p.iter().flatten())
-            .filter(|(s, p)| s.is_finite() && p.is_finite())
-    };
-    let smax = all().map(|q| q.0).fold(0.0, f64::max);
-    let (plo, phi) = all().fold((0.0f64, 0.0f64), |(a, b), q| (a.min(q.1), b.max(q.1)));
-    let pad = (phi - plo).max(phi.abs()).max(1e-300) * 0.06;
-    let yr = if phi > plo {
-        (plo - if plo < 0.0 { pad } else { 0.0 })..(phi + pad)
-    } else {
-        0.0..1.0
-    };
-    let xr = 0.0..if smax > 0.0 { smax } else { 1.0 };
-
     let body = titled(root, title, fs)?;
-    let mut chart = ChartBuilder::on(&body)
-        .margin((fs * 1.2) as u32)
-        .x_label_area_size((fs * 3.2) as u32)
-        .y_label_area_size((fs * 6.0) as u32)
-        .build_cartesian_2d(xr, yr)
-        .map_err(de)?;
-    chart
-        .configure_mesh()
-        .x_desc("arc length [m]")
-        .y_desc("contact pressure [Pa]")
-        .light_line_style(WHITE.mix(0.0))
-        .bold_line_style(BLACK.mix(0.12))
-        .label_style(("sans-serif", fs * 0.9))
-        .axis_desc_style(("sans-serif", fs))
-        .x_label_formatter(&|v| fmt_num(*v))
-        .y_label_formatter(&|v| fmt_num(*v))
-        .draw()
-        .map_err(de)?;
-    for (k, (name, pieces)) in series.iter().enumerate() {
+    let panels = body.split_evenly((series.len(), 1));
+    let mut total: Option<(f64, f64)> = None;
+    for (k, ((name, start, pieces), panel)) in series.iter().zip(&panels).enumerate() {
+        let pts = || {
+            pieces
+                .iter()
+                .flatten()
+                .filter(|(s, p)| s.is_finite() && p.is_finite())
+        };
+        let smax = pts().map(|q| q.0).fold(0.0, f64::max);
+        let (plo, phi) = pts().fold((0.0f64, 0.0f64), |(a, b), q| (a.min(q.1), b.max(q.1)));
+        total = Some(match total {
+            Some((a, b)) => (a.min(plo), b.max(phi)),
+            None => (plo, phi),
+        });
+        let yr = match range {
+            Some((lo, hi)) => lo..hi,
+            None => {
+                let pad = (phi - plo).max(phi.abs()).max(1e-300) * 0.06;
+                if phi > plo {
+                    (plo - if plo < 0.0 { pad } else { 0.0 })..(phi + pad)
+                } else {
+                    0.0..1.0
+                }
+            }
+        };
+        let xr = 0.0..if smax > 0.0 { smax } else { 1.0 };
+        let caption = format!(
+            "{name} (arc length from ({}, {}){})",
+            fmt_num(start[0]),
+            fmt_num(start[1]),
+            if pieces.len() > 1 {
+                format!(", {} pieces end to end", pieces.len())
+            } else {
+                String::new()
+            }
+        );
+        let mut chart = ChartBuilder::on(panel)
+            .margin((fs * 0.8) as u32)
+            .caption(caption, ("sans-serif", fs * 1.05))
+            .x_label_area_size((fs * 3.0) as u32)
+            .y_label_area_size((fs * 6.0) as u32)
+            .build_cartesian_2d(xr, yr)
+            .map_err(de)?;
+        chart
+            .configure_mesh()
+            .x_desc("arc length s [m]")
+            .y_desc("contact pressure [Pa]")
+            .light_line_style(WHITE.mix(0.0))
+            .bold_line_style(BLACK.mix(0.12))
+            .label_style(("sans-serif", fs * 0.9))
+            .axis_desc_style(("sans-serif", fs))
+            .x_label_formatter(&|v| fmt_num(*v))
+            .y_label_formatter(&|v| fmt_num(*v))
+            .draw()
+            .map_err(de)?;
         let color = category_color(k);
-        for (j, piece) in pieces.iter().enumerate() {
-            let anno = chart
+        for piece in pieces {
+            chart
                 .draw_series(LineSeries::new(
                     piece.iter().copied(),
                     color.stroke_width(2),
                 ))
                 .map_err(de)?;
-            if j == 0 {
-                let lw = fs as i32;
-                anno.label(name.clone()).legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + lw, y)], color.stroke_width(2))
-                });
-            }
             chart
                 .draw_series(
                     piece
@@ -1143,15 +1283,7 @@ fn draw_contact<DB: DrawingBackend>(
                 .map_err(de)?;
         }
     }
-    chart
-        .configure_series_labels()
-        .label_font(("sans-serif", fs))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.4))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(de)?;
-    Ok(Some((plo, phi)))
+    Ok(total)
 }
 
 #[cfg(test)]

@@ -1,0 +1,288 @@
+//! Forces an engineer checks first: the reactions of the Dirichlet and slip
+//! groups and the resultant of the contact pressure on each interface.
+//!
+//! The QP has eliminated the prescribed DOFs, so the reactions come from the
+//! unreduced element forces: at every point R_p = Σ_e (K_e u_e)_p − f_p − c_p,
+//! f the applied loads and c the contact forces (−λ_r times the row's
+//! coefficients at p). Equilibrium makes R_p zero in the directions left free
+//! (up to the solver's residual); its component in the directions fixed by
+//! the conditions at p is the support's reaction. Forces carry the thickness
+//! (N in plane stress with thickness t, N per metre in plane strain), like λ;
+//! moments are about the origin, m = x F_y − y F_x at the undeformed point.
+
+use crate::fem::{element, Model};
+use crate::model::Problem;
+
+/// A force resultant and its moment about the origin.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Resultant {
+    pub force: [f64; 2],
+    pub moment: f64,
+}
+
+impl Resultant {
+    /// Add the force `f` acting at `x`.
+    pub fn add(&mut self, x: [f64; 2], f: [f64; 2]) {
+        self.force[0] += f[0];
+        self.force[1] += f[1];
+        self.moment += x[0] * f[1] - x[1] * f[0];
+    }
+}
+
+/// The reaction of one physical group carrying `[[dirichlet]]` and/or `[[slip]]`.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct GroupReaction {
+    /// The physical group name (`on`).
+    pub on: String,
+    /// "dirichlet", "slip", or "dirichlet+slip".
+    pub kind: String,
+    /// Points the group constrains.
+    pub points: usize,
+    #[serde(flatten)]
+    pub resultant: Resultant,
+}
+
+/// The resultant of the contact forces on one `[[contact]]` interface.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct InterfaceForce {
+    /// The interface name: `on`, or "slave->master".
+    pub name: String,
+    /// The side the resultant acts on: the slave curve (non-matching) or
+    /// the body of lower index (conforming `on =`), by body name.
+    pub on_body: String,
+    #[serde(flatten)]
+    pub resultant: Resultant,
+    /// The resultant on the other side (master, or the higher body): equal
+    /// and opposite up to round-off.
+    #[serde(skip)]
+    pub other: Resultant,
+    /// Contact rows of the interface, rows with λ > 0 (active), largest pressure.
+    pub rows: usize,
+    pub active: usize,
+    pub max_pressure: f64,
+}
+
+/// Everything [`compute`] finds.
+#[derive(Debug, Clone, Default)]
+pub struct Forces {
+    /// Reaction force at each point (zero where nothing is prescribed).
+    pub point_reaction: Vec<[f64; 2]>,
+    /// Contact force on each point (from every row touching it).
+    pub point_contact: Vec<[f64; 2]>,
+    pub groups: Vec<GroupReaction>,
+    pub interfaces: Vec<InterfaceForce>,
+    /// The applied loads (tractions, point forces, gravity) summed.
+    pub loads: Resultant,
+    /// All reactions summed.
+    pub reactions: Resultant,
+    /// The physical strain energy ½ uᵀK u of the full displacement
+    /// (prescribed parts included), unlike the QP objective.
+    pub strain_energy: f64,
+    /// The work of the applied loads on u: fᵀu.
+    pub load_work: f64,
+}
+
+/// (K u)_p per point: the element forces C_e u_e summed at each vertex.
+fn internal_forces(model: &Model, problem: &Problem, u: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let t = &model.topo;
+    let f = &problem.file;
+    let th = match model.plane {
+        crate::model::Plane::Stress => model.thickness,
+        crate::model::Plane::Strain => 1.0,
+    };
+    let dmats: Vec<[[f64; 3]; 3]> = t
+        .material_names
+        .iter()
+        .map(|m| element::d_matrix(&f.materials[m], f.model.plane))
+        .collect();
+    let mut ku = vec![[0.0f64; 2]; t.points.len()];
+    for (tri, &mi) in t.triangles.iter().zip(&t.tri_material) {
+        let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
+        let ke = element::stiffness(&p, &dmats[mi as usize], th);
+        let ue: Vec<f64> = tri.iter().flat_map(|&v| u[v]).collect();
+        for (a, &v) in tri.iter().enumerate() {
+            for k in 0..2 {
+                ku[v][k] += (0..6).map(|j| ke[2 * a + k][j] * ue[j]).sum::<f64>();
+            }
+        }
+    }
+    ku
+}
+
+/// Reactions and interface resultants of a solved step: `u` the point
+/// displacements, `lambda` the multiplier of every contact row (0 for rows
+/// left out of the QP), `pressure` the contact pressure per row.
+pub fn compute(
+    model: &Model,
+    problem: &Problem,
+    u: &[[f64; 2]],
+    lambda: &[f64],
+    pressure: &[f64],
+) -> Forces {
+    let t = &model.topo;
+    let np = t.points.len();
+    let mut contact = vec![[0.0f64; 2]; np];
+    for (row, &l) in t.contact.iter().zip(lambda) {
+        for (p, c) in row.coefficients() {
+            contact[p][0] -= l * c[0];
+            contact[p][1] -= l * c[1];
+        }
+    }
+    let ku = internal_forces(model, problem, u);
+    let mut reaction = vec![[0.0f64; 2]; np];
+    let mut groups: Vec<GroupReaction> = vec![];
+    let mut group_of = vec![usize::MAX; model.cond_groups.len()];
+    for (i, (kind, on)) in model.cond_groups.iter().enumerate() {
+        let g = match groups.iter().position(|g| &g.on == on) {
+            Some(g) => {
+                if !groups[g].kind.split('+').any(|k| k == *kind) {
+                    groups[g].kind = format!("{}+{kind}", groups[g].kind);
+                }
+                g
+            }
+            None => {
+                groups.push(GroupReaction {
+                    on: on.clone(),
+                    kind: kind.to_string(),
+                    points: 0,
+                    resultant: Resultant::default(),
+                });
+                groups.len() - 1
+            }
+        };
+        group_of[i] = g;
+    }
+    // Conditions are stored point by point.
+    let conds = &model.conditions;
+    let mut i = 0;
+    while i < conds.len() {
+        let p = conds[i].0;
+        let mut j = i;
+        while j < conds.len() && conds[j].0 == p {
+            j += 1;
+        }
+        let here = &conds[i..j];
+        i = j;
+        let r = [
+            ku[p][0] - model.loads[p][0] - contact[p][0],
+            ku[p][1] - model.loads[p][1] - contact[p][1],
+        ];
+        // An orthonormal basis of the fixed directions: the complement of T.
+        let pd = &model.dofs[p];
+        let fixed: Vec<[f64; 2]> = match pd.ndof {
+            0 => vec![[1.0, 0.0], [0.0, 1.0]],
+            1 => vec![[-pd.t[0][1], pd.t[0][0]]],
+            _ => vec![],
+        };
+        // Each group's fixed directions at p, orthonormalised.
+        let mut gs: Vec<(usize, Vec<[f64; 2]>)> = vec![];
+        for &(_, dir, src) in here {
+            let g = group_of[src as usize];
+            let k = match gs.iter().position(|x| x.0 == g) {
+                Some(k) => k,
+                None => {
+                    gs.push((g, vec![]));
+                    gs.len() - 1
+                }
+            };
+            let basis = &mut gs[k].1;
+            let mut v = dir;
+            for b in basis.iter() {
+                let c = v[0] * b[0] + v[1] * b[1];
+                v = [v[0] - c * b[0], v[1] - c * b[1]];
+            }
+            let n = v[0].hypot(v[1]);
+            if n > 1e-8 {
+                basis.push([v[0] / n, v[1] / n]);
+            }
+        }
+        for (g, _) in &gs {
+            groups[*g].points += 1;
+        }
+        // Each fixed direction's share of R goes to the groups that fix it,
+        // in proportion to how much of it each group fixes.
+        for e in &fixed {
+            let comp = r[0] * e[0] + r[1] * e[1];
+            let w: Vec<f64> = gs
+                .iter()
+                .map(|(_, basis)| {
+                    basis
+                        .iter()
+                        .map(|b| (b[0] * e[0] + b[1] * e[1]).powi(2))
+                        .sum::<f64>()
+                })
+                .collect();
+            let wsum: f64 = w.iter().sum();
+            if wsum.is_nan() || wsum <= 0.0 {
+                continue;
+            }
+            let fe = [comp * e[0], comp * e[1]];
+            reaction[p][0] += fe[0];
+            reaction[p][1] += fe[1];
+            for ((g, _), wk) in gs.iter().zip(&w) {
+                let s = wk / wsum;
+                groups[*g]
+                    .resultant
+                    .add(t.points[p], [s * fe[0], s * fe[1]]);
+            }
+        }
+    }
+    let mut interfaces: Vec<InterfaceForce> = t
+        .interface_names
+        .iter()
+        .map(|n| InterfaceForce {
+            name: n.clone(),
+            on_body: String::new(),
+            resultant: Resultant::default(),
+            other: Resultant::default(),
+            rows: 0,
+            active: 0,
+            max_pressure: 0.0,
+        })
+        .collect();
+    for (r, row) in t.contact.iter().enumerate() {
+        let it = &mut interfaces[row.interface as usize];
+        let l = lambda.get(r).copied().unwrap_or(0.0);
+        it.rows += 1;
+        if l > 0.0 {
+            it.active += 1;
+        }
+        if let Some(&pr) = pressure.get(r) {
+            it.max_pressure = it.max_pressure.max(pr);
+        }
+        if it.on_body.is_empty() {
+            it.on_body = model
+                .body_names
+                .get(t.point_body[row.first] as usize)
+                .cloned()
+                .unwrap_or_default();
+        }
+        for (p, c) in row.coefficients() {
+            let f = [-l * c[0], -l * c[1]];
+            if p == row.first {
+                it.resultant.add(t.points[p], f);
+            } else {
+                it.other.add(t.points[p], f);
+            }
+        }
+    }
+    let mut loads = Resultant::default();
+    let mut reactions = Resultant::default();
+    let (mut strain_energy, mut load_work) = (0.0, 0.0);
+    for p in 0..np {
+        strain_energy += 0.5 * (u[p][0] * ku[p][0] + u[p][1] * ku[p][1]);
+        load_work += u[p][0] * model.loads[p][0] + u[p][1] * model.loads[p][1];
+        loads.add(t.points[p], model.loads[p]);
+        reactions.add(t.points[p], reaction[p]);
+    }
+    Forces {
+        point_reaction: reaction,
+        point_contact: contact,
+        groups,
+        interfaces,
+        loads,
+        reactions,
+        strain_energy,
+        load_work,
+    }
+}

@@ -1,0 +1,213 @@
+//! Reactions and contact resultants (post/forces.rs) on every shipped model:
+//! the reactions balance the applied loads (force and moment), each body is
+//! in equilibrium under its loads, reactions and contact forces, every
+//! interface's two sides carry equal and opposite resultants, and the
+//! reactions of two models match the load they carry by hand.
+
+use signorini::pipeline::{self, SolverChoice};
+use signorini::post::{self, forces};
+use std::path::PathBuf;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// (prepared problem, forces) of a shipped model solved by the default method.
+fn solved(name: &str) -> (pipeline::Prepared, forces::Forces) {
+    let path = root().join("meshes").join(format!("{name}.toml"));
+    let prep = pipeline::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
+    let (method, opts) = pipeline::options(&prep.problem, &SolverChoice::default()).unwrap();
+    let res = pipeline::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
+    assert!(res.status.converged(), "{name}: {:?}", res.status);
+    let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let f = forces::compute(
+        &prep.model,
+        &prep.problem,
+        &step.displacement,
+        &step.multipliers,
+        &step.contact_pressure,
+    );
+    assert_eq!(step.reaction, f.point_reaction);
+    (prep, f)
+}
+
+const SHIPPED: &[&str] = &[
+    "column",
+    "two_blocks",
+    "two_blocks_glued",
+    "two_blocks_eccentric",
+    "hertz",
+    "floating_block",
+    "three_bodies",
+    "cantilevers",
+    "hip",
+    "geodynamic",
+];
+
+/// |a + b| ≤ tol · scale, for force and moment.
+fn balanced(what: &str, a: forces::Resultant, b: forces::Resultant, scale: [f64; 2], tol: f64) {
+    let df = (a.force[0] + b.force[0]).hypot(a.force[1] + b.force[1]);
+    let dm = (a.moment + b.moment).abs();
+    assert!(
+        df <= tol * scale[0] && dm <= tol * scale[1],
+        "{what}: force {:?} + {:?} (|sum| {df:.3e}, scale {:.3e}), moment {:.6e} + {:.6e} (|sum| {dm:.3e}, scale {:.3e})",
+        a.force,
+        b.force,
+        scale[0],
+        a.moment,
+        b.moment,
+        scale[1]
+    );
+}
+
+/// Σ|f_p| and Σ|x_p × f_p| over the given point forces: the scales that a
+/// sum of them is compared with.
+fn scales<'a>(pts: &[[f64; 2]], fs: impl Iterator<Item = &'a [[f64; 2]]>) -> [f64; 2] {
+    let mut s = [0.0f64, 0.0];
+    for f in fs {
+        for (x, v) in pts.iter().zip(f) {
+            s[0] += v[0].hypot(v[1]);
+            s[1] += (x[0] * v[1] - x[1] * v[0]).abs() + x[0].hypot(x[1]) * v[0].hypot(v[1]);
+        }
+    }
+    s
+}
+
+#[test]
+fn reactions_balance_the_loads_on_every_shipped_model() {
+    for name in SHIPPED {
+        let (prep, f) = solved(name);
+        let m = &prep.model;
+        let pts = &m.topo.points;
+        let scale = scales(pts, [&m.loads[..], &f.point_reaction[..]].into_iter());
+        assert!(scale[0] > 0.0, "{name}: neither loads nor reactions");
+        balanced(name, f.loads, f.reactions, scale, 1e-8);
+        // The groups add up to the total.
+        let mut sum = forces::Resultant::default();
+        for g in &f.groups {
+            sum.force[0] += g.resultant.force[0];
+            sum.force[1] += g.resultant.force[1];
+            sum.moment += g.resultant.moment;
+        }
+        let neg = forces::Resultant {
+            force: [-f.reactions.force[0], -f.reactions.force[1]],
+            moment: -f.reactions.moment,
+        };
+        balanced(&format!("{name}: groups"), sum, neg, scale, 1e-12);
+        // Every [[dirichlet]]/[[slip]] group appears, with its points.
+        let f_toml = &prep.problem.file;
+        for on in f_toml
+            .dirichlet
+            .iter()
+            .map(|d| &d.on)
+            .chain(f_toml.slip.iter().map(|s| &s.on))
+        {
+            let g = f.groups.iter().find(|g| &g.on == on);
+            assert!(g.is_some_and(|g| g.points > 0), "{name}: group {on}");
+        }
+    }
+}
+
+#[test]
+fn every_body_is_in_equilibrium_and_interfaces_are_action_reaction() {
+    for name in SHIPPED {
+        let (prep, f) = solved(name);
+        let m = &prep.model;
+        let t = &m.topo;
+        let scale = scales(
+            &t.points,
+            [&m.loads[..], &f.point_reaction[..], &f.point_contact[..]].into_iter(),
+        );
+        for b in 0..t.nbodies {
+            let mut body = forces::Resultant::default();
+            for p in (0..t.points.len()).filter(|&p| t.point_body[p] as usize == b) {
+                for v in [m.loads[p], f.point_reaction[p], f.point_contact[p]] {
+                    body.add(t.points[p], v);
+                }
+            }
+            balanced(
+                &format!("{name}: {}", m.body_label(b)),
+                body,
+                forces::Resultant::default(),
+                scale,
+                1e-8,
+            );
+        }
+        for it in &f.interfaces {
+            let s = it.resultant.force[0].hypot(it.resultant.force[1]);
+            let xmax = t.points.iter().fold(0.0f64, |a, x| a.max(x[0].hypot(x[1])));
+            balanced(
+                &format!("{name}: interface {}", it.name),
+                it.resultant,
+                it.other,
+                [s.max(f64::MIN_POSITIVE), s * xmax.max(1.0)],
+                1e-12,
+            );
+            assert!(it.active <= it.rows && it.rows > 0);
+            assert!(!it.on_body.is_empty());
+        }
+    }
+}
+
+#[test]
+fn reactions_carry_the_load_by_hand() {
+    // Column under its own weight: the bottom carries ρ g H W, the slip
+    // sides carry no vertical force.
+    let (_, f) = solved("column");
+    let g = |on: &str| f.groups.iter().find(|g| g.on == on).unwrap().resultant;
+    let w = 2000.0 * 9.81 * 10.0 * 1.0;
+    assert!(
+        (g("bottom").force[1] - w).abs() <= 1e-9 * w,
+        "{:?}",
+        g("bottom")
+    );
+    assert!(g("left").force[1].abs() <= 1e-9 * w);
+    assert!((g("left").force[0] + g("right").force[0]).abs() <= 1e-8 * w);
+    // Hertz: the traction on the cylinder top goes through the contact
+    // into the block's bottom; the interface resultant on the cylinder is
+    // the whole load, pointing up.
+    let (prep, f) = solved("hertz");
+    let total = -f.loads.force[1];
+    assert!(total > 0.0);
+    let bottom = f.groups.iter().find(|g| g.on == "block_bottom").unwrap();
+    assert!((bottom.resultant.force[1] - total).abs() <= 1e-8 * total);
+    let it = &f.interfaces[0];
+    assert_eq!(it.on_body, "cylinder");
+    assert!((it.resultant.force[1] - total).abs() <= 1e-8 * total);
+    assert!(it.resultant.force[0].abs() <= 1e-8 * total);
+    assert!(it.max_pressure > 0.0);
+    assert!(prep.model.body_names.contains(&"block".to_string()));
+}
+
+#[test]
+fn vtu_names_components_and_writes_reactions() {
+    // The shipped column model through the pipeline's writer: ParaView's
+    // ComponentName attributes in the XML, and the file still reads back.
+    let (prep, _) = solved("column");
+    let path = root().join("meshes/column.toml");
+    let (method, opts) = pipeline::options(&prep.problem, &SolverChoice::default()).unwrap();
+    let res = pipeline::solve(&prep, &method, &opts).unwrap();
+    let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let om = post::out_mesh(&prep.model, &prep.mesh);
+    let dir = tempfile::tempdir().unwrap();
+    let out = pipeline::output_paths(dir.path(), "column", None);
+    signorini::io::vtu::write_vtu(&out.vtu, &om, &step, false).unwrap();
+    let xml = std::fs::read_to_string(&out.vtu).unwrap();
+    for want in [
+        r#"Name="stress" NumberOfComponents="4""#,
+        r#"ComponentName0="sxx" ComponentName1="syy" ComponentName2="sxy" ComponentName3="szz""#,
+        r#"ComponentName0="ux" ComponentName1="uy" ComponentName2="uz""#,
+        r#"ComponentName0="s1" ComponentName1="s2""#,
+        r#"ComponentName0="Rx""#,
+    ] {
+        assert!(xml.contains(want), "{want} missing in {}", path.display());
+    }
+    let back = signorini::io::vtu::read_vtu_arrays(&out.vtu).unwrap();
+    let r = back.point_array("reaction").expect("reaction array");
+    assert_eq!(r.num_comp, 3);
+    // The reaction of the bottom (u_y = 0) carries the column's weight.
+    let sum_y: f64 = r.values.chunks(3).map(|c| c[1]).sum();
+    let w = 2000.0 * 9.81 * 10.0;
+    assert!((sum_y - w).abs() <= 1e-8 * w, "{sum_y} vs {w}");
+    assert!(back.point_array("contact_role").is_some());
+}
