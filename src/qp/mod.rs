@@ -152,6 +152,9 @@ pub struct SolveOptions {
     pub progress: bool,
     /// Warm start (load steps, restart): used by methods that can, when feasible.
     pub x0: Option<Vec<f64>>,
+    /// ssn: the linear-algebra path ("auto", "augmented", "refactor",
+    /// "schur"); None = "auto" (the count-based cost model).
+    pub ssn_path: Option<String>,
 }
 
 impl Default for SolveOptions {
@@ -167,6 +170,7 @@ impl Default for SolveOptions {
             accelerate: true,
             progress: false,
             x0: None,
+            ssn_path: None,
         }
     }
 }
