@@ -946,7 +946,8 @@ impl<'a> Ssn<'a> {
         } else {
             c.fac_k
         };
-        let k = if self.steps_done >= 2 { 3.0 } else { 1.0 };
+        // steps_done counts this step: k = 1 in the second, 3 from the third.
+        let k = if self.steps_done >= 3 { 3.0 } else { 1.0 };
         schur <= k * (aug_fac + 6.0 * c.solve_k)
     }
 
