@@ -1148,7 +1148,7 @@ impl<'a> Ssn<'a> {
                 let lam: Vec<f64> = self.lam.iter().zip(&dl).map(|(a, b)| a + b).collect();
                 let c = certificate(qp, &x, &lam);
                 log::debug!("ssn: refinement: KKT residual {cert:.2e} → {c:.2e}");
-                if !(c < cert) {
+                if c.is_nan() || c >= cert {
                     break;
                 }
                 let improved = c < 0.5 * cert;
@@ -1275,7 +1275,7 @@ impl Iterative for Ssn<'_> {
         if new_j == self.in_j {
             // J has settled: certify (x, λ), refining the solve if needed.
             let cert = self.refine();
-            if !(cert <= CERT_TARGET.max(self.tol)) {
+            if cert.is_nan() || cert > CERT_TARGET.max(self.tol) {
                 return Step::Done(
                     Status::Failed(format!(
                         "ssn: KKT residual {cert:.2e} after refinement (target {CERT_TARGET:e})"
