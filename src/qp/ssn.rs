@@ -74,8 +74,9 @@
 //! the contact unknowns, so that force errors cannot hide behind ‖d‖). If it
 //! exceeds tol, the KKT system of J is refined with the same factor (solve
 //! for the correction of the residual, at most [`REFINE_MAX`] times while it
-//! decreases), then recomputed on the Schur path if the augmented one was
-//! used. An answer whose certificate still exceeds [`CERT_TARGET`] is
+//! halves), then, if it is still above min(CERT_TARGET, 100·tol) after the
+//! augmented path, recomputed once on the Schur path and refined there (the
+//! certificate has a rounding floor near ε × the stiffness contrast). An answer whose certificate still exceeds [`CERT_TARGET`] is
 //! returned as [`Status::Failed`], never as converged.
 //!
 //! **Why the augmented path lost accuracy under stiffness contrast.** The
