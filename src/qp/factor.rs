@@ -134,6 +134,57 @@ impl Cholesky {
     }
 }
 
+/// What a sparse Cholesky factor of a pattern costs, counted before any
+/// numeric work (the symbolic analysis on the same AMD ordering as
+/// [`Cholesky::new`]): `nnz` = entries of L (one solve reads each twice),
+/// `flops` = Σⱼ cⱼ² over the column counts cⱼ of L (the multiply–adds of
+/// the numeric factorization, up to a constant). Used by cost models that
+/// must not depend on wall-clock time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FactorCost {
+    pub nnz: f64,
+    pub flops: f64,
+}
+
+/// [`FactorCost`] of the lower triangle of the symmetric pattern `c` (values
+/// ignored; a diagonal entry is assumed in every column, as in the factor).
+pub fn factor_cost(c: &Csr) -> Result<FactorCost, QpError> {
+    use faer::sparse::linalg::cholesky::{
+        factorize_symbolic_cholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    };
+    let (sym, _) = lower_csc(c, &[]);
+    let s = factorize_symbolic_cholesky(
+        sym.as_ref(),
+        Side::Lower,
+        SymmetricOrdering::Amd,
+        Default::default(),
+    )
+    .map_err(|e| QpError::Factor(format!("symbolic analysis: {e:?}")))?;
+    let (mut nnz, mut flops) = (0.0f64, 0.0f64);
+    match s.raw() {
+        SymbolicCholeskyRaw::Simplicial(t) => {
+            for w in t.col_ptr().windows(2) {
+                let cj = (w[1] - w[0]) as f64;
+                nnz += cj;
+                flops += cj * cj;
+            }
+        }
+        SymbolicCholeskyRaw::Supernodal(t) => {
+            let (b, e) = (t.supernode_begin(), t.supernode_end());
+            for sn in 0..t.n_supernodes() {
+                let ncols = e[sn] - b[sn];
+                let below = t.supernode(sn).pattern().len();
+                for k in 0..ncols {
+                    let cj = (ncols - k + below) as f64;
+                    nnz += cj;
+                    flops += cj * cj;
+                }
+            }
+        }
+    }
+    Ok(FactorCost { nnz, flops })
+}
+
 /// The last factorization (see the module doc).
 struct CacheEntry {
     n: usize,

@@ -166,6 +166,9 @@ pub struct SolveOptions {
     pub deadline: Option<std::time::Instant>,
     /// Warm start (load steps, restart): used by methods that can, when feasible.
     pub x0: Option<Vec<f64>>,
+    /// ssn: the linear-algebra path ("auto", "augmented", "refactor",
+    /// "schur"); None = "auto" (the count-based cost model).
+    pub ssn_path: Option<String>,
 }
 
 impl Default for SolveOptions {
@@ -183,6 +186,7 @@ impl Default for SolveOptions {
             label: None,
             deadline: None,
             x0: None,
+            ssn_path: None,
         }
     }
 }
