@@ -306,6 +306,14 @@ pub fn options(
     if let Some(a) = s.accelerate {
         o.accelerate = a;
     }
+    if let Some(p) = &s.ssn_path {
+        if !["auto", "augmented", "refactor", "schur"].contains(&p.as_str()) {
+            return Err(bad(format!(
+                "ssn_path = \"{p}\": expected \"auto\", \"augmented\", \"refactor\" or \"schur\""
+            )));
+        }
+        o.ssn_path = Some(p.clone());
+    }
     Ok((method, o))
 }
 

@@ -203,6 +203,9 @@ pub struct SolverSection {
     /// Uzawa: Nesterov momentum; penalty: exact subspace correction between
     /// sweeps. `false` gives the report's plain iterations.
     pub accelerate: Option<bool>,
+    /// ssn's linear algebra: "auto" (by counts), "augmented", "refactor",
+    /// "schur" (docs/problem-format.md §4).
+    pub ssn_path: Option<String>,
 }
 
 #[derive(Debug, Clone, Default, Deserialize)]
