@@ -1,5 +1,5 @@
 //! The KKT certificate computed after every solve, independently of the method
-//! (docs/methods.md §8, docs/problem-format.md "Outputs"): relative, unit-free
+//! (docs/methods.md §8, docs/problem-format.md §8): relative, unit-free
 //! residuals of (x, λ).
 //!
 //! The four residuals of the problem-format contract are kept as the contract
