@@ -3,14 +3,22 @@
 //! (Luenberger; methods.md §4.8), matrix-free with C and A_J (no factor, no
 //! fill-in).
 //!
-//! Scaling (the implementation note of §4.8): the unknown multipliers are
-//! scaled, λ = s·μ with s = max diag C / max ‖a_i‖, so that both blocks of
+//! Scaling (the implementation note of §4.8, made per unknown): CGH solves
+//! the symmetrically Jacobi-scaled system, x = Σx̃ with Σ = diag(C)^(-1/2) and
+//! λ = Tμ with Tᵢ = 1/‖Σaᵢ‖,
 //!
 //! ```text
-//!   B = [[C, s A_Jᵀ], [s A_J, 0]]
+//!   B̃ = [[ΣCΣ, ΣA_JᵀT], [TA_JΣ, 0]]
 //! ```
 //!
-//! have the magnitude of C. The singularity test is made scale-free as the
+//! (unit diagonal, unit rows), so that a stiffness contrast between bodies
+//! does not leave the soft body's residual under the stiff body's rounding.
+//! If CGH still fails on a working set (breakdown, no progress in 2n + 200
+//! steps, or the cap 10·max_iter steps), the run switches to the exact ASM-E
+//! Schur solve for that and every later working set, with a warning and a
+//! `factor (ASM-E fallback)` entry in the timings.
+//!
+//! The singularity test is made scale-free as the
 //! implementation note of §4.8 asks, with the local value ‖Bp‖/‖p‖ ≤ ‖B‖ in
 //! place of ‖B‖: p is treated as singular when |(p,Bp)| ≤ ε_s ‖p‖ ‖Bp‖
 //! (ε_s = 10⁻⁴, the report's value), i.e. when p and Bp are nearly orthogonal.

@@ -50,8 +50,9 @@
 //! ‖PHP + ρQ‖ = ρ and ᾱ = 1.9/ρ; Q has rank k, so the large ρ costs CG on the
 //! free set only about k extra steps, while it cut the outer iterations on the
 //! hertz example from 52 (ρ = ‖PHP‖) to 9), η = 0.1‖h‖, β = 10,
-//! M₀ = ‖h‖/‖ẽ‖ (relates the gap-valued gradient to the force-valued
-//! equality residual). Stop when also
+//! M₀ = min(‖h‖/‖ẽ‖, ‖PHP‖) (relates the gap-valued gradient to the
+//! force-valued equality residual; the cap keeps it finite when the loads do
+//! no work on the free rigid motions, ẽ = 0, see [`smalbe_m0`]). Stop when also
 //! ‖G̃λ̂‖ ≤ tol·max(‖ẽ‖, ‖λ‖). Finally x = x̂ − Rα with x̂ = K⁻¹(d − Aᵀλ),
 //! α = L⁻ᵀ(μ + ρG̃λ̂ + G̃(Ax̂ − g)): since G̃ᵀc = A R L⁻ᵀc, this makes
 //! −(Ax − g) equal to the Lagrangian gradient up to O(‖G̃λ̂‖). With an empty
@@ -60,6 +61,11 @@
 //! accelerated) with their own inner step ([`Inner`]). If some rigid motion
 //! is not seen by any contact row (G rank deficient) the method refuses with
 //! [`QpError::Unsupported`].
+//!
+//! **Row scaling.** The host works on the constraints scaled by
+//! sᵢ = 1/√(aᵢᵀdiag(C)⁻¹aᵢ) (same feasible set, λ = diag(s)μ), so that the
+//! dual Hessian has a diagonal near 1 in every body's own stiffness scale
+//! ([`row_scaling`]); the residuals above are those of the scaled rows.
 //!
 //! Counts: `iterations` = MPRGP steps + SMALBE multiplier updates (one per
 //! executor step); `inner_iterations` = solves with the sparse factor.
