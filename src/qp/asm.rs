@@ -352,6 +352,11 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
         st
     }
 
+    /// The face solver (to report how it solved).
+    pub(crate) fn solver(&self) -> &S {
+        &self.solver
+    }
+
     /// Add constraint i to the working set if it is independent of it.
     fn add(&mut self, i: usize) -> bool {
         if self.solver.push(i, &self.jl) {
@@ -574,7 +579,7 @@ impl<S: FaceSolver> Iterative for ActiveSet<'_, S> {
 // ASM-E face solver: Schur complement with one Cholesky factor of C
 // ---------------------------------------------------------------------------
 
-struct SchurSolver<'a> {
+pub(crate) struct SchurSolver<'a> {
     qp: &'a QpProblem,
     chol: Cholesky,
     s: PackedChol,
@@ -582,7 +587,7 @@ struct SchurSolver<'a> {
 }
 
 impl<'a> SchurSolver<'a> {
-    fn new(qp: &'a QpProblem, chol: Cholesky) -> Self {
+    pub(crate) fn new(qp: &'a QpProblem, chol: Cholesky) -> Self {
         SchurSolver {
             qp,
             chol,

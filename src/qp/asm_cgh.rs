@@ -3,14 +3,22 @@
 //! (Luenberger; methods.md §4.8), matrix-free with C and A_J (no factor, no
 //! fill-in).
 //!
-//! Scaling (the implementation note of §4.8): the unknown multipliers are
-//! scaled, λ = s·μ with s = max diag C / max ‖a_i‖, so that both blocks of
+//! Scaling (the implementation note of §4.8, made per unknown): CGH solves
+//! the symmetrically Jacobi-scaled system, x = Σx̃ with Σ = diag(C)^(-1/2) and
+//! λ = Tμ with Tᵢ = 1/‖Σaᵢ‖,
 //!
 //! ```text
-//!   B = [[C, s A_Jᵀ], [s A_J, 0]]
+//!   B̃ = [[ΣCΣ, ΣA_JᵀT], [TA_JΣ, 0]]
 //! ```
 //!
-//! have the magnitude of C. The singularity test is made scale-free as the
+//! (unit diagonal, unit rows), so that a stiffness contrast between bodies
+//! does not leave the soft body's residual under the stiff body's rounding.
+//! If CGH still fails on a working set (breakdown, no progress in 2n + 200
+//! steps, or the cap 10·max_iter steps), the run switches to the exact ASM-E
+//! Schur solve for that and every later working set, with a warning and a
+//! `factor (ASM-E fallback)` entry in the timings.
+//!
+//! The singularity test is made scale-free as the
 //! implementation note of §4.8 asks, with the local value ‖Bp‖/‖p‖ ≤ ‖B‖ in
 //! place of ‖B‖: p is treated as singular when |(p,Bp)| ≤ ε_s ‖p‖ ‖Bp‖
 //! (ε_s = 10⁻⁴, the report's value), i.e. when p and Bp are nearly orthogonal.
@@ -25,8 +33,9 @@
 //! systems. Without a kernel a singular B_J shows up as a CGH breakdown or
 //! non-convergence: `Status::Failed`.
 
-use super::asm::{check_common, ActiveSet, FaceKernel, FaceSolver};
+use super::asm::{check_common, ActiveSet, FaceKernel, FaceSolver, SchurSolver};
 use super::executor::Executor;
+use super::factor::Cholesky;
 use super::sparse::{axpy, dot, norm};
 use super::{QpError, QpProblem, QpResult, SolveOptions};
 use std::time::Instant;
@@ -35,12 +44,98 @@ use std::time::Instant;
 pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     check_common(qp, opts)?;
     let t1 = Instant::now();
-    let solver = CghSolver::new(qp, opts.tol);
+    let solver = Hybrid {
+        qp,
+        cgh: CghSolver::new(qp, opts.tol, opts.max_iter),
+        schur: None,
+        cgh_steps: 0,
+        switch_time: 0.0,
+    };
     let mut state = ActiveSet::new(qp, solver, opts);
-    let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("asm-cgh"));
+    let mut exec = Executor::for_opts(opts, "asm-cgh");
     let (status, iters) = exec.run(&mut state);
     let t_it = t1.elapsed().as_secs_f64();
-    Ok(state.into_result(status, iters, exec.log, vec![("iterate".into(), t_it)]))
+    let mut timings = vec![("iterate".into(), t_it)];
+    let switched = state.solver().schur.is_some();
+    if switched {
+        // Visible in the result: the factor's time under its own name.
+        timings.push(("factor (ASM-E fallback)".into(), state.solver().switch_time));
+    }
+    Ok(state.into_result(status, iters, exec.log, timings))
+}
+
+/// CGH until it fails on a working set (breakdown, stall, step cap), then
+/// the exact ASM-E Schur solve (one Cholesky factor of C) for the rest of the
+/// run, with a warning. The switch is decided by step counts only, never by
+/// time, so the same input always takes the same path.
+struct Hybrid<'a> {
+    qp: &'a QpProblem,
+    cgh: CghSolver<'a>,
+    schur: Option<SchurSolver<'a>>,
+    cgh_steps: usize,
+    switch_time: f64,
+}
+
+impl FaceSolver for Hybrid<'_> {
+    fn push(&mut self, j: usize, jl: &[usize]) -> bool {
+        match &mut self.schur {
+            Some(s) => s.push(j, jl),
+            None => self.cgh.push(j, jl),
+        }
+    }
+
+    fn remove(&mut self, pos: usize) {
+        match &mut self.schur {
+            Some(s) => s.remove(pos),
+            None => self.cgh.remove(pos),
+        }
+    }
+
+    fn solve(
+        &mut self,
+        r: &[f64],
+        e: &[f64],
+        jl: &[usize],
+        fk: &FaceKernel,
+    ) -> Result<(Vec<f64>, Vec<f64>), String> {
+        if self.schur.is_none() {
+            match self.cgh.solve(r, e, jl, fk) {
+                Ok(v) => return Ok(v),
+                Err(msg) => {
+                    log::warn!(
+                        "{msg}; switching to the ASM-E Schur-complement solve (one Cholesky factor of C) \
+                         for this and the remaining working sets"
+                    );
+                    let t0 = Instant::now();
+                    let chol = Cholesky::new(&self.qp.c, &self.qp.kernel)
+                        .map_err(|e| format!("{msg}; the ASM-E fallback failed: {e}"))?;
+                    let mut s = SchurSolver::new(self.qp, chol);
+                    for (p, &j) in jl.iter().enumerate() {
+                        if !s.push(j, &jl[..p]) {
+                            return Err(format!(
+                                "{msg}; ASM-E fallback: row {j} depends on the working set"
+                            ));
+                        }
+                    }
+                    self.switch_time = t0.elapsed().as_secs_f64();
+                    self.cgh_steps = self.cgh.inner();
+                    self.schur = Some(s);
+                }
+            }
+        }
+        match &mut self.schur {
+            Some(s) => s.solve(r, e, jl, fk),
+            None => Err("asm-cgh: no face solver".into()),
+        }
+    }
+
+    /// CGH steps, then plus the solves with the factor after a switch.
+    fn inner(&self) -> usize {
+        match &self.schur {
+            Some(s) => self.cgh_steps + s.inner(),
+            None => self.cgh.inner(),
+        }
+    }
 }
 
 /// Parameters of [`cgh`].
@@ -91,10 +186,23 @@ pub fn cgh(
     let mut bq = vec![0.0; n];
     let mut k = 0usize;
     let mut restarts = 0;
+    // Stall: no new best residual (by 1 %) in `stall` steps. CG on a
+    // well-conditioned system of this size would have finished long before.
+    let stall = 2 * n + 200;
+    let (mut best, mut best_at) = (f64::INFINITY, 0usize);
     loop {
         let rn = norm(&r);
         if !rn.is_finite() {
             return Err(format!("CGH: NaN/Inf after {k} steps"));
+        }
+        if rn < 0.99 * best {
+            (best, best_at) = (rn, k);
+        } else if k - best_at >= stall {
+            return Err(format!(
+                "CGH stalls: no progress in {stall} steps (relative residual {:.2e}, best {:.2e}, {k} steps)",
+                rn / fnorm,
+                best / fnorm
+            ));
         }
         if rn <= target {
             // Confirm with the true residual (rounding drift); restart if needed.
@@ -183,35 +291,62 @@ pub fn cgh(
 struct CghSolver<'a> {
     qp: &'a QpProblem,
     tol: f64,
-    /// λ = s μ
-    s: f64,
-    /// max ‖a_i‖ (extra rows are scaled to it)
-    amax: f64,
+    /// Jacobi scaling of the displacement block: x = σ ⊙ x̃, σⱼ = 1/√Cⱼⱼ.
+    sigma: Vec<f64>,
+    /// Row scaling of the multipliers: λᵢ = τᵢ μᵢ, τᵢ = 1/‖aᵢ ⊙ σ‖.
+    tau: Vec<f64>,
+    /// Cap on the CGH steps of one face solve.
+    max_steps: usize,
     steps: usize,
     /// Multipliers of the previous solve by constraint (warm start).
     warm: Vec<f64>,
 }
 
 impl<'a> CghSolver<'a> {
-    fn new(qp: &'a QpProblem, tol: f64) -> Self {
-        let cmax = qp.c.diag().iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        let amax = (0..qp.m())
-            .map(|i| norm(qp.a.row(i).1))
-            .fold(0.0f64, f64::max);
-        let s = if amax > 0.0 && cmax > 0.0 {
-            cmax / amax
-        } else {
-            1.0
-        };
+    fn new(qp: &'a QpProblem, tol: f64, max_iter: usize) -> Self {
+        let diag = qp.c.diag();
+        let sigma: Vec<f64> = diag
+            .iter()
+            .map(|&c| {
+                if c > 0.0 && c.is_finite() {
+                    1.0 / c.sqrt()
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let tau = (0..qp.m())
+            .map(|i| {
+                let (cols, vals) = qp.a.row(i);
+                let t: f64 = cols
+                    .iter()
+                    .zip(vals)
+                    .map(|(&j, &a)| (a * sigma[j]).powi(2))
+                    .sum();
+                if t > 0.0 && t.is_finite() {
+                    1.0 / t.sqrt()
+                } else {
+                    1.0
+                }
+            })
+            .collect();
         CghSolver {
             qp,
             tol,
-            s,
-            amax: if amax > 0.0 { amax } else { 1.0 },
+            sigma,
+            tau,
+            max_steps: cgh_cap(qp.n() + qp.m(), max_iter),
             steps: 0,
             warm: vec![0.0; qp.m()],
         }
     }
+}
+
+/// CGH steps allowed for one face solve: 20 × the system size (CG needs at
+/// most the size in exact arithmetic), but never more than 10·`max_iter`
+/// (so that `--max-iter` bounds the inner loops too) and at least 50.
+fn cgh_cap(dim: usize, max_iter: usize) -> usize {
+    (20 * dim + 200).min(max_iter.saturating_mul(10).max(50))
 }
 
 impl FaceSolver for CghSolver<'_> {
@@ -221,6 +356,12 @@ impl FaceSolver for CghSolver<'_> {
 
     fn remove(&mut self, _pos: usize) {}
 
+    /// CGH on the symmetrically scaled system
+    /// `[[ΣCΣ, ΣA_JᵀT], [TA_JΣ, 0]] (x̃, μ) = (Σr, Te)`, x = Σx̃, λ = Tμ: every
+    /// diagonal entry of ΣCΣ is 1 and every scaled row has norm 1, whatever
+    /// the stiffness of the body a DOF belongs to. Without it the soft body's
+    /// part of the residual sat below the stiff body's rounding (the steel
+    /// punch on a soft foundation stalled at 1.6e-9 after 175 680 steps).
     fn solve(
         &mut self,
         r: &[f64],
@@ -231,59 +372,83 @@ impl FaceSolver for CghSolver<'_> {
         let qp = self.qp;
         let n = qp.n();
         let nj = jl.len();
-        let extra = &fk.free;
+        let sig = &self.sigma;
+        let tau = &self.tau;
+        // Extra rows: the free rigid motions v, scaled to Σv/‖Σv‖.
+        let extra: Vec<Vec<f64>> = fk
+            .free
+            .iter()
+            .map(|w| {
+                let v: Vec<f64> = w.iter().zip(sig).map(|(a, s)| a * s).collect();
+                let nv = norm(&v);
+                v.iter().map(|a| a / nv.max(f64::MIN_POSITIVE)).collect()
+            })
+            .collect();
         let dim = n + nj + extra.len();
-        let s = self.s;
-        // Extra rows v (unit) are scaled like a row of A.
-        let amax = self.amax;
         let mut f = vec![0.0; dim];
-        f[..n].copy_from_slice(r);
-        for (fi, ei) in f[n..n + nj].iter_mut().zip(e) {
-            *fi = s * ei;
+        for ((fi, ri), si) in f[..n].iter_mut().zip(r).zip(sig) {
+            *fi = ri * si;
+        }
+        for ((fi, ei), &j) in f[n..n + nj].iter_mut().zip(e).zip(jl) {
+            *fi = tau[j] * ei;
         }
         let mut y = vec![0.0; dim];
         for (yi, &j) in y[n..n + nj].iter_mut().zip(jl) {
-            *yi = self.warm[j] / s;
+            *yi = self.warm[j] / tau[j];
         }
+        let mut tmp = vec![0.0; n];
         let mut apply = |v: &[f64], out: &mut [f64]| {
             let (vx, vm) = v.split_at(n);
             let (ox, om) = out.split_at_mut(n);
-            qp.c.mul_vec(vx, ox);
+            for ((t, a), s) in tmp.iter_mut().zip(vx).zip(sig) {
+                *t = a * s;
+            }
+            qp.c.mul_vec(&tmp, ox);
             for (t, &j) in jl.iter().enumerate() {
-                let mu = vm[t];
+                let mu = vm[t] * tau[j];
                 let (c, a) = qp.a.row(j);
                 let mut acc = 0.0;
                 for (&k, &aa) in c.iter().zip(a) {
                     if mu != 0.0 {
-                        ox[k] += s * aa * mu;
+                        ox[k] += aa * mu;
                     }
-                    acc += aa * vx[k];
+                    acc += aa * tmp[k];
                 }
-                om[t] = s * acc;
+                om[t] = tau[j] * acc;
+            }
+            for (o, s) in ox.iter_mut().zip(sig) {
+                *o *= s;
             }
             for (t, w) in extra.iter().enumerate() {
                 let mu = vm[nj + t];
                 if mu != 0.0 {
-                    axpy(s * amax * mu, w, ox);
+                    axpy(mu, w, ox);
                 }
-                om[nj + t] = s * amax * dot(w, vx);
+                om[nj + t] = dot(w, vx);
             }
         };
         let o = CghOptions {
             tol: self.tol,
             eps_s: 1e-4,
-            max_iter: 20 * dim + 200,
+            max_iter: self.max_steps.min(20 * dim + 200),
         };
         let res = cgh(&mut apply, &f, &mut y, &o);
         match res {
             Ok(k) => self.steps += k,
             Err(msg) => return Err(format!("asm-cgh, working set of {nj} rows: {msg}")),
         }
-        let lam: Vec<f64> = y[n..n + nj].iter().map(|m| s * m).collect();
+        let lam: Vec<f64> = y[n..n + nj]
+            .iter()
+            .zip(jl)
+            .map(|(m, &j)| tau[j] * m)
+            .collect();
         for (&j, &l) in jl.iter().zip(&lam) {
             self.warm[j] = l;
         }
         y.truncate(n);
+        for (yi, s) in y.iter_mut().zip(sig) {
+            *yi *= s;
+        }
         Ok((y, lam))
     }
 

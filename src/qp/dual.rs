@@ -71,7 +71,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         solves: 1,
         cg_steps: 0,
     };
-    let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("dual"));
+    let mut exec = Executor::for_opts(opts, "dual");
     let (status, iters) = exec.run(&mut st);
     // x = C⁻¹(d − Aᵀλ)
     let mut x = qp.d.clone();

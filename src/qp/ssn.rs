@@ -246,7 +246,7 @@ pub(crate) fn solve_traced(
     if !augmented {
         st.ensure_dense()?;
     }
-    let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("ssn"));
+    let mut exec = Executor::for_opts(opts, "ssn");
     let (status, iters) = exec.run(&mut st);
     if let Some(e) = st.error.take() {
         return Err(e);

@@ -88,7 +88,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         lam_x: vec![0.0; qp.m()],
         solves: 0,
     };
-    let mut exec = Executor::new(opts.max_iter, opts.progress.then_some("uzawa"));
+    let mut exec = Executor::for_opts(opts, "uzawa");
     let (status, iters) = exec.run(&mut st);
     let t_it = t2.elapsed().as_secs_f64();
     let active: Vec<bool> = st.lam_x.iter().map(|&l| l > 0.0).collect();
