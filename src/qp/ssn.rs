@@ -306,46 +306,11 @@ impl Costs {
     }
 }
 
-/// The KKT certificate (the definition of issue 11, to be computed by
-/// `kkt::residuals` once it lands there): with r = Cx − d + Aᵀλ,
-/// S = max(‖d‖, ‖Cx‖, ‖Aᵀλ‖) and Γ the unknowns touched by A, the largest of
-/// stationarity max(‖r‖/S, ‖r_Γ‖/max(‖Aᵀλ‖, 1e-4·S)),
-/// primal max((Ax − g)⁺)/max(‖x‖∞, ‖g‖∞), dual max((−λ)⁺)/‖λ‖∞ and
-/// complementarity Σ|λᵢ||(Ax − g)ᵢ| / (‖λ‖₁·max(‖x‖∞, ‖g‖∞)); a zero scale
-/// leaves the residual absolute. +∞ if anything is not finite.
+/// The largest KKT residual of (x, λ) as the driver computes it
+/// ([`super::kkt::residuals`], docs/methods.md §8.4); +∞ if anything is not finite.
 pub(crate) fn certificate(qp: &QpProblem, x: &[f64], lam: &[f64]) -> f64 {
-    let rel = |a: f64, s: f64| if s > 0.0 { a / s } else { a };
-    let cx = qp.c.mul(x);
-    let mut atl = vec![0.0; qp.n()];
-    qp.a.mul_t_add(lam, &mut atl);
-    let r: Vec<f64> = (0..qp.n()).map(|i| cx[i] - qp.d[i] + atl[i]).collect();
-    let s = norm(&qp.d).max(norm(&cx)).max(norm(&atl));
-    let mut gamma = vec![false; qp.n()];
-    for &k in &qp.a.indices {
-        gamma[k] = true;
-    }
-    let rg = (0..qp.n())
-        .filter(|&i| gamma[i])
-        .map(|i| r[i] * r[i])
-        .sum::<f64>()
-        .sqrt();
-    let stat = rel(norm(&r), s).max(rel(rg, norm(&atl).max(1e-4 * s)));
-    let ax = qp.a.mul(x);
-    let xs = norm_inf(x).max(norm_inf(&qp.g));
-    let viol: Vec<f64> = ax.iter().zip(&qp.g).map(|(a, g)| a - g).collect();
-    let primal = rel(viol.iter().fold(0.0f64, |m, v| m.max(*v)), xs);
-    let dual = rel(lam.iter().fold(0.0f64, |m, l| m.max(-l)), norm_inf(lam));
-    let l1: f64 = lam.iter().map(|l| l.abs()).sum();
-    let comp = rel(
-        lam.iter().zip(&viol).map(|(l, v)| (l * v).abs()).sum(),
-        l1 * xs,
-    );
-    let all = [stat, primal, dual, comp];
-    if all.iter().all(|v| v.is_finite()) && x.iter().chain(lam).all(|v| v.is_finite()) {
-        all.iter().fold(0.0f64, |m, v| m.max(*v))
-    } else {
-        f64::INFINITY
-    }
+    // ssn refines until its answer passes the test the driver applies.
+    super::kkt::residuals(qp, x, lam).max()
 }
 
 /// K = C + AᵀA on one pattern: the values of C, and for every row j of A the
