@@ -253,7 +253,8 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         let staged = pipeline::output_paths(&sdir, &name, multi.then_some(s + 1));
         let mut problem_s = prep.problem.clone();
         problem_s.file = file.at_step(s);
-        let mut step = post::step_output(model_ref, &problem_s, &res, file.step_time(s));
+        let (mut step, forces) =
+            post::step_output_with_forces(model_ref, &problem_s, &res, file.step_time(s));
         step.info.method = method.clone();
         step.info.preconditioner = preconditioner_label(&method, &opts);
         step.info.time_assemble = t_assemble;
@@ -358,9 +359,9 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
             write: t_write,
             total: 0.0,
         };
-        final_state = Some((model, res, step, out, timings));
+        final_state = Some((model, res, step, forces, out, timings));
     }
-    let Some((model, res, step, out, mut timings)) = final_state else {
+    let Some((model, res, step, forces, out, mut timings)) = final_state else {
         // Unreachable: first < last, so the loop ran at least once.
         return bad_input(&"no load step was solved");
     };
@@ -375,6 +376,7 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         &method,
         &step.info.preconditioner,
         &step,
+        &forces,
         &timings,
         certified,
         a.solver.kkt_target,
@@ -474,6 +476,7 @@ pub fn summary_json(
     method: &str,
     pc: &str,
     step: &crate::io::StepOutput,
+    fo: &post::forces::Forces,
     t: &Timings,
     certified: bool,
     target: f64,
@@ -484,13 +487,6 @@ pub fn summary_json(
     }
     let max_p = step.contact_pressure.iter().fold(0.0f64, |a, b| a.max(*b));
     let total: f64 = step.multipliers.iter().sum();
-    let fo = post::forces::compute(
-        m,
-        &prep.problem,
-        &step.displacement,
-        &step.multipliers,
-        &step.contact_pressure,
-    );
     let reactions: serde_json::Map<String, serde_json::Value> =
         fo.groups.iter().map(|g| (g.on.clone(), json!(g))).collect();
     let interfaces: serde_json::Map<String, serde_json::Value> = fo

@@ -42,6 +42,17 @@ pub fn out_mesh(model: &Model, mesh: &crate::mesh::Mesh) -> OutMesh {
 
 /// Fields of one solved step.
 pub fn step_output(model: &Model, problem: &Problem, res: &QpResult, time: f64) -> StepOutput {
+    step_output_with_forces(model, problem, res, time).0
+}
+
+/// [`step_output`] and the forces it computed (reactions per group, contact
+/// resultants per interface) for the summary: one pass over the elements.
+pub fn step_output_with_forces(
+    model: &Model,
+    problem: &Problem,
+    res: &QpResult,
+    time: f64,
+) -> (StepOutput, forces::Forces) {
     let t = &model.topo;
     let u = model.displacements(&res.x);
     let f = &problem.file;
@@ -86,10 +97,10 @@ pub fn step_output(model: &Model, problem: &Problem, res: &QpResult, time: f64) 
             r.gap0 - s
         })
         .collect::<Vec<f64>>();
-    let forces = forces::compute(model, problem, &u, &multipliers, &contact_pressure);
-    StepOutput {
+    let mut forces = forces::compute(model, problem, &u, &multipliers, &contact_pressure);
+    let step = StepOutput {
         time,
-        reaction: forces.point_reaction,
+        reaction: std::mem::take(&mut forces.point_reaction),
         von_mises: stress.iter().map(element::von_mises).collect(),
         principal: stress.iter().map(element::principal).collect(),
         stress,
@@ -108,7 +119,8 @@ pub fn step_output(model: &Model, problem: &Problem, res: &QpResult, time: f64) 
             kkt_stationarity: res.kkt.stationarity,
             ..Default::default()
         },
-    }
+    };
+    (step, forces)
 }
 
 /// The point nearest to (x, y).
