@@ -449,9 +449,16 @@ impl Cgc<'_> {
             let pdp: f64 = p.iter().zip(&self.cdiag).map(|(v, c)| v * v * c).sum();
             return a2 <= 1e-14 * pdp;
         }
+        // ‖p − RRᵀp‖² = ‖p‖² − Σ(zᵀp)² (R orthonormal): enough to rule out
+        // span R without an n-vector per CG step; the explicit projection only
+        // when that difference is too small to trust.
+        let coef: Vec<f64> = self.kernel.iter().map(|z| dot(z, p)).collect();
+        if pp - coef.iter().map(|c| c * c).sum::<f64>() > 1e-8 * pp {
+            return false;
+        }
         let mut rest = p.to_vec();
-        for z in &self.kernel {
-            axpy(-dot(z, p), z, &mut rest);
+        for (z, c) in self.kernel.iter().zip(&coef) {
+            axpy(-c, z, &mut rest);
         }
         dot(&rest, &rest) <= 1e-16 * pp
     }
