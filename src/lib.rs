@@ -1,23 +1,24 @@
 //! signorini: frictionless multibody contact of elastic bodies in 2D by P1
 //! finite elements, with a choice of quadratic-programming methods.
 //!
-//! Two layers with one seam: `mesh`/`model`/`fem`/`post` turn a Gmsh mesh and
+//! Two layers with one seam: `mesh`/`problem`/`fem`/`post` turn a Gmsh mesh and
 //! a TOML problem into a [`qp::QpProblem`] (plus maps back to the nodes);
 //! `qp` solves it without knowing about meshes.
 
 pub mod cli;
 pub mod fem;
 pub mod io;
+pub mod linalg;
 pub mod mesh;
-pub mod model;
 pub mod pipeline;
 pub mod post;
+pub mod problem;
 pub mod qp;
 
 /// The shipped examples (`meshes/*.toml`, sorted) loaded with their meshes:
 /// the inputs of the unit tests that run over every model.
 #[cfg(test)]
-pub(crate) fn shipped_examples() -> Vec<(std::path::PathBuf, model::Problem, mesh::Mesh)> {
+pub(crate) fn shipped_examples() -> Vec<(std::path::PathBuf, problem::Problem, mesh::Mesh)> {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes");
     let mut tomls: Vec<_> = std::fs::read_dir(&dir)
         .expect("meshes/")
@@ -29,7 +30,7 @@ pub(crate) fn shipped_examples() -> Vec<(std::path::PathBuf, model::Problem, mes
     tomls
         .into_iter()
         .map(|p| {
-            let problem = model::Problem::load(&p).unwrap_or_else(|e| panic!("{e}"));
+            let problem = problem::Problem::load(&p).unwrap_or_else(|e| panic!("{e}"));
             let mesh = mesh::read_msh(&problem.mesh_path()).unwrap_or_else(|e| panic!("{e}"));
             (p, problem, mesh)
         })

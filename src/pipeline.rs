@@ -4,8 +4,8 @@
 use crate::fem::{self, Model};
 use crate::io::{self, IoError, OutMesh, StepOutput};
 use crate::mesh::{self, Mesh};
-use crate::model::Problem;
 use crate::post;
+use crate::problem::Problem;
 use crate::qp::{precond::PrecondKind, registry, QpResult, SolveOptions, Status};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -14,7 +14,7 @@ use std::time::Instant;
 #[derive(Debug, thiserror::Error)]
 pub enum InputError {
     #[error(transparent)]
-    Model(#[from] crate::model::ModelError),
+    Model(#[from] crate::problem::ModelError),
     #[error(transparent)]
     Mesh(#[from] mesh::MeshError),
     #[error(transparent)]
@@ -84,7 +84,7 @@ fn check_contact_groups(problem: &Problem, mesh: &Mesh) -> Result<(), InputError
                         msg: format!(
                             "[[contact]] #{}: the physical group \"{}\" in {} has no elements, so it would give no contact constraint",
                             i + 1,
-                            crate::model::shorten(name),
+                            crate::problem::shorten(name),
                             mesh.path.display()
                         ),
                     });
@@ -121,7 +121,7 @@ fn check_probes(problem: &Problem, model: &Model) -> Result<(), InputError> {
                 path: problem.path.clone(),
                 msg: format!(
                     "[output] probe {}: ({:e}, {:e}) lies {dist:.3e} from the nearest node, outside the mesh ([{:e}, {:e}] x [{:e}, {:e}])",
-                    crate::model::shorten(name),
+                    crate::problem::shorten(name),
                     x[0],
                     x[1],
                     lo[0],
@@ -340,7 +340,7 @@ pub fn solve_model(
         // direction r (Cr = 0 per body, Ar ≤ 0, dᵀr > 0), scaled to a largest
         // component of 1; described per body as the rigid motion it is.
         let u = model.motions(direction);
-        let work = crate::qp::sparse::dot(&model.qp.d, direction);
+        let work = crate::linalg::sparse::dot(&model.qp.d, direction);
         return Err(bad(format!(
             "the problem is unbounded: {} can move as a rigid body without closing any contact, and the loads do positive work on it (dᵀr = {work:.4e} J for a motion of 1 m; a body pulled away from its support, methods.md §1.7)",
             model.describe_rigid_motion(&u)

@@ -3,7 +3,7 @@
 //! kernel is the kernel; `signorini limit` solves C x = d.
 
 use signorini::io::mtx;
-use signorini::qp::sparse::{dot, norm, norm_inf};
+use signorini::linalg::sparse::{dot, norm, norm_inf};
 use std::path::Path;
 use std::process::Command;
 

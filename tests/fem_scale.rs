@@ -17,7 +17,7 @@
 //!   (C and d to 1e-12 relative, A and g exactly).
 
 use signorini::mesh::read_msh;
-use signorini::model::Problem;
+use signorini::problem::Problem;
 use signorini::qp::{Csr, QpProblem};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};

@@ -15,8 +15,8 @@
 //! written to a kept temporary directory, named in the failure message.
 
 use signorini::mesh::{gmsh, Mesh};
-use signorini::model::Problem;
 use signorini::pipeline::{self, SolverChoice};
+use signorini::problem::Problem;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::time::Instant;

@@ -530,7 +530,7 @@ fn tolerances(method: &str, c: &Cell) -> (f64, f64) {
     if method == "penalty" {
         (
             (10.0 * c.primal.unwrap_or(f64::INFINITY)).max(AGREE),
-            (100.0 / signorini::qp::penalty::PENALTY_FACTOR).max(AGREE),
+            (100.0 / signorini::qp::primal::penalty::PENALTY_FACTOR).max(AGREE),
         )
     } else {
         (AGREE, AGREE)

@@ -11,7 +11,7 @@
 //! to 10⁻⁸ relative.
 
 use signorini::mesh::Mesh;
-use signorini::model::Problem;
+use signorini::problem::Problem;
 use signorini::qp::precond::PrecondKind;
 use signorini::qp::{registry, SolveOptions};
 use std::path::{Path, PathBuf};

@@ -8,8 +8,8 @@
 //! and asm-cgh exited 3 on `wedge_slip_stiff`, `wedge_point_soft` and
 //! `punch` (CGH stalled on the unscaled KKT system).
 
+use signorini::linalg::sparse::norm;
 use signorini::pipeline;
-use signorini::qp::sparse::norm;
 use signorini::qp::{kkt, registry, QpProblem, SolveOptions};
 use std::path::PathBuf;
 

@@ -162,12 +162,13 @@ fn restart_from_a_foreign_checkpoint_is_bad_input() {
 }
 
 /// C is the same in every load step: the later steps reuse the numeric
-/// Cholesky factor of the first (qp::factor cache), and the answer is the
+/// Cholesky factor of the first (linalg::cholesky cache), and the answer is the
 /// one a fresh factorization gives.
 #[test]
 fn load_steps_reuse_the_factorization() {
+    use signorini::linalg::cholesky as factor;
     use signorini::pipeline;
-    use signorini::qp::{factor, registry, SolveOptions};
+    use signorini::qp::{registry, SolveOptions};
     let prep = pipeline::prepare(std::path::Path::new(&example()), false).unwrap();
     let opts = SolveOptions::default();
     factor::clear_cache();

@@ -7,7 +7,7 @@
 //! foundation, stiffness contrast 4200 and 1000, non-matching contact).
 
 use signorini::fem::Model;
-use signorini::model::Problem;
+use signorini::problem::Problem;
 use signorini::qp::{registry, SolveOptions, Status};
 use std::path::PathBuf;
 

@@ -141,7 +141,7 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
             Err(e) => Err(e.to_string()),
             Ok((m, mut opts)) => {
                 // Each method pays for its own factorization.
-                crate::qp::factor::clear_cache();
+                crate::linalg::cholesky::clear_cache();
                 opts.progress = !quiet;
                 opts.label = Some(label.clone());
                 opts.deadline = a
@@ -235,7 +235,7 @@ pub fn table_json(
 ) -> serde_json::Value {
     let penalty_lambda_tol = match penalty_eps {
         Some(e) => 100.0 * e * model.qp.c.diag().iter().fold(0.0f64, |a, b| a.max(*b)),
-        None => 100.0 / crate::qp::penalty::PENALTY_FACTOR,
+        None => 100.0 / crate::qp::primal::penalty::PENALTY_FACTOR,
     };
     let certified = |r: &Row, q: &QpResult| {
         q.status.converged() && registry::certified(&r.method, &q.kkt, kkt_target, false)

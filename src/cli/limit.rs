@@ -1,13 +1,13 @@
 //! `signorini limit model.toml`: what a contact solve is measured against in
 //! the benchmark: one sparse Cholesky factorization of C and one solve
 //! C x = d, on the same assembled C the methods see (with the fixing-DOF
-//! springs of `qp::factor` when a body floats, so it is defined for
+//! springs of `linalg::cholesky` when a body floats, so it is defined for
 //! semicoercive C; that regularisation costs nothing extra).
 //! Prints one JSON line with the phase times.
 
 use super::solve::{bad_input, EXIT_BAD_INPUT};
+use crate::linalg::cholesky::Cholesky;
 use crate::pipeline;
-use crate::qp::factor::Cholesky;
 use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
@@ -49,8 +49,8 @@ pub fn run(a: &LimitArgs, _quiet: bool) -> i32 {
         if qp.kernel.is_empty() {
             let cx = qp.c.mul(&x);
             let r: Vec<f64> = cx.iter().zip(&qp.d).map(|(a, b)| a - b).collect();
-            residual =
-                crate::qp::sparse::norm(&r) / crate::qp::sparse::norm(&qp.d).max(f64::MIN_POSITIVE);
+            residual = crate::linalg::sparse::norm(&r)
+                / crate::linalg::sparse::norm(&qp.d).max(f64::MIN_POSITIVE);
         }
     }
     let med = |v: &mut Vec<f64>| {

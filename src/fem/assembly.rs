@@ -12,8 +12,9 @@
 use super::element;
 use super::topology::Topology;
 use super::FemError;
+use crate::linalg::dense::sym_eigen;
 use crate::mesh::Mesh;
-use crate::model::{Plane, Problem};
+use crate::problem::{Plane, Problem};
 use crate::qp::{Csr, QpProblem};
 
 /// Per-point elimination: u = u0 + T ξ with `ndof` columns of T used.
@@ -355,7 +356,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
 
     lap.lap("elimination");
     // --- stiffness and body force
-    let mats: Vec<&crate::model::Material> = topo
+    let mats: Vec<&crate::problem::Material> = topo
         .material_names
         .iter()
         .map(|m| &f.materials[m])
@@ -1405,61 +1406,6 @@ fn check_semicoercive(m: &Model, problem: &Problem) -> Result<(), FemError> {
     Ok(())
 }
 
-/// Symmetric eigen-decomposition of a small dense matrix (cyclic Jacobi).
-pub fn sym_eigen(a: &[Vec<f64>]) -> (Vec<f64>, Vec<Vec<f64>>) {
-    let n = a.len();
-    let mut a: Vec<Vec<f64>> = a.to_vec();
-    let mut v: Vec<Vec<f64>> = (0..n)
-        .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
-        .collect();
-    for _ in 0..100 {
-        let mut off = 0.0;
-        let mut diag = 0.0;
-        for i in 0..n {
-            diag += a[i][i].abs();
-            for j in i + 1..n {
-                off += a[i][j].abs();
-            }
-        }
-        if off <= 1e-15 * diag.max(1e-300) {
-            break;
-        }
-        for p in 0..n {
-            for q in p + 1..n {
-                if a[p][q].abs() < 1e-300 {
-                    continue;
-                }
-                let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-                let t = if theta == 0.0 {
-                    1.0
-                } else {
-                    theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt())
-                };
-                let c = 1.0 / (t * t + 1.0).sqrt();
-                let s = t * c;
-                for k in 0..n {
-                    let (akp, akq) = (a[k][p], a[k][q]);
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
-                }
-                for k in 0..n {
-                    let (apk, aqk) = (a[p][k], a[q][k]);
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
-                }
-                for row in v.iter_mut() {
-                    let (vp, vq) = (row[p], row[q]);
-                    row[p] = c * vp - s * vq;
-                    row[q] = s * vp + c * vq;
-                }
-            }
-        }
-    }
-    let vals = (0..n).map(|i| a[i][i]).collect();
-    let vecs = (0..n).map(|k| (0..n).map(|i| v[i][k]).collect()).collect();
-    (vals, vecs)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1530,7 +1476,7 @@ mod tests {
                 Plane::Stress => f.model.thickness,
                 Plane::Strain => 1.0,
             };
-            let mats: Vec<&crate::model::Material> = m
+            let mats: Vec<&crate::problem::Material> = m
                 .topo
                 .material_names
                 .iter()

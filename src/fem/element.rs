@@ -1,7 +1,7 @@
 //! The P1 element of methods.md §1.4 and §2.2: material matrix D, strain
 //! matrix B, element stiffness C_e = t_h|T| BᵀDB, stresses τ̄ = D B x_e.
 
-use crate::model::{Material, Plane};
+use crate::problem::{Material, Plane};
 
 /// D for ē = (e11, e22, 2e12) (methods.md §1.4).
 pub fn d_matrix(m: &Material, plane: Plane) -> [[f64; 3]; 3] {

@@ -8,7 +8,7 @@
 
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::model::{NormalKind, Problem};
+use crate::problem::{NormalKind, Problem};
 use std::collections::HashMap;
 
 /// How a contact row couples points: n·(u_first − u_second) ≤ g (conforming,

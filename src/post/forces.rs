@@ -11,7 +11,7 @@
 //! moments are about the origin, m = x F_y − y F_x at the undeformed point.
 
 use crate::fem::{element, Model};
-use crate::model::Problem;
+use crate::problem::Problem;
 
 /// A force resultant and its moment about the origin.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
@@ -87,8 +87,8 @@ fn internal_forces(model: &Model, problem: &Problem, u: &[[f64; 2]]) -> Vec<[f64
     let t = &model.topo;
     let f = &problem.file;
     let th = match model.plane {
-        crate::model::Plane::Stress => model.thickness,
-        crate::model::Plane::Strain => 1.0,
+        crate::problem::Plane::Stress => model.thickness,
+        crate::problem::Plane::Strain => 1.0,
     };
     let dmats: Vec<[[f64; 3]; 3]> = t
         .material_names

@@ -7,7 +7,7 @@ pub mod plot;
 
 use crate::fem::{element, Model};
 use crate::io::{ContactGeometry, OutMesh, StepInfo, StepOutput};
-use crate::model::Problem;
+use crate::problem::Problem;
 use crate::qp::QpResult;
 
 /// The output mesh of a model (geometry only; no solution).
@@ -35,7 +35,7 @@ pub fn out_mesh(model: &Model, mesh: &crate::mesh::Mesh) -> OutMesh {
         triangles: t.triangles.clone(),
         material: t.tri_material.clone(),
         material_names: t.material_names.clone(),
-        plane_strain: model.plane == crate::model::Plane::Strain,
+        plane_strain: model.plane == crate::problem::Plane::Strain,
         contact,
     }
 }

@@ -2,7 +2,7 @@
 //! implements one iteration ([`Iterative::step`]); the [`Executor`] owns the
 //! MAXIT test, NaN/stagnation guards, the iteration log and progress output.
 
-use super::{IterRecord, Status};
+use crate::qp::{IterRecord, Status};
 use std::time::{Duration, Instant};
 
 /// What one iteration reports.
@@ -101,7 +101,7 @@ impl Executor {
 
     /// The executor of method `name` for `opts`: MAXIT, the deadline and a
     /// progress bar labelled with `opts.label` (or `name`).
-    pub fn for_opts(opts: &super::SolveOptions, name: &str) -> Executor {
+    pub fn for_opts(opts: &crate::qp::SolveOptions, name: &str) -> Executor {
         let label = opts.label.clone().unwrap_or_else(|| name.to_string());
         let mut e = Executor::new(opts.max_iter, opts.progress.then_some(label.as_str()));
         e.deadline = opts.deadline;

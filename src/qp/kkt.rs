@@ -11,8 +11,8 @@
 //! NaN or Inf anywhere (x, λ, a residual) makes every residual infinite:
 //! such an answer is never certified.
 
-use super::sparse::{norm, norm_inf};
-use super::{Kkt, QpProblem};
+use crate::linalg::sparse::{norm, norm_inf};
+use crate::qp::{Kkt, QpProblem};
 
 /// Floor of the contact-force scale, relative to the load scale: contact
 /// forces below 10⁻⁴ of the loads are measured against 10⁻⁴ of the loads.

@@ -15,26 +15,19 @@
 //! This layer knows nothing of meshes: `fem` builds a [`QpProblem`], every method
 //! returns a [`QpResult`]. A method is one file and one line in [`registry`].
 
-pub mod asm;
-pub mod asm_cgh;
-pub mod cgc;
+pub mod active_set;
 pub mod dual;
 pub mod executor;
-pub mod factor;
 pub mod kkt;
-pub mod mprgp;
-pub mod penalty;
 pub mod precond;
-pub mod preelim;
+pub mod primal;
 pub mod recession;
 pub mod registry;
-pub mod sparse;
 pub mod ssn;
 #[cfg(test)]
 mod tests_methods;
-pub mod uzawa;
 
-pub use sparse::Csr;
+pub use crate::linalg::sparse::{self, Csr};
 
 /// min ½xᵀCx − xᵀd subject to Ax ≤ g  (methods.md §2.8 with b = g).
 #[derive(Debug, Clone, Default)]

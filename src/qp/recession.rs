@@ -25,8 +25,8 @@
 //! zero curvature; (Ar)ᵢ ≤ 10⁻⁹·Σⱼ|Aᵢⱼrⱼ| for every row; and
 //! dᵀr > 10⁻⁹·Σⱼ|dⱼrⱼ|.
 
-use super::sparse::{dot, norm, Csr};
-use super::QpProblem;
+use crate::linalg::sparse::{dot, norm, Csr};
+use crate::qp::QpProblem;
 
 /// Relative tolerance of Cr = 0 per block (in the block's stiffness scale).
 const CURVATURE_TOL: f64 = 1e-8;

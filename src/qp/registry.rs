@@ -1,7 +1,7 @@
 //! The list of methods. Adding a method = one file in `qp/` + one line here.
 
-use super::recession::{self, Boundedness};
-use super::{kkt, Kkt, QpError, QpProblem, QpResult, SolveOptions, Status};
+use crate::qp::recession::{self, Boundedness};
+use crate::qp::{kkt, Kkt, QpError, QpProblem, QpResult, SolveOptions, Status};
 
 pub type SolveFn = fn(&QpProblem, &SolveOptions) -> Result<QpResult, QpError>;
 
@@ -18,55 +18,55 @@ pub const METHODS: &[MethodInfo] = &[MethodInfo {
     name: "cgc",
     summary: "conjugate gradients with constraints (§4.1), preconditioned (§4.2)",
     preconditioned: true,
-    solve: super::cgc::solve,
+    solve: crate::qp::primal::cgc::solve,
 },
 MethodInfo {
     name: "preelim",
     summary: "pre-elimination: dense Schur complement onto the contact DOFs, then CGC (§4.3)",
     preconditioned: false,
-    solve: super::preelim::solve,
+    solve: crate::qp::primal::preelim::solve,
 },
 MethodInfo {
     name: "penalty",
     summary: "exterior penalty with Gauss–Seidel/SOR relaxation (§4.4)",
     preconditioned: false,
-    solve: super::penalty::solve,
+    solve: crate::qp::primal::penalty::solve,
 },
 MethodInfo {
     name: "uzawa",
     summary: "Uzawa's method with Cholesky inner solves (§4.5)",
     preconditioned: false,
-    solve: super::uzawa::solve,
+    solve: crate::qp::dual::uzawa::solve,
 },
 MethodInfo {
     name: "dual",
     summary: "CGC on the dual functional, H applied through a Cholesky factor (§4.6)",
     preconditioned: false,
-    solve: super::dual::solve,
+    solve: crate::qp::dual::solve,
 },
 MethodInfo {
     name: "asm",
     summary: "active set method, KKT systems by Schur-complement elimination (ASM-E, §4.7)",
     preconditioned: false,
-    solve: super::asm::solve,
+    solve: crate::qp::active_set::solve,
 },
 MethodInfo {
     name: "asm-cgh",
     summary: "active set method, KKT systems by CG with hyperbolic pairs (§4.8)",
     preconditioned: false,
-    solve: super::asm_cgh::solve,
+    solve: crate::qp::active_set::cgh::solve,
 },
 MethodInfo {
     name: "mprgp",
     summary: "MPRGP on the dual, H through one Cholesky factor; SMALBE for floating bodies (§7)",
     preconditioned: false,
-    solve: super::mprgp::solve,
+    solve: crate::qp::dual::mprgp::solve,
 },
 MethodInfo {
     name: "ssn",
     summary: "semismooth Newton / primal–dual active set, Schur complement with one Cholesky factor (§7)",
     preconditioned: false,
-    solve: super::ssn::solve,
+    solve: crate::qp::ssn::solve,
 }];
 
 pub fn find(name: &str) -> Option<&'static MethodInfo> {
@@ -231,8 +231,8 @@ pub fn check_warm_start(qp: &QpProblem, x0: &[f64]) -> Result<(), String> {
     }
     let cx = qp.c.mul(x0);
     let r: Vec<f64> = cx.iter().zip(&qp.d).map(|(c, d)| c - d).collect();
-    let dn = super::sparse::norm(&qp.d);
-    let rn = super::sparse::norm(&r);
+    let dn = crate::linalg::sparse::norm(&qp.d);
+    let rn = crate::linalg::sparse::norm(&r);
     if dn > 0.0 && rn > 1e12 * dn {
         return Err(format!(
             "its residual ‖Cx − d‖ is {rn:.3e}, {:.1e} times the loads",

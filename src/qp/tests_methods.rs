@@ -4,9 +4,9 @@
 //! contact row per pair of facing nodes, g = 0 and g > 0, coercive and
 //! semicoercive (a floating body resting in a V-shaped contact).
 
-use super::precond::PrecondKind;
-use super::sparse::{norm, norm_inf};
-use super::{cgc, registry, Csr, QpError, QpProblem, QpResult, SolveOptions, Status};
+use crate::linalg::sparse::{norm, norm_inf};
+use crate::qp::precond::PrecondKind;
+use crate::qp::{primal::cgc, registry, Csr, QpError, QpProblem, QpResult, SolveOptions, Status};
 
 #[derive(Clone, Copy, Debug)]
 enum Variant {
@@ -301,7 +301,7 @@ fn semicoercive_unbounded_is_detected() {
                     norm(&qp.c.mul(direction)) <= 1e-8 * norm(direction) * norm_inf(&qp.c.diag())
                 );
                 assert!(
-                    super::sparse::dot(direction, &qp.d) > 0.0,
+                    crate::linalg::sparse::dot(direction, &qp.d) > 0.0,
                     "{name}: not a descent direction"
                 );
             }
@@ -416,7 +416,7 @@ fn no_constraints() {
     let mut qp = two_bodies(Variant::Coercive { gaps: false });
     qp.a = Csr::zeros(0, qp.n());
     qp.g = vec![];
-    let x = super::factor::Cholesky::new(&qp.c, &[])
+    let x = crate::linalg::cholesky::Cholesky::new(&qp.c, &[])
         .unwrap()
         .solve(&qp.d);
     for name in ["preelim", "uzawa", "dual", "asm", "asm-cgh", "penalty"] {

@@ -1,8 +1,9 @@
 //! Complete Cholesky W = C (methods.md §4.2, the report's fastest), via faer;
-//! a semicoercive C is regularised along its kernel (see `qp::factor`).
+//! a semicoercive C is regularised along its kernel (see `linalg::cholesky`).
 
 use super::Preconditioner;
-use crate::qp::{factor::Cholesky, sparse::Csr, QpError};
+use crate::linalg::{cholesky::Cholesky, sparse::Csr};
+use crate::qp::QpError;
 
 pub struct CholeskyPc {
     pub factor: Cholesky,

@@ -98,7 +98,7 @@ pub fn build(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::qp::sparse::dot;
+    use crate::linalg::sparse::dot;
 
     /// A 2D 5-point Laplacian + identity shift: SPD, not diagonal.
     fn test_matrix(m: usize) -> Csr {

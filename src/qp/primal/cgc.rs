@@ -13,10 +13,10 @@
 //! One executor iteration = one visit of a face (FACE_CG until a face minimum,
 //! a new constraint, or KMAX steps); the CG steps are the inner iterations.
 
-use super::executor::{Executor, Iterative, Step};
-use super::precond::{self, Preconditioner};
-use super::sparse::{axpy, dot, norm, norm_inf};
-use super::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status, MAXVAL};
+use crate::linalg::sparse::{axpy, dot, norm, norm_inf};
+use crate::qp::executor::{Executor, Iterative, Step};
+use crate::qp::precond::{self, Preconditioner};
+use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status, MAXVAL};
 use std::time::Instant;
 
 /// Solve `qp` by CGC with the preconditioner of `opts`.
@@ -127,7 +127,7 @@ impl<'a> Cgc<'a> {
             .collect();
         let mut wd = vec![0.0; n];
         pc.apply(&qp.d, &mut wd);
-        let kernel = super::ssn::orthonormal_kernel(&qp.c, &qp.kernel).unwrap_or_default();
+        let kernel = crate::qp::ssn::orthonormal_kernel(&qp.c, &qp.kernel).unwrap_or_default();
         let mut st = Cgc {
             qp,
             pc,

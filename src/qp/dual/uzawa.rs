@@ -27,21 +27,21 @@
 //! (y − λ_new)ᵀ(λ_new − λ) > 0. Still one solve with the factor per step
 //! (θ' is affine, so θ'(y) is extrapolated from the last two gradients), the
 //! rate becomes 1 − O(1/√κ). This path runs on the shared dual host of
-//! [`super::mprgp`] ([`uzawa_step`]) with the stopping test on the projected
+//! [`crate::qp::dual::mprgp`] ([`uzawa_step`]) with the stopping test on the projected
 //! gradient: ‖θ'ᴾ‖ ≤ tol·‖h‖, then x is recovered from λ.
 //!
 //! **Semicoercive C**: the inner problem min_x f(x) + λᵀ(Ax − g) has a
 //! solution only if d − Aᵀλ ⟂ ker C (Gλ = e, G = RᵀAᵀ, e = Rᵀd); the rigid
 //! part of x is then the multiplier of that equality. It is enforced by the
-//! SMALBE-M loop of [`super::mprgp`] (with ρ_SMALBE = ‖PHP‖, so Uzawa's step
+//! SMALBE-M loop of [`crate::qp::dual::mprgp`] (with ρ_SMALBE = ‖PHP‖, so Uzawa's step
 //! ρ = 1/‖PHP‖ is not shortened), the Uzawa step being the inner solver.
 
-use super::asm::check_common;
-use super::executor::{Executor, Iterative, Step};
-use super::factor::Cholesky;
-use super::mprgp::{Inner, Mprgp};
-use super::sparse::{dot, norm, norm_inf};
-use super::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
+use crate::linalg::cholesky::Cholesky;
+use crate::linalg::sparse::{dot, norm, norm_inf};
+use crate::qp::active_set::check_common;
+use crate::qp::dual::mprgp::{Inner, Mprgp};
+use crate::qp::executor::{Executor, Iterative, Step};
+use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
 use std::time::Instant;
 
 /// The accelerated (SMALBE-hosted) Uzawa stops at UZAWA_MARGIN·tol.
@@ -70,7 +70,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
             tol: (opts.tol * UZAWA_MARGIN).max(f64::EPSILON).min(opts.tol),
             ..opts.clone()
         };
-        return super::mprgp::solve_with(qp, &tight, inner, "uzawa");
+        return crate::qp::dual::mprgp::solve_with(qp, &tight, inner, "uzawa");
     }
     let t0 = Instant::now();
     let chol = Cholesky::new(&qp.c, &[])?;

@@ -70,11 +70,11 @@
 //! Counts: `iterations` = MPRGP steps + SMALBE multiplier updates (one per
 //! executor step); `inner_iterations` = solves with the sparse factor.
 
-use super::executor::{Executor, Iterative, Step};
-use super::factor::Cholesky;
-use super::sparse::{axpy, dot, norm, norm_inf};
-use super::ssn::{check_dims, chol_backward, chol_factor, chol_forward, orthonormal_kernel};
-use super::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
+use crate::linalg::cholesky::Cholesky;
+use crate::linalg::sparse::{axpy, dot, norm, norm_inf};
+use crate::qp::executor::{Executor, Iterative, Step};
+use crate::qp::ssn::{check_dims, chol_backward, chol_factor, chol_forward, orthonormal_kernel};
+use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
 use std::time::Instant;
 
 /// Proportioning parameter Γ.
@@ -103,10 +103,10 @@ pub(crate) enum Inner {
     /// MPRGP (this file).
     Mprgp,
     /// The report's CGC on the bounds (Polyak: CG on the face, stop at a
-    /// blocking bound, release when the face is minimised), [`super::dual`].
+    /// blocking bound, release when the face is minimised), [`crate::qp::dual`].
     Polyak { multiple: bool },
     /// Uzawa's projected gradient step with fixed step ρ, optionally with
-    /// Nesterov momentum, [`super::uzawa`].
+    /// Nesterov momentum, [`crate::qp::dual::uzawa`].
     Uzawa { rho: Option<f64>, momentum: bool },
 }
 
@@ -139,7 +139,7 @@ pub(crate) fn solve_with(
         }
     }
     let sq = QpProblem {
-        c: super::Csr::zeros(0, 0),
+        c: crate::qp::Csr::zeros(0, 0),
         d: qp.d.clone(),
         a,
         g: qp.g.iter().zip(&s).map(|(g, s)| g * s).collect(),
@@ -721,8 +721,8 @@ impl Iterative for Mprgp<'_> {
         }
         let stepped = match self.inner {
             Inner::Mprgp => self.mprgp_step(),
-            Inner::Polyak { multiple } => super::dual::polyak_step(self, multiple),
-            Inner::Uzawa { momentum, .. } => super::uzawa::uzawa_step(self, momentum),
+            Inner::Polyak { multiple } => crate::qp::dual::polyak_step(self, multiple),
+            Inner::Uzawa { momentum, .. } => crate::qp::dual::uzawa::uzawa_step(self, momentum),
         };
         match stepped {
             Ok(()) => Step::Continue(self.record(r)),
@@ -863,7 +863,7 @@ pub(crate) mod partial_kernel {
     //! A keystone between two clamped blocks on two inclined contact faces:
     //! QPs whose kernel is a partial set of rigid motions (1 or 2 of 3), with
     //! a stiffness contrast between the keystone and the blocks.
-    use crate::qp::sparse::{norm, norm_inf};
+    use crate::linalg::sparse::{norm, norm_inf};
     use crate::qp::{registry, Csr, QpProblem, QpResult, SolveOptions};
 
     /// How the keystone is held apart from contact.

@@ -36,7 +36,7 @@
 //! as soon as J holds every floating body, and has the same sparsity
 //! pattern for every J (C + AᵀA, rows outside J with weight 0): each Newton
 //! step is one *numeric* refactorization on the symbolic analysis of the
-//! first ([`super::factor`] cache), plus a few solves. The system
+//! first ([`crate::linalg::cholesky`] cache), plus a few solves. The system
 //! `K_J x + A_Jᵀλ = d + ρA_Jᵀg_J, A_J x = g_J` has the same solution as the
 //! KKT system; its Schur complement S_ρ = A_J K_J⁻¹ A_Jᵀ = (H_J⁻¹ + ρI)⁻¹
 //! (H_J = A_J C⁻¹A_Jᵀ on range C) has condition number ≤ 1 + 1/(ρ·λ_min(H_J)),
@@ -134,10 +134,10 @@
 //! Counts: `iterations` = KKT solves; `inner_iterations` = solves with the
 //! sparse factor (one per cached column plus one for K⁻¹d).
 
-use super::executor::{Executor, Iterative, Step};
-use super::factor::{factor_cost, Cholesky};
-use super::sparse::{dot, norm, norm_inf, Csr};
-use super::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
+use crate::linalg::cholesky::{factor_cost, Cholesky};
+use crate::linalg::sparse::{dot, norm, norm_inf, Csr};
+use crate::qp::executor::{Executor, Iterative, Step};
+use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
 use std::collections::{HashMap, HashSet};
 use std::rc::Rc;
 use std::time::Instant;
@@ -307,10 +307,10 @@ impl Costs {
 }
 
 /// The largest KKT residual of (x, λ) as the driver computes it
-/// ([`super::kkt::residuals`], docs/methods.md §8.4); +∞ if anything is not finite.
+/// ([`crate::qp::kkt::residuals`], docs/methods.md §8.4); +∞ if anything is not finite.
 pub(crate) fn certificate(qp: &QpProblem, x: &[f64], lam: &[f64]) -> f64 {
     // ssn refines until its answer passes the test the driver applies.
-    super::kkt::residuals(qp, x, lam).max()
+    crate::qp::kkt::residuals(qp, x, lam).max()
 }
 
 /// K = C + AᵀA on one pattern: the values of C, and for every row j of A the
@@ -1406,7 +1406,7 @@ pub(crate) fn chol_solve(l: &[f64], n: usize, b: &mut [f64]) {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::qp::{cgc, kkt, precond::PrecondKind};
+    use crate::qp::{kkt, precond::PrecondKind, primal::cgc};
 
     /// Two square spring lattices (bars along the grid lines and both
     /// diagonals, 2 DOFs per node), the lower one clamped at its bottom row,
@@ -1661,9 +1661,9 @@ pub(crate) mod tests {
         for floating in [false, true] {
             let qp = two_blocks(12, 6, floating);
             let refr = reference(&qp);
-            let (_, s0) = crate::qp::factor::reuse_counts();
+            let (_, s0) = crate::linalg::cholesky::reuse_counts();
             let a = solve_with(&qp, &opts(), Path::Refactor).unwrap();
-            let (_, s1) = crate::qp::factor::reuse_counts();
+            let (_, s1) = crate::linalg::cholesky::reuse_counts();
             let u = solve_with(&qp, &opts(), Path::Augmented).unwrap();
             compare(&qp, &u, &refr, 1e-6);
             assert_eq!(a.active, u.active);
@@ -1818,7 +1818,7 @@ pub(crate) mod tests {
     #[test]
     fn growth_limit_computes_few_columns() {
         let qp = string_on_parabola(2001);
-        let refr = crate::qp::mprgp::solve(&qp, &opts()).unwrap();
+        let refr = crate::qp::dual::mprgp::solve(&qp, &opts()).unwrap();
         assert!(refr.status.converged(), "mprgp: {:?}", refr.status);
         let r = solve_with(&qp, &opts(), Path::Schur).unwrap();
         compare(&qp, &r, &refr, 1e-6);
@@ -1876,7 +1876,7 @@ pub(crate) mod tests {
             let refr = if ["floating_block", "two_blocks", "three_bodies"].contains(&name) {
                 reference(qp)
             } else {
-                let m = crate::qp::mprgp::solve(qp, &opts()).unwrap();
+                let m = crate::qp::dual::mprgp::solve(qp, &opts()).unwrap();
                 assert!(m.status.converged(), "{name}: mprgp {:?}", m.status);
                 m
             };
@@ -2057,7 +2057,7 @@ pub(crate) mod tests {
             let schur = solve_with(&qp, &o, Path::Schur).unwrap();
             assert!(schur.status.converged(), "{contrast:e}: {:?}", schur.status);
             nontrivial(&schur);
-            let asm = crate::qp::asm::solve(&qp, &o).unwrap();
+            let asm = crate::qp::active_set::solve(&qp, &o).unwrap();
             assert!(asm.status.converged(), "asm {contrast:e}: {:?}", asm.status);
             // Rounding floor: C x of the stiff body (a rigid motion plus a
             // deformation 1/contrast as large) is known to ε·contrast only,

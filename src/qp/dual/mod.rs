@@ -24,7 +24,7 @@
 //!
 //! **Semicoercive C** (non-empty `qp.kernel`): the dual carries the equality
 //! constraint Gλ = e, G = RᵀAᵀ, e = Rᵀd (TFETI). It is enforced by the same
-//! SMALBE-M outer loop as [`super::mprgp`] (homogenised bounds λ̂ ≥ −λ̃,
+//! SMALBE-M outer loop as [`crate::qp::dual::mprgp`] (homogenised bounds λ̂ ≥ −λ̃,
 //! generalised inverse of C by the spring factor), with the report's CGC on
 //! the bounds as the inner solver ([`polyak_step`]): CG on the free face; a
 //! step that would cross a bound stops on it and restarts CG; when the face
@@ -33,12 +33,15 @@
 //! are released (all at once, or the most negative with
 //! `multiple_release = false`) by an exact line search along them.
 
-use super::asm::check_common;
-use super::executor::{Executor, Iterative, Step};
-use super::factor::Cholesky;
-use super::mprgp::{Inner, Mprgp};
-use super::sparse::{axpy, dot, norm};
-use super::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
+pub mod mprgp;
+pub mod uzawa;
+
+use crate::linalg::cholesky::Cholesky;
+use crate::linalg::sparse::{axpy, dot, norm};
+use crate::qp::active_set::check_common;
+use crate::qp::dual::mprgp::{Inner, Mprgp};
+use crate::qp::executor::{Executor, Iterative, Step};
+use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
 use std::time::Instant;
 
 pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
@@ -47,7 +50,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         let inner = Inner::Polyak {
             multiple: opts.multiple_release,
         };
-        return super::mprgp::solve_with(qp, opts, inner, "dual");
+        return crate::qp::dual::mprgp::solve_with(qp, opts, inner, "dual");
     }
     let t0 = Instant::now();
     let chol = Cholesky::new(&qp.c, &[])?;

@@ -18,7 +18,7 @@
 //! changes (append a row: one solve with C; delete a row: Givens rotations).
 //!
 //! **Semicoercive C** (a basis R of ker C in `qp.kernel`): Z = (C + springs at
-//! fixing DOFs)⁻¹ is then a generalised inverse of C (`qp::factor`), and the
+//! fixing DOFs)⁻¹ is then a generalised inverse of C (`linalg::cholesky`), and the
 //! face problem is solved in the FETI way: δ = Z(r − A_Jᵀλ) + Rα with the
 //! solvability condition Rᵀ(r − A_Jᵀλ) = 0, i.e. the small saddle system
 //! `[[S, −G], [−Gᵀ, 0]] (λ, α) = (A_J Z r − e, −Rᵀr)`, G = A_J R. If a rigid
@@ -29,10 +29,12 @@
 //! v-component is taken). This loop (shared with ASM-CGH, `asm_cgh.rs`) does the
 //! rigid-motion bookkeeping; the [`FaceSolver`] only solves the face systems.
 
-use super::executor::{Executor, Iterative, Step};
-use super::factor::Cholesky;
-use super::sparse::{axpy, dot, norm, norm_inf};
-use super::{cgc, IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
+pub mod cgh;
+
+use crate::linalg::cholesky::Cholesky;
+use crate::linalg::sparse::{axpy, dot, norm, norm_inf};
+use crate::qp::executor::{Executor, Iterative, Step};
+use crate::qp::{primal::cgc, IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
 use std::time::Instant;
 
 /// Refuse problems with more constraints: the dense factor of S_J needs |J|²/2 numbers.

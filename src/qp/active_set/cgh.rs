@@ -33,11 +33,11 @@
 //! systems. Without a kernel a singular B_J shows up as a CGH breakdown or
 //! non-convergence: `Status::Failed`.
 
-use super::asm::{check_common, ActiveSet, FaceKernel, FaceSolver, SchurSolver};
-use super::executor::Executor;
-use super::factor::Cholesky;
-use super::sparse::{axpy, dot, norm};
-use super::{QpError, QpProblem, QpResult, SolveOptions};
+use crate::linalg::cholesky::Cholesky;
+use crate::linalg::sparse::{axpy, dot, norm};
+use crate::qp::active_set::{check_common, ActiveSet, FaceKernel, FaceSolver, SchurSolver};
+use crate::qp::executor::Executor;
+use crate::qp::{QpError, QpProblem, QpResult, SolveOptions};
 use std::time::Instant;
 
 /// Solve `qp` by the active set method with CGH inner solves.

@@ -16,8 +16,8 @@
 //! refactors numerically. `signorini compare` clears the cache between methods
 //! so that each pays for its own factorization.
 
-use super::sparse::Csr;
-use super::QpError;
+use crate::linalg::sparse::Csr;
+use crate::qp::QpError;
 use faer::linalg::solvers::SolveCore;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};

@@ -20,11 +20,11 @@
 //! C11 itself is singular the method refuses (`QpError::Unsupported`).
 //! More than [`MAX_P`] constrained DOFs are refused (dense P² storage).
 
-use super::asm::check_common;
-use super::factor::Cholesky;
-use super::precond::PrecondKind;
-use super::sparse::Csr;
-use super::{cgc, QpError, QpProblem, QpResult, SolveOptions, Status};
+use crate::linalg::cholesky::Cholesky;
+use crate::linalg::sparse::Csr;
+use crate::qp::active_set::check_common;
+use crate::qp::precond::PrecondKind;
+use crate::qp::{primal::cgc, QpError, QpProblem, QpResult, SolveOptions, Status};
 use std::time::Instant;
 
 /// Largest number of constrained DOFs for the dense Schur complement.

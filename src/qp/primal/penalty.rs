@@ -46,10 +46,10 @@
 //! and the penalised problem has a minimiser whenever the contact holds the
 //! floating bodies (otherwise the sweeps drift and MAXIT is reported).
 
-use super::asm::check_common;
-use super::executor::{Executor, Iterative, Step};
-use super::sparse::{norm, Csr};
-use super::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
+use crate::linalg::sparse::{norm, Csr};
+use crate::qp::active_set::check_common;
+use crate::qp::executor::{Executor, Iterative, Step};
+use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
 use std::time::Instant;
 
 /// Default ε_p = 1/(PENALTY_FACTOR · max diag C).
@@ -223,7 +223,7 @@ impl Relax<'_> {
         let n = qp.n();
         // K = C + A_JᵀA_J/ε on the fixed pattern of C + AᵀA (rows outside J
         // enter with weight 0), so every Newton step reuses the symbolic
-        // analysis of the first ([`super::factor`] cache).
+        // analysis of the first ([`crate::linalg::cholesky`] cache).
         let mut trip = Vec::with_capacity(qp.c.nnz() + 36 * qp.m());
         for i in 0..n {
             let (c, v) = qp.c.row(i);
@@ -244,17 +244,19 @@ impl Relax<'_> {
                 }
             }
         }
-        let k = super::sparse::Csr::from_triplets(n, n, &trip);
+        let k = crate::linalg::sparse::Csr::from_triplets(n, n, &trip);
         self.factorizations += 1;
         // A floating body J does not hold yet makes K singular: then the
         // spring-regularised K + S (fixing DOFs, [`Cholesky::new`]) still
         // gives a descent direction −(K + S)⁻¹∇g_ε.
-        let fac = match super::factor::Cholesky::new(&k, &[]) {
+        let fac = match crate::linalg::cholesky::Cholesky::new(&k, &[]) {
             Ok(f) => f,
-            Err(_) if !qp.kernel.is_empty() => match super::factor::Cholesky::new(&k, &qp.kernel) {
-                Ok(f) => f,
-                Err(_) => return false,
-            },
+            Err(_) if !qp.kernel.is_empty() => {
+                match crate::linalg::cholesky::Cholesky::new(&k, &qp.kernel) {
+                    Ok(f) => f,
+                    Err(_) => return false,
+                }
+            }
             Err(_) => return false,
         };
         let kx = k.mul(&self.x);
@@ -270,8 +272,8 @@ impl Relax<'_> {
         let dir: Vec<f64> = y.iter().zip(&self.x).map(|(a, b)| a - b).collect();
         let cx = qp.c.mul(&self.x);
         let cd = qp.c.mul(&dir);
-        let lin = super::sparse::dot(&cx, &dir) - super::sparse::dot(&qp.d, &dir);
-        let quad = super::sparse::dot(&cd, &dir);
+        let lin = crate::linalg::sparse::dot(&cx, &dir) - crate::linalg::sparse::dot(&qp.d, &dir);
+        let quad = crate::linalg::sparse::dot(&cd, &dir);
         let ax: Vec<f64> = (0..qp.m())
             .map(|j| qp.a.row_dot(j, &self.x) - qp.g[j])
             .collect();
