@@ -3,10 +3,11 @@
 
 use crate::fem::{self, Model};
 use crate::io::{self, IoError, OutMesh, StepOutput};
+use crate::linalg::cholesky::Workspace;
 use crate::mesh::{self, Mesh};
 use crate::post;
 use crate::problem::Problem;
-use crate::qp::{precond::PrecondKind, registry, QpResult, SolveOptions, Status};
+use crate::qp::{registry, settings, QpResult, Settings, SolveOptions, SolverSection, Status};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -217,104 +218,30 @@ pub fn reduce(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
     x
 }
 
-/// Solver choice: method name + options, from [solver] overridden by flags.
-#[derive(Debug, Clone, Default)]
-pub struct SolverChoice {
-    pub method: Option<String>,
-    pub preconditioner: Option<String>,
-    pub tol: Option<f64>,
-    pub max_iter: Option<usize>,
-    pub omega: Option<f64>,
-    pub release: Option<String>,
-}
-
+/// The method and the options of a solve: the problem's `[solver]` with
+/// `flags` (the command line) laid over it, validated once
+/// ([`Settings::from_section`]).
 pub fn options(
     problem: &Problem,
-    flags: &SolverChoice,
+    flags: &SolverSection,
 ) -> Result<(String, SolveOptions), InputError> {
-    let s = &problem.file.solver;
     let bad = |msg: String| InputError::Solver {
         path: problem.path.clone(),
         msg,
     };
-    let method = flags
+    let s = problem.file.solver.overlay(flags);
+    let method = s
         .method
         .clone()
-        .or(s.method.clone())
-        .unwrap_or_else(|| "cgc".into());
+        .unwrap_or_else(|| settings::DEFAULT_METHOD.into());
     if registry::find(&method).is_none() {
         return Err(bad(format!(
             "unknown method \"{method}\"; known: {}",
             registry::names().join(", ")
         )));
     }
-    let pc_name = flags
-        .preconditioner
-        .clone()
-        .or(s.preconditioner.clone())
-        .unwrap_or_else(|| "cholesky".into());
-    let preconditioner = PrecondKind::parse(&pc_name).ok_or_else(|| {
-        bad(format!(
-            "unknown preconditioner \"{pc_name}\"; known: none, jacobi, ssor, ic0, mic0, cholesky"
-        ))
-    })?;
-    let mut o = SolveOptions {
-        preconditioner,
-        ..Default::default()
-    };
-    if let Some(t) = flags.tol.or(s.tol) {
-        if !(t > 0.0 && t < 1.0) {
-            return Err(bad(format!("tol = {t} must lie in (0, 1)")));
-        }
-        o.tol = t;
-    }
-    if let Some(m) = flags.max_iter.or(s.max_iter) {
-        if m == 0 {
-            return Err(bad("max_iter must be positive".into()));
-        }
-        o.max_iter = m;
-    }
-    if let Some(w) = flags.omega.or(s.omega) {
-        if !(w > 0.0 && w < 2.0) {
-            return Err(bad(format!("omega = {w} must lie in (0, 2)")));
-        }
-        o.omega = w;
-    }
-    if let Some(r) = flags.release.clone().or(s.release.clone()) {
-        o.multiple_release = match r.as_str() {
-            "multiple" => true,
-            "single" => false,
-            _ => {
-                return Err(bad(format!(
-                    "release = \"{r}\": expected \"single\" or \"multiple\""
-                )))
-            }
-        };
-    }
-    if let Some(p) = s.penalty {
-        if p.is_nan() || p <= 0.0 {
-            return Err(bad(format!("penalty = {p} must be positive")));
-        }
-        o.penalty = Some(p);
-    }
-    if let Some(r) = s.rho {
-        if r.is_nan() || r <= 0.0 {
-            return Err(bad(format!("rho = {r} must be positive")));
-        }
-        o.rho = Some(r);
-    }
-    if let Some(a) = s.accelerate {
-        o.accelerate = a;
-    }
-    if let Some(p) = &s.ssn_path {
-        if !["auto", "augmented", "refactor", "schur"].contains(&p.as_str()) {
-            return Err(bad(format!(
-                "ssn_path = \"{p}\": expected \"auto\", \"augmented\", \"refactor\" or \"schur\""
-            )));
-        }
-        o.ssn_path = Some(p.clone());
-    }
-    Ok((method, o))
+    let settings = Settings::from_section(&s).map_err(bad)?;
+    Ok((method, SolveOptions::new(settings)))
 }
 
 /// Run the method; an unbounded problem is bad input naming the bodies.
@@ -329,12 +256,24 @@ pub fn solve_model(
     method: &str,
     opts: &SolveOptions,
 ) -> Result<QpResult, InputError> {
+    solve_model_in(prep, model, method, opts, &Workspace::new())
+}
+
+/// [`solve_model`] reusing the factorizations kept in `ws` (load steps:
+/// C is the same in every step, docs/methods.md §8.5).
+pub fn solve_model_in(
+    prep: &Prepared,
+    model: &Model,
+    method: &str,
+    opts: &SolveOptions,
+    ws: &Workspace,
+) -> Result<QpResult, InputError> {
     let bad = |msg: String| InputError::Solver {
         path: prep.problem.path.clone(),
         msg,
     };
-    let res =
-        registry::solve(method, &model.qp, opts).map_err(|e| bad(format!("{method}: {e}")))?;
+    let res = registry::solve_in(method, &model.qp, opts, ws)
+        .map_err(|e| bad(format!("{method}: {e}")))?;
     if let Status::Unbounded { direction } = &res.status {
         // registry::solve returns Unbounded only with a verified recession
         // direction r (Cr = 0 per body, Ar ≤ 0, dᵀr > 0), scaled to a largest

@@ -64,9 +64,10 @@ fn norm(v: &[f64]) -> f64 {
 }
 
 fn opts(pc: PrecondKind) -> SolveOptions {
-    SolveOptions {
-        preconditioner: pc,
-        ..SolveOptions::default()
+    {
+        let mut o = SolveOptions::default();
+        o.settings.cgc.preconditioner = pc;
+        o
     }
 }
 
@@ -109,8 +110,8 @@ fn agree(qp: &QpProblem, ic0: bool) -> Result<(), TestCaseError> {
     let scale = norm(&r0.x).max(f64::MIN_POSITIVE);
     let mut variants: Vec<(&str, PrecondKind)> = registry::METHODS
         .iter()
-        .filter(|m| m.name != "penalty" && m.name != "cgc")
-        .map(|m| (m.name, PrecondKind::Cholesky))
+        .filter(|m| m.name() != "penalty" && m.name() != "cgc")
+        .map(|m| (m.name(), PrecondKind::Cholesky))
         .collect();
     if ic0 {
         variants.push(("cgc", PrecondKind::Ic0));

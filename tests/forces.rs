@@ -4,8 +4,9 @@
 //! interface's two sides carry equal and opposite resultants, and the
 //! reactions of two models match the load they carry by hand.
 
-use signorini::pipeline::{self, SolverChoice};
+use signorini::pipeline;
 use signorini::post::{self, forces};
+use signorini::qp::SolverSection;
 use std::path::PathBuf;
 
 fn root() -> PathBuf {
@@ -16,7 +17,7 @@ fn root() -> PathBuf {
 fn solved(name: &str) -> (pipeline::Prepared, forces::Forces) {
     let path = root().join("meshes").join(format!("{name}.toml"));
     let prep = pipeline::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
-    let (method, opts) = pipeline::options(&prep.problem, &SolverChoice::default()).unwrap();
+    let (method, opts) = pipeline::options(&prep.problem, &SolverSection::default()).unwrap();
     let res = pipeline::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
     assert!(res.status.converged(), "{name}: {:?}", res.status);
     let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
@@ -185,7 +186,7 @@ fn vtu_names_components_and_writes_reactions() {
     // ComponentName attributes in the XML, and the file still reads back.
     let (prep, _) = solved("column");
     let path = root().join("meshes/column.toml");
-    let (method, opts) = pipeline::options(&prep.problem, &SolverChoice::default()).unwrap();
+    let (method, opts) = pipeline::options(&prep.problem, &SolverSection::default()).unwrap();
     let res = pipeline::solve(&prep, &method, &opts).unwrap();
     let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
     let om = post::out_mesh(&prep.model, &prep.mesh);

@@ -15,8 +15,9 @@
 //! written to a kept temporary directory, named in the failure message.
 
 use signorini::mesh::{gmsh, Mesh};
-use signorini::pipeline::{self, SolverChoice};
+use signorini::pipeline;
 use signorini::problem::Problem;
+use signorini::qp::SolverSection;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -503,7 +504,7 @@ fn run_case(
             return check_message("toml", e.to_string());
         }
     };
-    let _ = pipeline::options(&problem, &SolverChoice::default()).map_err(|e| e.to_string());
+    let _ = pipeline::options(&problem, &SolverSection::default()).map_err(|e| e.to_string());
     match signorini::fem::build(mesh, &problem) {
         Ok(model) => {
             tally.built += 1;

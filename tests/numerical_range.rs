@@ -91,9 +91,10 @@ fn solve(mesh: &Mesh, e: f64, nu: f64, method: &str, label: &str) -> Result<Solv
     let problem = Problem::parse(Path::new("range.toml"), &problem_text(e, nu))
         .map_err(|err| format!("{label}: {err}"))?;
     let model = signorini::fem::build(mesh, &problem).map_err(|err| format!("{label}: {err}"))?;
-    let opts = SolveOptions {
-        preconditioner: PrecondKind::Cholesky,
-        ..SolveOptions::default()
+    let opts = {
+        let mut o = SolveOptions::default();
+        o.settings.cgc.preconditioner = PrecondKind::Cholesky;
+        o
     };
     let r = registry::solve(method, &model.qp, &opts).map_err(|err| format!("{label}: {err}"))?;
     if !r.status.converged() {

@@ -33,9 +33,10 @@ fn rel(a: &[f64], b: &[f64]) -> f64 {
 fn check(name: &str, kernel_dim: usize, methods: &[&str], max_iter: usize, lam_tol: f64) {
     let qp = problem(name);
     assert_eq!(qp.kernel.len(), kernel_dim, "{name}: kernel");
-    let opts = SolveOptions {
-        max_iter,
-        ..Default::default()
+    let opts = {
+        let mut o = SolveOptions::default();
+        o.settings.max_iter = max_iter;
+        o
     };
     let refr = registry::solve("asm", &qp, &opts).unwrap();
     assert!(refr.status.converged(), "{name} asm: {:?}", refr.status);

@@ -1,15 +1,16 @@
 //! End-to-end checks of the pipeline against analytic solutions and against
 //! itself (issue: Gmsh + TOML → P1 contact QP → CGC → outputs).
 
-use signorini::pipeline::{self, Prepared, SolverChoice};
+use signorini::pipeline::{self, Prepared};
 use signorini::qp::QpResult;
+use signorini::qp::SolverSection;
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn solve_file(path: &Path, choice: &SolverChoice) -> (Prepared, QpResult) {
+fn solve_file(path: &Path, choice: &SolverSection) -> (Prepared, QpResult) {
     let prep = pipeline::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
     let (method, opts) = pipeline::options(&prep.problem, choice).unwrap();
     let res = pipeline::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
@@ -25,7 +26,7 @@ fn solve_file(path: &Path, choice: &SolverChoice) -> (Prepared, QpResult) {
 fn solve_example(name: &str) -> (Prepared, QpResult) {
     solve_file(
         &root().join("meshes").join(format!("{name}.toml")),
-        &SolverChoice::default(),
+        &SolverSection::default(),
     )
 }
 
@@ -83,7 +84,7 @@ tol = 1e-12
         square_mesh("ascii41")
     );
     let p = temp_toml(dir.path(), "patch", &text);
-    let (prep, res) = solve_file(&p, &SolverChoice::default());
+    let (prep, res) = solve_file(&p, &SolverSection::default());
     let u = prep.model.displacements(&res.x);
     for (i, x) in prep.model.topo.points.iter().enumerate() {
         let exact = [s * x[0] / e, -nu * s * x[1] / e];
@@ -307,7 +308,7 @@ fn ascii_and_binary_meshes_give_identical_results() {
             square_mesh(kind)
         );
         let p = temp_toml(dir.path(), kind, &text);
-        let (prep, res) = solve_file(&p, &SolverChoice::default());
+        let (prep, res) = solve_file(&p, &SolverSection::default());
         out.push((prep.model.displacements(&res.x), res.lambda.clone()));
     }
     assert_eq!(out[0].0, out[1].0, "bit-identical displacements");

@@ -162,33 +162,32 @@ fn restart_from_a_foreign_checkpoint_is_bad_input() {
 }
 
 /// C is the same in every load step: the later steps reuse the numeric
-/// Cholesky factor of the first (linalg::cholesky cache), and the answer is the
+/// Cholesky factor of the first (one `Workspace` for all steps), and the answer is the
 /// one a fresh factorization gives.
 #[test]
 fn load_steps_reuse_the_factorization() {
-    use signorini::linalg::cholesky as factor;
+    use signorini::linalg::cholesky::Workspace;
     use signorini::pipeline;
     use signorini::qp::{registry, SolveOptions};
     let prep = pipeline::prepare(std::path::Path::new(&example()), false).unwrap();
     let opts = SolveOptions::default();
-    factor::clear_cache();
-    let (n0, _) = factor::reuse_counts();
+    let ws = Workspace::new();
+    let (n0, _) = ws.reuse_counts();
     let mut xs = vec![];
     for s in 0..prep.problem.file.nsteps() {
         let model = pipeline::step_model(&prep, s).unwrap();
-        let r = registry::solve("mprgp", &model.qp, &opts).unwrap();
+        let r = registry::solve_in("mprgp", &model.qp, &opts, &ws).unwrap();
         assert!(r.status.converged());
         xs.push((model, r.x));
     }
-    let (n1, _) = factor::reuse_counts();
+    let (n1, _) = ws.reuse_counts();
     assert!(
         n1 - n0 >= xs.len() - 1,
         "{} reuses over {} steps",
         n1 - n0,
         xs.len()
     );
-    // The last step again from a cold cache: the same solution.
-    factor::clear_cache();
+    // The last step again with a fresh workspace: the same solution.
     let (model, x) = xs.last().unwrap();
     let r = registry::solve("mprgp", &model.qp, &opts).unwrap();
     let dx =

@@ -3,7 +3,7 @@
 //! time per phase, KKT residuals, energy, agreement with the most accurate
 //! result. A failing variant shows that in its row; the others go on.
 
-use super::solve::{bad_input, choice, EXIT_BAD_INPUT};
+use super::solve::{bad_input, EXIT_BAD_INPUT};
 use super::SolverFlags;
 use crate::pipeline::{self, Prepared};
 use crate::qp::{precond::PrecondKind, registry, QpResult};
@@ -63,7 +63,7 @@ pub fn variants(spec: Option<&str>) -> Result<Vec<(String, Option<PrecondKind>)>
         };
         let m = registry::find(&name)
             .ok_or_else(|| format!("unknown method \"{name}\"; known: {}", all.join(", ")))?;
-        if m.preconditioned {
+        if m.preconditioned() {
             match pc {
                 Some(p) => out.push((
                     name,
@@ -122,7 +122,7 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
     } else {
         &prep.model
     };
-    let base = choice(&a.solver);
+    let base = a.solver.section.clone();
     let mut rows = vec![];
     let total = list.len();
     for (k, (method, pc)) in list.into_iter().enumerate() {
@@ -140,8 +140,8 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
         let outcome = match pipeline::options(&prep.problem, &c) {
             Err(e) => Err(e.to_string()),
             Ok((m, mut opts)) => {
-                // Each method pays for its own factorization.
-                crate::linalg::cholesky::clear_cache();
+                // Each method pays for its own factorization: every solve
+                // gets a fresh workspace.
                 opts.progress = !quiet;
                 opts.label = Some(label.clone());
                 opts.deadline = a
@@ -172,7 +172,7 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
     }
     let penalty_eps = pipeline::options(&prep.problem, &base)
         .ok()
-        .and_then(|(_, o)| o.penalty);
+        .and_then(|(_, o)| o.settings.penalty.eps);
     let mut table = table_json(&prep, model, &rows, a.solver.kkt_target, penalty_eps);
     table["steps"] = json!({ "count": nsteps, "compared": nsteps });
     if let Some(t) = a.time_limit {

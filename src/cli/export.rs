@@ -4,7 +4,7 @@
 //! problem signorini solves. The format is documented in the README
 //! ("Exported QP").
 
-use super::solve::{bad_input, choice, EXIT_BAD_INPUT};
+use super::solve::{bad_input, EXIT_BAD_INPUT};
 use super::SolverFlags;
 use crate::io::mtx;
 use crate::pipeline;
@@ -40,7 +40,7 @@ pub fn run(a: &ExportArgs, quiet: bool) -> i32 {
     let qp = &prep.model.qp;
     let mut solved = None;
     if a.solution {
-        let res = pipeline::options(&prep.problem, &choice(&a.solver))
+        let res = pipeline::options(&prep.problem, &a.solver.section)
             .and_then(|(method, opts)| pipeline::solve(&prep, &method, &opts).map(|r| (method, r)));
         match res {
             Ok(r) => solved = Some(r),

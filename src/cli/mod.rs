@@ -48,26 +48,12 @@ pub enum Command {
     Methods,
 }
 
+/// The `[solver]` entries as flags (they override the file, key by key)
+/// and the certificate's target.
 #[derive(Args, Debug, Clone, Default)]
 pub struct SolverFlags {
-    /// QP method (see `signorini methods`); overrides [solver] method.
-    #[arg(long)]
-    pub method: Option<String>,
-    /// none | jacobi | ssor | ic0 | mic0 | cholesky; overrides [solver] preconditioner.
-    #[arg(long)]
-    pub preconditioner: Option<String>,
-    /// Relative tolerance of the method's stopping test.
-    #[arg(long)]
-    pub tol: Option<f64>,
-    /// Maximum number of (outer) iterations.
-    #[arg(long)]
-    pub max_iter: Option<usize>,
-    /// SSOR relaxation parameter ω ∈ (0, 2).
-    #[arg(long)]
-    pub omega: Option<f64>,
-    /// CGC release strategy: single | multiple.
-    #[arg(long)]
-    pub release: Option<String>,
+    #[command(flatten)]
+    pub section: crate::qp::SolverSection,
     /// Largest KKT residual accepted as a certificate.
     #[arg(long, default_value_t = 1e-6)]
     pub kkt_target: f64,
@@ -121,7 +107,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Limit(a) => limit::run(&a, cli.quiet),
         Command::Methods => {
             for m in crate::qp::registry::METHODS {
-                println!("{:<10} {}", m.name, m.summary);
+                println!("{:<10} {}", m.name(), m.summary());
             }
             let pcs: Vec<&str> = crate::qp::precond::PrecondKind::ALL
                 .iter()

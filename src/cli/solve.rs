@@ -1,8 +1,8 @@
 //! `signorini solve`: one problem, one method, all outputs and the report.
 
-use super::{SolveArgs, SolverFlags};
+use super::SolveArgs;
 use crate::io::atomic::{self, OutputLock, Stage};
-use crate::pipeline::{self, Prepared, SolverChoice};
+use crate::pipeline::{self, Prepared};
 use crate::post;
 use crate::qp::{registry, QpResult};
 use serde_json::json;
@@ -11,17 +11,6 @@ use std::time::Instant;
 
 pub const EXIT_BAD_INPUT: i32 = 2;
 pub const EXIT_NOT_CONVERGED: i32 = 3;
-
-pub fn choice(f: &SolverFlags) -> SolverChoice {
-    SolverChoice {
-        method: f.method.clone(),
-        preconditioner: f.preconditioner.clone(),
-        tol: f.tol,
-        max_iter: f.max_iter,
-        omega: f.omega,
-        release: f.release.clone(),
-    }
-}
 
 /// The prefix of the staging directories of the problem `name`.
 fn stage_prefix(name: &str) -> String {
@@ -114,7 +103,7 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };
-    let (method, opts) = match pipeline::options(&prep.problem, &choice(&a.solver)) {
+    let (method, opts) = match pipeline::options(&prep.problem, &a.solver.section) {
         Ok(x) => x,
         Err(e) => return bad_input(&e),
     };
@@ -222,6 +211,8 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
     let mut code = 0;
     let mut step_rows = vec![];
     let mut final_state = None;
+    // One workspace for every step: C is the same, its factor is reused.
+    let ws = crate::linalg::cholesky::Workspace::new();
     for s in first..last {
         let ts = Instant::now();
         // Without [[steps]] the prepared model is the problem; with steps every
@@ -243,7 +234,7 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
         let mut o = opts.clone();
         o.x0 = u_prev.as_ref().map(|u| pipeline::reduce(model_ref, u));
         let t_solve0 = Instant::now();
-        let res = match pipeline::solve_model(&prep, model_ref, &method, &o) {
+        let res = match pipeline::solve_model_in(&prep, model_ref, &method, &o, &ws) {
             Ok(r) => r,
             Err(e) => return bad_input(&e),
         };
@@ -428,7 +419,7 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
 
 pub fn preconditioner_label(method: &str, opts: &crate::qp::SolveOptions) -> String {
     match crate::qp::registry::find(method) {
-        Some(m) if m.preconditioned => opts.preconditioner.name().to_string(),
+        Some(m) if m.preconditioned() => opts.settings.cgc.preconditioner.name().to_string(),
         _ => "-".to_string(),
     }
 }

@@ -7,22 +7,25 @@
 //! preconditioner; with the fixing DOFs' rows and columns removed instead it is the
 //! classical fixing-node generalised inverse (Farhat–Géradin).
 //!
-//! **Reuse.** The last factorization is kept in a per-thread cache keyed by
-//! hashes of the pattern and of the values of the (shifted) lower triangle:
-//! the same matrix again (load steps: C does not change between steps) reuses
-//! the numeric factor, the same pattern with other values (the penalty
-//! method's C + A_JᵀA_J/ε, built on the fixed pattern of C + AᵀA) reuses the
-//! symbolic analysis (AMD ordering, supernodes, elimination tree) and only
-//! refactors numerically. `signorini compare` clears the cache between methods
-//! so that each pays for its own factorization.
+//! **Reuse** is explicit: a [`Workspace`], owned by the caller and passed
+//! down, keeps the last factorization keyed by hashes of the pattern and of
+//! the values of the (shifted) lower triangle. The same matrix again (load
+//! steps: C does not change between steps) reuses the numeric factor; the
+//! same pattern with other values (penalty's C + A_JᵀA_J/ε on the fixed
+//! pattern of C + AᵀA) reuses the symbolic analysis (AMD ordering,
+//! supernodes, elimination tree). [`Cholesky::new`] reuses nothing.
 
 use crate::linalg::sparse::Csr;
-use crate::qp::QpError;
 use faer::linalg::solvers::SolveCore;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Side};
 use std::cell::{Cell, RefCell};
+
+/// A factorization that failed (C not positive definite, a bad pattern).
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("{0}")]
+pub struct FactorError(pub String);
 use std::sync::Arc;
 
 pub struct Cholesky {
@@ -33,8 +36,41 @@ pub struct Cholesky {
 }
 
 impl Cholesky {
-    /// Factor C, regularised along `kernel` (may be empty).
-    pub fn new(c: &Csr, kernel: &[Vec<f64>]) -> Result<Cholesky, QpError> {
+    /// Factor C, regularised along `kernel` (may be empty), reusing nothing.
+    pub fn new(c: &Csr, kernel: &[Vec<f64>]) -> Result<Cholesky, FactorError> {
+        Workspace::new().cholesky(c, kernel)
+    }
+}
+
+/// Factor reuse across solves: the last factorization and its symbolic
+/// analysis (see the module doc). Owned by the caller — one per load-step
+/// sequence, a fresh one per method in `compare` — and shared by reference;
+/// single-threaded (interior mutability, not `Sync`).
+#[derive(Default)]
+pub struct Workspace {
+    last: RefCell<Option<CacheEntry>>,
+    numeric_reused: Cell<usize>,
+    symbolic_reused: Cell<usize>,
+}
+
+impl Workspace {
+    pub fn new() -> Workspace {
+        Workspace::default()
+    }
+
+    /// Forget the kept factorization (frees its memory).
+    pub fn clear(&self) {
+        self.last.replace(None);
+    }
+
+    /// How often this workspace reused a numeric factor and a symbolic analysis.
+    pub fn reuse_counts(&self) -> (usize, usize) {
+        (self.numeric_reused.get(), self.symbolic_reused.get())
+    }
+
+    /// Factor C, regularised along `kernel` (may be empty), reusing the kept
+    /// factor or symbolic analysis when the matrix or its pattern is the same.
+    pub fn cholesky(&self, c: &Csr, kernel: &[Vec<f64>]) -> Result<Cholesky, FactorError> {
         let t0 = std::time::Instant::now();
         let fixing = fixing_dofs(kernel, c.nrows);
         let diag = c.diag();
@@ -51,17 +87,20 @@ impl Cholesky {
         let hv = hash_words(vals.iter().map(|v| v.to_bits()));
         let mut symbolic = None;
         let mut hit = None;
-        CACHE.with_borrow(|cache| {
-            if let Some(e) = cache.as_ref().filter(|e| e.n == c.nrows && e.pattern == hp) {
-                if e.values == hv {
-                    hit = Some(e.llt.clone());
-                } else {
-                    symbolic = Some(e.symbolic.clone());
-                }
+        if let Some(e) = self
+            .last
+            .borrow()
+            .as_ref()
+            .filter(|e| e.n == c.nrows && e.pattern == hp)
+        {
+            if e.values == hv {
+                hit = Some(e.llt.clone());
+            } else {
+                symbolic = Some(e.symbolic.clone());
             }
-        });
+        }
         if let Some(llt) = hit {
-            NUMERIC_REUSED.with(|k| k.set(k.get() + 1));
+            self.numeric_reused.set(self.numeric_reused.get() + 1);
             return Ok(Cholesky {
                 n: c.nrows,
                 llt,
@@ -69,21 +108,21 @@ impl Cholesky {
             });
         }
         if symbolic.is_some() {
-            SYMBOLIC_REUSED.with(|k| k.set(k.get() + 1));
+            self.symbolic_reused.set(self.symbolic_reused.get() + 1);
         }
         let t_prep = t0.elapsed().as_secs_f64();
         let reused = symbolic.is_some();
         let symbolic = match symbolic {
             Some(s) => s,
             None => SymbolicLlt::try_new(sym.as_ref(), Side::Lower)
-                .map_err(|e| QpError::Factor(format!("symbolic analysis: {e:?}")))?,
+                .map_err(|e| FactorError(format!("symbolic analysis: {e:?}")))?,
         };
         let t_sym = t0.elapsed().as_secs_f64() - t_prep;
         let mat = SparseColMatRef::new(sym.as_ref(), &vals);
-        // Drop the cached factor before allocating a new one (peak memory).
-        clear_cache();
+        // Drop the kept factor before allocating a new one (peak memory).
+        self.clear();
         let llt = Llt::try_new_with_symbolic(symbolic.clone(), mat, Side::Lower).map_err(|e| {
-            QpError::Factor(format!(
+            FactorError(format!(
                 "C is not positive definite ({e:?}); a body may be free to move without the kernel being known"
             ))
         })?;
@@ -95,7 +134,7 @@ impl Cholesky {
             if reused { " (reused)" } else { "" },
             t0.elapsed().as_secs_f64() - t_prep - t_sym
         );
-        CACHE.set(Some(CacheEntry {
+        self.last.replace(Some(CacheEntry {
             n: c.nrows,
             pattern: hp,
             values: hv,
@@ -108,7 +147,9 @@ impl Cholesky {
             fixing,
         })
     }
+}
 
+impl Cholesky {
     /// x ← (C + springs)⁻¹ x
     pub fn solve_in_place(&self, x: &mut [f64]) {
         debug_assert_eq!(x.len(), self.n);
@@ -148,7 +189,7 @@ pub struct FactorCost {
 
 /// [`FactorCost`] of the lower triangle of the symmetric pattern `c` (values
 /// ignored; a diagonal entry is assumed in every column, as in the factor).
-pub fn factor_cost(c: &Csr) -> Result<FactorCost, QpError> {
+pub fn factor_cost(c: &Csr) -> Result<FactorCost, FactorError> {
     use faer::sparse::linalg::cholesky::{
         factorize_symbolic_cholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     };
@@ -159,7 +200,7 @@ pub fn factor_cost(c: &Csr) -> Result<FactorCost, QpError> {
         SymmetricOrdering::Amd,
         Default::default(),
     )
-    .map_err(|e| QpError::Factor(format!("symbolic analysis: {e:?}")))?;
+    .map_err(|e| FactorError(format!("symbolic analysis: {e:?}")))?;
     let (mut nnz, mut flops) = (0.0f64, 0.0f64);
     match s.raw() {
         SymbolicCholeskyRaw::Simplicial(t) => {
@@ -192,22 +233,6 @@ struct CacheEntry {
     values: u64,
     symbolic: SymbolicLlt<usize>,
     llt: Arc<Llt<usize, f64>>,
-}
-
-thread_local! {
-    static CACHE: RefCell<Option<CacheEntry>> = const { RefCell::new(None) };
-    static NUMERIC_REUSED: Cell<usize> = const { Cell::new(0) };
-    static SYMBOLIC_REUSED: Cell<usize> = const { Cell::new(0) };
-}
-
-/// Forget this thread's cached factorization (frees its memory).
-pub fn clear_cache() {
-    CACHE.set(None);
-}
-
-/// How often this thread reused a numeric factor and a symbolic analysis.
-pub fn reuse_counts() -> (usize, usize) {
-    (NUMERIC_REUSED.get(), SYMBOLIC_REUSED.get())
 }
 
 /// A 64-bit hash of a word stream (multiply–rotate, as FxHash; collisions of
@@ -365,15 +390,17 @@ mod tests {
     #[test]
     fn reuses_numeric_factor_and_symbolic_analysis() {
         let c = lap1d(40, true);
+        let ws = Workspace::new();
+        let reuse_counts = || ws.reuse_counts();
         let (n0, s0) = reuse_counts();
-        let f1 = Cholesky::new(&c, &[]).unwrap();
-        let f2 = Cholesky::new(&c, &[]).unwrap();
+        let f1 = ws.cholesky(&c, &[]).unwrap();
+        let f2 = ws.cholesky(&c, &[]).unwrap();
         assert!(Arc::ptr_eq(&f1.llt, &f2.llt));
         assert_eq!(reuse_counts(), (n0 + 1, s0));
         // Same pattern, other values: a new numeric factor on the old analysis.
         let mut c2 = c.clone();
         c2.data.iter_mut().for_each(|v| *v *= 3.0);
-        let f3 = Cholesky::new(&c2, &[]).unwrap();
+        let f3 = ws.cholesky(&c2, &[]).unwrap();
         assert_eq!(reuse_counts(), (n0 + 1, s0 + 1));
         let x: Vec<f64> = (0..40).map(|i| (i as f64).cos()).collect();
         let y = f3.solve(&c2.mul(&x));
@@ -384,11 +411,15 @@ mod tests {
         let y = f1.solve(&c.mul(&x));
         assert!(x.iter().zip(&y).all(|(a, b)| (a - b).abs() < 1e-9));
         // Another pattern: nothing reused.
-        let f4 = Cholesky::new(&lap1d(41, true), &[]).unwrap();
+        let f4 = ws.cholesky(&lap1d(41, true), &[]).unwrap();
         assert_eq!(reuse_counts(), (n0 + 1, s0 + 1));
         drop(f4);
-        clear_cache();
-        let _ = Cholesky::new(&c, &[]).unwrap();
+        ws.clear();
+        let _ = ws.cholesky(&c, &[]).unwrap();
+        assert_eq!(reuse_counts(), (n0 + 1, s0 + 1));
+        // A fresh factorization reuses nothing and shares no factor.
+        let f5 = Cholesky::new(&c, &[]).unwrap();
+        assert!(!Arc::ptr_eq(&f1.llt, &f5.llt));
         assert_eq!(reuse_counts(), (n0 + 1, s0 + 1));
     }
 }

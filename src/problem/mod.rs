@@ -5,6 +5,7 @@
 //! (E > 0, −1 < ν < 0.5, ρ ≥ 0, …); names are checked against the mesh in
 //! `fem::topology`.
 
+pub use crate::qp::SolverSection;
 use serde::{Deserialize, Deserializer};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -183,29 +184,6 @@ pub struct Contact {
     /// Non-matching: largest initial gap at which a slave node is paired
     /// (default: unlimited, i.e. every slave node that projects onto the master).
     pub max_gap: Option<f64>,
-}
-
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SolverSection {
-    pub method: Option<String>,
-    pub preconditioner: Option<String>,
-    pub tol: Option<f64>,
-    pub max_iter: Option<usize>,
-    /// SSOR relaxation ω ∈ (0, 2).
-    pub omega: Option<f64>,
-    /// CGC release strategy: "single" or "multiple".
-    pub release: Option<String>,
-    /// Penalty parameter ε_p (penalty method).
-    pub penalty: Option<f64>,
-    /// Uzawa step ρ.
-    pub rho: Option<f64>,
-    /// Uzawa: Nesterov momentum; penalty: exact subspace correction between
-    /// sweeps. `false` gives the report's plain iterations.
-    pub accelerate: Option<bool>,
-    /// ssn's linear algebra: "auto" (by counts), "augmented", "refactor",
-    /// "schur" (docs/problem-format.md §4).
-    pub ssn_path: Option<String>,
 }
 
 #[derive(Debug, Clone, Default, Deserialize)]

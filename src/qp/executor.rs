@@ -99,15 +99,6 @@ impl Executor {
         }
     }
 
-    /// The executor of method `name` for `opts`: MAXIT, the deadline and a
-    /// progress bar labelled with `opts.label` (or `name`).
-    pub fn for_opts(opts: &crate::qp::SolveOptions, name: &str) -> Executor {
-        let label = opts.label.clone().unwrap_or_else(|| name.to_string());
-        let mut e = Executor::new(opts.max_iter, opts.progress.then_some(label.as_str()));
-        e.deadline = opts.deadline;
-        e
-    }
-
     /// Run `it` until it finishes or MAXIT; returns the status and the
     /// number of iterations done.
     pub fn run(&mut self, it: &mut dyn Iterative) -> (Status, usize) {

@@ -13,9 +13,11 @@
 //! * the active set `J = {i : (Ax − g)ᵢ = 0}`.
 //!
 //! This layer knows nothing of meshes: `fem` builds a [`QpProblem`], every method
-//! returns a [`QpResult`]. A method is one file and one line in [`registry`].
+//! returns an [`Output`] that the [`driver`] certifies into a [`QpResult`]. A
+//! method is one type implementing [`Method`] and one line in [`registry`].
 
 pub mod active_set;
+pub mod driver;
 pub mod dual;
 pub mod executor;
 pub mod kkt;
@@ -23,11 +25,14 @@ pub mod precond;
 pub mod primal;
 pub mod recession;
 pub mod registry;
+pub mod settings;
 pub mod ssn;
 #[cfg(test)]
 mod tests_methods;
 
 pub use crate::linalg::sparse::{self, Csr};
+pub use driver::{Context, Method, Output};
+pub use settings::{Settings, SolverSection};
 
 /// min ½xᵀCx − xᵀd subject to Ax ≤ g  (methods.md §2.8 with b = g).
 #[derive(Debug, Clone, Default)]
@@ -130,25 +135,40 @@ pub struct QpResult {
     pub notes: Vec<String>,
 }
 
-/// Options shared by all methods.
-#[derive(Debug, Clone)]
+impl From<QpResult> for Output {
+    /// The solution without its certificate (tests compare both kinds).
+    fn from(r: QpResult) -> Output {
+        Output {
+            x: r.x,
+            lambda: r.lambda,
+            active: r.active,
+            status: r.status,
+            iterations: r.iterations,
+            inner_iterations: r.inner_iterations,
+            log: r.log,
+            timings: r.timings,
+        }
+    }
+}
+
+/// Run a method's solve function directly (no driver checks, no
+/// certificate) with a fresh workspace: the unit tests of one method.
+#[cfg(test)]
+pub(crate) fn run_direct(
+    f: fn(&QpProblem, &mut Context) -> Result<Output, QpError>,
+    qp: &QpProblem,
+    opts: &SolveOptions,
+) -> Result<Output, QpError> {
+    let ws = crate::linalg::cholesky::Workspace::new();
+    f(qp, &mut Context::new(opts, &ws))
+}
+
+/// What a caller asks of the driver besides the problem: the settings
+/// (validated by the driver) and the run control — progress, label,
+/// deadline, warm start — which belong to the caller, not to the problem file.
+#[derive(Debug, Clone, Default)]
 pub struct SolveOptions {
-    /// Relative tolerance of the method's own stopping test.
-    pub tol: f64,
-    pub max_iter: usize,
-    pub preconditioner: precond::PrecondKind,
-    /// SSOR ω.
-    pub omega: f64,
-    /// CGC: release all constraints with negative multipliers at once.
-    pub multiple_release: bool,
-    /// Penalty ε_p (None: automatic).
-    pub penalty: Option<f64>,
-    /// Uzawa ρ (None: estimated).
-    pub rho: Option<f64>,
-    /// Uzawa: Nesterov momentum with gradient restart; penalty: exact solve
-    /// on the penalty active set between relaxation sweeps. `false`: the
-    /// report's plain iterations (§4.4, §4.5).
-    pub accelerate: bool,
+    pub settings: Settings,
     /// Print progress to stderr for long solves.
     pub progress: bool,
     /// Prefix of the progress line (e.g. the variant in `compare`).
@@ -159,27 +179,14 @@ pub struct SolveOptions {
     pub deadline: Option<std::time::Instant>,
     /// Warm start (load steps, restart): used by methods that can, when feasible.
     pub x0: Option<Vec<f64>>,
-    /// ssn: the linear-algebra path ("auto", "augmented", "refactor",
-    /// "schur"); None = "auto" (the count-based cost model).
-    pub ssn_path: Option<String>,
 }
 
-impl Default for SolveOptions {
-    fn default() -> Self {
+impl SolveOptions {
+    /// Default run control with `settings`.
+    pub fn new(settings: Settings) -> SolveOptions {
         SolveOptions {
-            tol: 1e-10,
-            max_iter: 100_000,
-            preconditioner: precond::PrecondKind::Cholesky,
-            omega: 1.0,
-            multiple_release: true,
-            penalty: None,
-            rho: None,
-            accelerate: true,
-            progress: false,
-            label: None,
-            deadline: None,
-            x0: None,
-            ssn_path: None,
+            settings,
+            ..Default::default()
         }
     }
 }
@@ -194,6 +201,12 @@ pub enum QpError {
     Unsupported(String),
     #[error("factorization failed: {0}")]
     Factor(String),
+}
+
+impl From<crate::linalg::cholesky::FactorError> for QpError {
+    fn from(e: crate::linalg::cholesky::FactorError) -> QpError {
+        QpError::Factor(e.0)
+    }
 }
 
 /// The large number of §5 (overflow guard, step for zero curvature).

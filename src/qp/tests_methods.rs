@@ -149,11 +149,12 @@ fn two_bodies(v: Variant) -> QpProblem {
 }
 
 fn opts(tol: f64) -> SolveOptions {
-    SolveOptions {
-        tol,
-        max_iter: 1_000_000,
-        preconditioner: PrecondKind::Cholesky,
-        ..Default::default()
+    {
+        let mut o = SolveOptions::default();
+        o.settings.tol = tol;
+        o.settings.max_iter = 1_000_000;
+        o.settings.cgc.preconditioner = PrecondKind::Cholesky;
+        o
     }
 }
 
@@ -236,9 +237,11 @@ fn exact_methods_match_cgc_coercive() {
             check_exact(name, v, &qp, &r, &refr);
         }
         // The report's plain Uzawa (no momentum) converges to the same pair, slower.
-        let plain = SolveOptions {
-            accelerate: false,
-            ..opts(1e-12)
+        let plain = {
+            let mut o = opts(1e-12);
+            o.settings.penalty.accelerate = false;
+            o.settings.uzawa.accelerate = false;
+            o
         };
         let r = registry::solve("uzawa", &qp, &plain).unwrap();
         check_exact("uzawa (plain)", v, &qp, &r, &refr);
@@ -265,8 +268,9 @@ fn semicoercive_solved() {
                 _ => 1e-12,
             });
             if name == "penalty" {
-                o.penalty = Some(1e-3 / norm_inf(&qp.c.diag()));
-                o.omega = 1.5;
+                o.settings.penalty.eps = Some(1e-3 / norm_inf(&qp.c.diag()));
+                o.settings.cgc.omega = 1.5;
+                o.settings.penalty.omega = 1.5;
             }
             match registry::solve(name, &qp, &o) {
                 Err(e) => panic!("{name} {v:?}: unexpected error {e}"),
@@ -313,9 +317,11 @@ fn semicoercive_unbounded_is_detected() {
 /// The report's plain relaxation (no subspace correction).
 fn penalty_run(qp: &QpProblem, eps: Option<f64>, omega: f64, tol: f64) -> QpResult {
     let mut o = opts(tol);
-    o.penalty = eps;
-    o.omega = omega;
-    o.accelerate = false;
+    o.settings.penalty.eps = eps;
+    o.settings.cgc.omega = omega;
+    o.settings.penalty.omega = omega;
+    o.settings.penalty.accelerate = false;
+    o.settings.uzawa.accelerate = false;
     let r = registry::solve("penalty", qp, &o).expect("penalty");
     assert!(r.status.converged(), "penalty: {}", r.status.describe());
     r
@@ -378,21 +384,20 @@ fn penalty_subspace_correction_finds_the_same_minimiser() {
         let qp = two_bodies(v);
         let cmax = norm_inf(&qp.c.diag());
         let eps = 1e-3 / cmax;
-        let fast = registry::solve(
-            "penalty",
-            &qp,
-            &SolveOptions {
-                penalty: Some(eps),
-                ..opts(1e-13)
-            },
-        )
+        let fast = registry::solve("penalty", &qp, &{
+            let mut o = opts(1e-13);
+            o.settings.penalty.eps = Some(eps);
+            o
+        })
         .unwrap();
         assert!(fast.status.converged(), "{v:?}: {}", fast.status.describe());
         assert!(fast.inner_iterations > 0, "{v:?}: no correction was made");
         let mut o = opts(1e-13);
-        o.penalty = Some(eps);
-        o.omega = 1.6;
-        o.accelerate = false;
+        o.settings.penalty.eps = Some(eps);
+        o.settings.cgc.omega = 1.6;
+        o.settings.penalty.omega = 1.6;
+        o.settings.penalty.accelerate = false;
+        o.settings.uzawa.accelerate = false;
         let plain = registry::solve("penalty", &qp, &o).unwrap();
         if plain.status.converged() {
             let e = rel_err(&fast.x, &plain.x);
@@ -432,46 +437,57 @@ fn bad_parameters_do_not_panic() {
     let qp = two_bodies(Variant::Coercive { gaps: true });
     let names = ["preelim", "uzawa", "dual", "asm", "asm-cgh", "penalty"];
     let bad = [
-        SolveOptions {
-            rho: Some(-1.0),
-            ..opts(1e-10)
+        {
+            let mut o = opts(1e-10);
+            o.settings.uzawa.rho = Some(-1.0);
+            o
         },
-        SolveOptions {
-            rho: Some(f64::NAN),
-            ..opts(1e-10)
+        {
+            let mut o = opts(1e-10);
+            o.settings.uzawa.rho = Some(f64::NAN);
+            o
         },
-        SolveOptions {
-            rho: Some(1e12),
-            max_iter: 50,
-            ..opts(1e-10)
+        {
+            let mut o = opts(1e-10);
+            o.settings.uzawa.rho = Some(1e12);
+            o.settings.max_iter = 50;
+            o
         },
-        SolveOptions {
-            penalty: Some(-1.0),
-            ..opts(1e-10)
+        {
+            let mut o = opts(1e-10);
+            o.settings.penalty.eps = Some(-1.0);
+            o
         },
-        SolveOptions {
-            penalty: Some(0.0),
-            ..opts(1e-10)
+        {
+            let mut o = opts(1e-10);
+            o.settings.penalty.eps = Some(0.0);
+            o
         },
-        SolveOptions {
-            omega: 3.0,
-            ..opts(1e-10)
+        {
+            let mut o = opts(1e-10);
+            o.settings.cgc.omega = 3.0;
+            o.settings.penalty.omega = 3.0;
+            o
         },
-        SolveOptions {
-            tol: f64::NAN,
-            ..opts(1e-10)
+        {
+            let mut o = opts(1e-10);
+            o.settings.tol = f64::NAN;
+            o
         },
-        SolveOptions {
-            tol: -1.0,
-            ..opts(1e-10)
+        {
+            let mut o = opts(1e-10);
+            o.settings.tol = -1.0;
+            o
         },
-        SolveOptions {
-            max_iter: 0,
-            ..opts(1e-10)
+        {
+            let mut o = opts(1e-10);
+            o.settings.max_iter = 0;
+            o
         },
-        SolveOptions {
-            max_iter: 1,
-            ..opts(1e-10)
+        {
+            let mut o = opts(1e-10);
+            o.settings.max_iter = 1;
+            o
         },
     ];
     for o in &bad {
@@ -516,6 +532,6 @@ fn preelim_refuses_singular_c11() {
         Ok(r) => panic!("expected refusal, got {}", r.status.describe()),
     }
     // The reference copes (the energy is constant along the kernel).
-    let r = cgc::solve(&qp, &opts(1e-10)).unwrap();
+    let r = crate::qp::run_direct(cgc::solve, &qp, &opts(1e-10)).unwrap();
     assert!(r.status.converged());
 }

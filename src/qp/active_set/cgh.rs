@@ -33,16 +33,31 @@
 //! systems. Without a kernel a singular B_J shows up as a CGH breakdown or
 //! non-convergence: `Status::Failed`.
 
-use crate::linalg::cholesky::Cholesky;
+use crate::linalg::cholesky::Workspace;
 use crate::linalg::sparse::{axpy, dot, norm};
-use crate::qp::active_set::{check_common, ActiveSet, FaceKernel, FaceSolver, SchurSolver};
-use crate::qp::executor::Executor;
-use crate::qp::{QpError, QpProblem, QpResult, SolveOptions};
+use crate::qp::active_set::{ActiveSet, FaceKernel, FaceSolver, SchurSolver};
+use crate::qp::{Context, Method, Output, QpError, QpProblem};
 use std::time::Instant;
 
+/// ASM-CGH: the active set method, KKT systems by CG with hyperbolic pairs
+/// (docs/methods.md §4.8).
+pub struct AsmCghMethod;
+
+impl Method for AsmCghMethod {
+    fn name(&self) -> &'static str {
+        "asm-cgh"
+    }
+    fn summary(&self) -> &'static str {
+        "active set method, KKT systems by CG with hyperbolic pairs (§4.8)"
+    }
+    fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+        solve(qp, ctx)
+    }
+}
+
 /// Solve `qp` by the active set method with CGH inner solves.
-pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
-    check_common(qp, opts)?;
+pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+    let opts = ctx.settings;
     let t1 = Instant::now();
     let solver = Hybrid {
         qp,
@@ -50,9 +65,10 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         schur: None,
         cgh_steps: 0,
         switch_time: 0.0,
+        ws: ctx.ws,
     };
     let mut state = ActiveSet::new(qp, solver, opts);
-    let mut exec = Executor::for_opts(opts, "asm-cgh");
+    let mut exec = ctx.executor("asm-cgh");
     let (status, iters) = exec.run(&mut state);
     let t_it = t1.elapsed().as_secs_f64();
     let mut timings = vec![("iterate".into(), t_it)];
@@ -74,6 +90,7 @@ struct Hybrid<'a> {
     schur: Option<SchurSolver<'a>>,
     cgh_steps: usize,
     switch_time: f64,
+    ws: &'a Workspace,
 }
 
 impl FaceSolver for Hybrid<'_> {
@@ -107,7 +124,9 @@ impl FaceSolver for Hybrid<'_> {
                          for this and the remaining working sets"
                     );
                     let t0 = Instant::now();
-                    let chol = Cholesky::new(&self.qp.c, &self.qp.kernel)
+                    let chol = self
+                        .ws
+                        .cholesky(&self.qp.c, &self.qp.kernel)
                         .map_err(|e| format!("{msg}; the ASM-E fallback failed: {e}"))?;
                     let mut s = SchurSolver::new(self.qp, chol);
                     for (p, &j) in jl.iter().enumerate() {

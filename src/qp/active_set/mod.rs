@@ -33,16 +33,32 @@ pub mod cgh;
 
 use crate::linalg::cholesky::Cholesky;
 use crate::linalg::sparse::{axpy, dot, norm, norm_inf};
-use crate::qp::executor::{Executor, Iterative, Step};
-use crate::qp::{primal::cgc, IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
-use std::time::Instant;
+use crate::qp::executor::{Iterative, Step};
+use crate::qp::{
+    primal::cgc, Context, IterRecord, Method, Output, QpError, QpProblem, Settings, Status,
+};
 
 /// Refuse problems with more constraints: the dense factor of S_J needs |J|²/2 numbers.
 pub const MAX_DENSE_ROWS: usize = 10_000;
 
+/// ASM-E: the active set method, KKT systems by Schur-complement
+/// elimination (docs/methods.md §4.7).
+pub struct AsmMethod;
+
+impl Method for AsmMethod {
+    fn name(&self) -> &'static str {
+        "asm"
+    }
+    fn summary(&self) -> &'static str {
+        "active set method, KKT systems by Schur-complement elimination (ASM-E, §4.7)"
+    }
+    fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+        solve(qp, ctx)
+    }
+}
+
 /// Solve `qp` by ASM-E.
-pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
-    check_common(qp, opts)?;
+pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
     if qp.m() > MAX_DENSE_ROWS {
         return Err(QpError::Unsupported(format!(
             "asm: {} constraints > {MAX_DENSE_ROWS}; the dense Cholesky factor of A_J C⁻¹ A_Jᵀ would need \
@@ -51,49 +67,12 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
             (qp.m() as f64).powi(2) * 4.0 / 1e9
         )));
     }
-    let t0 = Instant::now();
-    let chol = Cholesky::new(&qp.c, &qp.kernel)?;
-    let t_f = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
+    let chol = ctx.phase("factor", |ctx| ctx.ws.cholesky(&qp.c, &qp.kernel))?;
     let solver = SchurSolver::new(qp, chol);
-    let mut state = ActiveSet::new(qp, solver, opts);
-    let mut exec = Executor::for_opts(opts, "asm");
-    let (status, iters) = exec.run(&mut state);
-    let t_it = t1.elapsed().as_secs_f64();
-    Ok(state.into_result(
-        status,
-        iters,
-        exec.log,
-        vec![("factor".into(), t_f), ("iterate".into(), t_it)],
-    ))
-}
-
-/// Parameter checks shared by the methods of this family (never panic on bad input).
-pub(crate) fn check_common(qp: &QpProblem, opts: &SolveOptions) -> Result<(), QpError> {
-    if !(opts.tol.is_finite() && opts.tol > 0.0) {
-        return Err(QpError::BadParameter(format!(
-            "tolerance must be positive, got {}",
-            opts.tol
-        )));
-    }
-    let n = qp.n();
-    if qp.c.nrows != n || qp.c.ncols != n || qp.a.ncols != n || qp.a.nrows != qp.m() {
-        return Err(QpError::BadParameter(format!(
-            "inconsistent QP dimensions: C {}×{}, d {}, A {}×{}, g {}",
-            qp.c.nrows,
-            qp.c.ncols,
-            n,
-            qp.a.nrows,
-            qp.a.ncols,
-            qp.m()
-        )));
-    }
-    if qp.kernel.iter().any(|z| z.len() != n) {
-        return Err(QpError::BadParameter(
-            "kernel vectors must have length N".into(),
-        ));
-    }
-    Ok(())
+    let mut state = ActiveSet::new(qp, solver, ctx.settings);
+    let mut exec = ctx.executor("asm");
+    let (status, iters) = ctx.phase("iterate", |_| exec.run(&mut state));
+    Ok(state.into_result(status, iters, exec.log, vec![]))
 }
 
 // ---------------------------------------------------------------------------
@@ -317,7 +296,7 @@ pub(crate) struct ActiveSet<'a, S: FaceSolver> {
 }
 
 impl<'a, S: FaceSolver> ActiveSet<'a, S> {
-    pub fn new(qp: &'a QpProblem, solver: S, opts: &SolveOptions) -> Self {
+    pub fn new(qp: &'a QpProblem, solver: S, opts: &Settings) -> Self {
         let m = qp.m();
         let x = cgc::feasible_start(qp);
         let rker = orthonormal_kernel(&qp.kernel);
@@ -461,7 +440,7 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
         iterations: usize,
         log: Vec<IterRecord>,
         timings: Vec<(String, f64)>,
-    ) -> QpResult {
+    ) -> Output {
         let m = self.qp.m();
         let status = match (status, self.failed) {
             (Status::Converged, _) => Status::Converged,
@@ -478,8 +457,7 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
                 }
             })
             .collect();
-        let energy = self.qp.energy(&self.x);
-        QpResult {
+        Output {
             active: self.in_j,
             x: self.x,
             lambda,
@@ -488,9 +466,6 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
             inner_iterations: self.solver.inner(),
             log,
             timings,
-            kkt: Default::default(),
-            energy,
-            notes: vec![],
         }
     }
 

@@ -38,22 +38,36 @@ pub mod uzawa;
 
 use crate::linalg::cholesky::Cholesky;
 use crate::linalg::sparse::{axpy, dot, norm};
-use crate::qp::active_set::check_common;
 use crate::qp::dual::mprgp::{Inner, Mprgp};
-use crate::qp::executor::{Executor, Iterative, Step};
-use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
+use crate::qp::executor::{Iterative, Step};
+use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status};
 use std::time::Instant;
 
-pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
-    check_common(qp, opts)?;
+/// CGC on the dual functional (docs/methods.md §4.6).
+pub struct DualMethod;
+
+impl Method for DualMethod {
+    fn name(&self) -> &'static str {
+        "dual"
+    }
+    fn summary(&self) -> &'static str {
+        "CGC on the dual functional, H applied through a Cholesky factor (§4.6)"
+    }
+    fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+        solve(qp, ctx)
+    }
+}
+
+pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+    let opts = ctx.settings;
     if !qp.kernel.is_empty() {
         let inner = Inner::Polyak {
-            multiple: opts.multiple_release,
+            multiple: opts.dual.multiple_release,
         };
-        return crate::qp::dual::mprgp::solve_with(qp, opts, inner, "dual");
+        return crate::qp::dual::mprgp::solve_with(qp, ctx, inner, "dual");
     }
     let t0 = Instant::now();
-    let chol = Cholesky::new(&qp.c, &[])?;
+    let chol = ctx.ws.cholesky(&qp.c, &[])?;
     let t_f = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let m = qp.m();
@@ -65,7 +79,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         qp,
         chol: &chol,
         tol: opts.tol,
-        multiple: opts.multiple_release,
+        multiple: opts.dual.multiple_release,
         lam: vec![0.0; m],
         grad: h.iter().map(|v| -v).collect(),
         h,
@@ -74,7 +88,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         solves: 1,
         cg_steps: 0,
     };
-    let mut exec = Executor::for_opts(opts, "dual");
+    let mut exec = ctx.executor("dual");
     let (status, iters) = exec.run(&mut st);
     // x = C⁻¹(d − Aᵀλ)
     let mut x = qp.d.clone();
@@ -85,8 +99,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     chol.solve_in_place(&mut x);
     let t_it = t1.elapsed().as_secs_f64();
     let active: Vec<bool> = st.lam.iter().map(|&l| l > 0.0).collect();
-    let energy = qp.energy(&x);
-    Ok(QpResult {
+    Ok(Output {
         x,
         lambda: st.lam,
         active,
@@ -95,9 +108,6 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         inner_iterations: st.cg_steps,
         log: exec.log,
         timings: vec![("factor".into(), t_f), ("iterate".into(), t_it)],
-        kkt: Default::default(),
-        energy,
-        notes: vec![],
     })
 }
 

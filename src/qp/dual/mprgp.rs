@@ -72,9 +72,9 @@
 
 use crate::linalg::cholesky::Cholesky;
 use crate::linalg::sparse::{axpy, dot, norm, norm_inf};
-use crate::qp::executor::{Executor, Iterative, Step};
-use crate::qp::ssn::{check_dims, chol_backward, chol_factor, chol_forward, orthonormal_kernel};
-use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
+use crate::qp::executor::{Iterative, Step};
+use crate::qp::ssn::{chol_backward, chol_factor, chol_forward, orthonormal_kernel};
+use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status};
 use std::time::Instant;
 
 /// Proportioning parameter Γ.
@@ -90,9 +90,24 @@ const SMALBE_BETA: f64 = 10.0;
 /// SMALBE: η = ETA_FACTOR·‖h‖.
 const ETA_FACTOR: f64 = 0.1;
 
+/// MPRGP on the dual, SMALBE-M for a semicoercive C (docs/methods.md §7).
+pub struct MprgpMethod;
+
+impl Method for MprgpMethod {
+    fn name(&self) -> &'static str {
+        "mprgp"
+    }
+    fn summary(&self) -> &'static str {
+        "MPRGP on the dual, H through one Cholesky factor; SMALBE for floating bodies (§7)"
+    }
+    fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+        solve(qp, ctx)
+    }
+}
+
 /// Solve `qp` by MPRGP on the dual (SMALBE-M for a semicoercive C).
-pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
-    solve_with(qp, opts, Inner::Mprgp, "mprgp")
+pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+    solve_with(qp, ctx, Inner::Mprgp, "mprgp")
 }
 
 /// The bound-constrained solver run inside the SMALBE loop (one step per
@@ -113,20 +128,14 @@ pub(crate) enum Inner {
 /// Dual solve with the given inner solver; `name` prefixes messages.
 pub(crate) fn solve_with(
     qp: &QpProblem,
-    opts: &SolveOptions,
+    ctx: &mut Context,
     inner: Inner,
     name: &'static str,
-) -> Result<QpResult, QpError> {
-    check_dims(qp)?;
-    if !(opts.tol > 0.0 && opts.tol < 1.0) {
-        return Err(QpError::BadParameter(format!(
-            "{name}: tol = {} must lie in (0, 1)",
-            opts.tol
-        )));
-    }
+) -> Result<Output, QpError> {
+    let opts = ctx.settings;
     let t0 = Instant::now();
     let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
-    let fac = Cholesky::new(&qp.c, &qp.kernel)?;
+    let fac = ctx.ws.cholesky(&qp.c, &qp.kernel)?;
     let t_factor = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     // The dual host sees the rows scaled by sᵢ (see [`row_scaling`]); C, d
@@ -148,7 +157,7 @@ pub(crate) fn solve_with(
     let mut st = Mprgp::new(&sq, fac, r, opts.tol, inner, name)?;
     let t_setup = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let mut exec = Executor::for_opts(opts, name);
+    let mut exec = ctx.executor(name);
     let (status, iters) = exec.run(&mut st);
     let t_it = t2.elapsed().as_secs_f64();
     let mut res = st.into_result(
@@ -165,7 +174,6 @@ pub(crate) fn solve_with(
     for (l, si) in res.lambda.iter_mut().zip(&s) {
         *l *= si;
     }
-    res.energy = qp.energy(&res.x);
     Ok(res)
 }
 
@@ -638,7 +646,7 @@ impl<'a> Mprgp<'a> {
         iterations: usize,
         log: Vec<IterRecord>,
         timings: Vec<(String, f64)>,
-    ) -> QpResult {
+    ) -> Output {
         let qp = self.op.qp;
         log::debug!(
             "{}: {} CG, {} expansion/blocked, {} proportioning/release steps, {} SMALBE updates, ρ = {:e}, ᾱ = {:e}",
@@ -672,7 +680,7 @@ impl<'a> Mprgp<'a> {
         } else {
             status
         };
-        QpResult {
+        Output {
             x,
             lambda,
             active,
@@ -681,10 +689,6 @@ impl<'a> Mprgp<'a> {
             inner_iterations: self.op.solves,
             log,
             timings,
-            kkt: Default::default(),
-            // Set by `solve_with` from the caller's C (the host has none).
-            energy: f64::NAN,
-            notes: vec![],
         }
     }
 }
@@ -775,13 +779,14 @@ fn power_norm(op: &mut Dual) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::qp::kkt;
     use crate::qp::ssn::tests::{compare, reference, two_blocks};
+    use crate::qp::{kkt, run_direct, SolveOptions};
 
     fn opts() -> SolveOptions {
-        SolveOptions {
-            tol: 1e-12,
-            ..Default::default()
+        {
+            let mut o = SolveOptions::default();
+            o.settings.tol = 1e-12;
+            o
         }
     }
 
@@ -812,7 +817,7 @@ mod tests {
     fn coercive_agrees_with_cgc() {
         let qp = two_blocks(9, 5, false);
         let refr = reference(&qp);
-        let r = solve(&qp, &opts()).unwrap();
+        let r = run_direct(solve, &qp, &opts()).unwrap();
         compare(&qp, &r, &refr, 1e-6);
         assert!(r.timings.iter().any(|(n, _)| n == "factor"));
     }
@@ -821,7 +826,7 @@ mod tests {
     fn semicoercive_agrees_with_cgc() {
         let qp = two_blocks(9, 5, true);
         let refr = reference(&qp);
-        let r = solve(&qp, &opts()).unwrap();
+        let r = run_direct(solve, &qp, &opts()).unwrap();
         compare(&qp, &r, &refr, 1e-6);
     }
 
@@ -830,7 +835,10 @@ mod tests {
         let mut qp = two_blocks(5, 3, true);
         qp.a = crate::qp::Csr::zeros(0, qp.n());
         qp.g.clear();
-        assert!(matches!(solve(&qp, &opts()), Err(QpError::Unsupported(_))));
+        assert!(matches!(
+            run_direct(solve, &qp, &opts()),
+            Err(QpError::Unsupported(_))
+        ));
     }
 
     #[test]
@@ -838,7 +846,7 @@ mod tests {
         let mut qp = two_blocks(5, 3, false);
         qp.a = crate::qp::Csr::zeros(0, qp.n());
         qp.g.clear();
-        let r = solve(&qp, &opts()).unwrap();
+        let r = run_direct(solve, &qp, &opts()).unwrap();
         assert!(r.status.converged(), "{:?}", r.status);
         assert!(kkt::residuals(&qp, &r.x, &r.lambda).max() <= 1e-10);
     }
@@ -852,7 +860,7 @@ mod tests {
             let qp = &prep.model.qp;
             assert!(!qp.kernel.is_empty(), "{name} should be semicoercive");
             let refr = reference(qp);
-            let r = solve(qp, &opts()).unwrap();
+            let r = run_direct(solve, qp, &opts()).unwrap();
             compare(qp, &r, &refr, 1e-6);
         }
     }
@@ -1086,9 +1094,10 @@ pub(crate) mod partial_kernel {
     /// Each method converges within `max_iter`, certifies (issue-11 KKT
     /// ≤ 1e-6) and agrees with `asm` to 1e-8 on x and λ.
     pub(crate) fn check_all(name: &str, qp: &QpProblem, methods: &[&str], max_iter: usize) {
-        let opts = SolveOptions {
-            max_iter,
-            ..Default::default()
+        let opts = {
+            let mut o = SolveOptions::default();
+            o.settings.max_iter = max_iter;
+            o
         };
         let refr = registry::solve("asm", qp, &opts).unwrap();
         assert!(refr.status.converged(), "{name} asm: {:?}", refr.status);
@@ -1147,9 +1156,10 @@ pub(crate) mod partial_kernel {
     #[test]
     fn asm_cgh_step_cap_switches_to_schur() {
         let qp = keystone(Hold::TopPoint, 1e4, 1.0, 0.05);
-        let opts = SolveOptions {
-            max_iter: 8,
-            ..Default::default()
+        let opts = {
+            let mut o = SolveOptions::default();
+            o.settings.max_iter = 8;
+            o
         };
         let refr = registry::solve("asm", &qp, &opts).unwrap();
         let r = registry::solve("asm-cgh", &qp, &opts).unwrap();

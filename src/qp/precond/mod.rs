@@ -9,6 +9,7 @@ mod ssor;
 
 use super::sparse::Csr;
 use super::QpError;
+use crate::linalg::cholesky::Workspace;
 
 pub use cholesky::CholeskyPc;
 pub use ic0::Ic0;
@@ -85,13 +86,26 @@ pub fn build(
     kernel: &[Vec<f64>],
     omega: f64,
 ) -> Result<Box<dyn Preconditioner>, QpError> {
+    build_in(kind, c, kernel, omega, &Workspace::new())
+}
+
+/// [`build`], the Cholesky factor taken from (or kept in) `ws`.
+pub fn build_in(
+    kind: PrecondKind,
+    c: &Csr,
+    kernel: &[Vec<f64>],
+    omega: f64,
+    ws: &Workspace,
+) -> Result<Box<dyn Preconditioner>, QpError> {
     Ok(match kind {
         PrecondKind::None => Box::new(Identity),
         PrecondKind::Jacobi => Box::new(Jacobi::new(c)?),
         PrecondKind::Ssor => Box::new(Ssor::new(c, omega)?),
         PrecondKind::Ic0 => Box::new(Ic0::new(c, false)?),
         PrecondKind::Mic0 => Box::new(Ic0::new(c, true)?),
-        PrecondKind::Cholesky => Box::new(CholeskyPc::new(c, kernel)?),
+        PrecondKind::Cholesky => Box::new(CholeskyPc {
+            factor: ws.cholesky(c, kernel)?,
+        }),
     })
 }
 

@@ -14,32 +14,41 @@
 //! a new constraint, or KMAX steps); the CG steps are the inner iterations.
 
 use crate::linalg::sparse::{axpy, dot, norm, norm_inf};
-use crate::qp::executor::{Executor, Iterative, Step};
+use crate::qp::executor::{Iterative, Step};
 use crate::qp::precond::{self, Preconditioner};
-use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status, MAXVAL};
-use std::time::Instant;
+use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status, MAXVAL};
 
-/// Solve `qp` by CGC with the preconditioner of `opts`.
-pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
-    let t0 = Instant::now();
-    let pc = precond::build(opts.preconditioner, &qp.c, &qp.kernel, opts.omega)?;
-    let t_pc = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
-    let x0 = opts
-        .x0
-        .as_deref()
-        .filter(|x| x.len() == qp.n() && is_feasible(qp, x));
-    let mut state = Cgc::new(qp, pc.as_ref(), opts.tol, opts.multiple_release, x0);
-    state.kmax_cap = opts.max_iter.max(1);
-    let mut exec = Executor::for_opts(opts, "cgc");
-    let (status, iters) = exec.run(&mut state);
-    let t_it = t1.elapsed().as_secs_f64();
-    Ok(state.into_result(
-        status,
-        iters,
-        exec.log,
-        vec![("precondition".into(), t_pc), ("iterate".into(), t_it)],
-    ))
+/// CGC: conjugate gradients with constraints (docs/methods.md §4.1),
+/// preconditioned (§4.2) as the settings say.
+pub struct CgcMethod;
+
+impl Method for CgcMethod {
+    fn name(&self) -> &'static str {
+        "cgc"
+    }
+    fn summary(&self) -> &'static str {
+        "conjugate gradients with constraints (§4.1), preconditioned (§4.2)"
+    }
+    fn preconditioned(&self) -> bool {
+        true
+    }
+    fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+        solve(qp, ctx)
+    }
+}
+
+/// Solve `qp` by CGC with the preconditioner of the settings.
+pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+    let s = ctx.settings;
+    let pc = ctx.phase("precondition", |ctx| {
+        precond::build_in(s.cgc.preconditioner, &qp.c, &qp.kernel, s.cgc.omega, ctx.ws)
+    })?;
+    let x0 = ctx.x0.filter(|x| x.len() == qp.n() && is_feasible(qp, x));
+    let mut state = Cgc::new(qp, pc.as_ref(), s.tol, s.cgc.multiple_release, x0);
+    state.kmax_cap = s.max_iter.max(1);
+    let mut exec = ctx.executor("cgc");
+    let (status, iters) = ctx.phase("iterate", |_| exec.run(&mut state));
+    Ok(state.into_result(status, iters, exec.log, vec![]))
 }
 
 /// The CGC state: iterate, gradient, working set.
@@ -311,20 +320,19 @@ impl<'a> Cgc<'a> {
         }
     }
 
-    /// Package the state as a [`QpResult`] (KKT filled in by the registry).
+    /// Package the state as an [`Output`] (the driver certifies it).
     pub fn into_result(
         self,
         status: Status,
         iterations: usize,
         log: Vec<IterRecord>,
         timings: Vec<(String, f64)>,
-    ) -> QpResult {
+    ) -> Output {
         let m = self.qp.m();
         let lambda: Vec<f64> = (0..m)
             .map(|i| if self.in_j[i] { self.lam[i] } else { 0.0 })
             .collect();
-        let energy = self.qp.energy(&self.x);
-        QpResult {
+        Output {
             active: self.in_j.clone(),
             x: self.x,
             lambda,
@@ -333,9 +341,6 @@ impl<'a> Cgc<'a> {
             inner_iterations: self.inner,
             log,
             timings,
-            kkt: Default::default(),
-            energy,
-            notes: vec![],
         }
     }
 }

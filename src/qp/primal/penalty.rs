@@ -6,12 +6,12 @@
 //! ```
 //!
 //! minimised by block relaxation: one sweep = Gauss–Seidel/SOR (ω =
-//! `opts.omega`, 1 = Gauss–Seidel) over the x_i with the current s_j =
+//! `omega`, 1 = Gauss–Seidel) over the x_i with the current s_j =
 //! (a_j,x) − g_j + t_j, then the exact projected minimisation
 //! t_j = max(0, g_j − (a_j,x)), so s_j = ((a_j,x) − g_j)⁺. The sweep allocates
 //! nothing (C by rows, Aᵀ by rows = A by columns).
 //!
-//! ε_p: `opts.penalty` (one value for every row, as in the report), or by
+//! ε_p: the setting `penalty` (one value for every row, as in the report), or by
 //! default one per row, ε_j = 1/(10³ · min c_kk over the unknowns k of row
 //! j): 1/ε_j three orders of magnitude above the stiffness of the softer body
 //! the row touches, whose motion the violation O(ε_j·λ_j) is measured against (the report's best values were one to two orders above the
@@ -23,12 +23,12 @@
 //! the penalised stationarity then stalled at 1.2·10⁻⁶).
 //!
 //! Stopping: ERR = ‖x^{k+1} − x^k‖ / max(‖x^k‖, tiny) < tol (§5 made
-//! relative), MAXIT = `opts.max_iter` sweeps. Result: λ = (Ax − g)⁺/ε_p,
+//! relative), MAXIT = `max_iter` sweeps. Result: λ = (Ax − g)⁺/ε_p,
 //! active = {λ > 0}; the largest constraint violation max (Ax − g)⁺ (= O(ε_p))
 //! is reported by `log::info!`. The KKT stationarity holds exactly for this λ
 //! at the penalty minimiser; primal feasibility only to O(ε_p).
 //!
-//! **Subspace correction** (`opts.accelerate`, default on; not in the
+//! **Subspace correction** (`accelerate`, default on; not in the
 //! report). Gauss–Seidel on h_ε converges at the rate of GS on the stiffened
 //! C + A_JᵀA_J/ε_p: on the shipped models 100 000 sweeps did not reach
 //! tol = 1e-10 (ω = 1 to 1.95 made no difference). So every
@@ -46,11 +46,10 @@
 //! and the penalised problem has a minimiser whenever the contact holds the
 //! floating bodies (otherwise the sweeps drift and MAXIT is reported).
 
+use crate::linalg::cholesky::Workspace;
 use crate::linalg::sparse::{norm, Csr};
-use crate::qp::active_set::check_common;
-use crate::qp::executor::{Executor, Iterative, Step};
-use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
-use std::time::Instant;
+use crate::qp::executor::{Iterative, Step};
+use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status};
 
 /// Default ε_p = 1/(PENALTY_FACTOR · max diag C).
 pub const PENALTY_FACTOR: f64 = 1e3;
@@ -59,25 +58,64 @@ pub const CORRECTION_EVERY: usize = 10;
 /// Newton steps per correction at most.
 pub const NEWTON_STEPS: usize = 30;
 
-pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
-    check_common(qp, opts)?;
-    if !(opts.omega.is_finite() && opts.omega > 0.0 && opts.omega < 2.0) {
-        return Err(QpError::BadParameter(format!(
-            "penalty: relaxation ω must lie in (0, 2), got {}",
-            opts.omega
-        )));
+/// Exterior penalty with relaxation (docs/methods.md §4.4).
+pub struct PenaltyMethod;
+
+impl Method for PenaltyMethod {
+    fn name(&self) -> &'static str {
+        "penalty"
     }
-    let t0 = Instant::now();
+    fn summary(&self) -> &'static str {
+        "exterior penalty with Gauss–Seidel/SOR relaxation (§4.4)"
+    }
+    fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+        solve(qp, ctx)
+    }
+}
+
+pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+    let ps = &ctx.settings.penalty;
+    let mut st = ctx.phase("setup", |ctx| setup(qp, ctx))?;
+    let mut exec = ctx.executor("penalty");
+    let (status, iters) = ctx.phase("iterate", |_| exec.run(&mut st));
+    let ax = qp.a.mul(&st.x);
+    let viol: Vec<f64> = ax
+        .iter()
+        .zip(&qp.g)
+        .map(|(a, g)| (a - g).max(0.0))
+        .collect();
+    let vmax = viol.iter().fold(0.0f64, |a, &b| a.max(b));
+    let eps: Vec<f64> = st.inv_eps.iter().map(|v| 1.0 / v).collect();
+    let (emin, emax) = eps
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &e| (a.min(e), b.max(e)));
+    log::info!(
+        "penalty: ε_p from {emin:.3e} to {emax:.3e}, ω = {}, {iters} sweeps, {} of {} subspace corrections accepted, \
+         max constraint violation {vmax:.3e}",
+        ps.omega,
+        st.corrections,
+        st.factorizations
+    );
+    let lambda: Vec<f64> = viol.iter().zip(&eps).map(|(v, e)| v / e).collect();
+    let active = lambda.iter().map(|&l| l > 0.0).collect();
+    Ok(Output {
+        x: st.x,
+        lambda,
+        active,
+        status,
+        iterations: iters,
+        inner_iterations: st.factorizations,
+        log: exec.log,
+        timings: vec![],
+    })
+}
+
+/// ε per row, the relaxation diagonal and the start x = 0.
+fn setup<'a>(qp: &'a QpProblem, ctx: &Context<'a>) -> Result<Relax<'a>, QpError> {
+    let ps = &ctx.settings.penalty;
     let cdiag = qp.c.diag();
-    let eps: Vec<f64> = match opts.penalty {
-        Some(e) => {
-            if !(e.is_finite() && e > 0.0) {
-                return Err(QpError::BadParameter(format!(
-                    "penalty: ε_p must be positive, got {e}"
-                )));
-            }
-            vec![e; qp.m()]
-        }
+    let eps: Vec<f64> = match ps.eps {
+        Some(e) => vec![e; qp.m()],
         None => (0..qp.m())
             .map(|j| {
                 let kmin =
@@ -116,65 +154,28 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     let s: Vec<f64> = (0..m)
         .map(|j| (qp.a.row_dot(j, &x) - qp.g[j]).max(0.0))
         .collect();
-    let mut st = Relax {
+    Ok(Relax {
         qp,
-        at: &at,
+        at,
         diag,
         inv_eps: eps.iter().map(|e| 1.0 / e).collect(),
-        omega: opts.omega,
-        tol: opts.tol,
+        omega: ps.omega,
+        tol: ctx.settings.tol,
         x_old: x.clone(),
         x,
         s,
-        correct: opts.accelerate,
+        correct: ps.accelerate,
         sweeps: 0,
         corrections: 0,
         factorizations: 0,
-    };
-    let t_setup = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
-    let mut exec = Executor::for_opts(opts, "penalty");
-    let (status, iters) = exec.run(&mut st);
-    let t_it = t1.elapsed().as_secs_f64();
-    let ax = qp.a.mul(&st.x);
-    let viol: Vec<f64> = ax
-        .iter()
-        .zip(&qp.g)
-        .map(|(a, g)| (a - g).max(0.0))
-        .collect();
-    let vmax = viol.iter().fold(0.0f64, |a, &b| a.max(b));
-    let (emin, emax) = eps
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(a, b), &e| (a.min(e), b.max(e)));
-    log::info!(
-        "penalty: ε_p from {emin:.3e} to {emax:.3e}, ω = {}, {iters} sweeps, {} of {} subspace corrections accepted, \
-         max constraint violation {vmax:.3e}",
-        opts.omega,
-        st.corrections,
-        st.factorizations
-    );
-    let lambda: Vec<f64> = viol.iter().zip(&eps).map(|(v, e)| v / e).collect();
-    let active = lambda.iter().map(|&l| l > 0.0).collect();
-    let energy = qp.energy(&st.x);
-    Ok(QpResult {
-        x: st.x,
-        lambda,
-        active,
-        status,
-        iterations: iters,
-        inner_iterations: st.factorizations,
-        log: exec.log,
-        timings: vec![("setup".into(), t_setup), ("iterate".into(), t_it)],
-        kkt: Default::default(),
-        energy,
-        notes: vec![],
+        ws: ctx.ws,
     })
 }
 
 struct Relax<'a> {
     qp: &'a QpProblem,
     /// Aᵀ (row i = the constraints DOF i occurs in)
-    at: &'a Csr,
+    at: Csr,
     /// c_ii + Σ_j a_ji² / ε_j
     diag: Vec<f64>,
     /// 1/ε_j per contact row.
@@ -191,6 +192,8 @@ struct Relax<'a> {
     /// Accepted corrections / factorizations made.
     corrections: usize,
     factorizations: usize,
+    /// Where the correction factors reuse their symbolic analysis.
+    ws: &'a Workspace,
 }
 
 impl Relax<'_> {
@@ -249,14 +252,12 @@ impl Relax<'_> {
         // A floating body J does not hold yet makes K singular: then the
         // spring-regularised K + S (fixing DOFs, [`Cholesky::new`]) still
         // gives a descent direction −(K + S)⁻¹∇g_ε.
-        let fac = match crate::linalg::cholesky::Cholesky::new(&k, &[]) {
+        let fac = match self.ws.cholesky(&k, &[]) {
             Ok(f) => f,
-            Err(_) if !qp.kernel.is_empty() => {
-                match crate::linalg::cholesky::Cholesky::new(&k, &qp.kernel) {
-                    Ok(f) => f,
-                    Err(_) => return false,
-                }
-            }
+            Err(_) if !qp.kernel.is_empty() => match self.ws.cholesky(&k, &qp.kernel) {
+                Ok(f) => f,
+                Err(_) => return false,
+            },
             Err(_) => return false,
         };
         let kx = k.mul(&self.x);

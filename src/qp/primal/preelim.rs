@@ -20,18 +20,30 @@
 //! C11 itself is singular the method refuses (`QpError::Unsupported`).
 //! More than [`MAX_P`] constrained DOFs are refused (dense P² storage).
 
-use crate::linalg::cholesky::Cholesky;
 use crate::linalg::sparse::Csr;
-use crate::qp::active_set::check_common;
 use crate::qp::precond::PrecondKind;
-use crate::qp::{primal::cgc, QpError, QpProblem, QpResult, SolveOptions, Status};
-use std::time::Instant;
+use crate::qp::{primal::cgc, Context, Method, Output, QpError, QpProblem, Settings, Status};
 
 /// Largest number of constrained DOFs for the dense Schur complement.
 pub const MAX_P: usize = 5000;
 
-pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
-    check_common(qp, opts)?;
+/// Pre-elimination onto the contact DOFs, the reduced QP solved by CGC with
+/// the Cholesky preconditioner (docs/methods.md §4.3).
+pub struct PreelimMethod;
+
+impl Method for PreelimMethod {
+    fn name(&self) -> &'static str {
+        "preelim"
+    }
+    fn summary(&self) -> &'static str {
+        "pre-elimination: dense Schur complement onto the contact DOFs, then CGC (§4.3)"
+    }
+    fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+        solve(qp, ctx)
+    }
+}
+
+pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
     let n = qp.n();
     let mut is_p = vec![false; n];
     for (&c, &v) in qp.a.indices.iter().zip(&qp.a.data) {
@@ -42,7 +54,6 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     let pdofs: Vec<usize> = (0..n).filter(|&i| is_p[i]).collect();
     let ldofs: Vec<usize> = (0..n).filter(|&i| !is_p[i]).collect();
     let np = pdofs.len();
-    let nl = ldofs.len();
     if np > MAX_P {
         return Err(QpError::Unsupported(format!(
             "preelim: {np} constrained DOFs > {MAX_P}; the dense Schur complement C̄22 would need P² = {} \
@@ -61,7 +72,50 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     }
 
     // C11 and the factor.
-    let t0 = Instant::now();
+    let f11 = ctx.phase("factor", |ctx| factor_c11(qp, &ldofs, &is_p, &pos, ctx))?;
+
+    // C̄22 column by column, d̄2.
+    let (red, np) = ctx.phase("schur", |_| {
+        schur(qp, &pdofs, &ldofs, &is_p, &pos, f11.as_ref())
+    });
+
+    // Reduced QP by CGC, injected with its own settings.
+    let rsettings = Settings {
+        cgc: crate::qp::settings::CgcSettings {
+            preconditioner: PrecondKind::Cholesky,
+            ..ctx.settings.cgc
+        },
+        ..ctx.settings.clone()
+    };
+    let r = ctx.phase("reduced-cgc", |ctx| {
+        cgc::solve(&red, &mut ctx.sub(&rsettings))
+    })?;
+
+    // Back substitution x1 = C11⁻¹(d1 − C12 x2).
+    let (x, status) = ctx.phase("backsubstitute", |_| {
+        back_substitute(qp, &pdofs, &ldofs, &is_p, f11.as_ref(), &r)
+    });
+    Ok(Output {
+        x,
+        lambda: r.lambda,
+        active: r.active,
+        status,
+        iterations: r.iterations,
+        inner_iterations: r.inner_iterations + np,
+        log: r.log,
+        timings: vec![],
+    })
+}
+
+/// The sparse Cholesky factor of C11 = C[L,L] (None when L is empty).
+fn factor_c11(
+    qp: &QpProblem,
+    ldofs: &[usize],
+    is_p: &[bool],
+    pos: &[usize],
+    ctx: &Context,
+) -> Result<Option<crate::linalg::cholesky::Cholesky>, QpError> {
+    let nl = ldofs.len();
     let mut trip = Vec::new();
     for (kl, &i) in ldofs.iter().enumerate() {
         let (c, v) = qp.c.row(i);
@@ -73,20 +127,27 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     }
     let c11 = Csr::from_triplets(nl, nl, &trip);
     drop(trip);
-    let f11 = if nl > 0 {
-        Some(Cholesky::new(&c11, &[]).map_err(|e| {
-            QpError::Unsupported(format!(
-                "preelim: the stiffness block C11 of the non-contact DOFs is singular ({e}); a body can move \
-                 even with its contact DOFs fixed (use cgc)"
-            ))
-        })?)
-    } else {
-        None
-    };
-    let t_f = t0.elapsed().as_secs_f64();
+    if nl == 0 {
+        return Ok(None);
+    }
+    ctx.ws.cholesky(&c11, &[]).map(Some).map_err(|e| {
+        QpError::Unsupported(format!(
+            "preelim: the stiffness block C11 of the non-contact DOFs is singular ({e}); a body can move \
+             even with its contact DOFs fixed (use cgc)"
+        ))
+    })
+}
 
-    // C̄22 column by column, d̄2.
-    let t1 = Instant::now();
+/// The reduced problem on P: C̄22, d̄2, A2, g and the kernel restricted to P.
+fn schur(
+    qp: &QpProblem,
+    pdofs: &[usize],
+    ldofs: &[usize],
+    is_p: &[bool],
+    pos: &[usize],
+    f11: Option<&crate::linalg::cholesky::Cholesky>,
+) -> (QpProblem, usize) {
+    let (np, nl) = (pdofs.len(), ldofs.len());
     // C12ᵀ w for w on L: entry q = Σ_{l} C[P[q], L[l]] w_l (rows of C at P DOFs).
     let c12t_mul = |w: &[f64], out: &mut [f64]| {
         for (q, &pi) in pdofs.iter().enumerate() {
@@ -168,24 +229,25 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         g: qp.g.clone(),
         kernel,
     };
-    let t_s = t1.elapsed().as_secs_f64();
+    (red, np)
+}
 
-    // Reduced QP by CGC.
-    let t2 = Instant::now();
-    let ropts = SolveOptions {
-        preconditioner: PrecondKind::Cholesky,
-        ..opts.clone()
-    };
-    let r = cgc::solve(&red, &ropts)?;
-    let t_r = t2.elapsed().as_secs_f64();
-
-    // Back substitution x1 = C11⁻¹(d1 − C12 x2).
-    let t3 = Instant::now();
+/// x from the reduced solution: x2 = r.x on P, x1 = C11⁻¹(d1 − C12 x2) on L;
+/// an unbounded direction of the reduced problem extends the same way.
+fn back_substitute(
+    qp: &QpProblem,
+    pdofs: &[usize],
+    ldofs: &[usize],
+    is_p: &[bool],
+    f11: Option<&crate::linalg::cholesky::Cholesky>,
+    r: &Output,
+) -> (Vec<f64>, Status) {
+    let (n, np) = (qp.n(), pdofs.len());
     let mut x = vec![0.0; n];
     for (k, &i) in pdofs.iter().enumerate() {
         x[i] = r.x[k];
     }
-    if let Some(f) = &f11 {
+    if let Some(f) = f11 {
         let mut rhs: Vec<f64> = ldofs.iter().map(|&i| qp.d[i]).collect();
         for (kl, &i) in ldofs.iter().enumerate() {
             let (c, v) = qp.c.row(i);
@@ -202,13 +264,13 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         }
     }
     // An unbounded direction of the reduced problem extends by x1 = −C11⁻¹C12 x2.
-    let status = match r.status {
+    let status = match &r.status {
         Status::Unbounded { direction } if direction.len() == np => {
             let mut full = vec![0.0; n];
             for (k, &i) in pdofs.iter().enumerate() {
                 full[i] = direction[k];
             }
-            if let Some(f) = &f11 {
+            if let Some(f) = f11 {
                 let mut rhs: Vec<f64> = ldofs
                     .iter()
                     .map(|&i| {
@@ -227,24 +289,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
             }
             Status::Unbounded { direction: full }
         }
-        s => s,
+        s => s.clone(),
     };
-    let t_b = t3.elapsed().as_secs_f64();
-    let mut timings = vec![("factor".to_string(), t_f), ("schur".to_string(), t_s)];
-    timings.push(("reduced-cgc".into(), t_r));
-    timings.push(("backsubstitute".into(), t_b));
-    let energy = qp.energy(&x);
-    Ok(QpResult {
-        x,
-        lambda: r.lambda,
-        active: r.active,
-        status,
-        iterations: r.iterations,
-        inner_iterations: r.inner_iterations + np,
-        log: r.log,
-        timings,
-        kkt: Default::default(),
-        energy,
-        notes: vec![],
-    })
+    (x, status)
 }

@@ -134,10 +134,11 @@
 //! Counts: `iterations` = KKT solves; `inner_iterations` = solves with the
 //! sparse factor (one per cached column plus one for K⁻¹d).
 
-use crate::linalg::cholesky::{factor_cost, Cholesky};
+use crate::linalg::cholesky::{factor_cost, Cholesky, Workspace};
 use crate::linalg::sparse::{dot, norm, norm_inf, Csr};
-use crate::qp::executor::{Executor, Iterative, Step};
-use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
+use crate::qp::executor::{Iterative, Step};
+use crate::qp::settings::SsnPath;
+use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status};
 use std::collections::{HashMap, HashSet};
 use std::rc::Rc;
 use std::time::Instant;
@@ -175,17 +176,30 @@ const REFINE_MAX: usize = 3;
 /// The certificate an answer must meet to be returned as converged.
 pub(crate) const CERT_TARGET: f64 = 1e-6;
 
-/// Solve `qp` by the semismooth Newton (primal–dual active set) method.
-pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
-    check_dims(qp)?;
-    if !(opts.tol > 0.0 && opts.tol < 1.0) {
-        return Err(QpError::BadParameter(format!(
-            "ssn: tol = {} must lie in (0, 1)",
-            opts.tol
-        )));
+/// Semismooth Newton / primal–dual active set (docs/methods.md §7).
+pub struct SsnMethod;
+
+impl Method for SsnMethod {
+    fn name(&self) -> &'static str {
+        "ssn"
     }
-    let path = Path::parse(opts.ssn_path.as_deref())?;
-    solve_with(qp, opts, path)
+    fn summary(&self) -> &'static str {
+        "semismooth Newton / primal–dual active set, Schur complement with one Cholesky factor (§7)"
+    }
+    fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+        solve(qp, ctx)
+    }
+}
+
+/// Solve `qp` by the semismooth Newton (primal–dual active set) method.
+pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+    let path = match ctx.settings.ssn.path {
+        SsnPath::Auto => Path::Auto,
+        SsnPath::Augmented => Path::Augmented,
+        SsnPath::Refactor => Path::Refactor,
+        SsnPath::Schur => Path::Schur,
+    };
+    solve_traced(qp, ctx, path).map(|(r, _)| r)
 }
 
 /// Which linear algebra the KKT solves use (module doc).
@@ -201,43 +215,28 @@ pub(crate) enum Path {
     Schur,
 }
 
-impl Path {
-    /// `SolveOptions::ssn_path`: None or "auto", "augmented", "refactor", "schur".
-    pub(crate) fn parse(s: Option<&str>) -> Result<Path, QpError> {
-        Ok(match s {
-            None | Some("auto") => Path::Auto,
-            Some("augmented") => Path::Augmented,
-            Some("refactor") => Path::Refactor,
-            Some("schur") => Path::Schur,
-            Some(o) => {
-                return Err(QpError::BadParameter(format!(
-                    "ssn: unknown path \"{o}\"; known: auto, augmented, refactor, schur"
-                )))
-            }
-        })
-    }
-}
-
 /// [`solve`] with the linear-algebra path fixed (tests).
+#[cfg(test)]
 pub(crate) fn solve_with(
     qp: &QpProblem,
-    opts: &SolveOptions,
+    opts: &crate::qp::SolveOptions,
     path: Path,
-) -> Result<QpResult, QpError> {
-    solve_traced(qp, opts, path).map(|(r, _)| r)
+) -> Result<Output, QpError> {
+    let ws = Workspace::new();
+    solve_traced(qp, &mut Context::new(opts, &ws), path).map(|(r, _)| r)
 }
 
-/// [`solve_with`], also returning the path of every KKT solve (true =
-/// augmented), refinements included.
+/// [`solve`] with the path fixed, also returning the path of every KKT
+/// solve (true = augmented), refinements included.
 pub(crate) fn solve_traced(
     qp: &QpProblem,
-    opts: &SolveOptions,
+    ctx: &mut Context,
     path: Path,
-) -> Result<(QpResult, Vec<bool>), QpError> {
+) -> Result<(Output, Vec<bool>), QpError> {
     let augmented = path != Path::Schur;
     let t0 = Instant::now();
     let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
-    let mut st = Ssn::new(qp, r, opts.tol, augmented);
+    let mut st = Ssn::new(qp, r, ctx.settings.tol, augmented, ctx.ws);
     st.auto = path == Path::Auto;
     st.lowrank = path != Path::Refactor;
     if st.aug.is_some() {
@@ -246,7 +245,7 @@ pub(crate) fn solve_traced(
     if !augmented {
         st.ensure_dense()?;
     }
-    let mut exec = Executor::for_opts(opts, "ssn");
+    let mut exec = ctx.executor("ssn");
     let (status, iters) = exec.run(&mut st);
     if let Some(e) = st.error.take() {
         return Err(e);
@@ -388,24 +387,6 @@ impl AugPattern {
     }
 }
 
-/// Consistent sizes of C, d, A, g and the kernel vectors.
-pub(crate) fn check_dims(qp: &QpProblem) -> Result<(), QpError> {
-    let n = qp.n();
-    let m = qp.m();
-    if qp.c.nrows != n || qp.c.ncols != n || qp.a.nrows != m || (m > 0 && qp.a.ncols != n) {
-        return Err(QpError::BadParameter(format!(
-            "inconsistent QP sizes: C {}×{}, d {}, A {}×{}, g {}",
-            qp.c.nrows, qp.c.ncols, n, qp.a.nrows, qp.a.ncols, m
-        )));
-    }
-    if qp.kernel.iter().any(|z| z.len() != n) {
-        return Err(QpError::BadParameter(
-            "a kernel vector has the wrong length".into(),
-        ));
-    }
-    Ok(())
-}
-
 /// K_J = K' + UᵀΣU for the rows whose membership changed since K' was
 /// factored (σ = +ρ_j entering, −ρ_j leaving): Sherman–Morrison–Woodbury,
 /// K_J⁻¹ = K'⁻¹ − Z W⁻¹ Zᵀ with Z = K'⁻¹Uᵀ (n×r, kept) and the small
@@ -540,6 +521,8 @@ impl LowRank {
 /// The state of the iteration.
 struct Ssn<'a> {
     qp: &'a QpProblem,
+    /// Where factorizations reuse the symbolic analysis of the same pattern.
+    ws: &'a Workspace,
     /// Factor of C (+ springs) for the Schur-complement path, made on demand.
     fac: Option<Cholesky>,
     /// The augmented path: pattern of C + AᵀA, ρ_j per row, the factor of K_J.
@@ -590,7 +573,13 @@ struct Ssn<'a> {
 }
 
 impl<'a> Ssn<'a> {
-    fn new(qp: &'a QpProblem, r: Vec<Vec<f64>>, tol: f64, augmented: bool) -> Ssn<'a> {
+    fn new(
+        qp: &'a QpProblem,
+        r: Vec<Vec<f64>>,
+        tol: f64,
+        augmented: bool,
+        ws: &'a Workspace,
+    ) -> Ssn<'a> {
         let m = qp.m();
         let ar: Vec<Vec<f64>> = (0..m)
             .map(|i| r.iter().map(|rl| qp.a.row_dot(i, rl)).collect())
@@ -614,6 +603,7 @@ impl<'a> Ssn<'a> {
         });
         Ssn {
             qp,
+            ws,
             fac: None,
             rho: if aug.is_some() {
                 let cmax = norm_inf(&diag);
@@ -660,7 +650,7 @@ impl<'a> Ssn<'a> {
     fn ensure_dense(&mut self) -> Result<(), QpError> {
         if self.fac.is_none() {
             let t = Instant::now();
-            let fac = Cholesky::new(&self.qp.c, &self.qp.kernel)?;
+            let fac = self.ws.cholesky(&self.qp.c, &self.qp.kernel)?;
             self.t_factor += t.elapsed().as_secs_f64();
             self.x0 = fac.solve(&self.qp.d);
             self.solves += 1;
@@ -731,7 +721,7 @@ impl<'a> Ssn<'a> {
                 self.kfac_set = None;
                 self.zcache.clear();
                 let t = Instant::now();
-                let fac = Cholesky::new(&aug.k, &[]).ok();
+                let fac = self.ws.cholesky(&aug.k, &[]).ok();
                 self.t_factor += t.elapsed().as_secs_f64();
                 self.kfac = Some(fac?);
                 self.kfac_set = Some(in_j.to_vec());
@@ -1185,9 +1175,8 @@ impl<'a> Ssn<'a> {
         iterations: usize,
         log: Vec<IterRecord>,
         timings: Vec<(String, f64)>,
-    ) -> QpResult {
-        let energy = self.qp.energy(&self.x);
-        QpResult {
+    ) -> Output {
+        Output {
             x: self.x,
             lambda: self.lam,
             active: self.in_j,
@@ -1196,9 +1185,6 @@ impl<'a> Ssn<'a> {
             inner_iterations: self.solves,
             log,
             timings,
-            kkt: Default::default(),
-            energy,
-            notes: vec![],
         }
     }
 }
@@ -1406,7 +1392,8 @@ pub(crate) fn chol_solve(l: &[f64], n: usize, b: &mut [f64]) {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::qp::{kkt, precond::PrecondKind, primal::cgc};
+    use crate::qp::executor::Executor;
+    use crate::qp::{kkt, precond::PrecondKind, primal::cgc, run_direct, SolveOptions};
 
     /// Two square spring lattices (bars along the grid lines and both
     /// diagonals, 2 DOFs per node), the lower one clamped at its bottom row,
@@ -1535,19 +1522,20 @@ pub(crate) mod tests {
         QpProblem { c, d, a, g, kernel }
     }
 
-    pub(crate) fn reference(qp: &QpProblem) -> QpResult {
-        let opts = SolveOptions {
-            tol: 1e-12,
-            preconditioner: PrecondKind::Cholesky,
-            ..Default::default()
+    pub(crate) fn reference(qp: &QpProblem) -> Output {
+        let opts = {
+            let mut o = SolveOptions::default();
+            o.settings.tol = 1e-12;
+            o.settings.cgc.preconditioner = PrecondKind::Cholesky;
+            o
         };
-        let r = cgc::solve(qp, &opts).expect("cgc");
+        let r = run_direct(cgc::solve, qp, &opts).expect("cgc");
         assert!(r.status.converged(), "cgc: {:?}", r.status);
         r
     }
 
     /// x agrees to `rel`, active sets equal, KKT ≤ 1e-8, λ ≥ 0.
-    pub(crate) fn compare(qp: &QpProblem, r: &QpResult, refr: &QpResult, rel: f64) {
+    pub(crate) fn compare(qp: &QpProblem, r: &Output, refr: &Output, rel: f64) {
         assert!(r.status.converged(), "{:?}", r.status);
         let diff: Vec<f64> = r.x.iter().zip(&refr.x).map(|(a, b)| a - b).collect();
         let e = norm(&diff) / norm(&refr.x).max(1e-300);
@@ -1569,13 +1557,14 @@ pub(crate) mod tests {
     }
 
     fn opts() -> SolveOptions {
-        SolveOptions {
-            tol: 1e-12,
-            ..Default::default()
+        {
+            let mut o = SolveOptions::default();
+            o.settings.tol = 1e-12;
+            o
         }
     }
 
-    fn nontrivial(r: &QpResult) {
+    fn nontrivial(r: &Output) {
         let na = r.active.iter().filter(|b| **b).count();
         assert!(
             na > 0 && na < r.active.len(),
@@ -1605,7 +1594,7 @@ pub(crate) mod tests {
         let qp = two_blocks(9, 5, false);
         let refr = reference(&qp);
         nontrivial(&refr);
-        let r = solve(&qp, &opts()).unwrap();
+        let r = run_direct(solve, &qp, &opts()).unwrap();
         compare(&qp, &r, &refr, 1e-6);
         assert!(r.iterations <= 15, "{} iterations", r.iterations);
         assert!(r.timings.iter().any(|(n, _)| n == "factor"));
@@ -1622,7 +1611,7 @@ pub(crate) mod tests {
         );
         let refr = reference(&qp);
         nontrivial(&refr);
-        let r = solve(&qp, &opts()).unwrap();
+        let r = run_direct(solve, &qp, &opts()).unwrap();
         compare(&qp, &r, &refr, 1e-6);
         assert!(r.iterations <= 15, "{} iterations", r.iterations);
     }
@@ -1634,7 +1623,7 @@ pub(crate) mod tests {
         let mut qp = two_blocks(9, 5, true);
         qp.g.iter_mut().for_each(|g| *g += 1e-3);
         let refr = reference(&qp);
-        let r = solve(&qp, &opts()).unwrap();
+        let r = run_direct(solve, &qp, &opts()).unwrap();
         compare(&qp, &r, &refr, 1e-6);
     }
 
@@ -1645,7 +1634,8 @@ pub(crate) mod tests {
             let qp = two_blocks(9, 5, floating);
             let refr = reference(&qp);
             let r = orthonormal_kernel(&qp.c, &qp.kernel).unwrap();
-            let mut st = Ssn::new(&qp, r, 1e-12, augmented);
+            let ws_st = Workspace::new();
+            let mut st = Ssn::new(&qp, r, 1e-12, augmented, &ws_st);
             st.single = true;
             let mut exec = Executor::new(200, None);
             let (status, iters) = exec.run(&mut st);
@@ -1661,9 +1651,12 @@ pub(crate) mod tests {
         for floating in [false, true] {
             let qp = two_blocks(12, 6, floating);
             let refr = reference(&qp);
-            let (_, s0) = crate::linalg::cholesky::reuse_counts();
-            let a = solve_with(&qp, &opts(), Path::Refactor).unwrap();
-            let (_, s1) = crate::linalg::cholesky::reuse_counts();
+            let ws = Workspace::new();
+            let (_, s0) = ws.reuse_counts();
+            let a = solve_traced(&qp, &mut Context::new(&opts(), &ws), Path::Refactor)
+                .unwrap()
+                .0;
+            let (_, s1) = ws.reuse_counts();
             let u = solve_with(&qp, &opts(), Path::Augmented).unwrap();
             compare(&qp, &u, &refr, 1e-6);
             assert_eq!(a.active, u.active);
@@ -1708,14 +1701,16 @@ pub(crate) mod tests {
             let mut j2 = j1.clone();
             j2[0] = false;
             j2[m / 2] = false;
-            let mut st = Ssn::new(&qp, r.clone(), 1e-12, true);
+            let ws_st = Workspace::new();
+            let mut st = Ssn::new(&qp, r.clone(), 1e-12, true, &ws_st);
             st.kkt_solve_aug(&j1).expect("J1");
             st.costs.fac_k = 1e300; // make the update look cheap
             let solves = st.solves;
             let (l_up, x_up) = st.kkt_solve_aug(&j2).expect("J2 by update");
             assert!(st.kfac_set.as_ref().unwrap() == &j1, "K' was refactored");
             assert!(st.solves > solves);
-            let mut fresh = Ssn::new(&qp, r, 1e-12, true);
+            let ws_fresh = Workspace::new();
+            let mut fresh = Ssn::new(&qp, r, 1e-12, true, &ws_fresh);
             let (l_ref, x_ref) = fresh.kkt_solve_aug(&j2).expect("J2 fresh");
             let dx = x_up
                 .iter()
@@ -1732,11 +1727,13 @@ pub(crate) mod tests {
             assert_eq!(l_up[0], 0.0);
             // Now back to J1: the update is empty (r = 0), the factor is K' itself.
             let (_, x_back) = st.kkt_solve_aug(&j1).expect("J1 again");
+            let ws1 = Workspace::new();
             let mut fresh1 = Ssn::new(
                 &qp,
                 orthonormal_kernel(&qp.c, &qp.kernel).unwrap(),
                 1e-12,
                 true,
+                &ws1,
             );
             let (_, x1) = fresh1.kkt_solve_aug(&j1).unwrap();
             let d1 = x_back
@@ -1753,7 +1750,7 @@ pub(crate) mod tests {
         let mut qp = two_blocks(5, 3, true);
         qp.a = Csr::zeros(0, qp.n());
         qp.g.clear();
-        let r = solve(&qp, &opts()).unwrap();
+        let r = run_direct(solve, &qp, &opts()).unwrap();
         assert!(matches!(r.status, Status::Failed(_)), "{:?}", r.status);
     }
 
@@ -1762,7 +1759,7 @@ pub(crate) mod tests {
         let mut qp = two_blocks(5, 3, false);
         qp.a = Csr::zeros(0, qp.n());
         qp.g.clear();
-        let r = solve(&qp, &opts()).unwrap();
+        let r = run_direct(solve, &qp, &opts()).unwrap();
         assert!(r.status.converged());
         let k = kkt::residuals(&qp, &r.x, &r.lambda);
         assert!(k.max() <= 1e-10, "{k:?}");
@@ -1772,7 +1769,10 @@ pub(crate) mod tests {
     fn wrong_kernel_is_rejected() {
         let mut qp = two_blocks(5, 3, true);
         qp.kernel[0][0] += 1.0;
-        assert!(matches!(solve(&qp, &opts()), Err(QpError::BadParameter(_))));
+        assert!(matches!(
+            run_direct(solve, &qp, &opts()),
+            Err(QpError::BadParameter(_))
+        ));
     }
 
     pub(crate) fn example(name: &str) -> crate::pipeline::Prepared {
@@ -1818,7 +1818,7 @@ pub(crate) mod tests {
     #[test]
     fn growth_limit_computes_few_columns() {
         let qp = string_on_parabola(2001);
-        let refr = crate::qp::dual::mprgp::solve(&qp, &opts()).unwrap();
+        let refr = run_direct(crate::qp::dual::mprgp::solve, &qp, &opts()).unwrap();
         assert!(refr.status.converged(), "mprgp: {:?}", refr.status);
         let r = solve_with(&qp, &opts(), Path::Schur).unwrap();
         compare(&qp, &r, &refr, 1e-6);
@@ -1868,7 +1868,7 @@ pub(crate) mod tests {
         ] {
             let prep = example(name);
             let qp = &prep.model.qp;
-            let r = solve(qp, &opts()).unwrap();
+            let r = run_direct(solve, qp, &opts()).unwrap();
             // cantilevers: the glued start is far from the solution (half the
             // interface opens), PDAS releases it in 17 steps.
             let maxit = if name == "cantilevers" { 20 } else { 15 };
@@ -1876,7 +1876,7 @@ pub(crate) mod tests {
             let refr = if ["floating_block", "two_blocks", "three_bodies"].contains(&name) {
                 reference(qp)
             } else {
-                let m = crate::qp::dual::mprgp::solve(qp, &opts()).unwrap();
+                let m = run_direct(crate::qp::dual::mprgp::solve, qp, &opts()).unwrap();
                 assert!(m.status.converged(), "{name}: mprgp {:?}", m.status);
                 m
             };
@@ -1889,7 +1889,7 @@ pub(crate) mod tests {
         let prep = example("floating_block");
         let qp = &prep.model.qp;
         assert_eq!(qp.kernel.len(), 1);
-        let r = solve(qp, &SolveOptions::default()).unwrap();
+        let r = run_direct(solve, qp, &SolveOptions::default()).unwrap();
         assert!(r.status.converged(), "{:?}", r.status);
         assert!(r.iterations <= 15, "{} iterations", r.iterations);
         // total vertical contact force = 1e5 + 2500·9.81 N/m (meshes/floating_block.toml)
@@ -2057,7 +2057,7 @@ pub(crate) mod tests {
             let schur = solve_with(&qp, &o, Path::Schur).unwrap();
             assert!(schur.status.converged(), "{contrast:e}: {:?}", schur.status);
             nontrivial(&schur);
-            let asm = crate::qp::active_set::solve(&qp, &o).unwrap();
+            let asm = run_direct(crate::qp::active_set::solve, &qp, &o).unwrap();
             assert!(asm.status.converged(), "asm {contrast:e}: {:?}", asm.status);
             // Rounding floor: C x of the stiff body (a rigid motion plus a
             // deformation 1/contrast as large) is known to ε·contrast only,
@@ -2122,7 +2122,8 @@ pub(crate) mod tests {
         let mut kinds = HashSet::new();
         for qp in &probs {
             let o = opts();
-            let (a, ta) = solve_traced(qp, &o, Path::Auto).unwrap();
+            let (a, ta) =
+                solve_traced(qp, &mut Context::new(&o, &Workspace::new()), Path::Auto).unwrap();
             let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
             let s2 = stop.clone();
             let busy = std::thread::spawn(move || {
@@ -2132,7 +2133,8 @@ pub(crate) mod tests {
                 }
                 v
             });
-            let (b, tb) = solve_traced(qp, &o, Path::Auto).unwrap();
+            let (b, tb) =
+                solve_traced(qp, &mut Context::new(&o, &Workspace::new()), Path::Auto).unwrap();
             stop.store(true, std::sync::atomic::Ordering::Relaxed);
             busy.join().unwrap();
             assert!(a.status.converged(), "{:?}", a.status);
@@ -2171,19 +2173,26 @@ pub(crate) mod tests {
         );
     }
 
+    /// The path is a setting: an unknown name is refused when the settings
+    /// are read, a known one is taken.
     #[test]
     fn path_option() {
         let qp = two_blocks(9, 5, false);
-        let o = SolveOptions {
+        let bad = crate::qp::SolverSection {
             ssn_path: Some("diagonal".into()),
-            ..opts()
+            ..Default::default()
         };
-        assert!(matches!(solve(&qp, &o), Err(QpError::BadParameter(_))));
-        let o = SolveOptions {
-            ssn_path: Some("schur".into()),
-            ..opts()
+        assert!(crate::qp::Settings::from_section(&bad).is_err());
+        let o = {
+            let mut o = opts();
+            o.settings.ssn.path = crate::qp::settings::SsnPath::Schur;
+            o
         };
-        let r = solve(&qp, &o).unwrap();
+        let (r, trace) =
+            solve_traced(&qp, &mut Context::new(&o, &Workspace::new()), Path::Schur).unwrap();
+        assert!(r.status.converged());
+        assert!(trace.iter().all(|aug| !aug), "{trace:?}");
+        let r = run_direct(solve, &qp, &o).unwrap();
         assert!(r.status.converged());
     }
 
@@ -2191,7 +2200,7 @@ pub(crate) mod tests {
     #[test]
     fn certificate_rejects_nan() {
         let qp = two_blocks(9, 5, false);
-        let r = solve(&qp, &opts()).unwrap();
+        let r = run_direct(solve, &qp, &opts()).unwrap();
         assert!(certificate(&qp, &r.x, &r.lambda) <= 1e-8);
         let mut x = r.x.clone();
         x[3] = f64::NAN;

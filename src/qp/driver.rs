@@ -1,0 +1,295 @@
+//! The driver: the one place that runs a method (docs/methods.md §8).
+//!
+//! A method is a type implementing [`Method`]: it gets the problem and a
+//! [`Context`] (its validated [`Settings`], the caller's [`Workspace`] for
+//! factor reuse, the checked warm start, an [`Executor`] with the caller's
+//! observers, a phase timer) and returns an [`Output`]. Everything that is the
+//! same for every method happens here, once ([`run`]): the data check, the
+//! boundedness decision on the kernel (§8.2), the warm-start check (§8.3),
+//! the fallback when an unbounded claim fails its certificate, and the KKT
+//! certificate and energy (§8.4) that turn an [`Output`] into a [`QpResult`].
+//! A method cannot return a certificate of its own: [`Output`] has none, so a
+//! sub-solver's result (preelim's inner CGC) never carries a blank one.
+
+use super::executor::Executor;
+use super::recession::{self, Boundedness};
+use super::settings::Settings;
+use super::{kkt, IterRecord, Kkt, QpError, QpProblem, QpResult, SolveOptions, Status};
+use crate::linalg::cholesky::Workspace;
+use std::time::Instant;
+
+/// A QP method (one type per method; a family is one folder).
+pub trait Method: Sync {
+    /// The CLI name (part of the contract).
+    fn name(&self) -> &'static str;
+    /// One line for `signorini methods`.
+    fn summary(&self) -> &'static str;
+    /// Whether `--preconditioner` applies.
+    fn preconditioned(&self) -> bool {
+        false
+    }
+    fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError>;
+}
+
+/// What a method returns: the iterate and how it got there, no certificate.
+#[derive(Debug, Clone)]
+pub struct Output {
+    pub x: Vec<f64>,
+    pub lambda: Vec<f64>,
+    pub active: Vec<bool>,
+    pub status: Status,
+    /// Outer iterations (faces, active-set changes, Uzawa steps, …).
+    pub iterations: usize,
+    /// Inner iterations (CG steps, inner solves).
+    pub inner_iterations: usize,
+    pub log: Vec<IterRecord>,
+    /// Phases the method timed itself (in addition to [`Context::phase`]).
+    pub timings: Vec<(String, f64)>,
+}
+
+/// What the driver hands a method.
+pub struct Context<'a> {
+    /// The validated settings ([`Settings::validate`] has passed).
+    pub settings: &'a Settings,
+    /// Factor reuse, owned by the caller (load steps share one).
+    pub ws: &'a Workspace,
+    /// The warm start, checked by the driver (finite, plausible size).
+    pub x0: Option<&'a [f64]>,
+    opts: &'a SolveOptions,
+    timings: Vec<(String, f64)>,
+}
+
+impl<'a> Context<'a> {
+    pub fn new(opts: &'a SolveOptions, ws: &'a Workspace) -> Context<'a> {
+        Context {
+            settings: &opts.settings,
+            ws,
+            x0: opts.x0.as_deref(),
+            opts,
+            timings: vec![],
+        }
+    }
+
+    /// The context of an injected sub-solver: the same workspace, deadline
+    /// and progress, other settings, no warm start.
+    pub fn sub<'b>(&'b self, settings: &'b Settings) -> Context<'b> {
+        Context {
+            settings,
+            ws: self.ws,
+            x0: None,
+            opts: self.opts,
+            timings: vec![],
+        }
+    }
+
+    /// The executor of method `name`: MAXIT, the caller's deadline and a
+    /// progress bar labelled with the caller's label (or `name`).
+    pub fn executor(&self, name: &str) -> Executor {
+        let label = self.opts.label.clone().unwrap_or_else(|| name.to_string());
+        let mut e = Executor::new(
+            self.settings.max_iter,
+            self.opts.progress.then_some(label.as_str()),
+        );
+        e.deadline = self.opts.deadline;
+        e
+    }
+
+    /// Run `f` as the phase `name` (its wall time goes to the report only;
+    /// no decision depends on it).
+    pub fn phase<T>(&mut self, name: &str, f: impl FnOnce(&Self) -> T) -> T {
+        let t = Instant::now();
+        let r = f(self);
+        self.timings
+            .push((name.to_string(), t.elapsed().as_secs_f64()));
+        r
+    }
+
+    /// The phases timed so far (taken: a second call returns none).
+    pub fn take_timings(&mut self) -> Vec<(String, f64)> {
+        std::mem::take(&mut self.timings)
+    }
+}
+
+/// The method a solve falls back to when `name` claims an unbounded
+/// direction that fails the certificate (docs/methods.md §8.2).
+fn fallback_for(name: &str) -> &'static str {
+    if name == "ssn" {
+        "asm"
+    } else {
+        "ssn"
+    }
+}
+
+/// Run `method` on `qp`: check the problem and the settings, decide
+/// boundedness from the kernel ([`recession::boundedness`]), check the warm
+/// start, solve, check any unbounded claim ([`recession::certify`]; a claim
+/// that fails is not trusted and the solve falls back to another method, said
+/// in `notes`), and attach the KKT certificate and the energy.
+pub fn run(
+    method: &dyn Method,
+    qp: &QpProblem,
+    opts: &SolveOptions,
+    ws: &Workspace,
+) -> Result<QpResult, QpError> {
+    opts.settings.validate().map_err(QpError::BadParameter)?;
+    check_problem(qp)?;
+    let mut notes = vec![];
+    match recession::boundedness(qp) {
+        Boundedness::Unbounded(c) => return Ok(unbounded_result(qp, c.direction)),
+        Boundedness::Undecided(why) => {
+            log::debug!("boundedness undecided ({why}); the method decides, its claim is checked")
+        }
+        Boundedness::Bounded => {}
+    }
+    let mut checked;
+    let mut opts = opts;
+    if let Some(x0) = &opts.x0 {
+        if let Err(why) = check_warm_start(qp, x0) {
+            let note = format!("warm start not used: {why}");
+            log::warn!("{note}");
+            notes.push(note);
+            checked = opts.clone();
+            checked.x0 = None;
+            opts = &checked;
+        }
+    }
+    let name = method.name();
+    let mut r = solve_once(method, qp, opts, ws)?;
+    if let Status::Unbounded { direction } = &r.status {
+        match recession::certify(qp, direction) {
+            Ok(c) => return Ok(unbounded_result(qp, c.direction)),
+            Err(why) => {
+                let fb = fallback_for(name);
+                let note = format!(
+                    "{name} reported an unbounded direction that fails the certificate ({why}); solved by {fb} instead"
+                );
+                log::warn!("{note}");
+                notes.push(note);
+                let fm =
+                    super::registry::find(fb).ok_or_else(|| QpError::BadParameter(fb.into()))?;
+                let t = std::mem::take(&mut r.timings);
+                r = solve_once(fm, qp, opts, ws)?;
+                r.timings = t
+                    .into_iter()
+                    .map(|(k, v)| (format!("{name}-{k}"), v))
+                    .chain(r.timings)
+                    .collect();
+                if let Status::Unbounded { direction } = &r.status {
+                    let why = recession::certify(qp, direction).err().unwrap_or_default();
+                    r.status = Status::Failed(format!(
+                        "{fb} also reported an unbounded direction that fails the certificate ({why})"
+                    ));
+                }
+            }
+        }
+    }
+    let mut kkt = kkt::residuals(qp, &r.x, &r.lambda);
+    let energy = qp.energy(&r.x);
+    if !energy.is_finite() {
+        kkt = Kkt::not_finite();
+    }
+    Ok(QpResult {
+        x: r.x,
+        lambda: r.lambda,
+        active: r.active,
+        status: r.status,
+        iterations: r.iterations,
+        inner_iterations: r.inner_iterations,
+        log: r.log,
+        timings: r.timings,
+        kkt,
+        energy,
+        notes,
+    })
+}
+
+/// One call of `method` with its own context; the phases it timed through
+/// the context come first in the output's timings.
+fn solve_once(
+    method: &dyn Method,
+    qp: &QpProblem,
+    opts: &SolveOptions,
+    ws: &Workspace,
+) -> Result<Output, QpError> {
+    let mut ctx = Context::new(opts, ws);
+    let mut out = method.solve(qp, &mut ctx)?;
+    let mut t = ctx.take_timings();
+    t.append(&mut out.timings);
+    out.timings = t;
+    Ok(out)
+}
+
+/// A result that carries a verified recession direction and no solution.
+fn unbounded_result(qp: &QpProblem, direction: Vec<f64>) -> QpResult {
+    QpResult {
+        x: vec![0.0; qp.n()],
+        lambda: vec![0.0; qp.m()],
+        active: vec![false; qp.m()],
+        status: Status::Unbounded { direction },
+        iterations: 0,
+        inner_iterations: 0,
+        log: vec![],
+        timings: vec![],
+        kkt: Kkt::not_finite(),
+        energy: f64::NEG_INFINITY,
+        notes: vec![],
+    }
+}
+
+/// The QP's data must be finite and consistently sized.
+pub fn check_problem(qp: &QpProblem) -> Result<(), QpError> {
+    let (n, m) = (qp.n(), qp.m());
+    if qp.c.nrows != n || qp.c.ncols != n || qp.a.nrows != m || qp.a.ncols != n {
+        return Err(QpError::BadParameter(format!(
+            "inconsistent sizes: C {}×{}, d {n}, A {}×{}, g {m}",
+            qp.c.nrows, qp.c.ncols, qp.a.nrows, qp.a.ncols
+        )));
+    }
+    for (what, v) in [
+        ("the stiffness matrix C", &qp.c.data),
+        ("the load vector d", &qp.d),
+        ("the contact matrix A", &qp.a.data),
+        ("the gaps g", &qp.g),
+    ] {
+        if let Some(i) = v.iter().position(|e| !e.is_finite()) {
+            return Err(QpError::BadParameter(format!(
+                "{what} has a non-finite entry ({}) at position {i}: loads, moduli or prescribed displacements overflow",
+                v[i]
+            )));
+        }
+    }
+    if let Some((i, z)) = qp.kernel.iter().enumerate().find(|(_, z)| z.len() != n) {
+        return Err(QpError::BadParameter(format!(
+            "kernel vector {i} has {} entries for {n} unknowns",
+            z.len()
+        )));
+    }
+    Ok(())
+}
+
+/// A warm start must be finite, of the right size, and of a plausible scale:
+/// its energy must be finite and no larger than 10¹² times the size of the
+/// load's work at the start x = 0 would allow (a checkpoint holding 1e300).
+pub fn check_warm_start(qp: &QpProblem, x0: &[f64]) -> Result<(), String> {
+    if x0.len() != qp.n() {
+        return Err(format!("{} values for {} unknowns", x0.len(), qp.n()));
+    }
+    if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
+        return Err(format!("value {i} is {}", x0[i]));
+    }
+    let e = qp.energy(x0);
+    if !e.is_finite() {
+        return Err("its energy is not finite".into());
+    }
+    let cx = qp.c.mul(x0);
+    let r: Vec<f64> = cx.iter().zip(&qp.d).map(|(c, d)| c - d).collect();
+    let dn = crate::linalg::sparse::norm(&qp.d);
+    let rn = crate::linalg::sparse::norm(&r);
+    if dn > 0.0 && rn > 1e12 * dn {
+        return Err(format!(
+            "its residual ‖Cx − d‖ is {rn:.3e}, {:.1e} times the loads",
+            rn / dn
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,409 @@
+//! Solver settings: the `[solver]` section of the problem file
+//! (docs/problem-format.md §4), the CLI flags that override it, and the typed,
+//! validated settings of each method.
+//!
+//! One raw struct, [`SolverSection`], is both the TOML section (serde, unknown
+//! keys refused) and the command-line flags (clap): [`SolverSection::overlay`]
+//! lays the flags over the file. [`Settings::from_section`] validates it once:
+//! the common keys (`tol`, `max_iter`) here, every method-specific key by the
+//! settings type of the method that reads it ([`CgcSettings`],
+//! [`PenaltySettings`], [`DualSettings`], [`UzawaSettings`], [`SsnSettings`]).
+//! All of them are checked whatever the method, so a bad value in the file is
+//! reported even when another method is chosen on the command line.
+
+use super::precond::PrecondKind;
+
+/// `[solver]` as written in the problem file, or as given on the command line.
+#[derive(Debug, Clone, Default, PartialEq, serde::Deserialize, clap::Args)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSection {
+    /// QP method (see `signorini methods`); overrides [solver] method.
+    #[arg(long)]
+    pub method: Option<String>,
+    /// none | jacobi | ssor | ic0 | mic0 | cholesky; overrides [solver] preconditioner.
+    #[arg(long)]
+    pub preconditioner: Option<String>,
+    /// Relative tolerance of the method's stopping test.
+    #[arg(long)]
+    pub tol: Option<f64>,
+    /// Maximum number of (outer) iterations.
+    #[arg(long)]
+    pub max_iter: Option<usize>,
+    /// SSOR / SOR relaxation parameter ω ∈ (0, 2) (cgc:ssor, penalty).
+    #[arg(long)]
+    pub omega: Option<f64>,
+    /// Release strategy of cgc and dual: single | multiple.
+    #[arg(long)]
+    pub release: Option<String>,
+    /// Penalty parameter ε_p of the penalty method (default: one per contact
+    /// row from the stiffness, docs/methods.md §4.4).
+    #[arg(long)]
+    pub penalty: Option<f64>,
+    /// Uzawa step ρ (default: estimated from ‖H‖).
+    #[arg(long)]
+    pub rho: Option<f64>,
+    /// Uzawa: Nesterov momentum; penalty: exact subspace correction between
+    /// sweeps. `false` gives the report's plain iterations.
+    #[arg(long)]
+    pub accelerate: Option<bool>,
+    /// ssn's linear algebra: auto (by counts) | augmented | refactor | schur.
+    #[arg(long)]
+    pub ssn_path: Option<String>,
+}
+
+impl SolverSection {
+    /// `self` with every entry that `over` sets replaced (the command line
+    /// over the file).
+    pub fn overlay(&self, over: &SolverSection) -> SolverSection {
+        fn pick<T: Clone>(a: &Option<T>, b: &Option<T>) -> Option<T> {
+            b.clone().or_else(|| a.clone())
+        }
+        SolverSection {
+            method: pick(&self.method, &over.method),
+            preconditioner: pick(&self.preconditioner, &over.preconditioner),
+            tol: pick(&self.tol, &over.tol),
+            max_iter: pick(&self.max_iter, &over.max_iter),
+            omega: pick(&self.omega, &over.omega),
+            release: pick(&self.release, &over.release),
+            penalty: pick(&self.penalty, &over.penalty),
+            rho: pick(&self.rho, &over.rho),
+            accelerate: pick(&self.accelerate, &over.accelerate),
+            ssn_path: pick(&self.ssn_path, &over.ssn_path),
+        }
+    }
+}
+
+/// Default method when neither the file nor the command line names one.
+pub const DEFAULT_METHOD: &str = "cgc";
+
+/// The validated settings of every method (what [`Settings::from_section`]
+/// makes of a [`SolverSection`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// Relative tolerance of the method's own stopping test, in (0, 1).
+    pub tol: f64,
+    /// Maximum number of outer iterations, ≥ 1.
+    pub max_iter: usize,
+    pub cgc: CgcSettings,
+    pub penalty: PenaltySettings,
+    pub dual: DualSettings,
+    pub uzawa: UzawaSettings,
+    pub ssn: SsnSettings,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            tol: 1e-10,
+            max_iter: 100_000,
+            cgc: CgcSettings::default(),
+            penalty: PenaltySettings::default(),
+            dual: DualSettings::default(),
+            uzawa: UzawaSettings::default(),
+            ssn: SsnSettings::default(),
+        }
+    }
+}
+
+impl Settings {
+    /// Read and validate `s`: the common keys here, the others by the
+    /// method types. The error is one sentence naming the key and its
+    /// allowed values.
+    pub fn from_section(s: &SolverSection) -> Result<Settings, String> {
+        let d = Settings::default();
+        let settings = Settings {
+            tol: s.tol.unwrap_or(d.tol),
+            max_iter: s.max_iter.unwrap_or(d.max_iter),
+            cgc: CgcSettings::from_section(s)?,
+            penalty: PenaltySettings::from_section(s)?,
+            dual: DualSettings::from_section(s)?,
+            uzawa: UzawaSettings::from_section(s)?,
+            ssn: SsnSettings::from_section(s)?,
+        };
+        settings.validate()?;
+        Ok(settings)
+    }
+
+    /// The ranges of every value (the driver checks again: settings built
+    /// in code did not come through [`Settings::from_section`]).
+    pub fn validate(&self) -> Result<(), String> {
+        let t = self.tol;
+        if !(t > 0.0 && t < 1.0) {
+            return Err(format!("tol = {t} must lie in (0, 1)"));
+        }
+        if self.max_iter == 0 {
+            return Err("max_iter must be positive".into());
+        }
+        self.cgc.validate()?;
+        self.penalty.validate()?;
+        self.uzawa.validate()
+    }
+}
+
+fn check_omega(w: f64) -> Result<(), String> {
+    if w > 0.0 && w < 2.0 {
+        Ok(())
+    } else {
+        Err(format!("omega = {w} must lie in (0, 2)"))
+    }
+}
+
+fn release(s: &SolverSection) -> Result<bool, String> {
+    match s.release.as_deref() {
+        None | Some("multiple") => Ok(true),
+        Some("single") => Ok(false),
+        Some(r) => Err(format!(
+            "release = \"{r}\": expected \"single\" or \"multiple\""
+        )),
+    }
+}
+
+fn check_positive(key: &str, v: Option<f64>) -> Result<(), String> {
+    match v {
+        Some(p) if p.is_nan() || p <= 0.0 => Err(format!("{key} = {p} must be positive")),
+        _ => Ok(()),
+    }
+}
+
+/// CGC (docs/methods.md §4.1–§4.2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CgcSettings {
+    pub preconditioner: PrecondKind,
+    /// SSOR ω.
+    pub omega: f64,
+    /// Release every constraint with a negative multiplier at once.
+    pub multiple_release: bool,
+}
+
+impl Default for CgcSettings {
+    fn default() -> Self {
+        CgcSettings {
+            preconditioner: PrecondKind::Cholesky,
+            omega: 1.0,
+            multiple_release: true,
+        }
+    }
+}
+
+impl CgcSettings {
+    pub fn from_section(s: &SolverSection) -> Result<Self, String> {
+        let name = s.preconditioner.as_deref().unwrap_or("cholesky");
+        let preconditioner = PrecondKind::parse(name).ok_or_else(|| {
+            format!(
+                "unknown preconditioner \"{name}\"; known: none, jacobi, ssor, ic0, mic0, cholesky"
+            )
+        })?;
+        Ok(CgcSettings {
+            preconditioner,
+            omega: s.omega.unwrap_or(1.0),
+            multiple_release: release(s)?,
+        })
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        check_omega(self.omega)
+    }
+}
+
+/// Penalty with relaxation (docs/methods.md §4.4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PenaltySettings {
+    /// ε_p; None: one per contact row from the stiffness.
+    pub eps: Option<f64>,
+    /// SOR ω of the relaxation sweeps.
+    pub omega: f64,
+    /// Exact solve on the penalty active set between sweeps.
+    pub accelerate: bool,
+}
+
+impl Default for PenaltySettings {
+    fn default() -> Self {
+        PenaltySettings {
+            eps: None,
+            omega: 1.0,
+            accelerate: true,
+        }
+    }
+}
+
+impl PenaltySettings {
+    pub fn from_section(s: &SolverSection) -> Result<Self, String> {
+        Ok(PenaltySettings {
+            eps: s.penalty,
+            omega: s.omega.unwrap_or(1.0),
+            accelerate: s.accelerate.unwrap_or(true),
+        })
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        check_positive("penalty", self.eps)?;
+        check_omega(self.omega)
+    }
+}
+
+/// CGC on the dual functional (docs/methods.md §4.6).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DualSettings {
+    pub multiple_release: bool,
+}
+
+impl Default for DualSettings {
+    fn default() -> Self {
+        DualSettings {
+            multiple_release: true,
+        }
+    }
+}
+
+impl DualSettings {
+    pub fn from_section(s: &SolverSection) -> Result<Self, String> {
+        Ok(DualSettings {
+            multiple_release: release(s)?,
+        })
+    }
+}
+
+/// Uzawa (docs/methods.md §4.5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UzawaSettings {
+    /// Step ρ; None: 1.9/‖H‖ estimated by power iteration.
+    pub rho: Option<f64>,
+    /// Nesterov momentum with gradient restart.
+    pub accelerate: bool,
+}
+
+impl Default for UzawaSettings {
+    fn default() -> Self {
+        UzawaSettings {
+            rho: None,
+            accelerate: true,
+        }
+    }
+}
+
+impl UzawaSettings {
+    pub fn from_section(s: &SolverSection) -> Result<Self, String> {
+        Ok(UzawaSettings {
+            rho: s.rho,
+            accelerate: s.accelerate.unwrap_or(true),
+        })
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        check_positive("rho", self.rho)
+    }
+}
+
+/// The linear algebra of ssn (docs/methods.md §7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SsnPath {
+    /// Chosen from counts (nnz of the factor, flops), never timings.
+    #[default]
+    Auto,
+    Augmented,
+    Refactor,
+    Schur,
+}
+
+/// Semismooth Newton / primal–dual active set (docs/methods.md §7).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SsnSettings {
+    pub path: SsnPath,
+}
+
+impl SsnSettings {
+    pub fn from_section(s: &SolverSection) -> Result<Self, String> {
+        let path = match s.ssn_path.as_deref() {
+            None | Some("auto") => SsnPath::Auto,
+            Some("augmented") => SsnPath::Augmented,
+            Some("refactor") => SsnPath::Refactor,
+            Some("schur") => SsnPath::Schur,
+            Some(p) => {
+                return Err(format!(
+                "ssn_path = \"{p}\": expected \"auto\", \"augmented\", \"refactor\" or \"schur\""
+            ))
+            }
+        };
+        Ok(SsnSettings { path })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flags_override_the_file_key_by_key() {
+        let file = SolverSection {
+            method: Some("asm".into()),
+            tol: Some(1e-8),
+            rho: Some(2.0),
+            ..Default::default()
+        };
+        let flags = SolverSection {
+            tol: Some(1e-9),
+            ..Default::default()
+        };
+        let s = file.overlay(&flags);
+        assert_eq!(s.method.as_deref(), Some("asm"));
+        assert_eq!(s.tol, Some(1e-9));
+        assert_eq!(s.rho, Some(2.0));
+    }
+
+    #[test]
+    fn every_key_is_validated_whatever_the_method() {
+        let bad = [
+            SolverSection {
+                tol: Some(1.0),
+                ..Default::default()
+            },
+            SolverSection {
+                tol: Some(f64::NAN),
+                ..Default::default()
+            },
+            SolverSection {
+                max_iter: Some(0),
+                ..Default::default()
+            },
+            SolverSection {
+                omega: Some(2.0),
+                ..Default::default()
+            },
+            SolverSection {
+                release: Some("all".into()),
+                ..Default::default()
+            },
+            SolverSection {
+                penalty: Some(-1.0),
+                ..Default::default()
+            },
+            SolverSection {
+                rho: Some(f64::NAN),
+                ..Default::default()
+            },
+            SolverSection {
+                ssn_path: Some("fast".into()),
+                ..Default::default()
+            },
+            SolverSection {
+                preconditioner: Some("ilu".into()),
+                ..Default::default()
+            },
+        ];
+        for s in bad {
+            assert!(Settings::from_section(&s).is_err(), "{s:?}");
+        }
+        let s = Settings::from_section(&SolverSection::default()).unwrap();
+        assert_eq!(s, Settings::default());
+    }
+
+    #[test]
+    fn the_section_refuses_unknown_keys() {
+        let e = toml::from_str::<SolverSection>("tol = 1e-8\ntolerance = 1e-8\n").unwrap_err();
+        assert!(e.to_string().contains("tolerance"), "{e}");
+        let s: SolverSection = toml::from_str("accelerate = false\nssn_path = \"schur\"").unwrap();
+        let t = Settings::from_section(&s).unwrap();
+        assert!(!t.uzawa.accelerate && !t.penalty.accelerate);
+        assert_eq!(t.ssn.path, SsnPath::Schur);
+    }
+}
