@@ -1,32 +1,9 @@
 //! The `signorini` binary: outputs read back, JSON schema, exit codes, and
 //! bad input that must give exit 2 with one clear line and no output file.
 
-use std::path::PathBuf;
-use std::process::Command;
+mod common;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn signorini(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn example(name: &str) -> String {
-    root()
-        .join("meshes")
-        .join(format!("{name}.toml"))
-        .display()
-        .to_string()
-}
+use common::{example, root, signorini};
 
 #[test]
 fn solve_writes_all_four_outputs_with_the_contract_arrays() {

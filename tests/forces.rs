@@ -6,11 +6,10 @@
 
 use signorini::pipeline::{self, SolverChoice};
 use signorini::post::{self, forces};
-use std::path::PathBuf;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+
+use common::root;
 
 /// (prepared problem, forces) of a shipped model solved by the default method.
 fn solved(name: &str) -> (pipeline::Prepared, forces::Forces) {

@@ -27,7 +27,7 @@
 
 mod common;
 
-use common::{run_signorini, Run};
+use common::{norm, read_mtx, read_vec, rel_diff, root, run_signorini, tomls_in, Run};
 use signorini::io::hdf5::read_checkpoint;
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -99,10 +99,6 @@ struct Model {
     known: Known,
 }
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
 /// Oedometric modulus M = E(1 − ν)/((1 + ν)(1 − 2ν)) of `materials.NAME`.
 fn oedometric(t: &toml::Value, name: &str) -> f64 {
     let m = &t["materials"][name];
@@ -147,12 +143,7 @@ fn model(toml: PathBuf, name: &str, extra: &[&str]) -> Model {
 /// Every model of tests/hard/ plus the extreme-tolerance cases.
 fn models() -> Vec<Model> {
     let hard = root().join("tests/hard");
-    let mut tomls: Vec<PathBuf> = std::fs::read_dir(&hard)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-        .collect();
-    tomls.sort();
+    let tomls = tomls_in(&hard);
     let mut v: Vec<Model> = tomls
         .into_iter()
         .map(|p| {
@@ -200,27 +191,6 @@ struct Cell {
 
 fn finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
-    if a.len() != b.len() {
-        return f64::INFINITY;
-    }
-    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
-    let s = norm(b);
-    if s == 0.0 {
-        if norm(&d) == 0.0 {
-            0.0
-        } else {
-            f64::INFINITY
-        }
-    } else {
-        norm(&d) / s
-    }
 }
 
 /// The largest KKT residual of the JSON summary (NaN, null or missing → None).
@@ -271,53 +241,6 @@ fn solve_cell(m: &Model, v: &(&str, Option<&str>), budget: Duration, scratch: &P
     }
     c.run = Some(run);
     c
-}
-
-/// A Matrix Market file written by `signorini export`, as (rows, cols, triplets).
-fn read_mtx(path: &Path) -> (usize, usize, Vec<(usize, usize, f64)>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().to_lowercase();
-    let symmetric = header.contains("symmetric");
-    let array = header.contains("array");
-    let mut lines = lines.filter(|l| !l.starts_with('%') && !l.trim().is_empty());
-    let size: Vec<usize> = lines
-        .next()
-        .unwrap()
-        .split_whitespace()
-        .map(|s| s.parse().unwrap())
-        .collect();
-    let (nr, nc) = (size[0], size[1]);
-    let mut t = Vec::new();
-    if array {
-        // Column-major dense.
-        for (k, l) in lines.enumerate() {
-            t.push((k % nr, k / nr, l.trim().parse::<f64>().unwrap()));
-        }
-    } else {
-        for l in lines {
-            let f: Vec<&str> = l.split_whitespace().collect();
-            let (i, j) = (
-                f[0].parse::<usize>().unwrap() - 1,
-                f[1].parse::<usize>().unwrap() - 1,
-            );
-            let a: f64 = f[2].parse().unwrap();
-            t.push((i, j, a));
-            if symmetric && i != j {
-                t.push((j, i, a));
-            }
-        }
-    }
-    (nr, nc, t)
-}
-
-fn read_vec(path: &Path) -> Vec<f64> {
-    let (nr, _, t) = read_mtx(path);
-    let mut v = vec![0.0; nr];
-    for (i, _, a) in t {
-        v[i] = a;
-    }
-    v
 }
 
 /// M·v for triplets (transposed when `t`).

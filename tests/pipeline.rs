@@ -5,9 +5,9 @@ use signorini::pipeline::{self, Prepared, SolverChoice};
 use signorini::qp::QpResult;
 use std::path::{Path, PathBuf};
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+
+use common::{meshes, msh_fixture, root};
 
 fn solve_file(path: &Path, choice: &SolverChoice) -> (Prepared, QpResult) {
     let prep = pipeline::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
@@ -24,7 +24,7 @@ fn solve_file(path: &Path, choice: &SolverChoice) -> (Prepared, QpResult) {
 
 fn solve_example(name: &str) -> (Prepared, QpResult) {
     solve_file(
-        &root().join("meshes").join(format!("{name}.toml")),
+        &meshes().join(format!("{name}.toml")),
         &SolverChoice::default(),
     )
 }
@@ -37,9 +37,7 @@ fn temp_toml(dir: &Path, name: &str, text: &str) -> PathBuf {
 }
 
 fn square_mesh(kind: &str) -> String {
-    root()
-        .join("tests/data/msh")
-        .join(format!("square_{kind}.msh"))
+    msh_fixture(&format!("square_{kind}.msh"))
         .display()
         .to_string()
 }
