@@ -1,29 +1,18 @@
 //! Issue 11's contract on the hard models of `tests/hard/` (see its README):
-//! every method variant on every model either
-//! * exits 0 with a certified KKT and x (displacements) and λ (contact
-//!   multipliers) within 1e-6 relative of a verified reference, or
-//! * exits 3 (an honest failure, printed in the table).
-//!
-//! Exit 2 (these problems are all bounded and well posed), a run killed after
-//! its time budget ("hung"), a crash, and an exit 0 that is not certified or
-//! disagrees with the reference are failures.
+//! every method variant on every model either exits 0 with a certified KKT
+//! and x and λ within 1e-6 relative of a verified reference, or exits 3 (an
+//! honest failure, printed in the table). Exit 2 (these problems are bounded
+//! and well posed), a run killed after its time budget ("hung"), a crash, and
+//! an exit 0 that is not certified or disagrees with the reference fail.
 //!
 //! The reference of a model is the certified exit-0 run with the smallest KKT
 //! residual (penalty excluded: it solves its own O(ε_p) problem) that passes
-//! checks independent of signorini's own certificate: the QP exported by
-//! `signorini export --qp DIR --solution` with the same variant satisfies the
-//! KKT conditions as evaluated here (stationarity scaled by the contact
-//! forces AᵀΛ, so an error in λ cannot hide behind ‖d‖), the export
-//! reproduces the run's λ, and, where the model has one, the closed-form
-//! solution (uniaxial strain) or the equilibrium of the contact forces holds.
-//!
-//! `SIGNORINI_HARD_REPORT=1` prints the table and does not fail (the before /
-//! after tables of issue 11). `SIGNORINI_HARD_MODELS=punch,arch` (substrings
-//! of model names) and `SIGNORINI_HARD_VARIANTS=ssn,cgc:cholesky` (variant
-//! names; a bare method name selects all its variants) select a subset,
-//! `SIGNORINI_HARD_BUDGET_S` sets the time budget of one run
-//! (default 30 s) and `SIGNORINI_HARD_JOBS` the number of runs at a time
-//! (default 2).
+//! checks independent of signorini's certificate: the QP exported by `signorini
+//! export --qp DIR --solution` with the same variant meets the KKT conditions
+//! as evaluated here (stationarity scaled by the contact forces AᵀΛ, so an
+//! error in λ cannot hide behind ‖d‖), the export reproduces the run's λ, and
+//! the closed form (uniaxial strain) or the equilibrium of the contact forces
+//! holds where the model has one. Environment variables: on the test function.
 
 mod common;
 
@@ -535,6 +524,13 @@ fn fmt_opt(v: Option<f64>) -> String {
     v.map_or("-".to_string(), |x| format!("{x:.1e}"))
 }
 
+/// `SIGNORINI_HARD_REPORT=1` prints the table and does not fail (the before /
+/// after tables of issue 11). `SIGNORINI_HARD_MODELS=punch,arch` (substrings
+/// of model names) and `SIGNORINI_HARD_VARIANTS=ssn,cgc:cholesky` (variant
+/// names; a bare method name selects all its variants) select a subset,
+/// `SIGNORINI_HARD_BUDGET_S` sets the time budget of one run
+/// (default 30 s) and `SIGNORINI_HARD_JOBS` the number of runs at a time
+/// (default 2).
 #[test]
 fn every_variant_certifies_and_agrees_or_exits_3_on_every_hard_model() {
     let report_only = std::env::var("SIGNORINI_HARD_REPORT").is_ok_and(|v| v == "1");
