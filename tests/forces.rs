@@ -6,10 +6,11 @@
 
 use signorini::pipeline::{self, SolverChoice};
 use signorini::post::{self, forces};
+use std::path::PathBuf;
 
-mod common;
-
-use common::root;
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
 
 /// (prepared problem, forces) of a shipped model solved by the default method.
 fn solved(name: &str) -> (pipeline::Prepared, forces::Forces) {

@@ -5,9 +5,9 @@ use signorini::pipeline::{self, Prepared, SolverChoice};
 use signorini::qp::QpResult;
 use std::path::{Path, PathBuf};
 
-mod common;
-
-use common::{meshes, msh_fixture, root};
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
 
 fn solve_file(path: &Path, choice: &SolverChoice) -> (Prepared, QpResult) {
     let prep = pipeline::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
@@ -24,7 +24,7 @@ fn solve_file(path: &Path, choice: &SolverChoice) -> (Prepared, QpResult) {
 
 fn solve_example(name: &str) -> (Prepared, QpResult) {
     solve_file(
-        &meshes().join(format!("{name}.toml")),
+        &root().join("meshes").join(format!("{name}.toml")),
         &SolverChoice::default(),
     )
 }
@@ -36,8 +36,10 @@ fn temp_toml(dir: &Path, name: &str, text: &str) -> PathBuf {
     p
 }
 
+mod common;
+
 fn square_mesh(kind: &str) -> String {
-    msh_fixture(&format!("square_{kind}.msh"))
+    common::msh_fixture(&format!("square_{kind}.msh"))
         .display()
         .to_string()
 }
