@@ -17,3 +17,19 @@ fi
 # hdf5-metno must link Debian's *serial* HDF5 (installing gmsh makes
 # pkg-config point at the MPI build); .cargo/config.toml sets HDF5_DIR.
 test -d /usr/lib/x86_64-linux-gnu/hdf5/serial || { echo "setup: serial HDF5 not found" >&2; exit 1; }
+# rustfmt and clippy for the format and lint stages of scripts/test.sh: from
+# rustup when they are missing; without rustup (or when it cannot reach its
+# server) say so, and test.sh skips the stage with a message.
+for comp in rustfmt clippy; do
+    case $comp in
+        rustfmt) probe=(cargo fmt --version) ;;
+        clippy) probe=(cargo clippy --version) ;;
+    esac
+    "${probe[@]}" >/dev/null 2>&1 && continue
+    if command -v rustup >/dev/null 2>&1; then
+        echo "setup: installing $comp (rustup component add $comp)" >&2
+        rustup component add "$comp" >&2 || echo "setup: rustup could not install $comp" >&2
+    else
+        echo "setup: $comp is missing and there is no rustup to install it" >&2
+    fi
+done

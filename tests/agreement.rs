@@ -16,7 +16,10 @@ use proptest::test_runner::Config;
 use signorini::pipeline;
 use signorini::qp::precond::PrecondKind;
 use signorini::qp::{registry, QpError, QpProblem, QpResult, SolveOptions};
-use std::path::PathBuf;
+
+mod common;
+
+use common::{meshes, norm, XorShift};
 
 /// Agreement with the reference, relative: ‖x − x_ref‖ / ‖x_ref‖.
 const AGREE: f64 = 1e-8;
@@ -37,11 +40,7 @@ fn config(cases: u32) -> Config {
 }
 
 fn mesh(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("meshes")
-        .join(format!("{name}.msh"))
-        .display()
-        .to_string()
+    meshes().join(format!("{name}.msh")).display().to_string()
 }
 
 /// The QP of a TOML problem text.
@@ -57,10 +56,6 @@ fn build(toml: &str) -> QpProblem {
 fn down(m: f64, deg: f64) -> [f64; 2] {
     let a = deg.to_radians();
     [m * a.sin(), -m * a.cos()]
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|a| a * a).sum::<f64>().sqrt()
 }
 
 fn opts(pc: PrecondKind) -> SolveOptions {
@@ -90,11 +85,9 @@ fn with_gaps(mut qp: QpProblem, frac: f64, seed: u64) -> Result<QpProblem, TestC
     if frac > 0.0 && qp.m() > 0 {
         let r = reference(&qp)?;
         let s = r.x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let mut x = seed | 1;
+        let mut rng = XorShift(seed | 1);
         for g in qp.g.iter_mut() {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
+            let x = rng.next();
             let u = (x >> 11) as f64 / (1u64 << 53) as f64;
             *g += frac * u * s;
         }

@@ -14,7 +14,8 @@
 
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+mod common;
 
 /// Fewer cases than this means cases were deleted.
 const MIN_CASES: usize = 95;
@@ -33,7 +34,7 @@ struct Expect {
 }
 
 fn cases_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/bad_inputs")
+    common::root().join("tests/bad_inputs")
 }
 
 fn cases() -> Vec<PathBuf> {
@@ -86,7 +87,7 @@ fn run_case(case: &Path) -> Result<(), String> {
         None => tmp.path().join("out"),
     };
     let before = files_under(case);
-    let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
+    let o = common::command()
         .args(["solve", problem.to_str().unwrap(), "--out"])
         .arg(&out)
         .args(

@@ -1,32 +1,9 @@
 //! The `signorini` binary: outputs read back, JSON schema, exit codes, and
 //! bad input that must give exit 2 with one clear line and no output file.
 
-use std::path::PathBuf;
-use std::process::Command;
+mod common;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn signorini(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn example(name: &str) -> String {
-    root()
-        .join("meshes")
-        .join(format!("{name}.toml"))
-        .display()
-        .to_string()
-}
+use common::{example, root, signorini};
 
 #[test]
 fn solve_writes_all_four_outputs_with_the_contract_arrays() {
@@ -79,9 +56,7 @@ fn solve_writes_all_four_outputs_with_the_contract_arrays() {
     assert_eq!(ck.steps[0].displacement.len(), v.num_points);
     assert!(ck.steps[0].info.converged);
     assert_eq!(ck.steps[0].info.method, "cgc");
-    assert!(
-        ck.steps[0].active.iter().any(|a| *a == 0) && ck.steps[0].active.iter().any(|a| *a == 1)
-    );
+    assert!(ck.steps[0].active.contains(&0) && ck.steps[0].active.contains(&1));
     // The VTU displacement equals the checkpoint's.
     for (i, u) in ck.steps[0].displacement.iter().enumerate() {
         assert_eq!(disp.values[3 * i], u[0]);

@@ -1,7 +1,10 @@
 //! `signorini compare`: every variant on every shipped example; the rows agree.
 
 use std::path::Path;
-use std::process::Command;
+
+mod common;
+
+use common::{meshes, signorini, tomls_in};
 
 /// Run `signorini compare` on `toml` with `--json` and `--csv`: the printed
 /// table, the JSON rows and the CSV text.
@@ -9,25 +12,15 @@ fn run_compare(toml: &Path) -> (String, Vec<serde_json::Value>, String) {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("t.json");
     let csv = dir.path().join("t.csv");
-    let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
-        .args([
-            "compare",
-            toml.to_str().unwrap(),
-            "--json",
-            json.to_str().unwrap(),
-            "--csv",
-            csv.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}: {stdout}\n{}",
-        toml.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (code, stdout, stderr) = signorini(&[
+        "compare",
+        toml.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{}: {stdout}\n{stderr}", toml.display());
     let t: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let rows = t["rows"].as_array().unwrap().clone();
@@ -94,13 +87,7 @@ fn compare_all_agree(toml: &Path) -> Vec<serde_json::Value> {
 /// Issue 3's acceptance: all 14 variants on each shipped model agree.
 #[test]
 fn every_variant_agrees_on_every_shipped_example() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes");
-    let mut tomls: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-        .collect();
-    tomls.sort();
+    let tomls = tomls_in(&meshes());
     assert!(tomls.len() >= 11, "{tomls:?}");
     for t in &tomls {
         compare_all_agree(t);
@@ -109,7 +96,7 @@ fn every_variant_agrees_on_every_shipped_example() {
 
 #[test]
 fn compare_rows_agree_on_the_eccentric_blocks() {
-    let toml = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/two_blocks_eccentric.toml");
+    let toml = meshes().join("two_blocks_eccentric.toml");
     let (stdout, rows, csv) = run_compare(&toml);
     // Six CGC preconditioners at least, one line each in the CSV.
     assert!(rows.len() >= 6);

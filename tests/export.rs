@@ -4,34 +4,14 @@
 
 use signorini::io::mtx;
 use signorini::linalg::sparse::{dot, norm, norm_inf};
-use std::path::Path;
-use std::process::Command;
 
+mod common;
+
+use common::read_array;
+
+/// Runs `signorini ARGS` from the crate's root (the paths below are relative).
 fn signorini(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run signorini");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
-
-fn read_array(path: &Path) -> (usize, usize, Vec<f64>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut it = text.lines().filter(|l| !l.starts_with('%'));
-    let size: Vec<usize> = it
-        .next()
-        .unwrap()
-        .split_whitespace()
-        .map(|v| v.parse().unwrap())
-        .collect();
-    let v: Vec<f64> = it.map(|l| l.trim().parse().unwrap()).collect();
-    assert_eq!(v.len(), size[0] * size[1]);
-    (size[0], size[1], v)
+    common::signorini_in(env!("CARGO_MANIFEST_DIR"), args)
 }
 
 fn check(toml: &str, floating: bool) {

@@ -8,57 +8,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn exe() -> &'static str {
-    env!("CARGO_BIN_EXE_signorini")
-}
+mod common;
 
-fn meshes() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes")
-}
-
-/// Runs signorini; (exit code, stdout + stderr).
-fn run(args: &[&str]) -> (i32, String) {
-    let o = Command::new(exe()).args(args).output().unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-    )
-}
-
-/// Runs signorini with a deadline (a FIFO must not block the run forever).
-fn run_with_deadline(args: &[&str], deadline: Duration) -> (i32, String) {
-    let mut child = Command::new(exe())
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let t0 = Instant::now();
-    loop {
-        if child.try_wait().unwrap().is_some() {
-            break;
-        }
-        if t0.elapsed() > deadline {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("signorini {args:?} still runs after {deadline:?}");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let o = child.wait_with_output().unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-    )
-}
+use common::{exe, joined, meshes, run, run_with_deadline};
 
 /// Exit 2 with exactly one `error:` line and no panic; returns that line.
 fn assert_bad_input(code: i32, log: &str, what: &str) -> String {
@@ -613,12 +565,8 @@ fn out_of_memory_is_exit_2_not_an_abort() {
         ))
         .output()
         .unwrap();
-    let log = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let line = assert_bad_input(o.status.code().unwrap_or(-1), &log, "ulimit -v");
+    let (code, log) = joined(&o);
+    let line = assert_bad_input(code, &log, "ulimit -v");
     assert!(
         line.contains("out of memory") && line.contains("4.00 GiB"),
         "{line}"

@@ -23,9 +23,9 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+
+use common::root;
 
 /// Peak resident set size of this process [MB] (Linux), if known.
 fn peak_rss_mb() -> Option<f64> {

@@ -22,35 +22,12 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+mod common;
+
+use common::{root, XorShift};
+
 const DEFAULT_CASES: usize = 3000;
 const DEFAULT_SEED: u64 = 0x5167_6E6F_7269_6E69;
-
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Rng {
-        // splitmix64 of the seed, so that nearby seeds give unrelated streams.
-        let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        Rng((z ^ (z >> 31)) | 1)
-    }
-    /// xorshift64.
-    fn next(&mut self) -> u64 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        self.0 = x;
-        x
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn pick<'a, T>(&mut self, v: &'a [T]) -> &'a T {
-        &v[self.below(v.len())]
-    }
-}
 
 /// One shipped problem: its TOML, its mesh and the mesh's group names.
 struct Sample {
@@ -61,10 +38,6 @@ struct Sample {
     groups: Vec<String>,
     /// Relative frequency (large meshes are slower to build).
     weight: usize,
-}
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 fn sample(name: &str, toml: String, msh_path: &Path, weight: usize) -> Sample {
@@ -201,7 +174,7 @@ fn section(b: &[u8], name: &str) -> Option<(usize, usize)> {
 /// Replaces a token of section `name` by another token of the same section
 /// (keeps the file readable more often than random edits: moves a node onto
 /// another's coordinate, or makes an element use another node).
-fn swap_in_section(rng: &mut Rng, b: &mut Vec<u8>, name: &str) -> String {
+fn swap_in_section(rng: &mut XorShift, b: &mut Vec<u8>, name: &str) -> String {
     let Some((s0, e0)) = section(b, name) else {
         return format!("no ${name}");
     };
@@ -224,7 +197,7 @@ fn swap_in_section(rng: &mut Rng, b: &mut Vec<u8>, name: &str) -> String {
     what
 }
 
-fn mutate_msh(rng: &mut Rng, b: &mut Vec<u8>) -> String {
+fn mutate_msh(rng: &mut XorShift, b: &mut Vec<u8>) -> String {
     if b.is_empty() {
         return "empty".into();
     }
@@ -367,7 +340,7 @@ const CHARS: &[&str] = &[
     "\u{feff}", "\0", "\\", "\"\"\"", "a", "1", "e",
 ];
 
-fn mutate_toml(rng: &mut Rng, t: &mut String, groups: &[String]) -> String {
+fn mutate_toml(rng: &mut XorShift, t: &mut String, groups: &[String]) -> String {
     let ls = lines(t.as_bytes());
     match rng.below(11) {
         0 if !ls.is_empty() => {
@@ -549,7 +522,7 @@ fn mutated_meshes_and_problem_files_never_panic() {
     let default_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));
     for case in 0..cases {
-        let mut rng = Rng::new(seed ^ (case as u64).wrapping_mul(0x2545_F491_4F6C_DD1D));
+        let mut rng = XorShift::seeded(seed ^ (case as u64).wrapping_mul(0x2545_F491_4F6C_DD1D));
         let mut w = rng.below(wsum);
         let s = corpus
             .iter()

@@ -1,33 +1,22 @@
 //! Issue 11's contract on the hard models of `tests/hard/` (see its README):
-//! every method variant on every model either
-//! * exits 0 with a certified KKT and x (displacements) and λ (contact
-//!   multipliers) within 1e-6 relative of a verified reference, or
-//! * exits 3 (an honest failure, printed in the table).
-//!
-//! Exit 2 (these problems are all bounded and well posed), a run killed after
-//! its time budget ("hung"), a crash, and an exit 0 that is not certified or
-//! disagrees with the reference are failures.
+//! every method variant on every model either exits 0 with a certified KKT
+//! and x and λ within 1e-6 relative of a verified reference, or exits 3 (an
+//! honest failure, printed in the table). Exit 2 (these problems are bounded
+//! and well posed), a run killed after its time budget ("hung"), a crash, and
+//! an exit 0 that is not certified or disagrees with the reference fail.
 //!
 //! The reference of a model is the certified exit-0 run with the smallest KKT
 //! residual (penalty excluded: it solves its own O(ε_p) problem) that passes
-//! checks independent of signorini's own certificate: the QP exported by
-//! `signorini export --qp DIR --solution` with the same variant satisfies the
-//! KKT conditions as evaluated here (stationarity scaled by the contact
-//! forces AᵀΛ, so an error in λ cannot hide behind ‖d‖), the export
-//! reproduces the run's λ, and, where the model has one, the closed-form
-//! solution (uniaxial strain) or the equilibrium of the contact forces holds.
-//!
-//! `SIGNORINI_HARD_REPORT=1` prints the table and does not fail (the before /
-//! after tables of issue 11). `SIGNORINI_HARD_MODELS=punch,arch` (substrings
-//! of model names) and `SIGNORINI_HARD_VARIANTS=ssn,cgc:cholesky` (variant
-//! names; a bare method name selects all its variants) select a subset,
-//! `SIGNORINI_HARD_BUDGET_S` sets the time budget of one run
-//! (default 30 s) and `SIGNORINI_HARD_JOBS` the number of runs at a time
-//! (default 2).
+//! checks independent of signorini's certificate: the QP exported by `signorini
+//! export --qp DIR --solution` with the same variant meets the KKT conditions
+//! as evaluated here (stationarity scaled by the contact forces AᵀΛ, so an
+//! error in λ cannot hide behind ‖d‖), the export reproduces the run's λ, and
+//! the closed form (uniaxial strain) or the equilibrium of the contact forces
+//! holds where the model has one. Environment variables: on the test function.
 
 mod common;
 
-use common::{run_signorini, Run};
+use common::{norm, read_mtx, read_vec, rel_diff, root, run_signorini, tomls_in, Run};
 use signorini::io::hdf5::read_checkpoint;
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -99,10 +88,6 @@ struct Model {
     known: Known,
 }
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
 /// Oedometric modulus M = E(1 − ν)/((1 + ν)(1 − 2ν)) of `materials.NAME`.
 fn oedometric(t: &toml::Value, name: &str) -> f64 {
     let m = &t["materials"][name];
@@ -147,12 +132,7 @@ fn model(toml: PathBuf, name: &str, extra: &[&str]) -> Model {
 /// Every model of tests/hard/ plus the extreme-tolerance cases.
 fn models() -> Vec<Model> {
     let hard = root().join("tests/hard");
-    let mut tomls: Vec<PathBuf> = std::fs::read_dir(&hard)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-        .collect();
-    tomls.sort();
+    let tomls = tomls_in(&hard);
     let mut v: Vec<Model> = tomls
         .into_iter()
         .map(|p| {
@@ -200,27 +180,6 @@ struct Cell {
 
 fn finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
-    if a.len() != b.len() {
-        return f64::INFINITY;
-    }
-    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
-    let s = norm(b);
-    if s == 0.0 {
-        if norm(&d) == 0.0 {
-            0.0
-        } else {
-            f64::INFINITY
-        }
-    } else {
-        norm(&d) / s
-    }
 }
 
 /// The largest KKT residual of the JSON summary (NaN, null or missing → None).
@@ -271,53 +230,6 @@ fn solve_cell(m: &Model, v: &(&str, Option<&str>), budget: Duration, scratch: &P
     }
     c.run = Some(run);
     c
-}
-
-/// A Matrix Market file written by `signorini export`, as (rows, cols, triplets).
-fn read_mtx(path: &Path) -> (usize, usize, Vec<(usize, usize, f64)>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().to_lowercase();
-    let symmetric = header.contains("symmetric");
-    let array = header.contains("array");
-    let mut lines = lines.filter(|l| !l.starts_with('%') && !l.trim().is_empty());
-    let size: Vec<usize> = lines
-        .next()
-        .unwrap()
-        .split_whitespace()
-        .map(|s| s.parse().unwrap())
-        .collect();
-    let (nr, nc) = (size[0], size[1]);
-    let mut t = Vec::new();
-    if array {
-        // Column-major dense.
-        for (k, l) in lines.enumerate() {
-            t.push((k % nr, k / nr, l.trim().parse::<f64>().unwrap()));
-        }
-    } else {
-        for l in lines {
-            let f: Vec<&str> = l.split_whitespace().collect();
-            let (i, j) = (
-                f[0].parse::<usize>().unwrap() - 1,
-                f[1].parse::<usize>().unwrap() - 1,
-            );
-            let a: f64 = f[2].parse().unwrap();
-            t.push((i, j, a));
-            if symmetric && i != j {
-                t.push((j, i, a));
-            }
-        }
-    }
-    (nr, nc, t)
-}
-
-fn read_vec(path: &Path) -> Vec<f64> {
-    let (nr, _, t) = read_mtx(path);
-    let mut v = vec![0.0; nr];
-    for (i, _, a) in t {
-        v[i] = a;
-    }
-    v
 }
 
 /// M·v for triplets (transposed when `t`).
@@ -612,6 +524,13 @@ fn fmt_opt(v: Option<f64>) -> String {
     v.map_or("-".to_string(), |x| format!("{x:.1e}"))
 }
 
+/// `SIGNORINI_HARD_REPORT=1` prints the table and does not fail (the before /
+/// after tables of issue 11). `SIGNORINI_HARD_MODELS=punch,arch` (substrings
+/// of model names) and `SIGNORINI_HARD_VARIANTS=ssn,cgc:cholesky` (variant
+/// names; a bare method name selects all its variants) select a subset,
+/// `SIGNORINI_HARD_BUDGET_S` sets the time budget of one run
+/// (default 30 s) and `SIGNORINI_HARD_JOBS` the number of runs at a time
+/// (default 2).
 #[test]
 fn every_variant_certifies_and_agrees_or_exits_3_on_every_hard_model() {
     let report_only = std::env::var("SIGNORINI_HARD_REPORT").is_ok_and(|v| v == "1");

@@ -11,18 +11,22 @@
 
 use signorini::io::hdf5::{read_checkpoint, Checkpoint};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
+
+mod common;
+
+use common::{command, joined, meshes};
 
 const NAME: &str = "three_bodies_steps";
 const NSTEPS: usize = 4;
 
 fn problem() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("meshes/{NAME}.toml"))
+    meshes().join(format!("{NAME}.toml"))
 }
 
 fn solve(out: &Path, extra: &[&str]) -> (i32, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
+    let o = command()
         .arg("solve")
         .arg(problem())
         .arg("--out")
@@ -30,14 +34,7 @@ fn solve(out: &Path, extra: &[&str]) -> (i32, String) {
         .args(extra)
         .output()
         .unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-    )
+    joined(&o)
 }
 
 /// What a killed run may leave besides its outputs: a staging directory
@@ -147,7 +144,7 @@ enum KillAt {
 /// Starts the run in `dir`, kills it at `at`; returns the number of steps the
 /// checkpoint held at the moment of the kill (for `Steps`).
 fn run_and_kill(dir: &Path, at: KillAt) -> usize {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_signorini"))
+    let mut child = command()
         .arg("solve")
         .arg(problem())
         .arg("--out")

@@ -1,27 +1,14 @@
 //! `signorini mesh`: runs Gmsh and checks its output with our reader.
 
-use std::process::Command;
+mod common;
 
-fn run(args: &[&str]) -> (i32, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-    )
-}
+use common::{msh_fixture, run};
 
 #[test]
 fn meshes_a_geo_file_with_gmsh() {
     // scripts/setup.sh installs gmsh; the test needs it.
     let d = tempfile::tempdir().unwrap();
-    let geo = format!("{}/tests/data/msh/square.geo", env!("CARGO_MANIFEST_DIR"));
+    let geo = msh_fixture("square.geo").display().to_string();
     let out = d.path().join("square.msh");
     let (code, log) = run(&["mesh", &geo, "-o", out.to_str().unwrap()]);
     assert_eq!(code, 0, "{log}");
@@ -34,7 +21,7 @@ fn meshes_a_geo_file_with_gmsh() {
 #[test]
 fn missing_gmsh_is_a_clear_error() {
     let d = tempfile::tempdir().unwrap();
-    let geo = format!("{}/tests/data/msh/square.geo", env!("CARGO_MANIFEST_DIR"));
+    let geo = msh_fixture("square.geo").display().to_string();
     let out = d.path().join("x.msh");
     let (code, log) = run(&[
         "mesh",

@@ -8,24 +8,21 @@
 //! and asm-cgh exited 3 on `wedge_slip_stiff`, `wedge_point_soft` and
 //! `punch` (CGH stalled on the unscaled KKT system).
 
-use signorini::linalg::sparse::norm;
 use signorini::pipeline;
 use signorini::qp::{kkt, registry, QpProblem, SolveOptions};
-use std::path::PathBuf;
+
+mod common;
+
+use common::{rel_diff as rel, root};
 
 fn problem(name: &str) -> QpProblem {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    let path = root()
         .join("tests/data/partial_kernel")
         .join(format!("{name}.toml"));
     pipeline::prepare(&path, false)
         .unwrap_or_else(|e| panic!("{name}: {e}"))
         .model
         .qp
-}
-
-fn rel(a: &[f64], b: &[f64]) -> f64 {
-    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
-    norm(&d) / norm(b).max(1e-300)
 }
 
 /// Each method within `max_iter`, KKT ≤ 1e-6, x within 1e-8 and λ within

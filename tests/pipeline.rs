@@ -37,10 +37,10 @@ fn temp_toml(dir: &Path, name: &str, text: &str) -> PathBuf {
     p
 }
 
+mod common;
+
 fn square_mesh(kind: &str) -> String {
-    root()
-        .join("tests/data/msh")
-        .join(format!("square_{kind}.msh"))
+    common::msh_fixture(&format!("square_{kind}.msh"))
         .display()
         .to_string()
 }

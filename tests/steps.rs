@@ -2,29 +2,12 @@
 //! step, warm starts; a run stopped after step 2 and restarted from its
 //! checkpoint ends where an uninterrupted run ends.
 
-use std::path::PathBuf;
-use std::process::Command;
+mod common;
 
-fn run(args: &[&str]) -> (i32, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-    )
-}
+use common::{meshes, run};
 
 fn example() -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("meshes/three_bodies_steps.toml")
-        .display()
-        .to_string()
+    common::example("three_bodies_steps")
 }
 
 #[test]
@@ -139,7 +122,7 @@ fn steps_write_a_time_series_and_restart_reproduces_the_uninterrupted_run() {
 #[test]
 fn restart_from_a_foreign_checkpoint_is_bad_input() {
     let d = tempfile::tempdir().unwrap();
-    let col = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes/column.toml");
+    let col = meshes().join("column.toml");
     let (code, log) = run(&[
         "solve",
         col.to_str().unwrap(),

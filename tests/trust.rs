@@ -11,8 +11,12 @@ use signorini::problem::Problem;
 use signorini::qp::{registry, SolveOptions, Status};
 use std::path::PathBuf;
 
+mod common;
+
+use common::{rel_diff as rel, root};
+
 fn dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/punch")
+    root().join("tests/data/punch")
 }
 
 /// The punch model with the punch's Young's modulus replaced.
@@ -24,12 +28,6 @@ fn punch(e_punch: f64) -> Model {
     let problem = Problem::parse(&path, &text).expect("problem");
     let mesh = signorini::mesh::read_msh(&problem.mesh_path()).expect("mesh");
     signorini::fem::build(&mesh, &problem).expect("model")
-}
-
-fn rel(a: &[f64], b: &[f64]) -> f64 {
-    let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
-    let den: f64 = b.iter().map(|y| y * y).sum();
-    (num / den).sqrt()
 }
 
 /// Every exact method solves the floating punch, certifies its KKT residuals

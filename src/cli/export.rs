@@ -13,6 +13,9 @@ use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
 
+// clap prints these doc comments as `--help`: brackets such as [px] stay
+// literal there, so rustdoc must not read them as links.
+#[allow(rustdoc::broken_intra_doc_links)]
 #[derive(Args, Debug, Clone)]
 pub struct ExportArgs {
     /// The problem file (TOML).

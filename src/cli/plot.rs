@@ -9,6 +9,9 @@ use crate::post::plot::{self, Field, PlotOptions};
 use clap::Args;
 use std::path::PathBuf;
 
+// clap prints these doc comments as `--help`: brackets such as [px] stay
+// literal there, so rustdoc must not read them as links.
+#[allow(rustdoc::broken_intra_doc_links)]
 #[derive(Args, Debug, Clone)]
 pub struct PlotArgs {
     /// The HDF5 checkpoint written by `solve` (NAME.h5).

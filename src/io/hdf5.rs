@@ -1,34 +1,5 @@
-//! The HDF5 checkpoint (`model.h5`).
-//!
-//! Layout (indices are 0-based; "rows" = contact constraint rows):
-//!
-//! ```text
-//! /                       attrs: one string attribute per `attrs` entry
-//!                                (e.g. problem, toml, version, and the
-//!                                fingerprint `--restart` compares),
-//!                                plane_strain (u8 0/1), last_step (u64, once a step exists)
-//! /mesh/nodes             f64  [n, 2]   undeformed point coordinates
-//! /mesh/node_tags         u64  [n]      Gmsh node tag of each point
-//! /mesh/body              u32  [n]      body of each point
-//! /mesh/triangles         u64  [m, 3]   point indices, counter-clockwise
-//! /mesh/material          u32  [m]      index into material_names
-//! /mesh/contact_points    f64  [rows, 2]
-//! /mesh/contact_first     u64  [rows]   point index of the first side
-//! /mesh/contact_second    u64  [rows, 2] point indices of the other side
-//! /mesh/contact_weights   f64  [rows, 2] their weights
-//! /mesh/contact_normal    f64  [rows, 2]
-//! /mesh/contact_gap0      f64  [rows]
-//! /mesh/contact_interface u32  [rows]   index into interface_names
-//! /mesh/contact_segments  u64  [k, 2]   contact-point indices
-//! /mesh                   attrs: material_names, interface_names
-//!                                (1-D arrays of variable-length UTF-8 strings)
-//! /steps/NNNN             one group per step (4+ digits, 1-based):
-//!     displacement f64 [n, 2], stress f64 [m, 4], von_mises f64 [m],
-//!     principal_stress f64 [m, 2], multipliers f64 [rows],
-//!     contact_pressure f64 [rows], gap f64 [rows], active u8 [rows]
-//!     attrs: time, energy, kkt_*, time_* (f64); iterations (u64);
-//!            converged (u8 0/1); method, preconditioner (strings)
-//! ```
+//! The HDF5 checkpoint (`model.h5`, docs/problem-format.md §6): the mesh once,
+//! then one group per load step; its layout is documented on [`Checkpoint`].
 //!
 //! Every write is crash-safe: the file is built (or copied and extended) in
 //! a private staging directory, closed, fsynced and renamed over the target.
@@ -46,6 +17,36 @@ use super::atomic::{write_atomic, IoError};
 use super::{ContactGeometry, OutMesh, StepInfo, StepOutput};
 
 /// Everything a checkpoint holds.
+///
+/// Layout (indices are 0-based; "rows" = contact constraint rows):
+///
+/// ```text
+/// /                       attrs: one string attribute per `attrs` entry
+///                                (e.g. problem, toml, version, and the
+///                                fingerprint `--restart` compares),
+///                                plane_strain (u8 0/1), last_step (u64, once a step exists)
+/// /mesh/nodes             f64  [n, 2]   undeformed point coordinates
+/// /mesh/node_tags         u64  [n]      Gmsh node tag of each point
+/// /mesh/body              u32  [n]      body of each point
+/// /mesh/triangles         u64  [m, 3]   point indices, counter-clockwise
+/// /mesh/material          u32  [m]      index into material_names
+/// /mesh/contact_points    f64  [rows, 2]
+/// /mesh/contact_first     u64  [rows]   point index of the first side
+/// /mesh/contact_second    u64  [rows, 2] point indices of the other side
+/// /mesh/contact_weights   f64  [rows, 2] their weights
+/// /mesh/contact_normal    f64  [rows, 2]
+/// /mesh/contact_gap0      f64  [rows]
+/// /mesh/contact_interface u32  [rows]   index into interface_names
+/// /mesh/contact_segments  u64  [k, 2]   contact-point indices
+/// /mesh                   attrs: material_names, interface_names
+///                                (1-D arrays of variable-length UTF-8 strings)
+/// /steps/NNNN             one group per step (4+ digits, 1-based):
+///     displacement f64 [n, 2], stress f64 [m, 4], von_mises f64 [m],
+///     principal_stress f64 [m, 2], multipliers f64 [rows],
+///     contact_pressure f64 [rows], gap f64 [rows], active u8 [rows]
+///     attrs: time, energy, kkt_*, time_* (f64); iterations (u64);
+///            converged (u8 0/1); method, preconditioner (strings)
+/// ```
 #[derive(Debug, Clone, Default)]
 pub struct Checkpoint {
     pub mesh: OutMesh,

@@ -130,7 +130,7 @@ impl Field {
         }
     }
 
-    /// "von_mises [Pa]", "body".
+    /// "von_mises \[Pa\]", "body".
     pub fn label(self) -> String {
         match self.unit() {
             Some(u) => format!("{} [{u}]", self.name()),
@@ -201,7 +201,7 @@ impl Default for PlotOptions {
     }
 }
 
-/// Smallest and largest accepted image side [px].
+/// Smallest and largest accepted image side \[px\].
 pub const MIN_SIDE: u32 = 200;
 pub const MAX_SIDE: u32 = 10000;
 
@@ -213,7 +213,7 @@ pub struct PlotSummary {
     pub steps: usize,
     /// Displacement scale used (None for the contact plot).
     pub scale: Option<f64>,
-    /// Largest displacement magnitude of the step [m].
+    /// Largest displacement magnitude of the step \[m\].
     pub max_displacement: f64,
     /// Range of the plotted values (field, or contact pressure); None for a
     /// categorical field.

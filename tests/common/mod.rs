@@ -1,8 +1,114 @@
-//! Helpers shared by integration tests that run the `signorini` binary.
+//! Helpers shared by the integration tests: where the shipped files are, the
+//! `signorini` binary run with or without a time budget, a seeded xorshift
+//! generator, vector norms, and a Matrix Market reader independent of
+//! `signorini::io::mtx` (so a test can check the exporter with other code).
+//! Each test binary declares `mod common;` and uses the part it needs.
+#![allow(dead_code)] // Each test binary compiles all of this and uses a part.
 
-use std::path::Path;
-use std::process::{Command, Stdio};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
+
+/// The `signorini` binary Cargo built for these tests.
+pub fn exe() -> &'static str {
+    env!("CARGO_BIN_EXE_signorini")
+}
+
+/// A command for the `signorini` binary, to add arguments to.
+pub fn command() -> Command {
+    Command::new(exe())
+}
+
+/// The crate's root directory.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The shipped examples' directory, `meshes/`.
+pub fn meshes() -> PathBuf {
+    root().join("meshes")
+}
+
+/// The path of the shipped example `meshes/NAME.toml`, as a string argument.
+pub fn example(name: &str) -> String {
+    meshes().join(format!("{name}.toml")).display().to_string()
+}
+
+/// The Gmsh fixture `tests/data/msh/NAME`.
+pub fn msh_fixture(name: &str) -> PathBuf {
+    root().join("tests/data/msh").join(name)
+}
+
+/// The `*.toml` files of `dir`, sorted.
+pub fn tomls_in(dir: &Path) -> Vec<PathBuf> {
+    let mut tomls: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    tomls.sort();
+    tomls
+}
+
+/// Exit code (-1 when a signal ended the process), stdout and stderr.
+pub fn split(o: &Output) -> (i32, String, String) {
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// Exit code (-1 when a signal ended the process) and stdout + stderr.
+pub fn joined(o: &Output) -> (i32, String) {
+    let (code, stdout, stderr) = split(o);
+    (code, format!("{stdout}{stderr}"))
+}
+
+/// Runs `signorini ARGS`: (exit code, stdout, stderr).
+pub fn signorini(args: &[&str]) -> (i32, String, String) {
+    split(&command().args(args).output().expect("run signorini"))
+}
+
+/// Runs `signorini ARGS` in the directory `dir`: (exit code, stdout, stderr).
+pub fn signorini_in(dir: &str, args: &[&str]) -> (i32, String, String) {
+    split(
+        &command()
+            .args(args)
+            .current_dir(dir)
+            .output()
+            .expect("run signorini"),
+    )
+}
+
+/// Runs `signorini ARGS`: (exit code, stdout + stderr).
+pub fn run(args: &[&str]) -> (i32, String) {
+    joined(&command().args(args).output().expect("run signorini"))
+}
+
+/// Runs `signorini ARGS` and panics when it still runs after `deadline` (a
+/// FIFO must not block a run forever): (exit code, stdout + stderr).
+pub fn run_with_deadline(args: &[&str], deadline: Duration) -> (i32, String) {
+    let mut child = command()
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            break;
+        }
+        if t0.elapsed() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("signorini {args:?} still runs after {deadline:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    joined(&child.wait_with_output().unwrap())
+}
 
 /// How one run of the binary ended.
 #[derive(Debug, Clone)]
@@ -27,7 +133,7 @@ pub fn run_signorini(args: &[String], budget: Duration, scratch: &Path) -> Run {
     let stdout = std::fs::File::create(&out_path).expect("stdout file");
     let stderr = std::fs::File::create(&err_path).expect("stderr file");
     let start = Instant::now();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_signorini"))
+    let mut child = command()
         .args(args)
         .stdin(Stdio::null())
         .stdout(stdout)
@@ -58,4 +164,118 @@ pub fn run_signorini(args: &[String], budget: Duration, scratch: &Path) -> Run {
         secs: start.elapsed().as_secs_f64(),
         output,
     }
+}
+
+/// xorshift64: a small reproducible generator for fuzzing and random data.
+pub struct XorShift(pub u64);
+
+impl XorShift {
+    /// The generator started from splitmix64 of `seed`, so that nearby seeds
+    /// give unrelated streams.
+    pub fn seeded(seed: u64) -> XorShift {
+        let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        XorShift((z ^ (z >> 31)) | 1)
+    }
+    /// The next 64 bits.
+    pub fn next(&mut self) -> u64 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        self.0 = x;
+        x
+    }
+    /// A number in 0..n (0 when n = 0).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+    /// An element of the non-empty `v`.
+    pub fn pick<'a, T>(&mut self, v: &'a [T]) -> &'a T {
+        &v[self.below(v.len())]
+    }
+}
+
+/// Euclidean norm.
+pub fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// ‖a − b‖ / ‖b‖; 0 when both are zero, infinite when only `b` is zero or
+/// the lengths differ.
+pub fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
+    if a.len() != b.len() {
+        return f64::INFINITY;
+    }
+    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+    let s = norm(b);
+    if s == 0.0 {
+        if norm(&d) == 0.0 {
+            0.0
+        } else {
+            f64::INFINITY
+        }
+    } else {
+        norm(&d) / s
+    }
+}
+
+/// A Matrix Market file written by `signorini export`, as (rows, cols,
+/// triplets): coordinate files with the symmetric half expanded, array files
+/// in their column-major order.
+pub fn read_mtx(path: &Path) -> (usize, usize, Vec<(usize, usize, f64)>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_lowercase();
+    let symmetric = header.contains("symmetric");
+    let array = header.contains("array");
+    let mut lines = lines.filter(|l| !l.starts_with('%') && !l.trim().is_empty());
+    let size: Vec<usize> = lines
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .map(|s| s.parse().unwrap())
+        .collect();
+    let (nr, nc) = (size[0], size[1]);
+    let mut t = Vec::new();
+    if array {
+        // Column-major dense.
+        for (k, l) in lines.enumerate() {
+            t.push((k % nr, k / nr, l.trim().parse::<f64>().unwrap()));
+        }
+    } else {
+        for l in lines {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            let (i, j) = (
+                f[0].parse::<usize>().unwrap() - 1,
+                f[1].parse::<usize>().unwrap() - 1,
+            );
+            let a: f64 = f[2].parse().unwrap();
+            t.push((i, j, a));
+            if symmetric && i != j {
+                t.push((j, i, a));
+            }
+        }
+    }
+    (nr, nc, t)
+}
+
+/// A Matrix Market vector (one column) as a dense vector.
+pub fn read_vec(path: &Path) -> Vec<f64> {
+    let (nr, _, t) = read_mtx(path);
+    let mut v = vec![0.0; nr];
+    for (i, _, a) in t {
+        v[i] = a;
+    }
+    v
+}
+
+/// A dense Matrix Market array as (rows, cols, values in column-major order);
+/// asserts that it holds rows × cols values.
+pub fn read_array(path: &Path) -> (usize, usize, Vec<f64>) {
+    let (nr, nc, t) = read_mtx(path);
+    let v: Vec<f64> = t.into_iter().map(|(_, _, a)| a).collect();
+    assert_eq!(v.len(), nr * nc);
+    (nr, nc, v)
 }
