@@ -100,10 +100,9 @@ fn the_same_input_gives_the_same_bits() {
 fn absurd_warm_starts_and_overflowing_data_are_never_certified() {
     let model = punch(2.1e11);
     for bad in [1e300, f64::NAN] {
-        let opts = {
-            let mut o = SolveOptions::default();
-            o.x0 = Some(vec![bad; model.qp.n()]);
-            o
+        let opts = SolveOptions {
+            x0: Some(vec![bad; model.qp.n()]),
+            ..Default::default()
         };
         for method in ["cgc", "ssn"] {
             let r = registry::solve(method, &model.qp, &opts).expect(method);

@@ -62,6 +62,8 @@ pub struct SolverFlags {
     pub strict: bool,
 }
 
+// clap prints these doc comments as `--help`: `[output]` stays as written.
+#[allow(rustdoc::broken_intra_doc_links)]
 #[derive(Args, Debug, Clone)]
 pub struct SolveArgs {
     /// The problem file (TOML).

@@ -126,7 +126,7 @@ pub struct QpResult {
     /// Inner iterations (CG steps, inner solves).
     pub inner_iterations: usize,
     pub log: Vec<IterRecord>,
-    /// Wall time per phase [s], e.g. ("factor", 0.1), ("iterate", 0.5).
+    /// Wall time per phase in seconds, e.g. ("factor", 0.1), ("iterate", 0.5).
     pub timings: Vec<(String, f64)>,
     pub kkt: Kkt,
     pub energy: f64,

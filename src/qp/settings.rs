@@ -14,6 +14,8 @@
 use super::precond::PrecondKind;
 
 /// `[solver]` as written in the problem file, or as given on the command line.
+// clap prints these doc comments as `--help`: `[solver]` stays as written.
+#[allow(rustdoc::broken_intra_doc_links)]
 #[derive(Debug, Clone, Default, PartialEq, serde::Deserialize, clap::Args)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSection {

@@ -214,7 +214,7 @@ impl Relax<'_> {
             if !self.newton_step() {
                 return;
             }
-            if self.s.iter().map(|&v| v > 0.0).eq(before.into_iter()) {
+            if self.s.iter().map(|&v| v > 0.0).eq(before) {
                 return;
             }
         }
@@ -318,7 +318,7 @@ impl Iterative for Relax<'_> {
     fn step(&mut self) -> Step {
         let qp = self.qp;
         self.sweeps += 1;
-        if self.correct && self.sweeps % CORRECTION_EVERY == 0 {
+        if self.correct && self.sweeps.is_multiple_of(CORRECTION_EVERY) {
             self.subspace_correction();
         }
         self.x_old.copy_from_slice(&self.x);

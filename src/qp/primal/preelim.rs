@@ -1,7 +1,7 @@
 //! Pre-elimination: Schur complement onto the constrained DOFs (methods.md §4.3).
 //!
 //! P = the DOFs occurring in A (columns with a nonzero entry), L = the others.
-//! With C11 = C[L,L] (sparse Cholesky), C12 = C[L,P], C22 = C[P,P]:
+//! With C11 = C(L,L) (sparse Cholesky), C12 = C(L,P), C22 = C(P,P):
 //!
 //! ```text
 //!   C̄22 = C22 − C12ᵀ C11⁻¹ C12   (dense P×P, one solve per contact DOF)
