@@ -5,8 +5,8 @@
 
 use super::solve::{bad_input, choice, EXIT_BAD_INPUT};
 use super::SolverFlags;
-use crate::pipeline::{self, Prepared};
 use crate::qp::{precond::PrecondKind, registry, QpResult};
+use crate::run::{self, Prepared};
 use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
@@ -82,7 +82,7 @@ pub fn variants(spec: Option<&str>) -> Result<Vec<(String, Option<PrecondKind>)>
 }
 
 pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
-    let prep = match pipeline::prepare(&a.problem, a.no_contact) {
+    let prep = match run::prepare(&a.problem, a.no_contact) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };
@@ -107,7 +107,7 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
     let nsteps = prep.problem.file.nsteps();
     let step_model;
     let model = if nsteps > 1 {
-        step_model = match pipeline::step_model(&prep, nsteps - 1) {
+        step_model = match run::step_model(&prep, nsteps - 1) {
             Ok(m) => m,
             Err(e) => return bad_input(&e),
         };
@@ -137,7 +137,7 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
             eprintln!("compare: {label} …");
         }
         let t = Instant::now();
-        let outcome = match pipeline::options(&prep.problem, &c) {
+        let outcome = match run::options(&prep.problem, &c) {
             Err(e) => Err(e.to_string()),
             Ok((m, mut opts)) => {
                 // Each method pays for its own factorization.
@@ -147,7 +147,7 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
                 opts.deadline = a
                     .time_limit
                     .map(|s| t + std::time::Duration::from_secs_f64(s));
-                pipeline::solve_model(&prep, model, &m, &opts)
+                run::solve_model(&prep, model, &m, &opts)
                     .map(|r| (r, t.elapsed().as_secs_f64()))
                     .map_err(|e| e.to_string())
             }
@@ -170,7 +170,7 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
             outcome,
         });
     }
-    let penalty_eps = pipeline::options(&prep.problem, &base)
+    let penalty_eps = run::options(&prep.problem, &base)
         .ok()
         .and_then(|(_, o)| o.penalty);
     let mut table = table_json(&prep, model, &rows, a.solver.kkt_target, penalty_eps);
@@ -267,7 +267,7 @@ pub fn table_json(
             }
             Ok((q, t)) => {
                 let u = model.displacements(&q.x);
-                let probes: serde_json::Map<String, serde_json::Value> = pipeline::probes(prep, &u)
+                let probes: serde_json::Map<String, serde_json::Value> = run::probes(prep, &u)
                     .into_iter()
                     .map(|(n, _, _, v)| (n, json!(v)))
                     .collect();
