@@ -27,10 +27,10 @@ pub struct CompareArgs {
     /// Write the table as CSV.
     #[arg(long)]
     pub csv: Option<PathBuf>,
-    /// Ignore every [[contact]].
+    /// Ignore every `[[contact]]`.
     #[arg(long)]
     pub no_contact: bool,
-    /// Wall-clock budget per variant [s]; a variant that reaches it is
+    /// Wall-clock budget per variant (s); a variant that reaches it is
     /// stopped and its row says so.
     #[arg(long)]
     pub time_limit: Option<f64>,
@@ -311,7 +311,7 @@ pub fn table_json(
                         inner_iterations: q.inner_iterations,
                         time_s: *t,
                         phases: q.timings.iter().cloned().collect(),
-                        kkt: q.kkt.clone(),
+                        kkt: q.kkt,
                         kkt_max: q.kkt.max(),
                         energy: q.energy,
                         active: q.active.iter().filter(|a| **a).count(),

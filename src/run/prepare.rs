@@ -24,13 +24,13 @@ pub struct Prepared {
     pub mesh_hash: u64,
     pub mesh: Mesh,
     pub model: Model,
-    /// `--no-contact`: every [[contact]] was dropped (part of the fingerprint).
+    /// `--no-contact`: every `[[contact]]` was dropped (part of the fingerprint).
     pub no_contact: bool,
     pub t_read: f64,
     pub t_assemble: f64,
 }
 
-/// Read the TOML and the mesh, build the QP. `no_contact` drops every [[contact]].
+/// Read the TOML and the mesh, build the QP. `no_contact` drops every `[[contact]]`.
 pub fn prepare(path: &Path, no_contact: bool) -> Result<Prepared, InputError> {
     let t0 = Instant::now();
     let mut problem = Problem::load(path)?;

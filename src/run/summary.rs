@@ -76,7 +76,7 @@ pub struct Probe {
     pub u: [f64; 2],
 }
 
-/// Wall time [s] of the run's phases (the last step's assemble, solve and
+/// Wall time (s) of the run's phases (the last step's assemble, solve and
 /// write) and of the method's own phases.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct Timings {
