@@ -202,3 +202,49 @@ fn bad_run_settings_are_bad_input() {
     assert!(e.to_string().contains("does not match"), "{e}");
     assert_eq!(e.exit_code(), 2);
 }
+
+/// The CLI's outputs through the library: the writers observe the run and a
+/// transaction commits each load step; the directory then holds the
+/// complete files and no staging directory.
+#[test]
+fn the_writers_and_a_transaction_leave_every_output() {
+    use signorini::run::{SummaryWriter, Transaction, VtuWriter};
+    let (prep, method, opts) = prepared();
+    let nsteps = prep.problem.file.nsteps();
+    let name = prep.problem.name.clone();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let om = post::out_mesh(&prep.model, &prep.mesh);
+    let mut tx = Transaction::open(&out, &name).unwrap_or_else(|e| panic!("{e}"));
+    let (sdir, fdir) = (tx.stage_dir().to_path_buf(), tx.dir().to_path_buf());
+    assert_ne!(sdir, fdir);
+    let mut vtu = VtuWriter::new(&prep, &om, &sdir, &fdir, false);
+    let mut ck = CheckpointWriter::new(&prep, &om, &sdir, &fdir, None);
+    let mut json = SummaryWriter::new(&prep, &sdir);
+    let outcome = Run::new(&prep, &method, &opts)
+        .solve(&mut [&mut vtu, &mut ck, &mut json], Some(&mut tx))
+        .unwrap_or_else(|e| panic!("{e}"));
+    tx.finish();
+    let mut files: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    let mut want = vec![
+        format!("{name}.h5"),
+        format!("{name}.json"),
+        format!("{name}.pvd"),
+    ];
+    for k in 1..=nsteps {
+        want.push(format!("{name}_{k:04}.vtu"));
+        want.push(format!("{name}_{k:04}_contact.vtu"));
+    }
+    want.sort();
+    assert_eq!(files, want);
+    let text = std::fs::read_to_string(out.join(format!("{name}.json"))).unwrap();
+    assert_eq!(text, outcome.summary.unwrap().to_json().unwrap());
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v["steps"].as_array().map(Vec::len), Some(nsteps));
+    let ck = signorini::io::hdf5::read_checkpoint(&out.join(format!("{name}.h5"))).unwrap();
+    assert_eq!(ck.steps.len(), nsteps);
+}
