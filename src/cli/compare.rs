@@ -5,10 +5,11 @@
 
 use super::solve::{bad_input, EXIT_BAD_INPUT};
 use super::SolverFlags;
-use crate::pipeline::{self, Prepared};
 use crate::qp::{precond::PrecondKind, registry, QpResult};
+use crate::run::{self, Prepared};
 use clap::Args;
-use serde_json::json;
+use serde::Serialize;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -26,10 +27,10 @@ pub struct CompareArgs {
     /// Write the table as CSV.
     #[arg(long)]
     pub csv: Option<PathBuf>,
-    /// Ignore every [[contact]].
+    /// Ignore every `[[contact]]`.
     #[arg(long)]
     pub no_contact: bool,
-    /// Wall-clock budget per variant [s]; a variant that reaches it is
+    /// Wall-clock budget per variant (s); a variant that reaches it is
     /// stopped and its row says so.
     #[arg(long)]
     pub time_limit: Option<f64>,
@@ -82,7 +83,7 @@ pub fn variants(spec: Option<&str>) -> Result<Vec<(String, Option<PrecondKind>)>
 }
 
 pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
-    let prep = match pipeline::prepare(&a.problem, a.no_contact) {
+    let prep = match run::prepare(&a.problem, a.no_contact) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };
@@ -107,7 +108,7 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
     let nsteps = prep.problem.file.nsteps();
     let step_model;
     let model = if nsteps > 1 {
-        step_model = match pipeline::step_model(&prep, nsteps - 1) {
+        step_model = match run::step_model(&prep, nsteps - 1) {
             Ok(m) => m,
             Err(e) => return bad_input(&e),
         };
@@ -137,7 +138,7 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
             eprintln!("compare: {label} …");
         }
         let t = Instant::now();
-        let outcome = match pipeline::options(&prep.problem, &c) {
+        let outcome = match run::options(&prep.problem, &c) {
             Err(e) => Err(e.to_string()),
             Ok((m, mut opts)) => {
                 // Each method pays for its own factorization: every solve
@@ -147,7 +148,7 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
                 opts.deadline = a
                     .time_limit
                     .map(|s| t + std::time::Duration::from_secs_f64(s));
-                pipeline::solve_model(&prep, model, &m, &opts)
+                run::solve_model(&prep, model, &m, &opts)
                     .map(|r| (r, t.elapsed().as_secs_f64()))
                     .map_err(|e| e.to_string())
             }
@@ -170,19 +171,20 @@ pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
             outcome,
         });
     }
-    let penalty_eps = pipeline::options(&prep.problem, &base)
+    let penalty_eps = run::options(&prep.problem, &base)
         .ok()
         .and_then(|(_, o)| o.settings.penalty.eps);
     let mut table = table_json(&prep, model, &rows, a.solver.kkt_target, penalty_eps);
-    table["steps"] = json!({ "count": nsteps, "compared": nsteps });
-    if let Some(t) = a.time_limit {
-        table["time_limit_s"] = json!(t);
-    }
+    table.steps = TableSteps {
+        count: nsteps,
+        compared: nsteps,
+    };
+    table.time_limit_s = a.time_limit;
     if !quiet {
         print_table(&prep, &table);
     }
     if let Some(p) = &a.json {
-        let text = serde_json::to_string_pretty(&table).unwrap_or_default();
+        let text = table.to_json();
         if let Err(e) = crate::io::atomic::write_atomic_bytes(p, text.as_bytes()) {
             eprintln!("error: {e}");
             return EXIT_BAD_INPUT;
@@ -232,7 +234,7 @@ pub fn table_json(
     rows: &[Row],
     kkt_target: f64,
     penalty_eps: Option<f64>,
-) -> serde_json::Value {
+) -> Table {
     let penalty_lambda_tol = match penalty_eps {
         Some(e) => 100.0 * e * model.qp.c.diag().iter().fold(0.0f64, |a, b| a.max(*b)),
         None => 100.0 / crate::qp::primal::penalty::PENALTY_FACTOR,
@@ -257,21 +259,23 @@ pub fn table_json(
         .map(|(q, _)| q);
     let mut out = vec![];
     for r in rows {
-        let mut o = json!({ "method": r.method, "preconditioner": r.preconditioner });
-        match &r.outcome {
-            Err(e) => {
-                o["error"] = json!(e);
-                o["converged"] = json!(false);
-                o["certified"] = json!(false);
-                o["agrees"] = json!(false);
-            }
+        let row = match &r.outcome {
+            Err(e) => TableRow {
+                method: r.method.clone(),
+                preconditioner: r.preconditioner.clone(),
+                error: Some(e.clone()),
+                converged: false,
+                certified: false,
+                agrees: false,
+                solved: None,
+            },
             Ok((q, t)) => {
                 let u = model.displacements(&q.x);
-                let probes: serde_json::Map<String, serde_json::Value> = pipeline::probes(prep, &u)
+                let probes = run::probes(prep, &u)
                     .into_iter()
-                    .map(|(n, _, _, v)| (n, json!(v)))
+                    .map(|(n, _, _, v)| (n, v))
                     .collect();
-                let (agree_tol, agree_tol_l) = if r.method == "penalty" {
+                let (agree_tol, agree_tol_lambda) = if r.method == "penalty" {
                     (
                         (10.0 * q.kkt.primal).max(1e-6),
                         penalty_lambda_tol.max(1e-6),
@@ -288,42 +292,118 @@ pub fn table_json(
                             rel,
                             rel_l,
                             cert && rel <= agree_tol
-                                && rel_l <= agree_tol_l
+                                && rel_l <= agree_tol_lambda
                                 && q.active == rf.active,
                         )
                     }
                     None => (f64::NAN, f64::NAN, false),
                 };
-                o["converged"] = json!(q.status.converged());
-                o["certified"] = json!(cert);
-                o["status"] = json!(q.status.describe());
-                o["iterations"] = json!(q.iterations);
-                o["inner_iterations"] = json!(q.inner_iterations);
-                o["time_s"] = json!(t);
-                o["phases"] = json!(q
-                    .timings
-                    .iter()
-                    .map(|(k, v)| (k.clone(), json!(v)))
-                    .collect::<serde_json::Map<_, _>>());
-                o["kkt"] = json!(q.kkt);
-                o["kkt_max"] = json!(q.kkt.max());
-                o["energy"] = json!(q.energy);
-                o["active"] = json!(q.active.iter().filter(|a| **a).count());
-                o["probes"] = json!(probes);
-                o["rel_diff"] = json!(rel);
-                o["rel_diff_lambda"] = json!(rel_l);
-                o["agrees"] = json!(agrees);
-                o["agree_tol"] = json!(agree_tol);
-                o["agree_tol_lambda"] = json!(agree_tol_l);
-                o["notes"] = json!(q.notes);
+                TableRow {
+                    method: r.method.clone(),
+                    preconditioner: r.preconditioner.clone(),
+                    error: None,
+                    converged: q.status.converged(),
+                    certified: cert,
+                    agrees,
+                    solved: Some(SolvedRow {
+                        status: q.status.describe(),
+                        iterations: q.iterations,
+                        inner_iterations: q.inner_iterations,
+                        time_s: *t,
+                        phases: q.timings.iter().cloned().collect(),
+                        kkt: q.kkt,
+                        kkt_max: q.kkt.max(),
+                        energy: q.energy,
+                        active: q.active.iter().filter(|a| **a).count(),
+                        probes,
+                        rel_diff: rel,
+                        rel_diff_lambda: rel_l,
+                        agree_tol,
+                        agree_tol_lambda,
+                        notes: q.notes.clone(),
+                    }),
+                }
             }
-        }
-        out.push(o);
+        };
+        out.push(row);
     }
-    json!({ "problem": prep.problem.name, "dofs": model.qp.n(), "constraints": model.qp.m(), "kkt_target": kkt_target, "rows": out })
+    Table {
+        problem: prep.problem.name.clone(),
+        dofs: model.qp.n(),
+        constraints: model.qp.m(),
+        kkt_target,
+        rows: out,
+        steps: TableSteps {
+            count: 1,
+            compared: 1,
+        },
+        time_limit_s: None,
+    }
 }
 
-fn print_table(prep: &Prepared, t: &serde_json::Value) {
+/// The comparison table (`--json`; keys in alphabetical order).
+#[derive(Debug, Clone, Serialize)]
+pub struct Table {
+    pub problem: String,
+    pub dofs: usize,
+    pub constraints: usize,
+    pub kkt_target: f64,
+    pub rows: Vec<TableRow>,
+    /// Load steps of the problem; the last is compared.
+    pub steps: TableSteps,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_limit_s: Option<f64>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct TableSteps {
+    pub count: usize,
+    pub compared: usize,
+}
+
+/// One variant: its error, or its result ([`SolvedRow`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct TableRow {
+    pub method: String,
+    pub preconditioner: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+    pub converged: bool,
+    pub certified: bool,
+    pub agrees: bool,
+    #[serde(flatten)]
+    pub solved: Option<SolvedRow>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct SolvedRow {
+    pub status: String,
+    pub iterations: usize,
+    pub inner_iterations: usize,
+    pub time_s: f64,
+    pub phases: BTreeMap<String, f64>,
+    pub kkt: crate::qp::Kkt,
+    pub kkt_max: f64,
+    pub energy: f64,
+    pub active: usize,
+    pub probes: BTreeMap<String, [f64; 2]>,
+    pub rel_diff: f64,
+    pub rel_diff_lambda: f64,
+    pub agree_tol: f64,
+    pub agree_tol_lambda: f64,
+    pub notes: Vec<String>,
+}
+
+impl Table {
+    /// The JSON text, keys in alphabetical order at every level.
+    pub fn to_json(&self) -> String {
+        serde_json::to_value(self)
+            .and_then(|v| serde_json::to_string_pretty(&v))
+            .unwrap_or_default()
+    }
+}
+
+fn print_table(prep: &Prepared, t: &Table) {
     let names: Vec<String> = prep.problem.file.output.probes.keys().cloned().collect();
     println!(
         "{} — {} DOFs, {} contact constraints",
@@ -340,42 +420,35 @@ fn print_table(prep: &Prepared, t: &serde_json::Value) {
         "outer", "inner", "time[s]", "KKT", "energy", "diff(x)", "diff(λ)"
     );
     println!("{head}");
-    for r in t["rows"].as_array().into_iter().flatten() {
-        let mut line = format!(
-            "{:<8} {:<9}",
-            r["method"].as_str().unwrap_or(""),
-            r["preconditioner"].as_str().unwrap_or("")
-        );
-        if let Some(e) = r["error"].as_str() {
+    for r in &t.rows {
+        let mut line = format!("{:<8} {:<9}", r.method, r.preconditioner);
+        if let Some(e) = &r.error {
             println!("{line} FAILED: {e}");
             continue;
         }
-        if r["converged"] == false {
-            println!("{line} {}", r["status"].as_str().unwrap_or("NOT CONVERGED"));
+        let Some(s) = &r.solved else {
+            continue;
+        };
+        if !r.converged {
+            println!("{line} {}", s.status);
             continue;
         }
         for n in &names {
-            let u = &r["probes"][n];
-            line += &format!(
-                " {:>12.5e} {:>12.5e}",
-                u[0].as_f64().unwrap_or(f64::NAN),
-                u[1].as_f64().unwrap_or(f64::NAN)
-            );
+            let u = s.probes.get(n).copied().unwrap_or([f64::NAN; 2]);
+            line += &format!(" {:>12.5e} {:>12.5e}", u[0], u[1]);
         }
         line += &format!(
             " {:>7} {:>8} {:>9.4} {:>9.2e} {:>15.8e} {:>9.2e} {:>9.2e}  {}",
-            r["iterations"].as_u64().unwrap_or(0),
-            r["inner_iterations"].as_u64().unwrap_or(0),
-            r["time_s"].as_f64().unwrap_or(f64::NAN),
-            r["kkt_max"].as_f64().unwrap_or(f64::NAN),
-            r["energy"].as_f64().unwrap_or(f64::NAN),
-            r["rel_diff"].as_f64().unwrap_or(f64::NAN),
-            r["rel_diff_lambda"].as_f64().unwrap_or(f64::NAN),
-            if r["converged"] == false {
-                "NOT CONVERGED"
-            } else if r["certified"] == false {
+            s.iterations,
+            s.inner_iterations,
+            s.time_s,
+            s.kkt_max,
+            s.energy,
+            s.rel_diff,
+            s.rel_diff_lambda,
+            if !r.certified {
                 "NOT CERTIFIED"
-            } else if r["agrees"] == true {
+            } else if r.agrees {
                 "yes"
             } else {
                 "no"
@@ -385,34 +458,40 @@ fn print_table(prep: &Prepared, t: &serde_json::Value) {
     }
 }
 
-fn to_csv(t: &serde_json::Value) -> String {
+/// A value as in the JSON (`null` for a missing or non-finite number).
+fn js<T: Serialize>(v: &T) -> String {
+    serde_json::to_string(v).unwrap_or_else(|_| "null".into())
+}
+
+fn to_csv(t: &Table) -> String {
     let mut s = String::from("method,preconditioner,converged,certified,iterations,inner_iterations,time_s,kkt_max,energy,rel_diff,rel_diff_lambda,agrees,probes,error\n");
-    for r in t["rows"].as_array().into_iter().flatten() {
-        let probes = r["probes"]
-            .as_object()
-            .map(|m| {
-                m.iter()
-                    .map(|(k, v)| format!("{k}={}:{}", v[0], v[1]))
+    for r in &t.rows {
+        let o = r.solved.as_ref();
+        let probes = o
+            .map(|o| {
+                o.probes
+                    .iter()
+                    .map(|(k, v)| format!("{k}={}:{}", js(&v[0]), js(&v[1])))
                     .collect::<Vec<_>>()
                     .join(" ")
             })
             .unwrap_or_default();
         s += &format!(
             "{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\"\n",
-            r["method"].as_str().unwrap_or(""),
-            r["preconditioner"].as_str().unwrap_or(""),
-            r["converged"],
-            r["certified"],
-            r["iterations"],
-            r["inner_iterations"],
-            r["time_s"],
-            r["kkt_max"],
-            r["energy"],
-            r["rel_diff"],
-            r["rel_diff_lambda"],
-            r["agrees"],
+            r.method,
+            r.preconditioner,
+            r.converged,
+            r.certified,
+            js(&o.map(|o| o.iterations)),
+            js(&o.map(|o| o.inner_iterations)),
+            js(&o.map(|o| o.time_s)),
+            js(&o.map(|o| o.kkt_max)),
+            js(&o.map(|o| o.energy)),
+            js(&o.map(|o| o.rel_diff)),
+            js(&o.map(|o| o.rel_diff_lambda)),
+            r.agrees,
             probes,
-            r["error"].as_str().unwrap_or("").replace('"', "'")
+            r.error.as_deref().unwrap_or("").replace('"', "'")
         );
     }
     s

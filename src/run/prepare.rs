@@ -1,28 +1,22 @@
-//! The solve pipeline shared by the CLI commands and the tests:
-//! read → assemble → solve → post-process → write.
+//! Reading and assembling a problem (docs/problem-format.md §1–§2): the
+//! TOML and the mesh become a [`Prepared`] (a [`Model`] holding the QP),
+//! checked for contact curves without elements and probes off the mesh.
+//! Also the pieces every step needs: the model of load step `s`, the warm
+//! start of the previous step, the checkpoint's fingerprint, the solver
+//! choice ([`options`]) and the solve with its unbounded-problem message.
 
+use super::RunError;
 use crate::fem::{self, Model};
-use crate::io::{self, IoError, OutMesh, StepOutput};
 use crate::linalg::cholesky::Workspace;
 use crate::mesh::{self, Mesh};
 use crate::post;
 use crate::problem::Problem;
 use crate::qp::{registry, settings, QpResult, Settings, SolveOptions, SolverSection, Status};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
-/// Bad input: the problem cannot be solved as given (exit code 2).
-#[derive(Debug, thiserror::Error)]
-pub enum InputError {
-    #[error(transparent)]
-    Model(#[from] crate::problem::ModelError),
-    #[error(transparent)]
-    Mesh(#[from] mesh::MeshError),
-    #[error(transparent)]
-    Fem(#[from] fem::FemError),
-    #[error("{path}: {msg}")]
-    Solver { path: PathBuf, msg: String },
-}
+/// The error of [`prepare`] and [`options`] (one error type for the run).
+pub type InputError = RunError;
 
 /// A problem read and assembled.
 pub struct Prepared {
@@ -31,11 +25,13 @@ pub struct Prepared {
     pub mesh_hash: u64,
     pub mesh: Mesh,
     pub model: Model,
+    /// `--no-contact`: every `[[contact]]` was dropped (part of the fingerprint).
+    pub no_contact: bool,
     pub t_read: f64,
     pub t_assemble: f64,
 }
 
-/// Read the TOML and the mesh, build the QP. `no_contact` drops every [[contact]].
+/// Read the TOML and the mesh, build the QP. `no_contact` drops every `[[contact]]`.
 pub fn prepare(path: &Path, no_contact: bool) -> Result<Prepared, InputError> {
     let t0 = Instant::now();
     let mut problem = Problem::load(path)?;
@@ -57,6 +53,7 @@ pub fn prepare(path: &Path, no_contact: bool) -> Result<Prepared, InputError> {
         mesh_hash,
         mesh,
         model,
+        no_contact,
         t_read,
         t_assemble: t1.elapsed().as_secs_f64(),
     })
@@ -286,64 +283,6 @@ pub fn solve_model_in(
         )));
     }
     Ok(res)
-}
-
-/// Output file paths of one solve.
-#[derive(Debug, Clone)]
-pub struct Outputs {
-    pub vtu: PathBuf,
-    pub contact_vtu: PathBuf,
-    pub h5: PathBuf,
-    pub json: PathBuf,
-}
-
-/// Output paths; `step` = Some(k) names the VTU pair of load step k (1-based).
-pub fn output_paths(dir: &Path, name: &str, step: Option<usize>) -> Outputs {
-    let stem = match step {
-        Some(k) => format!("{name}_{k:04}"),
-        None => name.to_string(),
-    };
-    Outputs {
-        vtu: dir.join(format!("{stem}.vtu")),
-        contact_vtu: dir.join(format!("{stem}_contact.vtu")),
-        h5: dir.join(format!("{name}.h5")),
-        json: dir.join(format!("{name}.json")),
-    }
-}
-
-/// A new checkpoint at `h5` holding the mesh and the problem's
-/// [`fingerprint`] (steps are appended one by one).
-pub fn create_checkpoint(
-    prep: &Prepared,
-    h5: &Path,
-    om: &OutMesh,
-    fingerprint: &str,
-) -> Result<(), IoError> {
-    let attrs = [
-        ("problem", prep.problem.name.clone()),
-        ("problem_toml", prep.problem.text.clone()),
-        ("fingerprint", fingerprint.to_string()),
-        (
-            "program",
-            format!("signorini {}", env!("CARGO_PKG_VERSION")),
-        ),
-    ];
-    io::hdf5::create_checkpoint(h5, om, &attrs)
-}
-
-/// Write the VTU pair of a step at `out` and append the step to the
-/// checkpoint `out.h5` in place: `out` names files in a staging directory
-/// ([`crate::io::atomic::Stage`]), moved into place once all are complete.
-pub fn write_step(
-    out: &Outputs,
-    om: &OutMesh,
-    step: &StepOutput,
-    index: usize,
-    compress: bool,
-) -> Result<(), IoError> {
-    io::vtu::write_vtu(&out.vtu, om, step, compress)?;
-    io::vtu::write_contact_vtu(&out.contact_vtu, om, step, compress)?;
-    io::hdf5::append_step_in_place(&out.h5, index, step)
 }
 
 /// Probes: nearest output point to each requested point.

@@ -1,0 +1,78 @@
+//! A solve as a library call: read and assemble ([`prepare`]), solve every
+//! load step with a warm start from the previous one ([`Run`]), continue a
+//! run from its checkpoint ([`Restart`]), and hand each step to observers
+//! ([`StepObserver`]): the HDF5 checkpoint, the VTU/PVD writer, the JSON
+//! summary and the progress printer. The files of a run are staged and
+//! moved into place by commits of one [`Transaction`] (one per load step,
+//! the JSON last), so an interrupted run leaves complete files only.
+//! The `signorini solve` command is this API plus flag parsing and printing.
+//!
+//! Contract: docs/problem-format.md §6 (outputs), §7 (the JSON
+//! [`Summary`]), §8 (certificate and exit codes); warm starts:
+//! docs/methods.md §8.3.
+
+mod observe;
+mod output;
+mod prepare;
+mod restart;
+mod steps;
+mod summary;
+
+pub use observe::{Progress, StepObserver};
+pub use output::{
+    create_checkpoint, output_paths, CheckpointWriter, Outputs, SummaryWriter, Transaction,
+    VtuWriter,
+};
+pub use prepare::{
+    fingerprint, fingerprint_diff, fnv1a, options, prepare, probes, reduce, solve, solve_model,
+    solve_model_in, step_model, InputError, Prepared,
+};
+pub use restart::Restart;
+pub use steps::{preconditioner_label, Outcome, Run, Solved, Step, Verdict};
+pub use summary::{KktSummary, Probe, StepRow, Summary, Timings};
+
+use std::path::PathBuf;
+
+/// Why a run stopped without a result: bad input in the wide sense of
+/// docs/problem-format.md §8 (exit code 2), each message naming the file,
+/// line or group at fault. A step that does not converge or certify is no
+/// error: its outputs are written and flagged ([`Outcome::certified`]).
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Model(#[from] crate::problem::ModelError),
+    #[error(transparent)]
+    Mesh(#[from] crate::mesh::MeshError),
+    #[error(transparent)]
+    Fem(#[from] crate::fem::FemError),
+    /// The problem or the solver settings, as given in `path`.
+    #[error("{path}: {msg}")]
+    Solver { path: PathBuf, msg: String },
+    /// A checkpoint that cannot be continued.
+    #[error("{0}")]
+    Restart(String),
+    /// An output that cannot be written (the message names the final file).
+    #[error("{0}")]
+    Output(String),
+    /// A setting of the run itself (a step count, a KKT target).
+    #[error("{0}")]
+    Settings(String),
+}
+
+impl From<crate::io::IoError> for RunError {
+    fn from(e: crate::io::IoError) -> Self {
+        RunError::Output(e.to_string())
+    }
+}
+
+impl RunError {
+    /// The process exit code of this error (docs/problem-format.md §8).
+    pub fn exit_code(&self) -> i32 {
+        EXIT_BAD_INPUT
+    }
+}
+
+/// Exit code: bad input, an unbounded problem, an unwritable output.
+pub const EXIT_BAD_INPUT: i32 = 2;
+/// Exit code: a step not converged or not certified (outputs written).
+pub const EXIT_NOT_CONVERGED: i32 = 3;

@@ -1,0 +1,285 @@
+//! The outputs of a run (docs/problem-format.md §6) as observers, and the
+//! transaction that moves them into place: files are written into a staging
+//! directory ([`Stage`]) under the output directory's lock ([`OutputLock`])
+//! and committed per load step (VTU pair, PVD, the grown checkpoint), the
+//! JSON summary last; an error drops the transaction, which puts back what
+//! the directory held before.
+
+use super::observe::StepObserver;
+use super::prepare::{fingerprint, Prepared};
+use super::restart::Restart;
+use super::steps::Step;
+use super::summary::Summary;
+use super::RunError;
+use crate::io::atomic::{self, OutputLock, Stage};
+use crate::io::{self, IoError, OutMesh};
+use std::path::{Path, PathBuf};
+
+/// Output file paths of one solve.
+#[derive(Debug, Clone)]
+pub struct Outputs {
+    pub vtu: PathBuf,
+    pub contact_vtu: PathBuf,
+    pub h5: PathBuf,
+    pub json: PathBuf,
+}
+
+/// Output paths; `step` = Some(k) names the VTU pair of load step k (1-based).
+pub fn output_paths(dir: &Path, name: &str, step: Option<usize>) -> Outputs {
+    let stem = match step {
+        Some(k) => format!("{name}_{k:04}"),
+        None => name.to_string(),
+    };
+    Outputs {
+        vtu: dir.join(format!("{stem}.vtu")),
+        contact_vtu: dir.join(format!("{stem}_contact.vtu")),
+        h5: dir.join(format!("{name}.h5")),
+        json: dir.join(format!("{name}.json")),
+    }
+}
+
+/// The file name of an output path.
+fn fname(p: &Path) -> String {
+    p.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// The outputs of one run in the directory `dir`: the lock of the name, the
+/// staging directory, the commits. Dropped without [`Transaction::finish`]
+/// (an error), it restores the files the directory held before.
+pub struct Transaction {
+    // Dropped in this order: the stage restores, then the lock is released.
+    stage: Stage,
+    _lock: OutputLock,
+    dir: PathBuf,
+}
+
+impl Transaction {
+    /// Creates `dir` if needed, takes the lock of the output name `name`
+    /// (one run per name at a time), removes the staging directories a
+    /// killed run left, and opens a new one.
+    pub fn open(dir: &Path, name: &str) -> Result<Transaction, RunError> {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            RunError::Output(format!(
+                "{}: cannot create output directory: {e}",
+                dir.display()
+            ))
+        })?;
+        let lock = OutputLock::acquire(dir, name).map_err(RunError::Output)?;
+        let prefix = format!("{}{name}-", atomic::STAGE_PREFIX);
+        atomic::remove_stale_stages(dir, &prefix);
+        let stage = Stage::new(dir, &prefix)?;
+        Ok(Transaction {
+            stage,
+            _lock: lock,
+            dir: dir.to_path_buf(),
+        })
+    }
+
+    /// The output directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The staging directory, where the observers write.
+    pub fn stage_dir(&self) -> &Path {
+        self.stage.dir()
+    }
+
+    /// Moves the staged files `names` into place.
+    pub fn commit(&mut self, names: &[String]) -> Result<(), RunError> {
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        self.stage
+            .commit(&names)
+            .map_err(|e| RunError::Output(self.unstage(&e.to_string())))
+    }
+
+    /// `msg` naming the final files instead of their staged copies.
+    pub fn unstage(&self, msg: &str) -> String {
+        msg.replace(
+            &format!("{}/", self.stage.dir().display()),
+            &format!("{}/", self.dir.display()),
+        )
+    }
+
+    /// The run is complete: drop the backups and the staging directory, release the lock.
+    pub fn finish(self) {
+        self.stage.finish();
+    }
+}
+
+/// A new checkpoint at `h5` holding the mesh and the problem's
+/// [`fingerprint`] (steps are appended one by one).
+pub fn create_checkpoint(
+    prep: &Prepared,
+    h5: &Path,
+    om: &OutMesh,
+    fingerprint: &str,
+) -> Result<(), IoError> {
+    let attrs = [
+        ("problem", prep.problem.name.clone()),
+        ("problem_toml", prep.problem.text.clone()),
+        ("fingerprint", fingerprint.to_string()),
+        (
+            "program",
+            format!("signorini {}", env!("CARGO_PKG_VERSION")),
+        ),
+    ];
+    io::hdf5::create_checkpoint(h5, om, &attrs)
+}
+
+/// The checkpoint `NAME.h5`: created at the first step (or copied from the
+/// checkpoint of a restart), each step appended in place.
+pub struct CheckpointWriter<'a> {
+    prep: &'a Prepared,
+    om: &'a OutMesh,
+    fingerprint: String,
+    staged: PathBuf,
+    target: PathBuf,
+    /// The checkpoint the next step extends (None: a new one).
+    base: Option<PathBuf>,
+}
+
+impl<'a> CheckpointWriter<'a> {
+    /// Writes into `stage_dir` the checkpoint whose final place is in `dir`
+    /// (the same directory without a [`Transaction`]).
+    pub fn new(
+        prep: &'a Prepared,
+        om: &'a OutMesh,
+        stage_dir: &Path,
+        dir: &Path,
+        restart: Option<&Restart>,
+    ) -> Self {
+        let name = &prep.problem.name;
+        CheckpointWriter {
+            prep,
+            om,
+            fingerprint: fingerprint(prep, prep.no_contact),
+            staged: output_paths(stage_dir, name, None).h5,
+            target: output_paths(dir, name, None).h5,
+            base: restart.map(|r| r.path.clone()),
+        }
+    }
+
+    fn copy_base(&self, base: &Path) -> Result<(), RunError> {
+        std::fs::copy(base, &self.staged).map(|_| ()).map_err(|e| {
+            RunError::Output(format!(
+                "{}: cannot copy the checkpoint: {e}",
+                base.display()
+            ))
+        })
+    }
+}
+
+impl StepObserver for CheckpointWriter<'_> {
+    fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
+        // The staged checkpoint: a copy of the one this step extends, or new.
+        if !self.staged.exists() {
+            match &self.base {
+                Some(b) => self.copy_base(b)?,
+                None => create_checkpoint(self.prep, &self.staged, self.om, &self.fingerprint)?,
+            }
+        }
+        io::hdf5::append_step_in_place(&self.staged, step.index + 1, step.output)?;
+        if step.multi {
+            // Committed with this step: the next one extends the committed file.
+            self.base = Some(self.target.clone());
+        }
+        Ok(vec![fname(&self.staged)])
+    }
+
+    /// A checkpoint restarted from elsewhere is still copied to the output
+    /// directory, as a run would have left it.
+    fn on_nothing_to_do(&mut self, restart: &Restart) -> Result<Vec<String>, RunError> {
+        if restart.path.canonicalize().ok() == self.target.canonicalize().ok() {
+            return Ok(vec![]);
+        }
+        self.copy_base(&restart.path)?;
+        Ok(vec![fname(&self.staged)])
+    }
+}
+
+/// The VTU pair of each step (`NAME.vtu`, `NAME_contact.vtu`; with load
+/// steps `NAME_NNNN.vtu`, … and the time series `NAME.pvd`).
+pub struct VtuWriter<'a> {
+    om: &'a OutMesh,
+    name: String,
+    stage_dir: PathBuf,
+    dir: PathBuf,
+    compress: bool,
+    /// Pseudo-time of every load step (the PVD lists steps 1..=k).
+    times: Vec<f64>,
+}
+
+impl<'a> VtuWriter<'a> {
+    /// Writes into `stage_dir` the files whose final place is in `dir`.
+    pub fn new(
+        prep: &Prepared,
+        om: &'a OutMesh,
+        stage_dir: &Path,
+        dir: &Path,
+        compress: bool,
+    ) -> Self {
+        let file = &prep.problem.file;
+        VtuWriter {
+            om,
+            name: prep.problem.name.clone(),
+            stage_dir: stage_dir.to_path_buf(),
+            dir: dir.to_path_buf(),
+            compress,
+            times: (0..file.nsteps()).map(|s| file.step_time(s)).collect(),
+        }
+    }
+}
+
+impl StepObserver for VtuWriter<'_> {
+    fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
+        let s = step.index;
+        let staged = output_paths(&self.stage_dir, &self.name, step.multi.then_some(s + 1));
+        io::vtu::write_vtu(&staged.vtu, self.om, step.output, self.compress)?;
+        io::vtu::write_contact_vtu(&staged.contact_vtu, self.om, step.output, self.compress)?;
+        let mut names = vec![fname(&staged.vtu), fname(&staged.contact_vtu)];
+        if step.multi {
+            let entries: Vec<(f64, String)> = (0..=s)
+                .flat_map(|k| {
+                    let o = output_paths(&self.dir, &self.name, Some(k + 1));
+                    let t = self.times.get(k).copied().unwrap_or(step.time);
+                    [(t, fname(&o.vtu)), (t, fname(&o.contact_vtu))]
+                })
+                .collect();
+            let pvd = format!("{}.pvd", self.name);
+            io::vtu::write_pvd(&self.stage_dir.join(&pvd), &entries)?;
+            names.push(pvd);
+        }
+        Ok(names)
+    }
+}
+
+/// The JSON summary `NAME.json` (docs/problem-format.md §7): the run's last
+/// file, its commit record.
+pub struct SummaryWriter {
+    path: PathBuf,
+}
+
+impl SummaryWriter {
+    pub fn new(prep: &Prepared, stage_dir: &Path) -> Self {
+        SummaryWriter {
+            path: output_paths(stage_dir, &prep.problem.name, None).json,
+        }
+    }
+}
+
+impl StepObserver for SummaryWriter {
+    fn on_step(&mut self, _step: &Step<'_>) -> Result<Vec<String>, RunError> {
+        Ok(vec![])
+    }
+
+    fn on_finish(&mut self, summary: &Summary) -> Result<Vec<String>, RunError> {
+        let text = summary
+            .to_json()
+            .map_err(|e| RunError::Output(format!("JSON summary: {e}")))?;
+        atomic::write_atomic_bytes(&self.path, text.as_bytes())?;
+        Ok(vec![fname(&self.path)])
+    }
+}

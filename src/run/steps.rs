@@ -1,0 +1,349 @@
+//! The load-step driver (docs/problem-format.md §2 `[[steps]]`, §8): for
+//! each step, the step's model (same mesh and DOFs, the step's loads and
+//! prescribed displacements), a warm start from the previous step
+//! (docs/methods.md §8.3), the solve, the post-processing, the verdict on
+//! the KKT certificate; then the observers and, with a [`Transaction`], one
+//! commit per load step. The summary of the last step ends the run.
+
+use super::observe::StepObserver;
+use super::output::Transaction;
+use super::prepare::{reduce, solve_model_in, step_model, Prepared};
+use super::restart::Restart;
+use super::summary::{StepRow, Summary, Timings};
+use super::RunError;
+use crate::fem::Model;
+use crate::io::StepOutput;
+use crate::linalg::cholesky::Workspace;
+use crate::post::{self, forces::Forces};
+use crate::qp::{registry, QpResult, SolveOptions};
+use std::ops::Range;
+use std::time::Instant;
+
+/// The run's verdict on one step (docs/methods.md §8.4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    /// Converged, KKT residual within the target.
+    Certified,
+    /// Certified against its own penalised problem only (penalty without
+    /// `strict`): the contact conditions hold to O(ε_p).
+    Penalised,
+    /// The method did not converge.
+    NotConverged,
+    /// Converged, KKT residual above the target.
+    NotCertified,
+}
+
+impl Verdict {
+    pub fn of(method: &str, res: &QpResult, kkt_target: f64, strict: bool) -> Verdict {
+        if !res.status.converged() {
+            Verdict::NotConverged
+        } else if !registry::certified(method, &res.kkt, kkt_target, strict) {
+            Verdict::NotCertified
+        } else if !res.kkt.within(kkt_target) {
+            Verdict::Penalised
+        } else {
+            Verdict::Certified
+        }
+    }
+
+    /// The step's `kkt.certified` in the summary.
+    pub fn certified(self) -> bool {
+        matches!(self, Verdict::Certified | Verdict::Penalised)
+    }
+}
+
+/// One solved step, as the observers see it.
+pub struct Step<'a> {
+    /// 0-based step number (`index + 1` in file names and messages).
+    pub index: usize,
+    pub nsteps: usize,
+    /// The problem has `[[steps]]` (outputs per step, a time series).
+    pub multi: bool,
+    /// Pseudo-time of the step.
+    pub time: f64,
+    pub method: &'a str,
+    pub kkt_target: f64,
+    pub model: &'a Model,
+    pub result: &'a QpResult,
+    pub output: &'a StepOutput,
+    pub forces: &'a Forces,
+    pub verdict: Verdict,
+    /// When the step began (assembly).
+    pub started: Instant,
+}
+
+/// The last step solved.
+pub struct Solved {
+    /// The step's model (None: the prepared model, a problem without steps).
+    pub model: Option<Model>,
+    pub result: QpResult,
+    pub output: StepOutput,
+    pub forces: Forces,
+}
+
+impl Solved {
+    /// The model the step was solved on.
+    pub fn model<'a>(&'a self, prep: &'a Prepared) -> &'a Model {
+        self.model.as_ref().unwrap_or(&prep.model)
+    }
+}
+
+/// What a run did.
+pub struct Outcome {
+    /// The steps solved (0-based; empty when a restart left nothing to do).
+    pub steps: Range<usize>,
+    /// Steps of the problem.
+    pub nsteps: usize,
+    /// The last step (None when nothing was solved).
+    pub last: Option<Solved>,
+    pub summary: Option<Summary>,
+    /// Every step solved converged and is certified (else exit code 3).
+    pub certified: bool,
+}
+
+/// A solve of the load steps of a prepared problem by one method.
+pub struct Run<'a> {
+    prep: &'a Prepared,
+    method: &'a str,
+    opts: &'a SolveOptions,
+    kkt_target: f64,
+    strict: bool,
+    max_steps: Option<usize>,
+    restart: Option<Restart>,
+    started: Instant,
+}
+
+impl<'a> Run<'a> {
+    /// Every load step of `prep` by `method` (see [`super::options`]),
+    /// certified against the default KKT target 10⁻⁶.
+    pub fn new(prep: &'a Prepared, method: &'a str, opts: &'a SolveOptions) -> Self {
+        Run {
+            prep,
+            method,
+            opts,
+            kkt_target: 1e-6,
+            strict: false,
+            max_steps: None,
+            restart: None,
+            started: Instant::now(),
+        }
+    }
+
+    /// The largest KKT residual accepted; `strict` certifies penalty against
+    /// the unpenalised problem.
+    pub fn certify(mut self, kkt_target: f64, strict: bool) -> Self {
+        self.kkt_target = kkt_target;
+        self.strict = strict;
+        self
+    }
+
+    /// Stop after load step `n` (1-based); a restart continues later.
+    pub fn max_steps(mut self, n: Option<usize>) -> Self {
+        self.max_steps = n;
+        self
+    }
+
+    /// Continue after the last step of a checkpoint.
+    pub fn restart(mut self, r: Option<Restart>) -> Self {
+        self.restart = r;
+        self
+    }
+
+    /// The start of the run's total time (default: [`Run::new`]).
+    pub fn started(mut self, t0: Instant) -> Self {
+        self.started = t0;
+        self
+    }
+
+    /// The steps this run solves (0-based).
+    pub fn steps(&self) -> Range<usize> {
+        let nsteps = self.prep.problem.file.nsteps();
+        let last = self.max_steps.unwrap_or(nsteps).min(nsteps);
+        let first = self.restart.as_ref().map_or(0, |r| r.steps_done);
+        first..last.max(first)
+    }
+
+    /// Solves the steps, each handed to `observers` in order; with `tx`,
+    /// the files they stage are committed per load step (without steps,
+    /// all at the end with the summary's).
+    pub fn solve(
+        self,
+        observers: &mut [&mut dyn StepObserver],
+        mut tx: Option<&mut Transaction>,
+    ) -> Result<Outcome, RunError> {
+        if !(self.kkt_target > 0.0 && self.kkt_target.is_finite()) {
+            return Err(RunError::Settings(format!(
+                "kkt_target = {}: the KKT target must be a positive number",
+                self.kkt_target
+            )));
+        }
+        if self.max_steps == Some(0) {
+            return Err(RunError::Settings(
+                "max_steps = 0: load steps count from 1".into(),
+            ));
+        }
+        let (prep, method) = (self.prep, self.method);
+        let file = &prep.problem.file;
+        let multi = !file.steps.is_empty();
+        let nsteps = file.nsteps();
+        let steps = self.steps();
+        // Errors of the observers and commits name the final files.
+        let unstage = |tx: &Option<&mut Transaction>, e: RunError| match tx {
+            Some(t) => RunError::Output(t.unstage(&e.to_string())),
+            None => e,
+        };
+        if steps.is_empty() {
+            let mut names = vec![];
+            if let Some(r) = &self.restart {
+                for ob in observers.iter_mut() {
+                    names.extend(ob.on_nothing_to_do(r).map_err(|e| unstage(&tx, e))?);
+                }
+            }
+            if let Some(t) = tx.as_deref_mut() {
+                if !names.is_empty() {
+                    t.commit(&names)?;
+                }
+            }
+            return Ok(Outcome {
+                steps,
+                nsteps,
+                last: None,
+                summary: None,
+                certified: true,
+            });
+        }
+        let mut u_prev = self.restart.as_ref().and_then(|r| r.displacement.clone());
+        let mut pending: Vec<String> = vec![];
+        let mut rows = vec![];
+        let mut certified = true;
+        let mut last = None;
+        // One workspace for every step: C is the same, its factor is reused.
+        let ws = Workspace::new();
+        for s in steps.clone() {
+            let ts = Instant::now();
+            // Without [[steps]] the prepared model is the problem; with steps
+            // every step (the first included) gets its own loads.
+            let model = if multi {
+                Some(step_model(prep, s)?)
+            } else {
+                None
+            };
+            let model_ref = model.as_ref().unwrap_or(&prep.model);
+            let t_assemble = match model {
+                None => prep.t_assemble,
+                Some(_) => ts.elapsed().as_secs_f64(),
+            };
+            let mut o = self.opts.clone();
+            o.x0 = u_prev.as_ref().map(|u| reduce(model_ref, u));
+            let t_solve0 = Instant::now();
+            let res = solve_model_in(prep, model_ref, method, &o, &ws)?;
+            let t_solve = t_solve0.elapsed().as_secs_f64();
+            let t_w = Instant::now();
+            let mut problem_s = prep.problem.clone();
+            problem_s.file = file.at_step(s);
+            let (mut output, forces) =
+                post::step_output_with_forces(model_ref, &problem_s, &res, file.step_time(s));
+            output.info.method = method.to_string();
+            output.info.preconditioner = preconditioner_label(method, self.opts);
+            output.info.time_assemble = t_assemble;
+            output.info.time_solve = t_solve;
+            output.info.time_total = ts.elapsed().as_secs_f64();
+            let verdict = Verdict::of(method, &res, self.kkt_target, self.strict);
+            let step = Step {
+                index: s,
+                nsteps,
+                multi,
+                time: file.step_time(s),
+                method,
+                kkt_target: self.kkt_target,
+                model: model_ref,
+                result: &res,
+                output: &output,
+                forces: &forces,
+                verdict,
+                started: ts,
+            };
+            let mut names = vec![];
+            for ob in observers.iter_mut() {
+                names.extend(ob.on_step(&step).map_err(|e| unstage(&tx, e))?);
+            }
+            // A load step is one commit: its VTU pair, the time series and
+            // the checkpoint grown by this step.
+            match tx.as_deref_mut() {
+                Some(t) if multi => t.commit(&names)?,
+                _ => pending.extend(names),
+            }
+            let t_write = t_w.elapsed().as_secs_f64();
+            rows.push(StepRow {
+                step: s + 1,
+                t: file.step_time(s),
+                converged: res.status.converged(),
+                iterations: res.iterations,
+                kkt_max: res.kkt.max(),
+                energy: res.energy,
+                active: res.active.iter().filter(|a| **a).count(),
+            });
+            certified &= matches!(verdict, Verdict::Certified | Verdict::Penalised);
+            u_prev = Some(output.displacement.clone());
+            let timings = Timings {
+                read: prep.t_read,
+                assemble: t_assemble,
+                solve: t_solve,
+                write: t_write,
+                ..Default::default()
+            };
+            last = Some((
+                Solved {
+                    model,
+                    result: res,
+                    output,
+                    forces,
+                },
+                verdict,
+                timings,
+            ));
+        }
+        let Some((last, verdict, timings)) = last else {
+            return Err(RunError::Settings("no load step was solved".into()));
+        };
+        let summary = Summary::new(
+            prep,
+            last.model(prep),
+            method,
+            &last.result,
+            &last.output,
+            &last.forces,
+            self.kkt_target,
+            verdict.certified(),
+            Timings {
+                total: self.started.elapsed().as_secs_f64(),
+                ..timings
+            },
+            multi.then_some(rows),
+        );
+        for ob in observers.iter_mut() {
+            pending.extend(ob.on_finish(&summary).map_err(|e| unstage(&tx, e))?);
+        }
+        // The last commit: the JSON summary (the commit record) and, for a
+        // single solve, every other file with it.
+        if let Some(t) = tx {
+            t.commit(&pending)?;
+        }
+        Ok(Outcome {
+            steps,
+            nsteps,
+            last: Some(last),
+            summary: Some(summary),
+            certified,
+        })
+    }
+}
+
+/// The preconditioner column of a method: its name, or `-` for a method
+/// that takes none.
+pub fn preconditioner_label(method: &str, opts: &SolveOptions) -> String {
+    match registry::find(method) {
+        Some(m) if m.preconditioned() => opts.settings.cgc.preconditioner.name().to_string(),
+        _ => "-".to_string(),
+    }
+}

@@ -1,0 +1,194 @@
+//! The JSON summary of a run (docs/problem-format.md §7) as a typed value:
+//! the last step's result, certificate, contact, reactions, loads, probes,
+//! timings and, with load steps, one row per step solved.
+
+use super::prepare::{probes, Prepared};
+use crate::fem::Model;
+use crate::io::StepOutput;
+use crate::post::forces::{Forces, GroupReaction, InterfaceForce, Resultant};
+use crate::qp::QpResult;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// `NAME.json`. Maps are keyed by name (a repeated name keeps the last).
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    pub problem: String,
+    pub method: String,
+    pub preconditioner: String,
+    pub converged: bool,
+    pub status: String,
+    pub iterations: usize,
+    pub inner_iterations: usize,
+    /// Output points (interface nodes once per body).
+    pub nodes: usize,
+    pub mesh_nodes: usize,
+    pub triangles: usize,
+    pub bodies: usize,
+    pub rigid_modes: usize,
+    pub dofs: usize,
+    pub constraints: usize,
+    pub active: usize,
+    pub energy: f64,
+    pub strain_energy: f64,
+    pub load_work: f64,
+    pub kkt: KktSummary,
+    pub contact: ContactSummary,
+    pub loads: Resultant,
+    pub reactions: BTreeMap<String, GroupReaction>,
+    pub notes: Vec<String>,
+    pub probes: BTreeMap<String, Probe>,
+    #[serde(rename = "timings_s")]
+    pub timings: Timings,
+    /// One row per load step solved (only with `[[steps]]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steps: Option<Vec<StepRow>>,
+}
+
+/// The KKT residuals of the last step and the verdict (docs/methods.md §8.4).
+#[derive(Debug, Clone, Serialize)]
+pub struct KktSummary {
+    pub primal: f64,
+    pub dual: f64,
+    pub complementarity: f64,
+    pub stationarity: f64,
+    pub contact_balance: f64,
+    pub target: f64,
+    pub certified: bool,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ContactSummary {
+    pub max_pressure: f64,
+    /// Σ λ over the contact rows.
+    pub total_force: f64,
+    pub interfaces: BTreeMap<String, InterfaceForce>,
+}
+
+/// The output point nearest to a requested probe and its displacement.
+#[derive(Debug, Clone, Serialize)]
+pub struct Probe {
+    pub x: f64,
+    pub y: f64,
+    pub node: usize,
+    /// Gmsh node tag.
+    pub tag: u64,
+    pub u: [f64; 2],
+}
+
+/// Wall time (s) of the run's phases (the last step's assemble, solve and
+/// write) and of the method's own phases.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Timings {
+    pub read: f64,
+    pub assemble: f64,
+    pub solve: f64,
+    pub write: f64,
+    pub total: f64,
+    pub phases: BTreeMap<String, f64>,
+}
+
+/// One load step in `steps`.
+#[derive(Debug, Clone, Serialize)]
+pub struct StepRow {
+    pub step: usize,
+    pub t: f64,
+    pub converged: bool,
+    pub iterations: usize,
+    pub kkt_max: f64,
+    pub energy: f64,
+    pub active: usize,
+}
+
+impl Summary {
+    /// The summary of the step `res` of `model`; `certified` and `target`
+    /// are the run's verdict on it.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn new(
+        prep: &Prepared,
+        model: &Model,
+        method: &str,
+        res: &QpResult,
+        step: &StepOutput,
+        forces: &Forces,
+        target: f64,
+        certified: bool,
+        timings: Timings,
+        steps: Option<Vec<StepRow>>,
+    ) -> Summary {
+        let probes = probes(prep, &step.displacement)
+            .into_iter()
+            .map(|(name, x, node, u)| {
+                let tag = prep.mesh.node_tags[model.topo.point_node[node]];
+                (
+                    name,
+                    Probe {
+                        x: x[0],
+                        y: x[1],
+                        node,
+                        tag,
+                        u,
+                    },
+                )
+            })
+            .collect();
+        let k = &res.kkt;
+        Summary {
+            problem: prep.problem.name.clone(),
+            method: method.to_string(),
+            preconditioner: step.info.preconditioner.clone(),
+            converged: res.status.converged(),
+            status: res.status.describe(),
+            iterations: res.iterations,
+            inner_iterations: res.inner_iterations,
+            nodes: model.topo.points.len(),
+            mesh_nodes: prep.mesh.nodes.len(),
+            triangles: model.topo.triangles.len(),
+            bodies: model.topo.nbodies,
+            rigid_modes: model.qp.kernel.len(),
+            dofs: model.qp.n(),
+            constraints: model.qp.m(),
+            active: res.active.iter().filter(|a| **a).count(),
+            energy: res.energy,
+            strain_energy: forces.strain_energy,
+            load_work: forces.load_work,
+            kkt: KktSummary {
+                primal: k.primal,
+                dual: k.dual,
+                complementarity: k.complementarity,
+                stationarity: k.stationarity,
+                contact_balance: k.contact_balance,
+                target,
+                certified,
+            },
+            contact: ContactSummary {
+                max_pressure: step.contact_pressure.iter().fold(0.0f64, |a, b| a.max(*b)),
+                total_force: step.multipliers.iter().sum(),
+                interfaces: forces
+                    .interfaces
+                    .iter()
+                    .map(|i| (i.name.clone(), i.clone()))
+                    .collect(),
+            },
+            loads: forces.loads,
+            reactions: forces
+                .groups
+                .iter()
+                .map(|g| (g.on.clone(), g.clone()))
+                .collect(),
+            notes: res.notes.clone(),
+            probes,
+            timings: Timings {
+                phases: res.timings.iter().cloned().collect(),
+                ..timings
+            },
+            steps,
+        }
+    }
+
+    /// The JSON text: pretty-printed, keys in alphabetical order at every
+    /// level (the order of `NAME.json` since its first version).
+    pub fn to_json(&self) -> Result<String, serde_json::Error> {
+        serde_json::to_string_pretty(&serde_json::to_value(self)?)
+    }
+}
