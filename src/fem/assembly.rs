@@ -185,8 +185,17 @@ struct Cond {
     src: usize,
 }
 
-/// Build the whole model: topology, conditions, QP.
+/// Build the whole model: topology, conditions, QP (default options).
 pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
+    build_with(mesh, problem, &super::BuildOptions::default())
+}
+
+/// Build the whole model: topology, conditions, QP.
+pub fn build_with(
+    mesh: &Mesh,
+    problem: &Problem,
+    opts: &super::BuildOptions,
+) -> Result<Model, FemError> {
     let mut lap = super::Lap::new("fem::build");
     let topo = Topology::build(mesh, problem)?;
     lap.lap("topology");
@@ -371,7 +380,7 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
             .map(|m| [m.rho * gvec[0], m.rho * gvec[1]])
             .collect()
     };
-    let (c, mut d) = assemble_stiffness(&topo, &dofs, n, &dmats, &bforce, th, parallel_assembly());
+    let (c, mut d) = assemble_stiffness(&topo, &dofs, n, &dmats, &bforce, th, opts.parallel);
     lap.lap("stiffness");
     // Full nodal loads: gravity first (th |T|/3 F per vertex, as in d).
     let mut loads = vec![[0.0f64; 2]; np];
@@ -609,16 +618,6 @@ fn body_names(topo: &Topology) -> Vec<String> {
 
 /// Points per parallel work item of the assembly.
 const CHUNK_POINTS: usize = 2048;
-
-/// Whether to assemble on rayon's threads: yes unless `SIGNORINI_THREADS`
-/// ≤ 1 (the variable that also makes faer sequential).
-fn parallel_assembly() -> bool {
-    !std::env::var("SIGNORINI_THREADS")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-        .map(|t| t <= 1)
-        .unwrap_or(false)
-}
 
 /// `f` of every item, in order, on rayon's threads if `parallel`. The
 /// results never depend on it: every item works on its own data.

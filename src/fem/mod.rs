@@ -5,9 +5,23 @@ pub mod assembly;
 pub mod element;
 pub mod topology;
 
-pub use assembly::{build, Model};
+pub use assembly::{build, build_with, Model};
 
 use std::path::{Path, PathBuf};
+
+/// How [`build_with`] runs; the default (and [`build`]) assembles on
+/// rayon's threads. The model is the same bit for bit either way.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BuildOptions {
+    /// Assemble C and d on rayon's threads (false: on the calling thread).
+    pub parallel: bool,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions { parallel: true }
+    }
+}
 
 /// A problem that does not fit its mesh: the message names the TOML file
 /// and the group, key, node or element.
