@@ -1,11 +1,11 @@
 //! Finite elements: topology (bodies, node copies, contact rows), the P1
 //! element, and assembly of the [`crate::qp::QpProblem`].
 
-pub mod assembly;
+pub mod stiffness;
 pub mod element;
 pub mod topology;
 
-pub use assembly::{build, build_with, Model};
+pub use stiffness::{build, build_with, Model};
 
 use std::path::{Path, PathBuf};
 
