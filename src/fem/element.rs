@@ -1,4 +1,4 @@
-//! The P1 element of methods.md §1.4 and §2.2: material matrix D, strain
+//! The P1 element of docs/methods.md §1.4 and §2.2: material matrix D, strain
 //! matrix B, element stiffness C_e = t_h|T| BᵀDB, stresses τ̄ = D B x_e.
 
 use crate::problem::{Material, Plane};

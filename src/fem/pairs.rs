@@ -206,9 +206,13 @@ impl Topology {
             let mg = curve_group(mesh, mname, &what, &problem.path)?;
             let id = self.interface_names.len() as u32;
             self.interface_names.push(format!("{sname}->{mname}"));
-            let msegs = self.boundary_segments(mesh, problem, mg, &what, "master", mname)?;
-            let ssegs = self.boundary_segments(mesh, problem, sg, &what, "slave", sname)?;
-            self.nonmatching_rows(mesh, problem, c, id, &what, &msegs, &ssegs)?;
+            let pair = Pair {
+                id,
+                masters: self.boundary_segments(mesh, problem, mg, &what, "master", mname)?,
+                slaves: self.boundary_segments(mesh, problem, sg, &what, "slave", sname)?,
+                what,
+            };
+            self.nonmatching_rows(mesh, problem, c, &pair)?;
         }
         Ok(())
     }
@@ -246,17 +250,15 @@ impl Topology {
 
     /// One row per slave node that finds a master segment within reach, in
     /// (body, node tag) order, and the segments between the rows.
-    #[allow(clippy::too_many_arguments)]
     fn nonmatching_rows(
         &mut self,
         mesh: &Mesh,
         problem: &Problem,
         c: &Contact,
-        id: u32,
-        what: &str,
-        msegs: &[MasterSeg],
-        ssegs: &[MasterSeg],
+        pair: &Pair,
     ) -> Result<(), FemError> {
+        let (id, what) = (pair.id, &pair.what);
+        let (msegs, ssegs) = (&pair.masters[..], &pair.slaves[..]);
         let err = |msg: String| FemError::new(&problem.path, msg);
         let (sname, mname) = (
             c.slave.as_deref().unwrap_or(""),
@@ -333,8 +335,17 @@ impl Topology {
     }
 }
 
-/// A master segment of a non-matching pair: nodes, owner body, outward normal.
+/// A boundary segment of a non-matching pair (master or slave): nodes,
+/// owner body, outward normal.
 type MasterSeg = (usize, usize, u32, [f64; 2]);
+
+/// A non-matching pair: its interface, its name in messages, its segments.
+struct Pair {
+    id: u32,
+    what: String,
+    masters: Vec<MasterSeg>,
+    slaves: Vec<MasterSeg>,
+}
 
 /// Orthogonal projection of `xs` on the segment (pa, pb): (distance, ξ) if
 /// ξ ∈ [−1e-9, 1 + 1e-9] (ξ clamped to [0, 1]).

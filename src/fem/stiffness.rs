@@ -606,7 +606,7 @@ pub(super) fn assemble(
     parallel: bool,
 ) -> (Csr, Vec<f64>) {
     let np = topo.points.len();
-    let mut lap = super::Lap::new("assemble_stiffness");
+    let mut lap = super::Lap::new("fem::stiffness");
     let ord = Order::new(topo, dofs, parallel, &mut lap);
     let chunks: Vec<(usize, usize)> = (0..np)
         .step_by(CHUNK_POINTS)
