@@ -261,10 +261,70 @@ fn eliminate(cs: &[Cond]) -> Result<PointDofs, String> {
     Ok(pd)
 }
 
-pub(super) fn norm2(r: [f64; 2]) -> f64 {
+/// |r|.
+fn norm2(r: [f64; 2]) -> f64 {
     (r[0] * r[0] + r[1] * r[1]).sqrt()
 }
+
+/// r / |r|.
 pub(super) fn normalize(r: [f64; 2]) -> [f64; 2] {
     let l = norm2(r);
     [r[0] / l, r[1] / l]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cond(r: [f64; 2], v: f64) -> Cond {
+        Cond { r, v, src: 0 }
+    }
+
+    /// u0 + Tξ satisfies every condition for any ξ, and T has orthonormal
+    /// columns orthogonal to every r.
+    fn check(cs: &[Cond], ndof: usize) {
+        let pd = eliminate(cs).unwrap();
+        assert_eq!(pd.ndof, ndof);
+        for xi in [[0.0, 0.0], [0.7, -1.3]] {
+            let mut u = pd.u0;
+            for k in 0..pd.ndof {
+                u[0] += pd.t[k][0] * xi[k];
+                u[1] += pd.t[k][1] * xi[k];
+            }
+            for c in cs {
+                let res = c.r[0] * u[0] + c.r[1] * u[1] - c.v;
+                assert!(res.abs() < 1e-12, "{res} for {:?}", c.r);
+            }
+        }
+        for k in 0..pd.ndof {
+            assert!((norm2(pd.t[k]) - 1.0).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn elimination_satisfies_the_conditions_and_refuses_conflicts() {
+        check(&[], 2);
+        // One Dirichlet component, then a slip line with an oblique normal
+        // (r not unit: v is scaled with it), then both at a corner.
+        check(&[cond([0.0, 1.0], -0.25)], 1);
+        check(&[cond([3.0, 4.0], 0.0), cond([0.6, 0.8], 0.0)], 1);
+        check(&[cond([1.0, 0.0], 0.1), cond([0.6, 0.8], 0.0)], 0);
+        check(
+            &[
+                cond([1.0, 0.0], 0.1),
+                cond([0.0, 1.0], 0.2),
+                cond([1.0, 1.0], 0.3),
+            ],
+            0,
+        );
+        // Parallel conditions with different values, and a third
+        // independent condition that disagrees.
+        assert!(eliminate(&[cond([1.0, 0.0], 0.1), cond([-2.0, 0.0], 0.0)]).is_err());
+        assert!(eliminate(&[
+            cond([1.0, 0.0], 0.1),
+            cond([0.0, 1.0], 0.2),
+            cond([1.0, 1.0], 0.0)
+        ])
+        .is_err());
+    }
 }
