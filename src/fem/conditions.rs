@@ -287,9 +287,9 @@ mod tests {
         assert_eq!(pd.ndof, ndof);
         for xi in [[0.0, 0.0], [0.7, -1.3]] {
             let mut u = pd.u0;
-            for k in 0..pd.ndof {
-                u[0] += pd.t[k][0] * xi[k];
-                u[1] += pd.t[k][1] * xi[k];
+            for (tk, x) in pd.t.iter().zip(xi).take(pd.ndof) {
+                u[0] += tk[0] * x;
+                u[1] += tk[1] * x;
             }
             for c in cs {
                 let res = c.r[0] * u[0] + c.r[1] * u[1] - c.v;
