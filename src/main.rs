@@ -91,16 +91,18 @@ fn main() {
     }
     // Threads for faer's dense/supernodal kernels: SIGNORINI_THREADS=1 runs
     // sequentially (the default is faer's: all cores, via rayon).
-    if let Some(t) = std::env::var("SIGNORINI_THREADS")
+    // It also makes the assembly sequential (read here only, passed down).
+    let threads = std::env::var("SIGNORINI_THREADS")
         .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-    {
+        .and_then(|v| v.parse::<usize>().ok());
+    if let Some(t) = threads {
         faer::set_global_parallelism(if t <= 1 {
             faer::Par::Seq
         } else {
             faer::Par::rayon(t)
         });
     }
-    let cli = signorini::cli::Cli::parse();
+    let mut cli = signorini::cli::Cli::parse();
+    cli.build.parallel = !threads.is_some_and(|t| t <= 1);
     std::process::exit(signorini::cli::run(cli));
 }

@@ -82,8 +82,8 @@ pub fn variants(spec: Option<&str>) -> Result<Vec<(String, Option<PrecondKind>)>
     Ok(out)
 }
 
-pub fn run(a: &CompareArgs, quiet: bool) -> i32 {
-    let prep = match run::prepare(&a.problem, a.no_contact) {
+pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
+    let prep = match run::prepare_with(&a.problem, a.no_contact, build) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };

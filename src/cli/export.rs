@@ -34,9 +34,9 @@ pub struct ExportArgs {
     pub solver: SolverFlags,
 }
 
-pub fn run(a: &ExportArgs, quiet: bool) -> i32 {
+pub fn run(a: &ExportArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
     let t0 = Instant::now();
-    let prep = match pipeline::prepare(&a.problem, a.no_contact) {
+    let prep = match pipeline::prepare_with(&a.problem, a.no_contact, build) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };

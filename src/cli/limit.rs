@@ -28,8 +28,8 @@ pub struct LimitArgs {
     pub repeat: usize,
 }
 
-pub fn run(a: &LimitArgs, _quiet: bool) -> i32 {
-    let prep = match pipeline::prepare(&a.problem, a.no_contact) {
+pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
+    let prep = match pipeline::prepare_with(&a.problem, a.no_contact, build) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };

@@ -28,6 +28,9 @@ pub struct Cli {
     pub quiet: bool,
     #[command(subcommand)]
     pub command: Command,
+    /// How models are built: set by `main` from SIGNORINI_THREADS, no flag.
+    #[arg(skip)]
+    pub build: crate::fem::BuildOptions,
 }
 
 #[derive(Subcommand, Debug)]
@@ -101,12 +104,12 @@ pub fn run(cli: Cli) -> i32 {
         .format_timestamp(verbose.then_some(env_logger::TimestampPrecision::Millis))
         .try_init();
     match cli.command {
-        Command::Solve(a) => solve::run(&a, cli.quiet),
-        Command::Compare(a) => compare::run(&a, cli.quiet),
+        Command::Solve(a) => solve::run(&a, cli.quiet, &cli.build),
+        Command::Compare(a) => compare::run(&a, cli.quiet, &cli.build),
         Command::Mesh(a) => mesh::run(&a, cli.quiet),
         Command::Plot(a) => plot::run(&a, cli.quiet),
-        Command::Export(a) => export::run(&a, cli.quiet),
-        Command::Limit(a) => limit::run(&a, cli.quiet),
+        Command::Export(a) => export::run(&a, cli.quiet, &cli.build),
+        Command::Limit(a) => limit::run(&a, cli.quiet, &cli.build),
         Command::Methods => {
             for m in crate::qp::registry::METHODS {
                 println!("{:<10} {}", m.name(), m.summary());

@@ -14,7 +14,7 @@ use std::time::Instant;
 
 pub use crate::run::{EXIT_BAD_INPUT, EXIT_NOT_CONVERGED};
 
-pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
+pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
     let t0 = Instant::now();
     let target = a.solver.kkt_target;
     if !(target > 0.0 && target.is_finite()) {
@@ -25,7 +25,7 @@ pub fn run(a: &SolveArgs, quiet: bool) -> i32 {
     if a.max_steps == Some(0) {
         return bad_input(&"--max-steps 0: load steps count from 1");
     }
-    let prep = match run::prepare(&a.problem, a.no_contact) {
+    let prep = match run::prepare_with(&a.problem, a.no_contact, build) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };

@@ -1,4 +1,4 @@
-//! The P1 element of methods.md §1.4 and §2.2: material matrix D, strain
+//! The P1 element of docs/methods.md §1.4 and §2.2: material matrix D, strain
 //! matrix B, element stiffness C_e = t_h|T| BᵀDB, stresses τ̄ = D B x_e.
 
 use crate::problem::{Material, Plane};
@@ -70,9 +70,9 @@ pub fn stiffness(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64) -> [[f64; 6]; 6]
     let (b, area) = b_matrix(p);
     let db = d_times_b(d, &b);
     let mut k = [[0.0; 6]; 6];
-    for i in 0..6 {
-        for j in 0..6 {
-            k[i][j] = ke_entry(&b, &db, th, area, i, j);
+    for (i, row) in k.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = ke_entry(&b, &db, th, area, i, j);
         }
     }
     k

@@ -1,13 +1,169 @@
-//! Finite elements: topology (bodies, node copies, contact rows), the P1
-//! element, and assembly of the [`crate::qp::QpProblem`].
+//! Finite elements: from a mesh and a problem file to the QP
+//! min ½xᵀCx − xᵀd s.t. Ax ≤ g with the maps back to the mesh
+//! (docs/methods.md §1–2, §7).
+//!
+//! [`build_with`] is the list of steps, one module each: bodies and points
+//! (`topology`, with the mesh graph in `edges`), the contact pairs as rows
+//! on points (`pairs`), Dirichlet and slip conditions and their elimination
+//! u = u0 + Tξ (`conditions`), the stiffness matrix and the element part of
+//! d (`stiffness`, over the P1 `element`), tractions and point forces
+//! (`loads`), the rows of A and g (`contact`), and the rigid modes with the
+//! semicoercive checks (`rigid`). Nothing here reads the environment: the
+//! caller chooses threads through [`BuildOptions`].
 
-pub mod assembly;
+mod conditions;
+mod contact;
+mod edges;
 pub mod element;
+mod loads;
+mod pairs;
+mod rigid;
+mod sort;
+mod stiffness;
 pub mod topology;
 
-pub use assembly::{build, Model};
+pub use conditions::PointDofs;
+pub use topology::Topology;
 
+use crate::mesh::Mesh;
+use crate::problem::{Plane, Problem};
+use crate::qp::QpProblem;
 use std::path::{Path, PathBuf};
+
+/// How [`build_with`] runs; the default (and [`build`]) assembles on
+/// rayon's threads. The model is the same bit for bit either way.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BuildOptions {
+    /// Assemble C and d on rayon's threads (false: on the calling thread).
+    pub parallel: bool,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions { parallel: true }
+    }
+}
+
+/// The assembled problem with the maps back to the mesh.
+pub struct Model {
+    pub topo: Topology,
+    pub dofs: Vec<PointDofs>,
+    pub qp: QpProblem,
+    /// QP row → contact row (rows whose points are all fixed are left out).
+    pub qp_rows: Vec<usize>,
+    /// Kernel vectors and the body each belongs to.
+    pub kernel_body: Vec<u32>,
+    pub plane: Plane,
+    pub thickness: f64,
+    /// The Dirichlet and slip conditions r·u = v, kept for the reactions:
+    /// (point, unit direction r, index into `cond_groups`).
+    pub conditions: Vec<(usize, [f64; 2], u32)>,
+    /// What set each condition: (kind "dirichlet" | "slip", physical group name).
+    pub cond_groups: Vec<(&'static str, String)>,
+    /// Nodal external force on each point (N; tractions, point forces,
+    /// gravity; thickness included), before the elimination: the load side
+    /// of the balance R = K u − f.
+    pub loads: Vec<[f64; 2]>,
+    /// The name of each body: its physical surface name(s), "+"-joined,
+    /// with " #b" when bodies share a material.
+    pub body_names: Vec<String>,
+}
+
+impl Model {
+    /// "body 'punch'": a body as messages name it.
+    pub fn body_label(&self, b: usize) -> String {
+        match self.body_names.get(b) {
+            Some(n) => format!("body '{n}'"),
+            None => format!("body {b}"),
+        }
+    }
+
+    /// Point displacements of a change `dx` of the QP unknowns (u0 left out):
+    /// the motion along a direction such as a rigid mode.
+    pub fn motions(&self, dx: &[f64]) -> Vec<[f64; 2]> {
+        self.dofs
+            .iter()
+            .map(|p| {
+                let mut u = [0.0, 0.0];
+                for k in 0..p.ndof {
+                    let xi = dx[p.start + k];
+                    u[0] += p.t[k][0] * xi;
+                    u[1] += p.t[k][1] * xi;
+                }
+                u
+            })
+            .collect()
+    }
+
+    /// Full point displacements from the QP unknowns.
+    pub fn displacements(&self, x: &[f64]) -> Vec<[f64; 2]> {
+        self.dofs
+            .iter()
+            .map(|p| {
+                let mut u = p.u0;
+                for k in 0..p.ndof {
+                    let xi = x[p.start + k];
+                    u[0] += p.t[k][0] * xi;
+                    u[1] += p.t[k][1] * xi;
+                }
+                u
+            })
+            .collect()
+    }
+
+    /// The effective thickness for forces → pressures (1 in plane strain).
+    pub fn t_eff(&self) -> f64 {
+        match self.plane {
+            Plane::Stress => self.thickness,
+            Plane::Strain => 1.0,
+        }
+    }
+}
+
+/// Build the whole model with the default options.
+pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
+    build_with(mesh, problem, &BuildOptions::default())
+}
+
+/// Build the whole model: topology, conditions, QP, checks.
+pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result<Model, FemError> {
+    let mut lap = Lap::new("fem::build");
+    let topo = Topology::build(mesh, problem)?;
+    lap.lap("topology");
+    let conds = conditions::Conditions::collect(mesh, &topo, problem)?;
+    lap.lap("conditions");
+    let body_names = topo.body_names();
+    let dofs = conds.eliminate(mesh, &topo, &body_names, problem)?;
+    let n = dofs.last().map_or(0, |pd| pd.start + pd.ndof);
+    lap.lap("elimination");
+    let mats = stiffness::Materials::new(&topo, problem);
+    let (c, mut d) = stiffness::assemble(&topo, &dofs, n, &mats, opts.parallel);
+    lap.lap("stiffness");
+    let loads = loads::nodal_loads(mesh, &topo, &dofs, problem, &mats, &mut d)?;
+    loads::check_scale(&c, &d, &dofs, &topo, mesh, problem)?;
+    lap.lap("loads");
+    let (a, g, qp_rows) = contact::reduced_rows(mesh, &topo, &dofs, n, problem)?;
+    lap.lap("contact rows");
+    let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n);
+    let f = &problem.file;
+    let model = Model {
+        topo,
+        dofs,
+        qp: QpProblem { c, d, a, g, kernel },
+        qp_rows,
+        kernel_body,
+        plane: f.model.plane,
+        thickness: f.model.thickness,
+        conditions: conds.list(),
+        cond_groups: conds.groups,
+        loads,
+        body_names,
+    };
+    lap.lap("rigid modes");
+    rigid::check_semicoercive(&model, problem)?;
+    lap.lap("semicoercivity check");
+    Ok(model)
+}
 
 /// A problem that does not fit its mesh: the message names the TOML file
 /// and the group, key, node or element.
@@ -47,100 +203,6 @@ impl FemError {
         FemError {
             path: path.to_path_buf(),
             msg,
-        }
-    }
-}
-
-/// Stable counting sort of the items that `gen` yields (called twice, and
-/// yielding the same items each time) by `key(item) < nkeys`: the sorted
-/// items and `ptr` (nkeys + 1 entries; key k's items are `ptr[k]..ptr[k + 1]`).
-///
-/// One counting pass over millions of keys writes at random and misses the
-/// cache on nearly every item; so a first pass buckets by the high bits of
-/// the key (about 2048 buckets: a few streams of writes) and a second sorts
-/// each small bucket by the whole key, in cache.
-pub(crate) fn bucket_sort<T, I>(
-    gen: impl Fn() -> I,
-    key: impl Fn(&T) -> usize,
-    nkeys: usize,
-) -> (Vec<T>, Vec<usize>)
-where
-    T: Copy + Default,
-    I: Iterator<Item = T>,
-{
-    let bits = usize::BITS - nkeys.leading_zeros();
-    let shift = bits.saturating_sub(11);
-    let nbk = (nkeys >> shift) + 1;
-    let mut bptr = vec![0usize; nbk + 1];
-    for x in gen() {
-        bptr[(key(&x) >> shift) + 1] += 1;
-    }
-    for b in 0..nbk {
-        bptr[b + 1] += bptr[b];
-    }
-    let mut items = vec![T::default(); bptr[nbk]];
-    {
-        let mut fill = bptr[..nbk].to_vec();
-        for x in gen() {
-            let b = key(&x) >> shift;
-            items[fill[b]] = x;
-            fill[b] += 1;
-        }
-    }
-    let mut ptr = vec![0usize; nkeys + 1];
-    let mut scratch: Vec<T> = vec![];
-    let mut cnt: Vec<usize> = vec![];
-    for b in 0..nbk {
-        let slice = &mut items[bptr[b]..bptr[b + 1]];
-        let base = b << shift;
-        let width = (1usize << shift).min(nkeys.saturating_sub(base));
-        cnt.clear();
-        cnt.resize(width + 1, 0);
-        for x in slice.iter() {
-            cnt[key(x) - base + 1] += 1;
-        }
-        for i in 0..width {
-            ptr[base + i + 1] = cnt[i + 1];
-            cnt[i + 1] += cnt[i];
-        }
-        scratch.clear();
-        scratch.resize(slice.len(), T::default());
-        for x in slice.iter() {
-            let i = key(x) - base;
-            scratch[cnt[i]] = *x;
-            cnt[i] += 1;
-        }
-        slice.copy_from_slice(&scratch);
-    }
-    for k in 0..nkeys {
-        ptr[k + 1] += ptr[k];
-    }
-    (items, ptr)
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn bucket_sort_is_a_stable_counting_sort() {
-        let mut s = 0x2545_f491_4f6c_dd1du64;
-        for nkeys in [0usize, 1, 5, 2047, 2048, 2049, 5000, 100_000] {
-            let items: Vec<(usize, usize)> = (0..3 * nkeys + 7)
-                .filter(|_| nkeys > 0)
-                .map(|i| {
-                    s ^= s << 13;
-                    s ^= s >> 7;
-                    s ^= s << 17;
-                    ((s % nkeys.max(1) as u64) as usize, i)
-                })
-                .collect();
-            let (sorted, ptr) = super::bucket_sort(|| items.iter().copied(), |x| x.0, nkeys);
-            let mut expect = items.clone();
-            expect.sort_by_key(|x| x.0);
-            assert_eq!(sorted, expect);
-            assert_eq!(ptr.len(), nkeys + 1);
-            for k in 0..nkeys {
-                assert!(sorted[ptr[k]..ptr[k + 1]].iter().all(|x| x.0 == k));
-            }
         }
     }
 }

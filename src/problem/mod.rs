@@ -281,7 +281,7 @@ impl ProblemFile {
         f
     }
 
-    /// Number of load steps (1 without [[steps]]).
+    /// Number of load steps (1 without `[[steps]]`).
     pub fn nsteps(&self) -> usize {
         self.steps.len().max(1)
     }

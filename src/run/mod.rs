@@ -24,8 +24,8 @@ pub use output::{
     VtuWriter,
 };
 pub use prepare::{
-    fingerprint, fingerprint_diff, fnv1a, options, prepare, probes, reduce, solve, solve_model,
-    solve_model_in, step_model, InputError, Prepared,
+    fingerprint, fingerprint_diff, fnv1a, options, prepare, prepare_with, probes, reduce, solve,
+    solve_model, solve_model_in, step_model, InputError, Prepared,
 };
 pub use restart::Restart;
 pub use steps::{preconditioner_label, Outcome, Run, Solved, Step, Verdict};

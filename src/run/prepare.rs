@@ -27,12 +27,23 @@ pub struct Prepared {
     pub model: Model,
     /// `--no-contact`: every `[[contact]]` was dropped (part of the fingerprint).
     pub no_contact: bool,
+    /// How the models of this problem are built (also each load step's).
+    pub build: fem::BuildOptions,
     pub t_read: f64,
     pub t_assemble: f64,
 }
 
 /// Read the TOML and the mesh, build the QP. `no_contact` drops every `[[contact]]`.
 pub fn prepare(path: &Path, no_contact: bool) -> Result<Prepared, InputError> {
+    prepare_with(path, no_contact, &fem::BuildOptions::default())
+}
+
+/// [`prepare`] with the options of `fem::build_with`.
+pub fn prepare_with(
+    path: &Path,
+    no_contact: bool,
+    build: &fem::BuildOptions,
+) -> Result<Prepared, InputError> {
     let t0 = Instant::now();
     let mut problem = Problem::load(path)?;
     if no_contact {
@@ -46,7 +57,7 @@ pub fn prepare(path: &Path, no_contact: bool) -> Result<Prepared, InputError> {
     check_contact_groups(&problem, &mesh)?;
     let t_read = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let model = fem::build(&mesh, &problem)?;
+    let model = fem::build_with(&mesh, &problem, build)?;
     check_probes(&problem, &model)?;
     Ok(Prepared {
         problem,
@@ -54,6 +65,7 @@ pub fn prepare(path: &Path, no_contact: bool) -> Result<Prepared, InputError> {
         mesh,
         model,
         no_contact,
+        build: *build,
         t_read,
         t_assemble: t1.elapsed().as_secs_f64(),
     })
@@ -200,7 +212,7 @@ pub fn fingerprint_diff(a: &str, b: &str) -> Vec<String> {
 pub fn step_model(prep: &Prepared, s: usize) -> Result<Model, InputError> {
     let mut p = prep.problem.clone();
     p.file = prep.problem.file.at_step(s);
-    Ok(fem::build(&prep.mesh, &p)?)
+    Ok(fem::build_with(&prep.mesh, &p, &prep.build)?)
 }
 
 /// Reduced unknowns ξ = Tᵀ(u − u0) of point displacements `u` (a warm start).

@@ -1,0 +1,330 @@
+//! Dirichlet conditions and slip lines, and their elimination point by point
+//! (docs/methods.md §2.4–2.5).
+//!
+//! Dirichlet components and slip lines (Γ0, u·n = 0) are conditions r·u = v
+//! at points. They are eliminated node by node: each point's displacement is
+//! u_p = u0_p + T_p ξ_p, where the rows of all conditions at the point fix
+//! u0_p and T_p has orthonormal columns spanning what is left free (2, 1 or
+//! 0 DOFs). This is the elimination option of §2.5 with a unit tangent
+//! instead of (1, −n1/n2), so it is well-conditioned for any normal, and it
+//! combines Dirichlet and slip at corners. The unknowns ξ are numbered point
+//! by point (§2.3).
+
+use super::topology::{dim_name, Topology};
+use super::FemError;
+use crate::mesh::Mesh;
+use crate::problem::Problem;
+
+/// Per-point elimination: u = u0 + T ξ with `ndof` columns of T used.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PointDofs {
+    pub start: usize,
+    pub ndof: usize,
+    /// Columns of T (unit, orthogonal); only the first `ndof` are used.
+    pub t: [[f64; 2]; 2],
+    pub u0: [f64; 2],
+}
+
+/// One linear condition r·u = v at a point; `src` indexes the names of the
+/// TOML entries that set conditions (for messages).
+#[derive(Clone, Copy)]
+pub(super) struct Cond {
+    pub(super) r: [f64; 2],
+    pub(super) v: f64,
+    pub(super) src: usize,
+}
+
+/// The conditions of every point and what set them.
+pub(super) struct Conditions {
+    /// The conditions at each point.
+    pub(super) at: Vec<Vec<Cond>>,
+    /// What set each condition: `[[dirichlet]] on = "NAME"`, `[[slip]] on = "NAME"`.
+    src: Vec<String>,
+    /// The same as (kind "dirichlet" | "slip", physical group name).
+    pub(super) groups: Vec<(&'static str, String)>,
+}
+
+impl Conditions {
+    /// The `[[dirichlet]]` and `[[slip]]` conditions, in that order.
+    pub(super) fn collect(
+        mesh: &Mesh,
+        topo: &Topology,
+        problem: &Problem,
+    ) -> Result<Conditions, FemError> {
+        let mut c = Conditions {
+            at: vec![vec![]; topo.points.len()],
+            src: vec![],
+            groups: vec![],
+        };
+        c.add_dirichlet(mesh, topo, problem)?;
+        c.add_slip(mesh, topo, problem)?;
+        Ok(c)
+    }
+
+    /// ux, uy (or u) on the points of a curve or point group.
+    fn add_dirichlet(
+        &mut self,
+        mesh: &Mesh,
+        topo: &Topology,
+        problem: &Problem,
+    ) -> Result<(), FemError> {
+        for (i, dch) in problem.file.dirichlet.iter().enumerate() {
+            let what = format!("[[dirichlet]] #{} (on = \"{}\")", i + 1, dch.on);
+            let (ux, uy) = match dch.u {
+                Some(u) => (Some(u[0]), Some(u[1])),
+                None => (dch.ux, dch.uy),
+            };
+            let mut pts: Vec<usize> = topo
+                .group_points(mesh, problem, &dch.on, &what)?
+                .into_iter()
+                .map(|x| x.0)
+                .collect();
+            pts.sort_unstable();
+            pts.dedup();
+            let src = self.src.len();
+            self.src.push(format!("[[dirichlet]] on = \"{}\"", dch.on));
+            self.groups.push(("dirichlet", dch.on.clone()));
+            for p in pts {
+                if let Some(v) = ux {
+                    self.at[p].push(Cond {
+                        r: [1.0, 0.0],
+                        v,
+                        src,
+                    });
+                }
+                if let Some(v) = uy {
+                    self.at[p].push(Cond {
+                        r: [0.0, 1.0],
+                        v,
+                        src,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// u·n = 0 on the points of a curve, n the unit average of the outward
+    /// normals of the point's segments on that curve (§2.5–2.6).
+    fn add_slip(
+        &mut self,
+        mesh: &Mesh,
+        topo: &Topology,
+        problem: &Problem,
+    ) -> Result<(), FemError> {
+        for (i, s) in problem.file.slip.iter().enumerate() {
+            let what = format!("[[slip]] #{} (on = \"{}\")", i + 1, s.on);
+            if let Some(g) = mesh.group_any(&s.on) {
+                if g.dim != 1 {
+                    return Err(FemError::new(
+                        &problem.path,
+                        format!(
+                            "{what}: \"{}\" is a physical {}, expected a curve",
+                            s.on,
+                            dim_name(g.dim)
+                        ),
+                    ));
+                }
+            }
+            // Averaged unit normal per point over the segments of this line.
+            let mut sum: std::collections::BTreeMap<usize, [f64; 2]> = Default::default();
+            for (p, _, seg) in topo.group_points(mesh, problem, &s.on, &what)? {
+                if let Some((a, b, t)) = seg {
+                    let n = topo.outward_normal(mesh, t, a, b);
+                    let e = sum.entry(p).or_insert([0.0, 0.0]);
+                    e[0] += n[0];
+                    e[1] += n[1];
+                }
+            }
+            let src = self.src.len();
+            self.src.push(format!("[[slip]] on = \"{}\"", s.on));
+            self.groups.push(("slip", s.on.clone()));
+            for (p, n) in sum {
+                let len = (n[0] * n[0] + n[1] * n[1]).sqrt();
+                if len > 1e-12 {
+                    self.at[p].push(Cond {
+                        r: [n[0] / len, n[1] / len],
+                        v: 0.0,
+                        src,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Each point's u = u0 + Tξ, its unknowns numbered after the previous
+    /// point's; conflicting conditions are an error that names the node,
+    /// the body (`body_names`) and the TOML entries.
+    pub(super) fn eliminate(
+        &self,
+        mesh: &Mesh,
+        topo: &Topology,
+        body_names: &[String],
+        problem: &Problem,
+    ) -> Result<Vec<PointDofs>, FemError> {
+        let mut dofs = Vec::with_capacity(self.at.len());
+        let mut next = 0usize;
+        for (p, cs) in self.at.iter().enumerate() {
+            let pd = eliminate(cs).map_err(|m| {
+                let mut from: Vec<usize> = cs.iter().map(|c| c.src).collect();
+                from.sort_unstable();
+                from.dedup();
+                let from: Vec<&str> = from.iter().map(|&i| self.src[i].as_str()).collect();
+                FemError::new(
+                    &problem.path,
+                    format!(
+                        "conflicting conditions at node {} ({}) from {}: {m}",
+                        mesh.node_tags[topo.point_node[p]],
+                        match body_names.get(topo.point_body[p] as usize) {
+                            Some(n) => format!("body '{n}'"),
+                            None => format!("body {}", topo.point_body[p]),
+                        },
+                        from.join(", ")
+                    ),
+                )
+            })?;
+            let pd = PointDofs { start: next, ..pd };
+            next += pd.ndof;
+            dofs.push(pd);
+        }
+        Ok(dofs)
+    }
+
+    /// The conditions as (point, unit direction r, index into `groups`).
+    pub(super) fn list(&self) -> Vec<(usize, [f64; 2], u32)> {
+        self.at
+            .iter()
+            .enumerate()
+            .flat_map(|(p, cs)| cs.iter().map(move |c| (p, c.r, c.src as u32)))
+            .collect()
+    }
+}
+
+/// Combine the conditions r·u = v at one point into u = u0 + Tξ.
+fn eliminate(cs: &[Cond]) -> Result<PointDofs, String> {
+    let mut pd = PointDofs {
+        start: 0,
+        ndof: 2,
+        t: [[1.0, 0.0], [0.0, 1.0]],
+        u0: [0.0, 0.0],
+    };
+    if cs.is_empty() {
+        return Ok(pd);
+    }
+    let q1 = normalize(cs[0].r);
+    let v1 = cs[0].v / norm2(cs[0].r);
+    // A second, independent condition?
+    let second = cs.iter().skip(1).find(|c| {
+        let r = normalize(c.r);
+        (r[0] * q1[1] - r[1] * q1[0]).abs() > 1e-8
+    });
+    match second {
+        None => {
+            // all parallel: check consistency
+            for c in &cs[1..] {
+                let r = normalize(c.r);
+                let s = r[0] * q1[0] + r[1] * q1[1];
+                let v = c.v / norm2(c.r);
+                if (v - s * v1).abs() > 1e-9 * (1.0 + v.abs() + v1.abs()) {
+                    return Err(format!(
+                        "two conditions prescribe different values ({} and {}) in one direction",
+                        v1 * s,
+                        v
+                    ));
+                }
+            }
+            pd.ndof = 1;
+            pd.u0 = [v1 * q1[0], v1 * q1[1]];
+            pd.t = [[-q1[1], q1[0]], [0.0, 0.0]];
+        }
+        Some(c2) => {
+            let (r1, r2) = (cs[0].r, c2.r);
+            let det = r1[0] * r2[1] - r1[1] * r2[0];
+            let u = [
+                (cs[0].v * r2[1] - c2.v * r1[1]) / det,
+                (r1[0] * c2.v - r2[0] * cs[0].v) / det,
+            ];
+            for c in cs {
+                let res = c.r[0] * u[0] + c.r[1] * u[1] - c.v;
+                if res.abs() > 1e-9 * (1.0 + c.v.abs() + u[0].abs() + u[1].abs()) {
+                    return Err(format!(
+                        "more than two independent conditions that disagree (residual {res:.3e})"
+                    ));
+                }
+            }
+            pd.ndof = 0;
+            pd.u0 = u;
+            pd.t = [[0.0, 0.0], [0.0, 0.0]];
+        }
+    }
+    Ok(pd)
+}
+
+/// |r|.
+fn norm2(r: [f64; 2]) -> f64 {
+    (r[0] * r[0] + r[1] * r[1]).sqrt()
+}
+
+/// r / |r|.
+pub(super) fn normalize(r: [f64; 2]) -> [f64; 2] {
+    let l = norm2(r);
+    [r[0] / l, r[1] / l]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cond(r: [f64; 2], v: f64) -> Cond {
+        Cond { r, v, src: 0 }
+    }
+
+    /// u0 + Tξ satisfies every condition for any ξ, and T has orthonormal
+    /// columns orthogonal to every r.
+    fn check(cs: &[Cond], ndof: usize) {
+        let pd = eliminate(cs).unwrap();
+        assert_eq!(pd.ndof, ndof);
+        for xi in [[0.0, 0.0], [0.7, -1.3]] {
+            let mut u = pd.u0;
+            for (tk, x) in pd.t.iter().zip(xi).take(pd.ndof) {
+                u[0] += tk[0] * x;
+                u[1] += tk[1] * x;
+            }
+            for c in cs {
+                let res = c.r[0] * u[0] + c.r[1] * u[1] - c.v;
+                assert!(res.abs() < 1e-12, "{res} for {:?}", c.r);
+            }
+        }
+        for k in 0..pd.ndof {
+            assert!((norm2(pd.t[k]) - 1.0).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn elimination_satisfies_the_conditions_and_refuses_conflicts() {
+        check(&[], 2);
+        // One Dirichlet component, then a slip line with an oblique normal
+        // (r not unit: v is scaled with it), then both at a corner.
+        check(&[cond([0.0, 1.0], -0.25)], 1);
+        check(&[cond([3.0, 4.0], 0.0), cond([0.6, 0.8], 0.0)], 1);
+        check(&[cond([1.0, 0.0], 0.1), cond([0.6, 0.8], 0.0)], 0);
+        check(
+            &[
+                cond([1.0, 0.0], 0.1),
+                cond([0.0, 1.0], 0.2),
+                cond([1.0, 1.0], 0.3),
+            ],
+            0,
+        );
+        // Parallel conditions with different values, and a third
+        // independent condition that disagrees.
+        assert!(eliminate(&[cond([1.0, 0.0], 0.1), cond([-2.0, 0.0], 0.0)]).is_err());
+        assert!(eliminate(&[
+            cond([1.0, 0.0], 0.1),
+            cond([0.0, 1.0], 0.2),
+            cond([1.0, 1.0], 0.0)
+        ])
+        .is_err());
+    }
+}

@@ -1,0 +1,106 @@
+//! The contact rows: their form on points, Σ c_p·u_p ≤ g (conforming or
+//! node-to-segment, built in `pairs.rs`), and their form in the reduced
+//! unknowns, the rows of A and g of the QP (docs/methods.md §2.7–2.8, §7).
+
+use super::conditions::PointDofs;
+use super::topology::Topology;
+use super::FemError;
+use crate::mesh::Mesh;
+use crate::problem::Problem;
+use crate::qp::Csr;
+
+/// How a contact row couples points: n·(u_first − u_second) ≤ g (conforming,
+/// n outward of the lower body) or n·(Σ w u_master − u_slave) ≤ g (non-matching,
+/// n outward of the master).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RowKind {
+    Conforming,
+    NonMatching,
+}
+
+/// One contact constraint row (docs/methods.md §2.7, §7 for non-matching).
+#[derive(Debug, Clone)]
+pub struct ContactRow {
+    pub kind: RowKind,
+    /// Point of body k (conforming) or the slave point.
+    pub first: usize,
+    /// Point of body l (weight 1), or the two master points with (1−ξ, ξ).
+    pub second: [(usize, f64); 2],
+    /// Contract normal: outward of body k, or of the master segment.
+    pub normal: [f64; 2],
+    /// Initial gap g ≥ 0.
+    pub gap0: f64,
+    /// Length that the row's force acts on (half the adjacent segments).
+    pub trib: f64,
+    pub interface: u32,
+}
+
+impl ContactRow {
+    /// Coefficients c_p (2-vectors) of the row Σ c_p·u_p ≤ g.
+    pub fn coefficients(&self) -> Vec<(usize, [f64; 2])> {
+        let n = self.normal;
+        match self.kind {
+            RowKind::Conforming => vec![(self.first, n), (self.second[0].0, [-n[0], -n[1]])],
+            RowKind::NonMatching => {
+                let mut v = vec![(self.first, [-n[0], -n[1]])];
+                for &(p, w) in &self.second {
+                    if w != 0.0 {
+                        v.push((p, [w * n[0], w * n[1]]));
+                    }
+                }
+                v
+            }
+        }
+    }
+}
+
+/// The contact rows in the reduced unknowns: A = rows · T and
+/// g = gap0 − rows · u0 (docs/methods.md §2.7–2.8), and the contact row of
+/// each QP row. A row whose points are all fixed is left out, and refused
+/// if the prescribed displacements alone violate it.
+pub(super) fn reduced_rows(
+    mesh: &Mesh,
+    topo: &Topology,
+    dofs: &[PointDofs],
+    n: usize,
+    problem: &Problem,
+) -> Result<(Csr, Vec<f64>, Vec<usize>), FemError> {
+    let mut atrip = vec![];
+    let mut g = vec![];
+    let mut qp_rows = vec![];
+    for (r, row) in topo.contact.iter().enumerate() {
+        let mut gr = row.gap0;
+        let mut entries = vec![];
+        for (p, cvec) in row.coefficients() {
+            let pd = dofs[p];
+            gr -= cvec[0] * pd.u0[0] + cvec[1] * pd.u0[1];
+            for k in 0..pd.ndof {
+                let v = cvec[0] * pd.t[k][0] + cvec[1] * pd.t[k][1];
+                if v.abs() > 1e-14 {
+                    entries.push((pd.start + k, v));
+                }
+            }
+        }
+        if entries.is_empty() {
+            if gr < -1e-12 * (1.0 + row.gap0.abs()) {
+                return Err(FemError::new(
+                    &problem.path,
+                    format!(
+                        "contact row at node {} of \"{}\" is violated by the prescribed displacements alone",
+                        mesh.node_tags[topo.point_node[row.first]],
+                        topo.interface_names[row.interface as usize]
+                    ),
+                ));
+            }
+            continue;
+        }
+        let qi = qp_rows.len();
+        for (j, v) in entries {
+            atrip.push((qi, j, v));
+        }
+        g.push(gr);
+        qp_rows.push(r);
+    }
+    let a = Csr::from_triplets(qp_rows.len(), n, &atrip);
+    Ok((a, g, qp_rows))
+}
