@@ -51,7 +51,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         cgh_steps: 0,
         switch_time: 0.0,
     };
-    let mut state = ActiveSet::new(qp, solver, opts);
+    let mut state = ActiveSet::new(qp, solver, opts)?;
     let mut exec = Executor::for_opts(opts, "asm-cgh");
     let (status, iters) = exec.run(&mut state);
     let t_it = t1.elapsed().as_secs_f64();

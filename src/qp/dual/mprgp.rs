@@ -71,9 +71,11 @@
 //! executor step); `inner_iterations` = solves with the sparse factor.
 
 use crate::linalg::cholesky::Cholesky;
+use crate::linalg::dense::{chol_backward, chol_factor, chol_forward};
+use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::sparse::{axpy, dot, norm, norm_inf};
 use crate::qp::executor::{Executor, Iterative, Step};
-use crate::qp::ssn::{check_dims, chol_backward, chol_factor, chol_forward, orthonormal_kernel};
+use crate::qp::ssn::check_dims;
 use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
 use std::time::Instant;
 
@@ -315,7 +317,7 @@ impl<'a> Mprgp<'a> {
                 l[a * k + b] = dot(&g0[a], &g0[b]);
             }
         }
-        if !chol_factor(&mut l, k, 1e-10) {
+        if !chol_factor(&mut l, k) {
             return Err(QpError::Unsupported(
                 format!(
                     "{name}: a rigid motion of a floating body is not restrained by any contact row \

@@ -46,6 +46,7 @@
 //! and the penalised problem has a minimiser whenever the contact holds the
 //! floating bodies (otherwise the sweeps drift and MAXIT is reported).
 
+use crate::linalg::augmented::AugPattern;
 use crate::linalg::sparse::{norm, Csr};
 use crate::qp::active_set::check_common;
 use crate::qp::executor::{Executor, Iterative, Step};
@@ -130,6 +131,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         sweeps: 0,
         corrections: 0,
         factorizations: 0,
+        aug: None,
     };
     let t_setup = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
@@ -191,6 +193,8 @@ struct Relax<'a> {
     /// Accepted corrections / factorizations made.
     corrections: usize,
     factorizations: usize,
+    /// The pattern of C + AᵀA, made at the first correction.
+    aug: Option<AugPattern>,
 }
 
 impl Relax<'_> {
@@ -220,31 +224,22 @@ impl Relax<'_> {
     /// One step; false if it was not taken.
     fn newton_step(&mut self) -> bool {
         let qp = self.qp;
-        let n = qp.n();
         // K = C + A_JᵀA_J/ε on the fixed pattern of C + AᵀA (rows outside J
         // enter with weight 0), so every Newton step reuses the symbolic
         // analysis of the first ([`crate::linalg::cholesky`] cache).
-        let mut trip = Vec::with_capacity(qp.c.nnz() + 36 * qp.m());
-        for i in 0..n {
-            let (c, v) = qp.c.row(i);
-            trip.extend(c.iter().zip(v).map(|(&k, &a)| (i, k, a)));
-        }
+        let jset: Vec<usize> = (0..qp.m()).filter(|&j| self.s[j] > 0.0).collect();
         let mut rhs = qp.d.clone();
-        for j in 0..qp.m() {
-            let w = if self.s[j] > 0.0 {
-                self.inv_eps[j]
-            } else {
-                0.0
-            };
+        for &j in &jset {
+            let w = self.inv_eps[j];
             let (c, v) = qp.a.row(j);
             for (&k, &ak) in c.iter().zip(v) {
                 rhs[k] += w * ak * qp.g[j];
-                for (&l, &al) in c.iter().zip(v) {
-                    trip.push((k, l, w * ak * al));
-                }
             }
         }
-        let k = crate::linalg::sparse::Csr::from_triplets(n, n, &trip);
+        let aug = self
+            .aug
+            .get_or_insert_with(|| AugPattern::new(&qp.c, &qp.a));
+        let k = aug.assemble(jset, &self.inv_eps);
         self.factorizations += 1;
         // A floating body J does not hold yet makes K singular: then the
         // spring-regularised K + S (fixing DOFs, [`Cholesky::new`]) still
