@@ -25,8 +25,14 @@ pub const PIVOT_REL: f64 = 1e-10;
 pub const LU_PIVOT_REL: f64 = 1e-13;
 
 /// Symmetric eigen-decomposition of a small dense matrix (rows `a[i]`; the
-/// lower triangle is read): eigenvalues in nondecreasing order and the unit
-/// eigenvectors as rows in the same order. Non-finite input gives NaN.
+/// lower triangle is read): (eigenvalues, unit eigenvectors as rows) on
+/// faer's self-adjoint eigen-solver, in the convention of cyclic Jacobi
+/// from the identity, which the FEM's rigid-mode basis (and `R.mtx`) was
+/// built with: the k-th pair is the one whose eigenvector lies nearest the
+/// k-th coordinate axis (greedy on |v_i|; ties within 1e-12 go to the lower
+/// eigenvalue, then the lower axis), signed so that its k-th component is
+/// positive. A diagonal matrix gives the identity.
+/// Non-finite input gives NaN.
 pub fn sym_eigen(a: &[Vec<f64>]) -> (Vec<f64>, Vec<Vec<f64>>) {
     let n = a.len();
     let m = Mat::from_fn(n, n, |i, j| a[i][j]);
@@ -34,17 +40,36 @@ pub fn sym_eigen(a: &[Vec<f64>]) -> (Vec<f64>, Vec<Vec<f64>>) {
     if !m.as_ref().is_all_finite() {
         return nan();
     }
-    match m.self_adjoint_eigen(Side::Lower) {
-        Ok(e) => {
-            let (s, u) = (e.S().column_vector(), e.U());
-            let vals = (0..n).map(|k| s[k]).collect();
-            let vecs = (0..n)
-                .map(|k| (0..n).map(|i| u[(i, k)]).collect())
-                .collect();
-            (vals, vecs)
+    let Ok(e) = m.self_adjoint_eigen(Side::Lower) else {
+        return nan();
+    };
+    let (s, u) = (e.S().column_vector(), e.U());
+    // Greedy assignment of eigenvectors (columns c of U) to axes (rows i).
+    let mut slot: Vec<Option<usize>> = vec![None; n];
+    let mut used = vec![false; n];
+    for _ in 0..n {
+        let mut best: Option<(f64, usize, usize)> = None;
+        for c in (0..n).filter(|&c| !used[c]) {
+            for i in (0..n).filter(|&i| slot[i].is_none()) {
+                let v = u[(i, c)].abs();
+                if best.is_none_or(|(b, _, _)| v > b * (1.0 + 1e-12)) {
+                    best = Some((v, c, i));
+                }
+            }
         }
-        Err(_) => nan(),
+        let (_, c, i) = best.expect("a free pair");
+        used[c] = true;
+        slot[i] = Some(c);
     }
+    let mut vals = Vec::with_capacity(n);
+    let mut vecs = Vec::with_capacity(n);
+    for (k, c) in slot.into_iter().enumerate() {
+        let c = c.expect("every axis assigned");
+        let sign = if u[(k, c)] < 0.0 { -1.0 } else { 1.0 };
+        vals.push(s[c]);
+        vecs.push((0..n).map(|i| sign * u[(i, c)]).collect());
+    }
+    (vals, vecs)
 }
 
 /// LLᵀ factor of a dense SPD matrix (faer); matrices singular to working
@@ -408,8 +433,8 @@ mod tests {
                 let rows: Vec<Vec<f64>> = a.chunks(n).map(|r| r.to_vec()).collect();
                 let (vals, vecs) = sym_eigen(&rows);
                 let scale = norm(&a);
-                for w in vals.windows(2) {
-                    assert!(w[0] <= w[1], "sorted");
+                for (k, v) in vecs.iter().enumerate() {
+                    assert!(v[k] > 0.0, "k-th component positive");
                 }
                 for (l, v) in vals.iter().zip(&vecs) {
                     let av = matvec(&a, n, v);
@@ -426,10 +451,24 @@ mod tests {
         }
         let a = [2.0, 1.0, 0.0, 1.0, 2.0, 0.0, 0.0, 0.0, 0.0];
         let rows: Vec<Vec<f64>> = a.chunks(3).map(|r| r.to_vec()).collect();
-        let (vals, _) = sym_eigen(&rows);
-        assert!(
-            vals[0].abs() < 1e-14 && (vals[1] - 1.0).abs() < 1e-12 && (vals[2] - 3.0).abs() < 1e-12
-        );
+        let (vals, vecs) = sym_eigen(&rows);
+        // The Jacobi convention: (1, −1)/√2 (λ = 1), (1, 1)/√2 (λ = 3), e_2 (λ = 0).
+        let h = 0.5f64.sqrt();
+        let want = [
+            (1.0, [h, -h, 0.0]),
+            (3.0, [h, h, 0.0]),
+            (0.0, [0.0, 0.0, 1.0]),
+        ];
+        for (k, (l, v)) in want.iter().enumerate() {
+            assert!((vals[k] - l).abs() < 1e-14, "{vals:?}");
+            for i in 0..3 {
+                assert!((vecs[k][i] - v[i]).abs() < 1e-14, "{vecs:?}");
+            }
+        }
+        // A diagonal matrix: the identity, in place.
+        let (vals, vecs) = sym_eigen(&[vec![5.0, 0.0], vec![0.0, -1.0]]);
+        assert_eq!(vals, vec![5.0, -1.0]);
+        assert_eq!(vecs, vec![vec![1.0, 0.0], vec![0.0, 1.0]]);
         let (vals, vecs) = sym_eigen(&[vec![f64::NAN]]);
         assert!(vals[0].is_nan() && vecs[0][0].is_nan());
     }
