@@ -206,7 +206,7 @@ impl Lu {
         let scale = w.iter().fold(0.0f64, |s, v| s.max(v.abs()));
         let lu = m.partial_piv_lu();
         let u = lu.U();
-        if (0..n).any(|k| !(u[(k, k)].abs() > LU_PIVOT_REL * scale)) {
+        if (0..n).any(|k| !(u[(k, k)].is_finite() && u[(k, k)].abs() > LU_PIVOT_REL * scale)) {
             return None;
         }
         Some(Lu { lu })
@@ -247,7 +247,7 @@ impl PackedChol {
             w.push((col[i] - s) / r[i]);
         }
         let d2 = diag - dot(&w, &w);
-        if !(d2 > PIVOT_REL * diag.abs()) || !d2.is_finite() {
+        if !(d2.is_finite() && d2 > PIVOT_REL * diag.abs()) {
             return false;
         }
         w.push(d2.sqrt());

@@ -106,7 +106,7 @@ mod tests {
         ] {
             assert!(
                 matches!(
-                    orthonormal_kernel(&c(), &[bad.clone()]),
+                    orthonormal_kernel(&c(), std::slice::from_ref(&bad)),
                     Err(QpError::BadParameter(_))
                 ),
                 "{bad:?}"

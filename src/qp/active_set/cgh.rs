@@ -240,7 +240,7 @@ pub fn cgh(
         if !regular {
             // Case II: hyperbolic pair (p, q).
             let bpbp = bpn * bpn;
-            if !(bpbp > 0.0) {
+            if bpbp <= 0.0 || bpbp.is_nan() {
                 return Err("CGH breakdown: B p = 0 for a direction p ≠ 0 (B_J singular)".into());
             }
             apply(&bp, &mut b2p);

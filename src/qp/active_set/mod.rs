@@ -1,7 +1,7 @@
 //! Active set methods (docs/methods.md §4.7 ASM-E, §4.8 ASM-CGH): the loop
-//! both share ([`ActiveSet`]) and ASM-E's entry. A working set J of
+//! both share (`ActiveSet`) and ASM-E's entry. A working set J of
 //! constraints is held as equalities; each step solves the face problem
-//! `C δ + A_Jᵀλ_J = d − Cx, A_J δ = g_J − A_J x` (a [`FaceSolver`]; the lower
+//! `C δ + A_Jᵀλ_J = d − Cx, A_J δ = g_J − A_J x` (a `FaceSolver`; the lower
 //! right-hand side is 0 up to rounding drift, carrying it keeps x on its
 //! face), then steps to the nearest blocking constraint (adding it to J) or,
 //! after a full step, drops the constraint with the most negative multiplier.
@@ -11,7 +11,7 @@
 //! makes the face problem unbounded along ±v when rᵀv ≠ 0 (a ray step to the
 //! first blocking constraint, or `Status::Unbounded`), or leaves v free when
 //! rᵀv = 0 (the face minimiser without a v-component is taken). Face
-//! solvers: ASM-E's [`SchurSolver`] ([`schur`]), ASM-CGH's in [`cgh`].
+//! solvers: ASM-E's `SchurSolver` (`schur`), ASM-CGH's in [`cgh`].
 
 pub mod cgh;
 mod schur;
@@ -167,8 +167,8 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
         };
         let ax = qp.a.mul(&st.x);
         let scale = norm_inf(&qp.g).max(norm_inf(&st.x)).max(1e-300);
-        for i in 0..m {
-            if ax[i] - qp.g[i] >= -1e-12 * scale && st.row_norm[i] > 0.0 {
+        for (i, (&axi, &gi)) in ax.iter().zip(&qp.g).enumerate() {
+            if axi - gi >= -1e-12 * scale && st.row_norm[i] > 0.0 {
                 st.add(i);
             }
         }
@@ -252,13 +252,13 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
     fn ratio_test(&self, p: &[f64], ax: &[f64]) -> Option<(f64, usize)> {
         let pn = norm(p);
         let mut best: Option<(f64, usize)> = None;
-        for i in 0..self.qp.m() {
+        for (i, &axi) in ax.iter().enumerate() {
             if self.in_j[i] {
                 continue;
             }
             let ap = self.qp.a.row_dot(i, p);
             if ap > 1e-13 * self.row_norm[i] * pn {
-                let t = ((self.qp.g[i] - ax[i]) / ap).max(0.0);
+                let t = ((self.qp.g[i] - axi) / ap).max(0.0);
                 if best.is_none_or(|(b, _)| t < b) {
                     best = Some((t, i));
                 }

@@ -106,7 +106,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         let (rows, vals) = at.row(i);
         let s: f64 = rows.iter().zip(vals).map(|(&j, a)| a * a / eps[j]).sum();
         *di = cdiag[i] + s;
-        if !(cdiag[i] > 0.0) {
+        if cdiag[i] <= 0.0 || cdiag[i].is_nan() {
             return Err(QpError::Unsupported(format!(
                 "penalty: Gauss–Seidel needs c_ii > 0, but c_{i}{i} = {}",
                 cdiag[i]
@@ -215,7 +215,7 @@ impl Relax<'_> {
             if !self.newton_step() {
                 return;
             }
-            if self.s.iter().map(|&v| v > 0.0).eq(before.into_iter()) {
+            if self.s.iter().map(|&v| v > 0.0).eq(before) {
                 return;
             }
         }
@@ -244,10 +244,10 @@ impl Relax<'_> {
         // A floating body J does not hold yet makes K singular: then the
         // spring-regularised K + S (fixing DOFs, [`Cholesky::new`]) still
         // gives a descent direction −(K + S)⁻¹∇g_ε.
-        let fac = match crate::linalg::cholesky::Cholesky::new(&k, &[]) {
+        let fac = match crate::linalg::cholesky::Cholesky::new(k, &[]) {
             Ok(f) => f,
             Err(_) if !qp.kernel.is_empty() => {
-                match crate::linalg::cholesky::Cholesky::new(&k, &qp.kernel) {
+                match crate::linalg::cholesky::Cholesky::new(k, &qp.kernel) {
                     Ok(f) => f,
                     Err(_) => return false,
                 }
@@ -312,7 +312,7 @@ impl Iterative for Relax<'_> {
     fn step(&mut self) -> Step {
         let qp = self.qp;
         self.sweeps += 1;
-        if self.correct && self.sweeps % CORRECTION_EVERY == 0 {
+        if self.correct && self.sweeps.is_multiple_of(CORRECTION_EVERY) {
             self.subspace_correction();
         }
         self.x_old.copy_from_slice(&self.x);

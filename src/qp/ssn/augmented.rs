@@ -148,7 +148,7 @@ impl Ssn<'_> {
             let sp_full = apply(&p);
             let sp = aj(&sp_full);
             let psp = dot(&p, &sp);
-            if !(psp > 0.0) {
+            if psp <= 0.0 || psp.is_nan() {
                 break;
             }
             let alpha = rr / psp;

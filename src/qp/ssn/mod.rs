@@ -1,17 +1,17 @@
 //! Semismooth Newton / primal–dual active set method (Hintermüller, Ito &
 //! Kunisch 2002, SIAM J. Optim. 13; docs/methods.md §7): Newton's method on
-//! λ − max(0, λ + c(Ax − g)) = 0. One step ([`Executor`] step) solves the KKT
+//! λ − max(0, λ + c(Ax − g)) = 0. One step (`Executor` step) solves the KKT
 //! system of the working set J (`Cx + A_Jᵀλ_J = d, A_J x = g_J, λ_{J^c} = 0`),
 //! predicts `J ← {i : λᵢ + c(Ax − g)ᵢ > τ}` and stops when J did not change.
-//! Start: the glued set {gᵢ = 0}; c = mean diag C (a stiffness), τ = tol·(‖λ‖∞
-//! + c·max(‖x‖∞, ‖g‖∞)).
+//! Start: the glued set {gᵢ = 0}; c = mean diag C (a stiffness), and
+//! τ = tol·(‖λ‖∞ + c·max(‖x‖∞, ‖g‖∞)).
 //!
-//! The KKT solve takes, per step and from counts only ([`path`]), the
-//! augmented factor C + A_JᵀΡA_J ([`augmented`], Woodbury updates in
-//! [`lowrank`]) or the Schur complement on one factor of C ([`schur`], with
+//! The KKT solve takes, per step and from counts only (`path`), the
+//! augmented factor C + A_JᵀΡA_J (`augmented`, Woodbury updates in
+//! `lowrank`) or the Schur complement on one factor of C (`schur`, with
 //! the FETI coarse problem for floating bodies). A settled J is certified by
-//! the KKT residual and refined (at most [`REFINE_MAX`] steps, then once on
-//! the Schur path); at most max([`GROW_MIN`], |J|) rows enter per step; a
+//! the KKT residual and refined (at most `REFINE_MAX` steps, then once on
+//! the Schur path); at most max(`GROW_MIN`, |J|) rows enter per step; a
 //! repeated J switches to single changes (anti-cycling). Counts:
 //! `iterations` = KKT solves, `inner_iterations` = sparse solves.
 
