@@ -1,8 +1,11 @@
 //! Linear algebra shared by the FEM and QP layers: sparse matrices ([`sparse`]),
-//! sparse Cholesky of a (semi)definite stiffness ([`cholesky`]) and small dense
-//! kernels ([`dense`]). Algorithms live in `qp`; the kernels they share live
-//! here, once.
+//! sparse Cholesky of a (semi)definite stiffness ([`cholesky`]), small dense
+//! kernels ([`dense`]), the checked basis of ker C ([`kernel`]) and
+//! C + Aᵀdiag(w)A on one pattern ([`augmented`]). Algorithms live in `qp`; the
+//! kernels they share live here, once.
 
+pub mod augmented;
 pub mod cholesky;
 pub mod dense;
+pub mod kernel;
 pub mod sparse;

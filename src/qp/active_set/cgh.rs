@@ -1,37 +1,16 @@
-//! ASM-CGH: the active set loop of ASM-E (`asm.rs`, methods.md §4.7) with the
-//! KKT systems B_J y = f solved iteratively by CG with hyperbolic pairs
-//! (Luenberger; methods.md §4.8), matrix-free with C and A_J (no factor, no
-//! fill-in).
-//!
-//! Scaling (the implementation note of §4.8, made per unknown): CGH solves
-//! the symmetrically Jacobi-scaled system, x = Σx̃ with Σ = diag(C)^(-1/2) and
-//! λ = Tμ with Tᵢ = 1/‖Σaᵢ‖,
-//!
-//! ```text
-//!   B̃ = [[ΣCΣ, ΣA_JᵀT], [TA_JΣ, 0]]
-//! ```
-//!
-//! (unit diagonal, unit rows), so that a stiffness contrast between bodies
-//! does not leave the soft body's residual under the stiff body's rounding.
-//! If CGH still fails on a working set (breakdown, no progress in 2n + 200
-//! steps, or the cap 10·max_iter steps), the run switches to the exact ASM-E
-//! Schur solve for that and every later working set, with a warning and a
-//! `factor (ASM-E fallback)` entry in the timings.
-//!
-//! The singularity test is made scale-free as the
-//! implementation note of §4.8 asks, with the local value ‖Bp‖/‖p‖ ≤ ‖B‖ in
-//! place of ‖B‖: p is treated as singular when |(p,Bp)| ≤ ε_s ‖p‖ ‖Bp‖
-//! (ε_s = 10⁻⁴, the report's value), i.e. when p and Bp are nearly orthogonal.
-//! (With the global ‖B‖ every smooth direction of a stiffness matrix, whose
-//! Rayleigh quotient is ~λ_min(C) ≪ 10⁻⁴‖C‖, would be declared singular.)
-//!
-//! Semidefinite C: B_J is nonsingular iff no rigid motion satisfies A_J v = 0.
-//! With the kernel in `qp.kernel`, the active-set loop detects the rigid
-//! motions the working set leaves free (ray steps, or `Status::Unbounded`);
-//! a free motion with no force along it is appended to B_J as an extra
-//! constraint row (its multiplier is zero), so CGH only ever sees nonsingular
-//! systems. Without a kernel a singular B_J shows up as a CGH breakdown or
-//! non-convergence: `Status::Failed`.
+//! ASM-CGH (docs/methods.md §4.8): the active set loop of ASM-E (`super`,
+//! §4.7) with the face systems B_J y = f solved matrix-free by CG with
+//! hyperbolic pairs (Luenberger): no factor, no fill-in. CGH works on the
+//! Jacobi-scaled system B̃ = [[ΣCΣ, ΣA_JᵀT], [TA_JΣ, 0]], Σ = diag(C)^(-1/2),
+//! Tᵢ = 1/‖Σaᵢ‖ (unit diagonal and rows), so a stiffness contrast does not
+//! bury the soft body's residual under the stiff body's rounding. A direction
+//! p is singular when |(p, Bp)| ≤ ε_s‖p‖‖Bp‖ (ε_s = 10⁻⁴; the local ‖Bp‖/‖p‖
+//! replaces ‖B‖, which would flag every smooth direction of C). Rigid motions
+//! J leaves free come from the loop; one with no force along it is appended
+//! to B_J as an extra row (zero multiplier), so CGH only sees nonsingular
+//! systems. If CGH fails on a working set (breakdown, no progress in
+//! 2n + 200 steps, or 10·max_iter steps) the run switches for good to the
+//! exact ASM-E solve, with a warning and a `factor (ASM-E fallback)` timing.
 
 use crate::linalg::cholesky::Workspace;
 use crate::linalg::sparse::{axpy, dot, norm};
@@ -67,7 +46,7 @@ pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
         switch_time: 0.0,
         ws: ctx.ws,
     };
-    let mut state = ActiveSet::new(qp, solver, opts);
+    let mut state = ActiveSet::new(qp, solver, opts)?;
     let mut exec = ctx.executor("asm-cgh");
     let (status, iters) = exec.run(&mut state);
     let t_it = t1.elapsed().as_secs_f64();
@@ -259,7 +238,7 @@ pub fn cgh(
         if !regular {
             // Case II: hyperbolic pair (p, q).
             let bpbp = bpn * bpn;
-            if !(bpbp > 0.0) {
+            if bpbp <= 0.0 || bpbp.is_nan() {
                 return Err("CGH breakdown: B p = 0 for a direction p ≠ 0 (B_J singular)".into());
             }
             apply(&bp, &mut b2p);

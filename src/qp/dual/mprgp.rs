@@ -71,9 +71,10 @@
 //! executor step); `inner_iterations` = solves with the sparse factor.
 
 use crate::linalg::cholesky::Cholesky;
+use crate::linalg::dense::{chol_backward, chol_factor, chol_forward};
+use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::sparse::{axpy, dot, norm, norm_inf};
 use crate::qp::executor::{Iterative, Step};
-use crate::qp::ssn::{chol_backward, chol_factor, chol_forward, orthonormal_kernel};
 use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status};
 use std::time::Instant;
 
@@ -323,7 +324,7 @@ impl<'a> Mprgp<'a> {
                 l[a * k + b] = dot(&g0[a], &g0[b]);
             }
         }
-        if !chol_factor(&mut l, k, 1e-10) {
+        if !chol_factor(&mut l, k) {
             return Err(QpError::Unsupported(
                 format!(
                     "{name}: a rigid motion of a floating body is not restrained by any contact row \

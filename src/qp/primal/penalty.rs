@@ -46,6 +46,7 @@
 //! and the penalised problem has a minimiser whenever the contact holds the
 //! floating bodies (otherwise the sweeps drift and MAXIT is reported).
 
+use crate::linalg::augmented::AugPattern;
 use crate::linalg::cholesky::Workspace;
 use crate::linalg::sparse::{norm, Csr};
 use crate::qp::executor::{Iterative, Step};
@@ -143,7 +144,7 @@ fn setup<'a>(qp: &'a QpProblem, ctx: &Context<'a>) -> Result<Relax<'a>, QpError>
         let (rows, vals) = at.row(i);
         let s: f64 = rows.iter().zip(vals).map(|(&j, a)| a * a / eps[j]).sum();
         *di = cdiag[i] + s;
-        if !(cdiag[i] > 0.0) {
+        if cdiag[i] <= 0.0 || cdiag[i].is_nan() {
             return Err(QpError::Unsupported(format!(
                 "penalty: Gauss–Seidel needs c_ii > 0, but c_{i}{i} = {}",
                 cdiag[i]
@@ -169,6 +170,7 @@ fn setup<'a>(qp: &'a QpProblem, ctx: &Context<'a>) -> Result<Relax<'a>, QpError>
         corrections: 0,
         factorizations: 0,
         ws: ctx.ws,
+        aug: None,
     })
 }
 
@@ -194,6 +196,8 @@ struct Relax<'a> {
     factorizations: usize,
     /// Where the correction factors reuse their symbolic analysis.
     ws: &'a Workspace,
+    /// The pattern of C + AᵀA, made at the first correction.
+    aug: Option<AugPattern>,
 }
 
 impl Relax<'_> {
@@ -223,38 +227,29 @@ impl Relax<'_> {
     /// One step; false if it was not taken.
     fn newton_step(&mut self) -> bool {
         let qp = self.qp;
-        let n = qp.n();
         // K = C + A_JᵀA_J/ε on the fixed pattern of C + AᵀA (rows outside J
         // enter with weight 0), so every Newton step reuses the symbolic
         // analysis of the first ([`crate::linalg::cholesky`] cache).
-        let mut trip = Vec::with_capacity(qp.c.nnz() + 36 * qp.m());
-        for i in 0..n {
-            let (c, v) = qp.c.row(i);
-            trip.extend(c.iter().zip(v).map(|(&k, &a)| (i, k, a)));
-        }
+        let jset: Vec<usize> = (0..qp.m()).filter(|&j| self.s[j] > 0.0).collect();
         let mut rhs = qp.d.clone();
-        for j in 0..qp.m() {
-            let w = if self.s[j] > 0.0 {
-                self.inv_eps[j]
-            } else {
-                0.0
-            };
+        for &j in &jset {
+            let w = self.inv_eps[j];
             let (c, v) = qp.a.row(j);
             for (&k, &ak) in c.iter().zip(v) {
                 rhs[k] += w * ak * qp.g[j];
-                for (&l, &al) in c.iter().zip(v) {
-                    trip.push((k, l, w * ak * al));
-                }
             }
         }
-        let k = crate::linalg::sparse::Csr::from_triplets(n, n, &trip);
+        let aug = self
+            .aug
+            .get_or_insert_with(|| AugPattern::new(&qp.c, &qp.a));
+        let k = aug.assemble(jset, &self.inv_eps);
         self.factorizations += 1;
         // A floating body J does not hold yet makes K singular: then the
         // spring-regularised K + S (fixing DOFs, [`Cholesky::new`]) still
         // gives a descent direction −(K + S)⁻¹∇g_ε.
-        let fac = match self.ws.cholesky(&k, &[]) {
+        let fac = match self.ws.cholesky(k, &[]) {
             Ok(f) => f,
-            Err(_) if !qp.kernel.is_empty() => match self.ws.cholesky(&k, &qp.kernel) {
+            Err(_) if !qp.kernel.is_empty() => match self.ws.cholesky(k, &qp.kernel) {
                 Ok(f) => f,
                 Err(_) => return false,
             },
