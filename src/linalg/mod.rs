@@ -5,4 +5,5 @@
 
 pub mod cholesky;
 pub mod dense;
+pub mod power;
 pub mod sparse;
