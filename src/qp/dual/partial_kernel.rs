@@ -68,8 +68,8 @@ pub(crate) fn keystone(hold: Hold, e_key: f64, e_rock: f64, fx: f64) -> QpProble
     let mut count = 0usize;
     let mut bar = |p: usize, q: usize| {
         count += 1;
-        let k = if body[p] == 1 { e_key } else { e_rock }
-            * (1.0 + 0.2 * (count as f64 * 0.7).sin());
+        let k =
+            if body[p] == 1 { e_key } else { e_rock } * (1.0 + 0.2 * (count as f64 * 0.7).sin());
         let (dx, dy) = (coords[q][0] - coords[p][0], coords[q][1] - coords[p][1]);
         let l = (dx * dx + dy * dy).sqrt();
         let e = [dx / l, dy / l];

@@ -1,45 +1,22 @@
-//! Minimisation of the dual functional (methods.md §4.6):
+//! The `dual` method (docs/methods.md §4.6): the report's CGC on the bound
+//! constraints of the dual, i.e. Polyak's CG with constraints: CG on the
+//! free face; a step that would cross a bound stops on it and restarts CG;
+//! when the face is minimised the bounds with negative multipliers are
+//! released (all at once, or the most negative with `multiple_release =
+//! false`; the rows −eᵢ are orthonormal, so releasing all is safe).
 //!
-//! ```text
-//!   min θ(λ) = ½λᵀHλ − λᵀh  s.t. λ ≥ 0,   H = A C⁻¹ Aᵀ,  h = A C⁻¹ d − g,
-//!   θ'(λ) = Hλ − h = −(A x(λ) − g),        x(λ) = C⁻¹ (d − Aᵀλ),
-//! ```
-//!
-//! by CGC on the bound constraints (rows −e_i: orthonormal, so the projection is
-//! "zero the bound components" and releasing every negative multiplier at
-//! once is safe; `opts.multiple_release = false` releases one). Hp is applied
-//! through one Cholesky factor of C (w = Aᵀp, solve, A·): H is never formed.
-//! The displacements are recovered as x = C⁻¹(d − Aᵀλ), so stationarity
-//! Cx − d + Aᵀλ = 0 holds to rounding and the primal feasibility A x − g ≤ 0
-//! is the dual optimality condition θ' ≥ 0 on the bounds.
-//!
-//! Stopping (§4.1 applied to θ): ‖projected θ'‖ ≤ tol·max(‖A x(λ)‖, ‖g‖), the
-//! scale taken at the start of each face (A x(λ) = g − θ'(λ) is free; the
-//! unconstrained ‖A C⁻¹ d‖ can exceed the final ‖Ax‖ by orders of magnitude).
-//! With exact solves (a factor, not the report's inner CG) no stricter inner
-//! tolerance is needed.
-//!
-//! One executor iteration = one face (CG on the free multipliers until the
-//! face minimum or a new bound becomes active).
-//!
-//! **Semicoercive C** (non-empty `qp.kernel`): the dual carries the equality
-//! constraint Gλ = e, G = RᵀAᵀ, e = Rᵀd (TFETI). It is enforced by the same
-//! SMALBE-M outer loop as [`crate::qp::dual::mprgp`] (homogenised bounds λ̂ ≥ −λ̃,
-//! generalised inverse of C by the spring factor), with the report's CGC on
-//! the bounds as the inner solver ([`polyak_step`]): CG on the free face; a
-//! step that would cross a bound stops on it and restarts CG; when the face
-//! is minimised to the precision the current SMALBE step asks for,
-//! ‖φ‖ ≤ max(tol·‖h‖, ½min(M‖G̃λ̂‖, η)), the bounds with negative multipliers
-//! are released (all at once, or the most negative with
-//! `multiple_release = false`) by an exact line search along them.
-
-pub mod mprgp;
-pub mod uzawa;
+//! Coercive C: [`DualCgc`], one executor iteration per face, stopping at
+//! ‖projected θ'‖ ≤ tol·max(‖Ax(λ)‖, ‖g‖) with the scale taken at the start
+//! of each face (A x(λ) = g − θ'(λ) is free), x = C⁻¹(d − Aᵀλ) at the end.
+//! Semicoercive C: [`Polyak`] as the bound step of the SMALBE host of
+//! [`crate::qp::dual`], the face minimised to the precision the current
+//! SMALBE step asks for, max(tol·‖h‖, ½min(M‖G̃λ̂‖, η)), the release by an
+//! exact line search along the chopped gradient.
 
 use crate::linalg::cholesky::Cholesky;
 use crate::linalg::sparse::{axpy, dot, norm};
 use crate::qp::active_set::check_common;
-use crate::qp::dual::mprgp::{Inner, Mprgp};
+use crate::qp::dual::{solve_with, BoundStep, DualOp, DualState, StepKind};
 use crate::qp::executor::{Executor, Iterative, Step};
 use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
 use std::time::Instant;
@@ -47,23 +24,26 @@ use std::time::Instant;
 pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     check_common(qp, opts)?;
     if !qp.kernel.is_empty() {
-        let inner = Inner::Polyak {
+        let step = Polyak {
             multiple: opts.multiple_release,
+            p: vec![],
         };
-        return crate::qp::dual::mprgp::solve_with(qp, opts, inner, "dual");
+        return solve_with(qp, opts, step, "dual");
     }
     let t0 = Instant::now();
     let chol = Cholesky::new(&qp.c, &[])?;
+    let mut op = DualOp::new(qp, chol, vec![], "dual")?;
     let t_f = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let m = qp.m();
-    let x0 = chol.solve(&qp.d);
+    let mut x0 = qp.d.clone();
+    op.solve_k(&mut x0);
     let ax0 = qp.a.mul(&x0);
     let h: Vec<f64> = ax0.iter().zip(&qp.g).map(|(a, g)| a - g).collect();
     let ref_norm = norm(&ax0).max(norm(&qp.g)).max(1e-300);
     let mut st = DualCgc {
         qp,
-        chol: &chol,
+        op,
         tol: opts.tol,
         multiple: opts.multiple_release,
         lam: vec![0.0; m],
@@ -71,7 +51,6 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         h,
         in_j: vec![true; m],
         ref_norm,
-        solves: 1,
         cg_steps: 0,
     };
     let mut exec = Executor::for_opts(opts, "dual");
@@ -82,7 +61,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     for (xi, a) in x.iter_mut().zip(&atl) {
         *xi -= a;
     }
-    chol.solve_in_place(&mut x);
+    st.op.solve_k(&mut x);
     let t_it = t1.elapsed().as_secs_f64();
     let active: Vec<bool> = st.lam.iter().map(|&l| l > 0.0).collect();
     let energy = qp.energy(&x);
@@ -101,9 +80,12 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     })
 }
 
-struct DualCgc<'a> {
+/// Polyak's CG with constraints on θ for a coercive C (no row scaling, no
+/// SMALBE), one face per executor iteration.
+pub(crate) struct DualCgc<'a> {
     qp: &'a QpProblem,
-    chol: &'a Cholesky,
+    /// H = A C⁻¹ Aᵀ through the factor of C.
+    op: DualOp<'a>,
     tol: f64,
     multiple: bool,
     lam: Vec<f64>,
@@ -112,8 +94,9 @@ struct DualCgc<'a> {
     h: Vec<f64>,
     /// Bound λ_i = 0 in the working set.
     in_j: Vec<bool>,
+    /// Scale of the stopping test, max(‖A x(λ)‖, ‖g‖) at the face start.
     ref_norm: f64,
-    solves: usize,
+    /// CG steps (reported as inner iterations).
     cg_steps: usize,
 }
 
@@ -127,10 +110,7 @@ enum Face {
 impl DualCgc<'_> {
     /// out = H v
     fn apply_h(&mut self, v: &[f64], out: &mut [f64]) {
-        let mut w = self.qp.a.mul_t(v);
-        self.chol.solve_in_place(&mut w);
-        self.qp.a.mul_vec(&w, out);
-        self.solves += 1;
+        out.copy_from_slice(&self.op.h(v));
     }
 
     /// Projected gradient norm (bound components zeroed).
@@ -273,84 +253,94 @@ impl Iterative for DualCgc<'_> {
 /// release (line search along the chopped gradient β, restricted to its most
 /// negative component unless `multiple`) when the face is minimised, else
 /// one CG step on the face, stopped at the first blocking bound.
-pub(crate) fn polyak_step(st: &mut Mprgp, multiple: bool) -> Result<(), String> {
-    let mdim = st.x.len();
-    let phi = st.phi();
-    let mut beta = st.beta();
-    st.fresh = false;
-    let face_tol = if st.op.k() > 0 {
-        let (fe, _) = st.feas();
-        (st.tol * st.ref_g).max(0.5 * (st.mpar * fe).min(st.eta))
-    } else {
-        st.tol * st.ref_g
-    };
-    if norm(&beta) > 0.0 && norm(&phi) <= face_tol {
-        if !multiple {
-            let imin = (0..mdim)
-                .min_by(|&a, &b| beta[a].total_cmp(&beta[b]))
-                .unwrap_or(0);
-            for (i, b) in beta.iter_mut().enumerate() {
-                if i != imin {
-                    *b = 0.0;
+pub(crate) struct Polyak {
+    /// Release every bound with a negative multiplier at once.
+    multiple: bool,
+    /// CG direction on the face.
+    p: Vec<f64>,
+}
+
+impl BoundStep for Polyak {
+    fn start(&mut self, s: &DualState, _h_norm: f64) {
+        self.p = s.phi();
+    }
+
+    fn restart(&mut self, s: &DualState) {
+        self.p = s.phi();
+    }
+
+    fn step(&mut self, s: &mut DualState) -> Result<StepKind, String> {
+        let mdim = s.lam.len();
+        let phi = s.phi();
+        let mut beta = s.beta();
+        s.fresh = false;
+        let face_tol = (s.tol * s.ref_g).max(0.5 * s.smalbe_tol);
+        if norm(&beta) > 0.0 && norm(&phi) <= face_tol {
+            if !self.multiple {
+                let imin = (0..mdim)
+                    .min_by(|&a, &b| beta[a].total_cmp(&beta[b]))
+                    .unwrap_or(0);
+                for (i, b) in beta.iter_mut().enumerate() {
+                    if i != imin {
+                        *b = 0.0;
+                    }
+                }
+            }
+            let ad = s.op.apply(&beta);
+            let dad = dot(&beta, &ad);
+            if !dad.is_finite() || dad <= 0.0 {
+                return Err(format!(
+                    "dual: non-positive curvature βᵀHβ = {dad:e} (H should be SPD)"
+                ));
+            }
+            let a = dot(&s.g, &beta) / dad;
+            for i in 0..mdim {
+                s.lam[i] = (s.lam[i] - a * beta[i]).max(s.lb[i]);
+                s.g[i] -= a * ad[i];
+            }
+            self.p = s.phi();
+            return Ok(StepKind::Release);
+        }
+        if dot(&self.p, &self.p) == 0.0 {
+            self.p = phi;
+        }
+        let ap = s.op.apply(&self.p);
+        let pap = dot(&self.p, &ap);
+        if !pap.is_finite() || pap <= 0.0 {
+            return Err(format!(
+                "dual: non-positive curvature pᵀHp = {pap:e} (H should be SPD)"
+            ));
+        }
+        let acg = dot(&s.g, &self.p) / pap;
+        let mut af = f64::INFINITY;
+        let mut block = usize::MAX;
+        for i in 0..mdim {
+            if self.p[i] > 0.0 {
+                let t = ((s.lam[i] - s.lb[i]) / self.p[i]).max(0.0);
+                if t < af {
+                    af = t;
+                    block = i;
                 }
             }
         }
-        let ad = st.op.apply(&beta);
-        let dad = dot(&beta, &ad);
-        if !dad.is_finite() || dad <= 0.0 {
-            return Err(format!(
-                "dual: non-positive curvature βᵀHβ = {dad:e} (H should be SPD)"
-            ));
-        }
-        let a = dot(&st.g, &beta) / dad;
-        for i in 0..mdim {
-            st.x[i] = (st.x[i] - a * beta[i]).max(st.lb[i]);
-            st.g[i] -= a * ad[i];
-        }
-        st.p = st.phi();
-        st.counts[2] += 1;
-        return Ok(());
-    }
-    if dot(&st.p, &st.p) == 0.0 {
-        st.p = phi;
-    }
-    let ap = st.op.apply(&st.p);
-    let pap = dot(&st.p, &ap);
-    if !pap.is_finite() || pap <= 0.0 {
-        return Err(format!(
-            "dual: non-positive curvature pᵀHp = {pap:e} (H should be SPD)"
-        ));
-    }
-    let acg = dot(&st.g, &st.p) / pap;
-    let mut af = f64::INFINITY;
-    let mut block = usize::MAX;
-    for i in 0..mdim {
-        if st.p[i] > 0.0 {
-            let t = ((st.x[i] - st.lb[i]) / st.p[i]).max(0.0);
-            if t < af {
-                af = t;
-                block = i;
+        if acg <= af {
+            axpy(-acg, &self.p, &mut s.lam);
+            axpy(-acg, &ap, &mut s.g);
+            let phin = s.phi();
+            let gamma = dot(&phin, &ap) / pap;
+            for (pi, fi) in self.p.iter_mut().zip(&phin) {
+                *pi = fi - gamma * *pi;
             }
+            Ok(StepKind::Cg)
+        } else {
+            // Stop on the blocking bound; CG restarts on the smaller face.
+            for ((xi, pi), li) in s.lam.iter_mut().zip(&self.p).zip(&s.lb) {
+                *xi = (*xi - af * pi).max(*li);
+            }
+            s.lam[block] = s.lb[block];
+            axpy(-af, &ap, &mut s.g);
+            self.p = s.phi();
+            Ok(StepKind::Blocked)
         }
     }
-    if acg <= af {
-        axpy(-acg, &st.p, &mut st.x);
-        axpy(-acg, &ap, &mut st.g);
-        let phin = st.phi();
-        let gamma = dot(&phin, &ap) / pap;
-        for (pi, fi) in st.p.iter_mut().zip(&phin) {
-            *pi = fi - gamma * *pi;
-        }
-        st.counts[0] += 1;
-    } else {
-        // Stop on the blocking bound; CG restarts on the smaller face.
-        for ((xi, pi), li) in st.x.iter_mut().zip(&st.p).zip(&st.lb) {
-            *xi = (*xi - af * pi).max(*li);
-        }
-        st.x[block] = st.lb[block];
-        axpy(-af, &ap, &mut st.g);
-        st.p = st.phi();
-        st.counts[1] += 1;
-    }
-    Ok(())
 }

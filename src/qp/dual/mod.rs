@@ -1,0 +1,681 @@
+//! The dual family (docs/methods.md §4.5, §4.6, §7): minimise
+//! θ(λ) = ½λᵀHλ − λᵀh over λ ≥ 0, H = A C⁻¹ Aᵀ, h = A C⁻¹ d − g, and recover
+//! x(λ) = C⁻¹(d − Aᵀλ). H is never formed: Hv = A K⁻¹(Aᵀv) with one sparse
+//! Cholesky factor K of C ([`DualOp`]).
+//!
+//! This module is the host the three methods share: the row scaling, the
+//! dual operator and, for a semicoercive C (TFETI), the SMALBE-M loop that
+//! enforces the equality Gλ = e (G = RᵀAᵀ, e = Rᵀd) on the homogenised
+//! problem min ½λ̂ᵀ(PHP + ρQ)λ̂ − λ̂ᵀb over λ̂ ≥ −λ̃ (methods.md §7). Inside
+//! that loop a [`BoundStep`] does one step on the bounds: MPRGP
+//! ([`mprgp`]), Polyak's CG with constraints ([`polyak`], the `dual`
+//! method) or projected gradient / accelerated Uzawa ([`uzawa`]). With an
+//! empty kernel the loop reduces to the bound-constrained solver alone.
+//! Counts: `iterations` = steps + multiplier updates, `inner_iterations` =
+//! solves with the factor.
+
+pub mod mprgp;
+#[cfg(test)]
+pub(crate) mod partial_kernel;
+pub mod polyak;
+pub mod uzawa;
+
+pub use polyak::solve;
+
+use crate::linalg::cholesky::Cholesky;
+use crate::linalg::power;
+use crate::linalg::sparse::{dot, norm, norm_inf};
+use crate::qp::executor::{Executor, Iterative, Step};
+use crate::qp::ssn::{check_dims, chol_backward, chol_factor, chol_forward, orthonormal_kernel};
+use crate::qp::{IterRecord, QpError, QpProblem, QpResult, SolveOptions, Status};
+use std::time::Instant;
+
+/// Power iterations for ‖PHP‖ (and for Uzawa's ρ).
+pub const POWER_ITERS: usize = 30;
+/// SMALBE: ρ = RHO_FACTOR·‖PHP‖_est (unless the step asks otherwise).
+pub const RHO_FACTOR: f64 = 30.0;
+/// SMALBE: M ← M/β.
+const SMALBE_BETA: f64 = 10.0;
+/// SMALBE: η = ETA_FACTOR·‖h‖.
+const ETA_FACTOR: f64 = 0.1;
+
+/// One step of a bound-constrained solver for min ½λ̂ᵀHλ̂ − λ̂ᵀb, λ̂ ≥ ℓ,
+/// run by the SMALBE host (one executor iteration per step).
+pub(crate) trait BoundStep {
+    /// SMALBE's ρ as a multiple of ‖PHP‖_est.
+    fn rho_factor(&self) -> f64 {
+        RHO_FACTOR
+    }
+    /// Prepare the first step: `h_norm` = ‖PHP + ρQ‖_est, `s.g` is exact.
+    fn start(&mut self, s: &DualState, h_norm: f64);
+    /// One step: moves `s.lam` within the bounds and keeps
+    /// `s.g` = Hλ̂ − b up to date.
+    fn step(&mut self, s: &mut DualState) -> Result<StepKind, String>;
+    /// The host recomputed `s.g` from scratch or changed `s.b` (SMALBE
+    /// update): drop what was built on the old gradient.
+    fn restart(&mut self, s: &DualState);
+}
+
+/// What a [`BoundStep`] did (counted for the debug log).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum StepKind {
+    /// A conjugate-gradient step on the free set.
+    Cg,
+    /// MPRGP's expansion (feasible CG part, then projected gradient step).
+    Expansion,
+    /// MPRGP's proportioning step along the chopped gradient.
+    Proportioning,
+    /// Polyak: CG stopped on a blocking bound.
+    Blocked,
+    /// Polyak: release of bounds with negative multipliers.
+    Release,
+    /// Uzawa: projected (possibly extrapolated) gradient step.
+    Gradient,
+}
+
+const KINDS: [(StepKind, &str); 6] = [
+    (StepKind::Cg, "CG"),
+    (StepKind::Expansion, "expansion"),
+    (StepKind::Proportioning, "proportioning"),
+    (StepKind::Blocked, "blocked"),
+    (StepKind::Release, "release"),
+    (StepKind::Gradient, "gradient"),
+];
+
+/// Dual solve with the given bound step; `name` prefixes messages.
+pub(crate) fn solve_with<S: BoundStep>(
+    qp: &QpProblem,
+    opts: &SolveOptions,
+    step: S,
+    name: &'static str,
+) -> Result<QpResult, QpError> {
+    check_dims(qp)?;
+    if !(opts.tol > 0.0 && opts.tol < 1.0) {
+        return Err(QpError::BadParameter(format!(
+            "{name}: tol = {} must lie in (0, 1)",
+            opts.tol
+        )));
+    }
+    let t0 = Instant::now();
+    let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
+    let fac = Cholesky::new(&qp.c, &qp.kernel)?;
+    let t_factor = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    // The dual host sees the rows scaled by sᵢ (see [`row_scaling`]); C, d
+    // and the kernel are the caller's (C is not needed past the factor).
+    let s = row_scaling(qp);
+    let mut a = qp.a.clone();
+    for (i, si) in s.iter().enumerate() {
+        for v in &mut a.data[a.indptr[i]..a.indptr[i + 1]] {
+            *v *= si;
+        }
+    }
+    let sq = QpProblem {
+        c: crate::qp::Csr::zeros(0, 0),
+        d: qp.d.clone(),
+        a,
+        g: qp.g.iter().zip(&s).map(|(g, s)| g * s).collect(),
+        kernel: vec![],
+    };
+    let op = DualOp::new(&sq, fac, r, name)?;
+    let mut st = Smalbe::new(op, opts.tol, step, name)?;
+    let t_setup = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    let mut exec = Executor::for_opts(opts, name);
+    let (status, iters) = exec.run(&mut st);
+    let t_it = t2.elapsed().as_secs_f64();
+    let mut res = st.into_result(
+        status,
+        iters,
+        exec.log,
+        vec![
+            ("factor".into(), t_factor),
+            ("setup".into(), t_setup),
+            ("iterate".into(), t_it),
+        ],
+    );
+    // Aᵀλ = Ãᵀμ with Ã = diag(s)A: λ = diag(s)μ.
+    for (l, si) in res.lambda.iter_mut().zip(&s) {
+        *l *= si;
+    }
+    res.energy = qp.energy(&res.x);
+    Ok(res)
+}
+
+/// Row scaling sᵢ = 1/√(aᵢᵀ diag(C)⁻¹ aᵢ): Jacobi scaling of H by the cheap
+/// estimate of its diagonal. Same feasible set (λ ≥ 0 ⇔ μ ≥ 0), but Hᵢᵢ ≈ 1
+/// in every body's own stiffness scale, so a row whose compliance comes
+/// from a stiff body only no longer stalls the fixed-step methods, and the
+/// result is invariant under scaling C (BENCHMARKS.md, "Dual family notes").
+fn row_scaling(qp: &QpProblem) -> Vec<f64> {
+    let diag = qp.c.diag();
+    (0..qp.m())
+        .map(|i| {
+            let (cols, vals) = qp.a.row(i);
+            let h: f64 = cols
+                .iter()
+                .zip(vals)
+                .filter(|(&j, _)| diag[j] > 0.0)
+                .map(|(&j, &a)| a * a / diag[j])
+                .sum();
+            if h > 0.0 && h.is_finite() {
+                1.0 / h.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
+/// The dual operator λ ↦ (PHP + ρQ)λ and what defines it: the factor K of C
+/// (springs at the fixing DOFs when C is singular, so K⁻¹ is a generalised
+/// inverse on range C), the kernel basis R, G̃ = L⁻¹RᵀAᵀ with orthonormal
+/// rows (GGᵀ = LLᵀ), Q = G̃ᵀG̃, P = I − Q. With an empty kernel it is H.
+pub(crate) struct DualOp<'a> {
+    qp: &'a QpProblem,
+    fac: Cholesky,
+    /// Orthonormal basis of ker C.
+    r: Vec<Vec<f64>>,
+    /// Rows of G̃ (k × m, orthonormal).
+    gt: Vec<Vec<f64>>,
+    /// L with GGᵀ = LLᵀ (k×k row-major).
+    l: Vec<f64>,
+    /// SMALBE's penalty ρ (0 until the host sets it).
+    rho: f64,
+    /// Solves with the factor so far.
+    solves: usize,
+}
+
+impl<'a> DualOp<'a> {
+    /// The operator of `qp` (whose C is not used) with the factor `fac` of
+    /// its C and the orthonormal kernel basis `r`; refuses a kernel that no
+    /// contact row sees (G rank deficient).
+    pub(crate) fn new(
+        qp: &'a QpProblem,
+        fac: Cholesky,
+        r: Vec<Vec<f64>>,
+        name: &str,
+    ) -> Result<DualOp<'a>, QpError> {
+        let m = qp.m();
+        let k = r.len();
+        // G = RᵀAᵀ (k×m), GGᵀ = LLᵀ, G̃ = L⁻¹G.
+        let g0: Vec<Vec<f64>> = r.iter().map(|rl| qp.a.mul(rl)).collect();
+        let mut l = vec![0.0; k * k];
+        for a in 0..k {
+            for b in 0..k {
+                l[a * k + b] = dot(&g0[a], &g0[b]);
+            }
+        }
+        if !chol_factor(&mut l, k, 1e-10) {
+            return Err(QpError::Unsupported(format!(
+                "{name}: a rigid motion of a floating body is not restrained by any contact row \
+                 (A·R rank deficient), the dual equality constraint is degenerate; use cgc or ssn"
+            )));
+        }
+        let mut gt = vec![vec![0.0; m]; k];
+        let mut col = vec![0.0; k];
+        for i in 0..m {
+            for (c, row) in col.iter_mut().zip(&g0) {
+                *c = row[i];
+            }
+            chol_forward(&l, k, &mut col);
+            for (row, c) in gt.iter_mut().zip(&col) {
+                row[i] = *c;
+            }
+        }
+        Ok(DualOp {
+            qp,
+            fac,
+            r,
+            gt,
+            l,
+            rho: 0.0,
+            solves: 0,
+        })
+    }
+    /// Dimension k of the kernel.
+    pub(crate) fn k(&self) -> usize {
+        self.gt.len()
+    }
+    /// b ← K⁻¹ b
+    pub(crate) fn solve_k(&mut self, b: &mut [f64]) {
+        self.fac.solve_in_place(b);
+        self.solves += 1;
+    }
+    /// x(λ) = K⁻¹(d − Aᵀλ) (rows with λᵢ = 0 skipped).
+    pub(crate) fn x_of(&mut self, lam: &[f64]) -> Vec<f64> {
+        let qp = self.qp;
+        let mut b = qp.d.clone();
+        for (i, &li) in lam.iter().enumerate() {
+            if li != 0.0 {
+                let (c, v) = qp.a.row(i);
+                for (&j, &a) in c.iter().zip(v) {
+                    b[j] -= a * li;
+                }
+            }
+        }
+        self.solve_k(&mut b);
+        b
+    }
+    /// h = A K⁻¹ d − g
+    pub(crate) fn h_vec(&mut self) -> Vec<f64> {
+        let mut t = self.qp.d.clone();
+        self.solve_k(&mut t);
+        let qp = self.qp;
+        qp.a.mul(&t).iter().zip(&qp.g).map(|(a, g)| a - g).collect()
+    }
+    /// H v = A K⁻¹ Aᵀ v
+    pub(crate) fn h(&mut self, v: &[f64]) -> Vec<f64> {
+        let mut t = self.qp.a.mul_t(v);
+        self.solve_k(&mut t);
+        self.qp.a.mul(&t)
+    }
+    /// G̃ v
+    fn gmul(&self, v: &[f64]) -> Vec<f64> {
+        self.gt.iter().map(|row| dot(row, v)).collect()
+    }
+    /// out += G̃ᵀ c
+    fn gt_add(&self, c: &[f64], out: &mut [f64]) {
+        for (row, &cl) in self.gt.iter().zip(c) {
+            for (o, r) in out.iter_mut().zip(row) {
+                *o += cl * r;
+            }
+        }
+    }
+    /// v ← P v
+    fn project(&self, v: &mut [f64]) {
+        if self.k() == 0 {
+            return;
+        }
+        let c: Vec<f64> = self.gmul(v).iter().map(|a| -a).collect();
+        self.gt_add(&c, v);
+    }
+    /// (PHP + ρQ) v
+    pub(crate) fn apply(&mut self, v: &[f64]) -> Vec<f64> {
+        if self.k() == 0 {
+            return self.h(v);
+        }
+        let mut pv = v.to_vec();
+        self.project(&mut pv);
+        let mut out = self.h(&pv);
+        self.project(&mut out);
+        if self.rho != 0.0 {
+            let q: Vec<f64> = self.gmul(v).iter().map(|a| self.rho * a).collect();
+            self.gt_add(&q, &mut out);
+        }
+        out
+    }
+    /// ‖(PHP + ρQ)‖ estimated by [`power::norm_estimate`] from the projected
+    /// fixed start vector.
+    pub(crate) fn norm_estimate(&mut self) -> f64 {
+        let mut v = power::start_vector(self.qp.m());
+        self.project(&mut v);
+        power::norm_estimate(v, POWER_ITERS, |v| self.apply(v))
+    }
+}
+
+/// The state the bound steps share with the host.
+pub(crate) struct DualState<'a> {
+    /// The operator H = PHP + ρQ of the inner problem.
+    pub(crate) op: DualOp<'a>,
+    /// Lower bounds ℓ = −λ̃ of λ̂ (zero without a kernel).
+    pub(crate) lb: Vec<f64>,
+    /// The iterate λ̂ (λ = λ̂ + λ̃), always ≥ ℓ.
+    pub(crate) lam: Vec<f64>,
+    /// The gradient g = (PHP + ρQ)λ̂ − b, kept current by every step.
+    pub(crate) g: Vec<f64>,
+    /// The linear term b = b̂ − G̃ᵀμ (changed by the SMALBE update only).
+    pub(crate) b: Vec<f64>,
+    /// g was recomputed from scratch and not updated since.
+    pub(crate) fresh: bool,
+    /// Relative tolerance: the loop stops at ‖gᴾ‖ ≤ tol·ref_g.
+    pub(crate) tol: f64,
+    /// The scale of the gradient, max(‖h‖, ‖b̂‖).
+    pub(crate) ref_g: f64,
+    /// Precision SMALBE asks of the current inner solve, min(M‖G̃λ̂‖, η)
+    /// (0 without a kernel); set by the host before each step.
+    pub(crate) smalbe_tol: f64,
+    /// Method name for messages.
+    pub(crate) name: &'static str,
+}
+
+impl DualState<'_> {
+    /// g ← (PHP + ρQ)λ̂ − b from scratch.
+    pub(crate) fn refresh(&mut self) {
+        let ax = self.op.apply(&self.lam);
+        self.g = ax.iter().zip(&self.b).map(|(a, b)| a - b).collect();
+        self.fresh = true;
+    }
+    /// λ̂ᵢ off its bound.
+    pub(crate) fn is_free(&self, i: usize) -> bool {
+        self.lam[i] > self.lb[i]
+    }
+    /// Free gradient φ (zero at the bounds).
+    pub(crate) fn phi(&self) -> Vec<f64> {
+        (0..self.lam.len())
+            .map(|i| if self.is_free(i) { self.g[i] } else { 0.0 })
+            .collect()
+    }
+    /// Chopped gradient β = min(g, 0) at the bounds (zero on the free set).
+    pub(crate) fn beta(&self) -> Vec<f64> {
+        (0..self.lam.len())
+            .map(|i| {
+                if self.is_free(i) {
+                    0.0
+                } else {
+                    self.g[i].min(0.0)
+                }
+            })
+            .collect()
+    }
+    /// ‖gᴾ‖ = ‖φ + β‖
+    pub(crate) fn gp_norm(&self) -> f64 {
+        (0..self.lam.len())
+            .map(|i| {
+                let v = if self.is_free(i) {
+                    self.g[i]
+                } else {
+                    self.g[i].min(0.0)
+                };
+                v * v
+            })
+            .sum::<f64>()
+            .sqrt()
+    }
+}
+
+/// SMALBE-M host (methods.md §7): a [`BoundStep`] on the augmented
+/// Lagrangian, multiplier updates μ ← μ + ρG̃λ̂ when ‖gᴾ‖ ≤ max(min(M‖G̃λ̂‖,
+/// η), 0.1·tol·‖h‖), M ← M/β when the Lagrangian did not grow by ρ/2‖G̃λ̂‖².
+struct Smalbe<'a, S> {
+    s: DualState<'a>,
+    step: S,
+    /// λ̃ (the homogenising shift).
+    shift: Vec<f64>,
+    /// Multiplier μ of G̃λ̂ = 0.
+    mu: Vec<f64>,
+    /// ‖ẽ‖
+    e_norm: f64,
+    /// SMALBE's M.
+    mpar: f64,
+    /// SMALBE's η.
+    eta: f64,
+    /// The augmented Lagrangian at the previous update.
+    lag_prev: Option<f64>,
+    /// Multiplier updates so far.
+    outer: usize,
+    /// Steps by kind, in the order of [`KINDS`].
+    counts: [usize; 6],
+}
+
+impl<'a, S: BoundStep> Smalbe<'a, S> {
+    fn new(
+        mut op: DualOp<'a>,
+        tol: f64,
+        mut step: S,
+        name: &'static str,
+    ) -> Result<Smalbe<'a, S>, QpError> {
+        let m = op.qp.m();
+        let k = op.k();
+        let mut et: Vec<f64> = op.r.iter().map(|rl| dot(rl, &op.qp.d)).collect();
+        chol_forward(&op.l, k, &mut et);
+        let mut shift = vec![0.0; m];
+        op.gt_add(&et, &mut shift);
+        let h = op.h_vec();
+        let mut bhat = h.clone();
+        if k > 0 {
+            let hs = op.h(&shift);
+            for (b, v) in bhat.iter_mut().zip(&hs) {
+                *b -= v;
+            }
+            op.project(&mut bhat);
+        }
+        // ‖PHP‖ by power iteration (ρ = 0 here).
+        let hnorm = if m == 0 { 1.0 } else { op.norm_estimate() };
+        if !(hnorm > 0.0 && hnorm.is_finite()) {
+            return Err(QpError::Factor(format!(
+                "{name}: ‖H‖ estimate {hnorm} is not positive"
+            )));
+        }
+        op.rho = if k > 0 {
+            step.rho_factor() * hnorm
+        } else {
+            0.0
+        };
+        let ref_g = norm(&h).max(norm(&bhat)).max(f64::MIN_POSITIVE);
+        let e_norm = norm(&et);
+        let lb: Vec<f64> = shift.iter().map(|s| -s).collect();
+        let lam: Vec<f64> = lb.iter().map(|&l| l.max(0.0)).collect();
+        // ‖PHP + ρQ‖ = max(‖PHP‖, ρ): PHP and ρQ act on orthogonal subspaces.
+        let h_norm = hnorm.max(op.rho);
+        let mut s = DualState {
+            op,
+            lb,
+            lam,
+            g: vec![0.0; m],
+            b: bhat,
+            fresh: false,
+            tol,
+            ref_g,
+            smalbe_tol: 0.0,
+            name,
+        };
+        s.refresh();
+        step.start(&s, h_norm);
+        Ok(Smalbe {
+            s,
+            step,
+            shift,
+            mu: vec![0.0; k],
+            e_norm,
+            mpar: smalbe_m0(ref_g, e_norm, hnorm),
+            eta: ETA_FACTOR * ref_g,
+            lag_prev: None,
+            outer: 0,
+            counts: [0; 6],
+        })
+    }
+
+    /// (‖G̃λ̂‖, its reference max(‖ẽ‖, ‖λ‖))
+    fn feas(&self) -> (f64, f64) {
+        if self.s.op.k() == 0 {
+            return (0.0, 1.0);
+        }
+        let lam_norm = self
+            .s
+            .lam
+            .iter()
+            .zip(&self.shift)
+            .map(|(a, b)| (a + b) * (a + b))
+            .sum::<f64>()
+            .sqrt();
+        (
+            norm(&self.s.op.gmul(&self.s.lam)),
+            self.e_norm.max(lam_norm).max(f64::MIN_POSITIVE),
+        )
+    }
+
+    fn record(&self, residual: f64) -> IterRecord {
+        IterRecord {
+            iter: 0,
+            residual,
+            active: (0..self.s.lam.len()).filter(|&i| self.s.is_free(i)).count(),
+            inner: self.s.op.solves,
+        }
+    }
+
+    /// SMALBE multiplier update μ ← μ + ρG̃λ̂ and the M update.
+    fn smalbe_update(&mut self) {
+        let s = &mut self.s;
+        let gx = s.op.gmul(&s.lam);
+        let rho = s.op.rho;
+        let inc: Vec<f64> = gx.iter().map(|v| rho * v).collect();
+        for (m, d) in self.mu.iter_mut().zip(&inc) {
+            *m += d;
+        }
+        let neg: Vec<f64> = inc.iter().map(|v| -v).collect();
+        s.op.gt_add(&neg, &mut s.b);
+        s.op.gt_add(&inc, &mut s.g);
+        let lag = 0.5
+            * s.lam
+                .iter()
+                .zip(s.g.iter().zip(&s.b))
+                .map(|(x, (g, b))| x * (g - b))
+                .sum::<f64>();
+        if let Some(prev) = self.lag_prev {
+            if lag < prev + 0.5 * rho * dot(&gx, &gx) {
+                self.mpar /= SMALBE_BETA;
+            }
+        }
+        self.lag_prev = Some(lag);
+        self.outer += 1;
+        self.step.restart(&self.s);
+    }
+
+    /// λ (exact zeros at the bounds), x = K⁻¹(d − Aᵀλ) − Rα.
+    fn primal(&mut self) -> (Vec<f64>, Vec<f64>) {
+        let s = &mut self.s;
+        let qp = s.op.qp;
+        let m = qp.m();
+        let lam: Vec<f64> = (0..m)
+            .map(|i| {
+                if s.is_free(i) {
+                    (s.lam[i] + self.shift[i]).max(0.0)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mut x = s.op.x_of(&lam);
+        let k = s.op.k();
+        if k > 0 {
+            // α = L⁻ᵀ(μ + ρG̃λ̂ + G̃(Ax̂ − g)) makes −(Ax − g) the Lagrangian
+            // gradient up to O(‖G̃λ̂‖).
+            let r: Vec<f64> = qp.a.mul(&x).iter().zip(&qp.g).map(|(a, g)| a - g).collect();
+            let gs = s.op.gmul(&r);
+            let gx = s.op.gmul(&s.lam);
+            let mut alpha: Vec<f64> = (0..k)
+                .map(|l| self.mu[l] + s.op.rho * gx[l] + gs[l])
+                .collect();
+            chol_backward(&s.op.l, k, &mut alpha);
+            for (rl, &al) in s.op.r.iter().zip(&alpha) {
+                for (xi, ri) in x.iter_mut().zip(rl) {
+                    *xi -= al * ri;
+                }
+            }
+        }
+        (lam, x)
+    }
+
+    fn into_result(
+        mut self,
+        status: Status,
+        iterations: usize,
+        log: Vec<IterRecord>,
+        timings: Vec<(String, f64)>,
+    ) -> QpResult {
+        let qp = self.s.op.qp;
+        let name = self.s.name;
+        if log::log_enabled!(log::Level::Debug) {
+            let steps: Vec<String> = KINDS
+                .iter()
+                .zip(&self.counts)
+                .filter(|(_, &c)| c > 0)
+                .map(|((_, label), c)| format!("{c} {label}"))
+                .collect();
+            log::debug!(
+                "{name}: steps: {}; {} SMALBE updates, ρ = {:e}",
+                steps.join(", "),
+                self.outer,
+                self.s.op.rho
+            );
+        }
+        let (lambda, x) = self.primal();
+        let tol = self.s.tol;
+        let ref_g = self.s.ref_g;
+        let s: Vec<f64> = qp.a.mul(&x).iter().zip(&qp.g).map(|(a, g)| a - g).collect();
+        let gap_tol = 10.0 * tol * ref_g;
+        let active: Vec<bool> = (0..qp.m())
+            .map(|i| lambda[i] > 0.0 || s[i] >= -gap_tol)
+            .collect();
+        // Primal feasibility and complementarity of the recovered x.
+        let viol = s.iter().fold(0.0f64, |a, &v| a.max(v));
+        let compl = (0..qp.m())
+            .filter(|&i| lambda[i] > 0.0)
+            .fold(0.0f64, |a, i| a.max(s[i].abs()));
+        let rounding = 1e-13 * (norm_inf(&x) + norm_inf(&qp.g));
+        let limit = 100.0 * tol * ref_g + rounding;
+        let status = if status.converged() && !(viol <= limit && compl <= limit) {
+            Status::Failed(format!(
+                "{name}: the dual converged but the recovered x violates Ax ≤ g by {viol:e} or complementarity \
+                 by {compl:e} (limit 100·tol·‖h‖ = {limit:e})"
+            ))
+        } else {
+            status
+        };
+        QpResult {
+            x,
+            lambda,
+            active,
+            status,
+            iterations,
+            inner_iterations: self.s.op.solves,
+            log,
+            timings,
+            kkt: Default::default(),
+            // Set by `solve_with` from the caller's C (the host has none).
+            energy: f64::NAN,
+            notes: vec![],
+        }
+    }
+}
+
+impl<S: BoundStep> Iterative for Smalbe<'_, S> {
+    fn step(&mut self) -> Step {
+        let (tol, ref_g) = (self.s.tol, self.s.ref_g);
+        let mut gp = self.s.gp_norm();
+        let (mut fe, mut fe_ref) = self.feas();
+        let res = |gp: f64, fe: f64, fe_ref: f64| (gp / ref_g).max(fe / fe_ref);
+        if gp <= tol * ref_g && fe <= tol * fe_ref {
+            if !self.s.fresh {
+                // Accept the stop only with an exact gradient.
+                self.s.refresh();
+                gp = self.s.gp_norm();
+                (fe, fe_ref) = self.feas();
+                self.step.restart(&self.s);
+            }
+            if gp <= tol * ref_g && fe <= tol * fe_ref {
+                return Step::Done(Status::Converged, self.record(res(gp, fe, fe_ref)));
+            }
+        }
+        let r = res(gp, fe, fe_ref);
+        if self.s.op.k() > 0 {
+            // The floor 0.1·tol·‖h‖: below it the inner problem is solved to
+            // the final precision, and M may have shrunk until M‖G̃λ̂‖ is
+            // under rounding.
+            let smalbe_tol = (self.mpar * fe).min(self.eta);
+            if gp <= smalbe_tol.max(0.1 * tol * ref_g) {
+                self.smalbe_update();
+                return Step::Continue(self.record(r));
+            }
+            self.s.smalbe_tol = smalbe_tol;
+        }
+        match self.step.step(&mut self.s) {
+            Ok(kind) => {
+                if let Some(i) = KINDS.iter().position(|(k, _)| *k == kind) {
+                    self.counts[i] += 1;
+                }
+                Step::Continue(self.record(r))
+            }
+            Err(msg) => Step::Done(Status::Failed(msg), self.record(r)),
+        }
+    }
+}
+
+/// The initial SMALBE M, a compliance converting ‖G̃λ̂‖ (a force) into the
+/// inner tolerance on ‖gᴾ‖ (a gap): ‖h‖/‖ẽ‖, capped by ‖PHP‖ so that it
+/// stays finite when the loads do no work on the free rigid motions (ẽ = 0,
+/// the rule for a partial kernel); invariant under scaling C, d or g.
+fn smalbe_m0(ref_g: f64, e_norm: f64, hnorm: f64) -> f64 {
+    ref_g / e_norm.max(ref_g / hnorm).max(f64::MIN_POSITIVE)
+}
