@@ -57,7 +57,7 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
     let rho = match opts.rho {
         Some(r) => r,
         None => {
-            let mu = power_mu_max(qp, &mut op, 20);
+            let mu = op.norm_estimate();
             if mu > 0.0 && mu.is_finite() {
                 1.0 / mu
             } else {
@@ -100,30 +100,6 @@ pub fn solve(qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
         energy,
         notes: vec![],
     })
-}
-
-/// Largest eigenvalue of H = A C⁻¹ Aᵀ by `iters` power iterations (Rayleigh quotient).
-fn power_mu_max(qp: &QpProblem, op: &mut DualOp, iters: usize) -> f64 {
-    let m = qp.m();
-    if m == 0 {
-        return 0.0;
-    }
-    let mut v: Vec<f64> = (0..m)
-        .map(|i| 1.0 + 0.1 * ((i * 37 % 17) as f64 / 17.0))
-        .collect();
-    let nv = norm(&v);
-    v.iter_mut().for_each(|e| *e /= nv);
-    let mut mu = 0.0;
-    for _ in 0..iters {
-        let hv = op.h(&v);
-        mu = crate::linalg::sparse::dot(&v, &hv);
-        let nh = norm(&hv);
-        if !(nh > 0.0) || !nh.is_finite() {
-            break;
-        }
-        v = hv.iter().map(|e| e / nh).collect();
-    }
-    mu
 }
 
 /// The report's plain Uzawa iteration for a coercive C (no row scaling, no
