@@ -567,6 +567,9 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
         (lam, x)
     }
 
+    /// λ (exact zeros at the bounds) and the recovered x; a converged status
+    /// becomes `Failed` when x violates Ax ≤ g or complementarity by more
+    /// than 100·tol·‖h‖; `active` = λᵢ > 0 or (g − Ax)ᵢ ≤ 10·tol·‖h‖.
     fn into_result(
         mut self,
         status: Status,
