@@ -1,13 +1,13 @@
 //! The dual family (docs/methods.md §4.5, §4.6, §7): minimise
 //! θ(λ) = ½λᵀHλ − λᵀh over λ ≥ 0, H = A C⁻¹ Aᵀ, h = A C⁻¹ d − g, and recover
 //! x(λ) = C⁻¹(d − Aᵀλ). H is never formed: Hv = A K⁻¹(Aᵀv) with one sparse
-//! Cholesky factor K of C ([`DualOp`]).
+//! Cholesky factor K of C (`DualOp`).
 //!
 //! This module is the host the three methods share: the row scaling, the
 //! dual operator and, for a semicoercive C (TFETI), the SMALBE-M loop that
 //! enforces the equality Gλ = e (G = RᵀAᵀ, e = Rᵀd) on the homogenised
 //! problem min ½λ̂ᵀ(PHP + ρQ)λ̂ − λ̂ᵀb over λ̂ ≥ −λ̃ (methods.md §7). Inside
-//! that loop a [`BoundStep`] does one step on the bounds: MPRGP
+//! that loop a `BoundStep` does one step on the bounds: MPRGP
 //! ([`mprgp`]), Polyak's CG with constraints ([`polyak`], the `dual`
 //! method) or projected gradient / accelerated Uzawa ([`uzawa`]). With an
 //! empty kernel the loop reduces to the bound-constrained solver alone.
@@ -681,4 +681,58 @@ impl<S: BoundStep> Iterative for Smalbe<'_, S> {
 /// the rule for a partial kernel); invariant under scaling C, d or g.
 fn smalbe_m0(ref_g: f64, e_norm: f64, hnorm: f64) -> f64 {
     ref_g / e_norm.max(ref_g / hnorm).max(f64::MIN_POSITIVE)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::qp::ssn::tests::two_blocks;
+
+    /// G̃ has orthonormal rows, P annihilates them, PHP + ρQ is symmetric
+    /// with eigenvalue ρ on range G̃ᵀ, and the power estimate of ‖PHP‖ is
+    /// positive and at most trace H.
+    #[test]
+    fn dual_operator_structure() {
+        let qp = two_blocks(6, 4, true);
+        let r = orthonormal_kernel(&qp.c, &qp.kernel).unwrap();
+        let fac = Cholesky::new(&qp.c, &qp.kernel).unwrap();
+        let mut op = DualOp::new(&qp, fac, r, "test").unwrap();
+        let (k, m) = (op.k(), qp.m());
+        assert!(k > 0 && m > k);
+        for a in 0..k {
+            for b in 0..k {
+                let want = if a == b { 1.0 } else { 0.0 };
+                assert!((dot(&op.gt[a], &op.gt[b]) - want).abs() <= 1e-12);
+            }
+            let mut v = op.gt[a].clone();
+            op.project(&mut v);
+            assert!(norm(&v) <= 1e-12, "P G̃ᵀ ≠ 0");
+        }
+        let hnorm = op.norm_estimate();
+        assert!(hnorm > 0.0);
+        op.rho = 7.0 * hnorm;
+        let u: Vec<f64> = (0..m).map(|i| ((i * 13 % 7) as f64) - 3.0).collect();
+        let v: Vec<f64> = (0..m).map(|i| ((i * 5 % 11) as f64) - 4.5).collect();
+        let (hu, hv) = (op.apply(&u), op.apply(&v));
+        let asym = (dot(&u, &hv) - dot(&v, &hu)).abs();
+        assert!(
+            asym <= 1e-12 * norm(&u) * norm(&hv),
+            "not symmetric: {asym:e}"
+        );
+        // (PHP + ρQ) G̃ᵀe₀ = ρ G̃ᵀe₀
+        let g0 = op.gt[0].clone();
+        let w = op.apply(&g0);
+        let d: Vec<f64> = w.iter().zip(&g0).map(|(a, b)| a - op.rho * b).collect();
+        assert!(norm(&d) <= 1e-10 * op.rho, "{:e}", norm(&d));
+        // ‖PHP v‖ for a unit v: at most ‖PHP‖ ≤ ‖H‖ ≤ trace H (H ⪰ 0).
+        op.rho = 0.0;
+        let trace: f64 = (0..m)
+            .map(|i| {
+                let mut e = vec![0.0; m];
+                e[i] = 1.0;
+                op.h(&e)[i]
+            })
+            .sum();
+        assert!(hnorm <= trace * (1.0 + 1e-12), "{hnorm} > trace {trace}");
+    }
 }

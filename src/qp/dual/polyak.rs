@@ -5,10 +5,10 @@
 //! released (all at once, or the most negative with `multiple_release =
 //! false`; the rows −eᵢ are orthonormal, so releasing all is safe).
 //!
-//! Coercive C: [`DualCgc`], one executor iteration per face, stopping at
+//! Coercive C: `DualCgc`, one executor iteration per face, stopping at
 //! ‖projected θ'‖ ≤ tol·max(‖Ax(λ)‖, ‖g‖) with the scale taken at the start
 //! of each face (A x(λ) = g − θ'(λ) is free), x = C⁻¹(d − Aᵀλ) at the end.
-//! Semicoercive C: [`Polyak`] as the bound step of the SMALBE host of
+//! Semicoercive C: `Polyak` as the bound step of the SMALBE host of
 //! [`crate::qp::dual`], the face minimised to the precision the current
 //! SMALBE step asks for, max(tol·‖h‖, ½min(M‖G̃λ̂‖, η)), the release by an
 //! exact line search along the chopped gradient.

@@ -4,10 +4,10 @@
 //! ([`crate::linalg::power`]; convergence needs 0 < ρ < 2/‖H‖).
 //!
 //! `accelerate = false` with a coercive C runs the report's plain iteration
-//! ([`Uzawa`]): stop when ‖x_new − x‖ ≤ tol·‖x_new‖ and the relative primal
+//! (`Uzawa`): stop when ‖x_new − x‖ ≤ tol·‖x_new‖ and the relative primal
 //! violation max((A x_new − g)⁺)/max|x_new| ≤ tol; the pair returned is
 //! (x_new, the λ that produced it). Its rate is 1 − O(1/κ(H)). Otherwise
-//! ([`UzawaStep`] in the SMALBE host of [`crate::qp::dual`], which enforces
+//! (`UzawaStep` in the SMALBE host of [`crate::qp::dual`], which enforces
 //! Gλ = e for a semicoercive C with ρ_SMALBE = ‖PHP‖) the update is applied
 //! at the Nesterov/FISTA point y = λ + β_k(λ − λ_prev) with the gradient
 //! restart of O'Donoghue & Candès (rate 1 − O(1/√κ)), stopping at
