@@ -146,18 +146,14 @@ impl DualCgc<'_> {
                 return Face::Min;
             }
             let beta = if k == 0 { 0.0 } else { r / r_old };
-            for i in 0..m {
-                p[i] = if self.in_j[i] {
-                    0.0
-                } else {
-                    -self.grad[i] + beta * p[i]
-                };
+            for ((pi, &bound), gi) in p.iter_mut().zip(&self.in_j).zip(&self.grad) {
+                *pi = if bound { 0.0 } else { -gi + beta * *pi };
             }
             r_old = r;
             self.apply_h(&p, &mut w);
             self.cg_steps += 1;
             let a2 = dot(&p, &w);
-            if !(a2 > 0.0) {
+            if a2.is_nan() || a2 <= 0.0 {
                 return Face::Failed(format!(
                     "dual Hessian not positive on a search direction ((p,Hp) = {a2:e})"
                 ));
@@ -165,9 +161,9 @@ impl DualCgc<'_> {
             let alpha = r / a2;
             let mut abar = f64::INFINITY;
             let mut istar = usize::MAX;
-            for i in 0..m {
-                if !self.in_j[i] && p[i] < 0.0 {
-                    let t = (self.lam[i] / -p[i]).max(0.0);
+            for (i, &pi) in p.iter().enumerate() {
+                if !self.in_j[i] && pi < 0.0 {
+                    let t = (self.lam[i] / -pi).max(0.0);
                     if t < abar {
                         abar = t;
                         istar = i;

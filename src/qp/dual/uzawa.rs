@@ -137,10 +137,10 @@ impl Iterative for Uzawa<'_> {
         let ax = qp.a.mul(&xn);
         let mut pmax = 0.0f64;
         self.lam_x.copy_from_slice(&self.lam);
-        for i in 0..qp.m() {
-            let v = ax[i] - qp.g[i];
+        for ((l, a), g) in self.lam.iter_mut().zip(&ax).zip(&qp.g) {
+            let v = a - g;
             pmax = pmax.max(v);
-            self.lam[i] = (self.lam[i] + self.rho * v).max(0.0);
+            *l = (*l + self.rho * v).max(0.0);
         }
         let xinf = norm_inf(&xn);
         let primal = if xinf > 0.0 { pmax / xinf } else { pmax };
