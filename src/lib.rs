@@ -20,9 +20,6 @@ pub mod problem;
 pub mod qp;
 pub mod run;
 
-/// The former name of [`run`] (kept for callers of `pipeline::prepare`, …).
-pub use run as pipeline;
-
 /// The shipped examples (`meshes/*.toml`, sorted) loaded with their meshes:
 /// the inputs of the unit tests that run over every model.
 #[cfg(test)]

@@ -5,7 +5,7 @@
 //! KKT target.
 //!
 //! The problems are built through the library (TOML written to a temporary
-//! directory, `pipeline::prepare`); random initial gaps are added to the QP's
+//! directory, `run::prepare`); random initial gaps are added to the QP's
 //! g (g ≥ 0 stays a valid contact QP: the bodies start apart by that much).
 //! The random loads stay in the cone that keeps each floating body pressed
 //! onto its support (bounded problems; an unbounded one is bad input and is
@@ -13,9 +13,9 @@
 
 use proptest::prelude::*;
 use proptest::test_runner::Config;
-use signorini::pipeline;
 use signorini::qp::precond::PrecondKind;
 use signorini::qp::{registry, QpError, QpProblem, QpResult, SolveOptions};
+use signorini::run;
 
 mod common;
 
@@ -48,7 +48,7 @@ fn build(toml: &str) -> QpProblem {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("case.toml");
     std::fs::write(&p, toml).unwrap();
-    let prep = pipeline::prepare(&p, false).unwrap_or_else(|e| panic!("{e}\n{toml}"));
+    let prep = run::prepare(&p, false).unwrap_or_else(|e| panic!("{e}\n{toml}"));
     prep.model.qp
 }
 

@@ -4,9 +4,9 @@
 //! interface's two sides carry equal and opposite resultants, and the
 //! reactions of two models match the load they carry by hand.
 
-use signorini::pipeline;
 use signorini::post::{self, forces};
 use signorini::qp::SolverSection;
+use signorini::run;
 use std::path::PathBuf;
 
 fn root() -> PathBuf {
@@ -14,11 +14,11 @@ fn root() -> PathBuf {
 }
 
 /// (prepared problem, forces) of a shipped model solved by the default method.
-fn solved(name: &str) -> (pipeline::Prepared, forces::Forces) {
+fn solved(name: &str) -> (run::Prepared, forces::Forces) {
     let path = root().join("meshes").join(format!("{name}.toml"));
-    let prep = pipeline::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
-    let (method, opts) = pipeline::options(&prep.problem, &SolverSection::default()).unwrap();
-    let res = pipeline::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
+    let (method, opts) = run::options(&prep.problem, &SolverSection::default()).unwrap();
+    let res = run::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
     assert!(res.status.converged(), "{name}: {:?}", res.status);
     let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
     let f = forces::compute(
@@ -186,12 +186,12 @@ fn vtu_names_components_and_writes_reactions() {
     // ComponentName attributes in the XML, and the file still reads back.
     let (prep, _) = solved("column");
     let path = root().join("meshes/column.toml");
-    let (method, opts) = pipeline::options(&prep.problem, &SolverSection::default()).unwrap();
-    let res = pipeline::solve(&prep, &method, &opts).unwrap();
+    let (method, opts) = run::options(&prep.problem, &SolverSection::default()).unwrap();
+    let res = run::solve(&prep, &method, &opts).unwrap();
     let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
     let om = post::out_mesh(&prep.model, &prep.mesh);
     let dir = tempfile::tempdir().unwrap();
-    let out = pipeline::output_paths(dir.path(), "column", None);
+    let out = run::output_paths(dir.path(), "column", None);
     signorini::io::vtu::write_vtu(&out.vtu, &om, &step, false).unwrap();
     let xml = std::fs::read_to_string(&out.vtu).unwrap();
     for want in [

@@ -4,7 +4,7 @@
 //! deleted, values replaced, random characters), go through the whole
 //! prepare path in memory: `mesh::gmsh::parse_msh`, `model::Problem::parse`,
 //! `fem::build` (topology, conditions, assembly, semicoercive checks) and
-//! `pipeline::options`. No input may panic, and every error is one
+//! `run::options`. No input may panic, and every error is one
 //! non-empty line.
 //!
 //! `tests/mesh_reader.rs` already fuzzes the mesh reader alone on byte level;
@@ -15,9 +15,9 @@
 //! written to a kept temporary directory, named in the failure message.
 
 use signorini::mesh::{gmsh, Mesh};
-use signorini::pipeline;
 use signorini::problem::Problem;
 use signorini::qp::SolverSection;
+use signorini::run;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -477,7 +477,7 @@ fn run_case(
             return check_message("toml", e.to_string());
         }
     };
-    let _ = pipeline::options(&problem, &SolverSection::default()).map_err(|e| e.to_string());
+    let _ = run::options(&problem, &SolverSection::default()).map_err(|e| e.to_string());
     match signorini::fem::build(mesh, &problem) {
         Ok(model) => {
             tally.built += 1;

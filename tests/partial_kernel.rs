@@ -8,8 +8,8 @@
 //! and asm-cgh exited 3 on `wedge_slip_stiff`, `wedge_point_soft` and
 //! `punch` (CGH stalled on the unscaled KKT system).
 
-use signorini::pipeline;
 use signorini::qp::{kkt, registry, QpProblem, SolveOptions};
+use signorini::run;
 
 mod common;
 
@@ -19,7 +19,7 @@ fn problem(name: &str) -> QpProblem {
     let path = root()
         .join("tests/data/partial_kernel")
         .join(format!("{name}.toml"));
-    pipeline::prepare(&path, false)
+    run::prepare(&path, false)
         .unwrap_or_else(|e| panic!("{name}: {e}"))
         .model
         .qp

@@ -1,9 +1,9 @@
 //! End-to-end checks of the pipeline against analytic solutions and against
 //! itself (issue: Gmsh + TOML → P1 contact QP → CGC → outputs).
 
-use signorini::pipeline::{self, Prepared};
 use signorini::qp::QpResult;
 use signorini::qp::SolverSection;
+use signorini::run::{self, Prepared};
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
@@ -11,9 +11,9 @@ fn root() -> PathBuf {
 }
 
 fn solve_file(path: &Path, choice: &SolverSection) -> (Prepared, QpResult) {
-    let prep = pipeline::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
-    let (method, opts) = pipeline::options(&prep.problem, choice).unwrap();
-    let res = pipeline::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let prep = run::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
+    let (method, opts) = run::options(&prep.problem, choice).unwrap();
+    let res = run::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
     assert!(
         res.status.converged(),
         "{}: {:?}",
@@ -340,7 +340,7 @@ fn point_force_is_per_unit_thickness_in_plane_stress() {
         square_mesh("ascii41")
     );
     let p = temp_toml(dir.path(), "force", &text);
-    let prep = pipeline::prepare(&p, false).unwrap();
+    let prep = run::prepare(&p, false).unwrap();
     let m = &prep.model;
     let corner = m
         .topo

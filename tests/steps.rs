@@ -150,15 +150,15 @@ fn restart_from_a_foreign_checkpoint_is_bad_input() {
 #[test]
 fn load_steps_reuse_the_factorization() {
     use signorini::linalg::cholesky::Workspace;
-    use signorini::pipeline;
     use signorini::qp::{registry, SolveOptions};
-    let prep = pipeline::prepare(std::path::Path::new(&example()), false).unwrap();
+    use signorini::run;
+    let prep = run::prepare(std::path::Path::new(&example()), false).unwrap();
     let opts = SolveOptions::default();
     let ws = Workspace::new();
     let (n0, _) = ws.reuse_counts();
     let mut xs = vec![];
     for s in 0..prep.problem.file.nsteps() {
-        let model = pipeline::step_model(&prep, s).unwrap();
+        let model = run::step_model(&prep, s).unwrap();
         let r = registry::solve_in("mprgp", &model.qp, &opts, &ws).unwrap();
         assert!(r.status.converged());
         xs.push((model, r.x));

@@ -7,7 +7,7 @@
 use super::solve::{bad_input, EXIT_BAD_INPUT};
 use super::SolverFlags;
 use crate::io::mtx;
-use crate::pipeline;
+use crate::run;
 use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
@@ -36,15 +36,15 @@ pub struct ExportArgs {
 
 pub fn run(a: &ExportArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
     let t0 = Instant::now();
-    let prep = match pipeline::prepare_with(&a.problem, a.no_contact, build) {
+    let prep = match run::prepare_with(&a.problem, a.no_contact, build) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };
     let qp = &prep.model.qp;
     let mut solved = None;
     if a.solution {
-        let res = pipeline::options(&prep.problem, &a.solver.section)
-            .and_then(|(method, opts)| pipeline::solve(&prep, &method, &opts).map(|r| (method, r)));
+        let res = run::options(&prep.problem, &a.solver.section)
+            .and_then(|(method, opts)| run::solve(&prep, &method, &opts).map(|r| (method, r)));
         match res {
             Ok(r) => solved = Some(r),
             Err(e) => {

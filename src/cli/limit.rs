@@ -7,7 +7,7 @@
 
 use super::solve::{bad_input, EXIT_BAD_INPUT};
 use crate::linalg::cholesky::Cholesky;
-use crate::pipeline;
+use crate::run;
 use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
@@ -29,7 +29,7 @@ pub struct LimitArgs {
 }
 
 pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
-    let prep = match pipeline::prepare_with(&a.problem, a.no_contact, build) {
+    let prep = match run::prepare_with(&a.problem, a.no_contact, build) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };

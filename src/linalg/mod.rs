@@ -8,4 +8,5 @@ pub mod augmented;
 pub mod cholesky;
 pub mod dense;
 pub mod kernel;
+pub mod power;
 pub mod sparse;

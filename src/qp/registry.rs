@@ -13,7 +13,7 @@ pub const METHODS: &[&dyn Method] = &[
     &super::primal::preelim::PreelimMethod,
     &super::primal::penalty::PenaltyMethod,
     &super::dual::uzawa::UzawaMethod,
-    &super::dual::DualMethod,
+    &super::dual::polyak::DualMethod,
     &super::active_set::AsmMethod,
     &super::active_set::cgh::AsmCghMethod,
     &super::dual::mprgp::MprgpMethod,

@@ -15,9 +15,6 @@ use crate::qp::{registry, settings, QpResult, Settings, SolveOptions, SolverSect
 use std::path::Path;
 use std::time::Instant;
 
-/// The error of [`prepare`] and [`options`] (one error type for the run).
-pub type InputError = RunError;
-
 /// A problem read and assembled.
 pub struct Prepared {
     pub problem: Problem,
@@ -34,7 +31,7 @@ pub struct Prepared {
 }
 
 /// Read the TOML and the mesh, build the QP. `no_contact` drops every `[[contact]]`.
-pub fn prepare(path: &Path, no_contact: bool) -> Result<Prepared, InputError> {
+pub fn prepare(path: &Path, no_contact: bool) -> Result<Prepared, RunError> {
     prepare_with(path, no_contact, &fem::BuildOptions::default())
 }
 
@@ -43,7 +40,7 @@ pub fn prepare_with(
     path: &Path,
     no_contact: bool,
     build: &fem::BuildOptions,
-) -> Result<Prepared, InputError> {
+) -> Result<Prepared, RunError> {
     let t0 = Instant::now();
     let mut problem = Problem::load(path)?;
     if no_contact {
@@ -84,12 +81,12 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 
 /// A contact curve that exists but holds no segment would give no
 /// constraint at all: the bodies would pass through each other unnoticed.
-fn check_contact_groups(problem: &Problem, mesh: &Mesh) -> Result<(), InputError> {
+fn check_contact_groups(problem: &Problem, mesh: &Mesh) -> Result<(), RunError> {
     for (i, c) in problem.file.contact.iter().enumerate() {
         for name in [&c.on, &c.slave, &c.master].into_iter().flatten() {
             if let Some(g) = mesh.group_any(name) {
                 if g.elements.is_empty() {
-                    return Err(InputError::Solver {
+                    return Err(RunError::Solver {
                         path: problem.path.clone(),
                         msg: format!(
                             "[[contact]] #{}: the physical group \"{}\" in {} has no elements, so it would give no contact constraint",
@@ -109,7 +106,7 @@ fn check_contact_groups(problem: &Problem, mesh: &Mesh) -> Result<(), InputError
 /// diagonal is refused: it cannot mean any node of this mesh.
 const PROBE_REACH: f64 = 0.1;
 
-fn check_probes(problem: &Problem, model: &Model) -> Result<(), InputError> {
+fn check_probes(problem: &Problem, model: &Model) -> Result<(), RunError> {
     let pts = &model.topo.points;
     if pts.is_empty() || problem.file.output.probes.is_empty() {
         return Ok(());
@@ -127,7 +124,7 @@ fn check_probes(problem: &Problem, model: &Model) -> Result<(), InputError> {
         let dist = (pts[p][0] - x[0]).hypot(pts[p][1] - x[1]);
         let near = dist <= PROBE_REACH * diag;
         if !near {
-            return Err(InputError::Solver {
+            return Err(RunError::Solver {
                 path: problem.path.clone(),
                 msg: format!(
                     "[output] probe {}: ({:e}, {:e}) lies {dist:.3e} from the nearest node, outside the mesh ([{:e}, {:e}] x [{:e}, {:e}])",
@@ -209,7 +206,7 @@ pub fn fingerprint_diff(a: &str, b: &str) -> Vec<String> {
 
 /// The model of load step `s` (0-based): the same mesh and DOF numbering,
 /// with loads and prescribed displacements of that step.
-pub fn step_model(prep: &Prepared, s: usize) -> Result<Model, InputError> {
+pub fn step_model(prep: &Prepared, s: usize) -> Result<Model, RunError> {
     let mut p = prep.problem.clone();
     p.file = prep.problem.file.at_step(s);
     Ok(fem::build_with(&prep.mesh, &p, &prep.build)?)
@@ -233,8 +230,8 @@ pub fn reduce(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
 pub fn options(
     problem: &Problem,
     flags: &SolverSection,
-) -> Result<(String, SolveOptions), InputError> {
-    let bad = |msg: String| InputError::Solver {
+) -> Result<(String, SolveOptions), RunError> {
+    let bad = |msg: String| RunError::Solver {
         path: problem.path.clone(),
         msg,
     };
@@ -254,7 +251,7 @@ pub fn options(
 }
 
 /// Run the method; an unbounded problem is bad input naming the bodies.
-pub fn solve(prep: &Prepared, method: &str, opts: &SolveOptions) -> Result<QpResult, InputError> {
+pub fn solve(prep: &Prepared, method: &str, opts: &SolveOptions) -> Result<QpResult, RunError> {
     solve_model(prep, &prep.model, method, opts)
 }
 
@@ -264,7 +261,7 @@ pub fn solve_model(
     model: &Model,
     method: &str,
     opts: &SolveOptions,
-) -> Result<QpResult, InputError> {
+) -> Result<QpResult, RunError> {
     solve_model_in(prep, model, method, opts, &Workspace::new())
 }
 
@@ -276,8 +273,8 @@ pub fn solve_model_in(
     method: &str,
     opts: &SolveOptions,
     ws: &Workspace,
-) -> Result<QpResult, InputError> {
-    let bad = |msg: String| InputError::Solver {
+) -> Result<QpResult, RunError> {
+    let bad = |msg: String| RunError::Solver {
         path: prep.problem.path.clone(),
         msg,
     };

@@ -1,366 +1,728 @@
-//! Minimisation of the dual functional (methods.md §4.6):
+//! The dual family (docs/methods.md §4.5, §4.6, §7): minimise
+//! θ(λ) = ½λᵀHλ − λᵀh over λ ≥ 0, H = A C⁻¹ Aᵀ, h = A C⁻¹ d − g, and recover
+//! x(λ) = C⁻¹(d − Aᵀλ). H is never formed: Hv = A K⁻¹(Aᵀv) with one sparse
+//! Cholesky factor K of C (`DualOp`).
 //!
-//! ```text
-//!   min θ(λ) = ½λᵀHλ − λᵀh  s.t. λ ≥ 0,   H = A C⁻¹ Aᵀ,  h = A C⁻¹ d − g,
-//!   θ'(λ) = Hλ − h = −(A x(λ) − g),        x(λ) = C⁻¹ (d − Aᵀλ),
-//! ```
-//!
-//! by CGC on the bound constraints (rows −e_i: orthonormal, so the projection is
-//! "zero the bound components" and releasing every negative multiplier at
-//! once is safe; `opts.multiple_release = false` releases one). Hp is applied
-//! through one Cholesky factor of C (w = Aᵀp, solve, A·): H is never formed.
-//! The displacements are recovered as x = C⁻¹(d − Aᵀλ), so stationarity
-//! Cx − d + Aᵀλ = 0 holds to rounding and the primal feasibility A x − g ≤ 0
-//! is the dual optimality condition θ' ≥ 0 on the bounds.
-//!
-//! Stopping (§4.1 applied to θ): ‖projected θ'‖ ≤ tol·max(‖A x(λ)‖, ‖g‖), the
-//! scale taken at the start of each face (A x(λ) = g − θ'(λ) is free; the
-//! unconstrained ‖A C⁻¹ d‖ can exceed the final ‖Ax‖ by orders of magnitude).
-//! With exact solves (a factor, not the report's inner CG) no stricter inner
-//! tolerance is needed.
-//!
-//! One executor iteration = one face (CG on the free multipliers until the
-//! face minimum or a new bound becomes active).
-//!
-//! **Semicoercive C** (non-empty `qp.kernel`): the dual carries the equality
-//! constraint Gλ = e, G = RᵀAᵀ, e = Rᵀd (TFETI). It is enforced by the same
-//! SMALBE-M outer loop as [`crate::qp::dual::mprgp`] (homogenised bounds λ̂ ≥ −λ̃,
-//! generalised inverse of C by the spring factor), with the report's CGC on
-//! the bounds as the inner solver ([`polyak_step`]): CG on the free face; a
-//! step that would cross a bound stops on it and restarts CG; when the face
-//! is minimised to the precision the current SMALBE step asks for,
-//! ‖φ‖ ≤ max(tol·‖h‖, ½min(M‖G̃λ̂‖, η)), the bounds with negative multipliers
-//! are released (all at once, or the most negative with
-//! `multiple_release = false`) by an exact line search along them.
+//! This module is the host the three methods share: the row scaling, the
+//! dual operator and, for a semicoercive C (TFETI), the SMALBE-M loop that
+//! enforces the equality Gλ = e (G = RᵀAᵀ, e = Rᵀd) on the homogenised
+//! problem min ½λ̂ᵀ(PHP + ρQ)λ̂ − λ̂ᵀb over λ̂ ≥ −λ̃ (methods.md §7). Inside
+//! that loop a `BoundStep` does one step on the bounds: MPRGP
+//! ([`mprgp`]), Polyak's CG with constraints ([`polyak`], the `dual`
+//! method) or projected gradient / accelerated Uzawa ([`uzawa`]). With an
+//! empty kernel the loop reduces to the bound-constrained solver alone.
+//! Counts: `iterations` = steps + multiplier updates, `inner_iterations` =
+//! solves with the factor.
 
 pub mod mprgp;
+#[cfg(test)]
+pub(crate) mod partial_kernel;
+pub mod polyak;
 pub mod uzawa;
 
+pub use polyak::{solve, DualMethod};
+
 use crate::linalg::cholesky::Cholesky;
-use crate::linalg::sparse::{axpy, dot, norm};
-use crate::qp::dual::mprgp::{Inner, Mprgp};
+use crate::linalg::dense::{chol_backward, chol_factor, chol_forward};
+use crate::linalg::kernel::orthonormal_kernel;
+use crate::linalg::power;
+use crate::linalg::sparse::{dot, norm, norm_inf};
 use crate::qp::executor::{Iterative, Step};
-use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status};
+use crate::qp::{Context, IterRecord, Output, QpError, QpProblem, Status};
 use std::time::Instant;
 
-/// CGC on the dual functional (docs/methods.md §4.6).
-pub struct DualMethod;
+/// Power iterations for ‖PHP‖ (and for Uzawa's ρ).
+pub const POWER_ITERS: usize = 30;
+/// SMALBE: ρ = RHO_FACTOR·‖PHP‖_est (unless the step asks otherwise).
+pub const RHO_FACTOR: f64 = 30.0;
+/// SMALBE: M ← M/β.
+const SMALBE_BETA: f64 = 10.0;
+/// SMALBE: η = ETA_FACTOR·‖h‖.
+const ETA_FACTOR: f64 = 0.1;
 
-impl Method for DualMethod {
-    fn name(&self) -> &'static str {
-        "dual"
+/// One step of a bound-constrained solver for min ½λ̂ᵀHλ̂ − λ̂ᵀb, λ̂ ≥ ℓ,
+/// run by the SMALBE host (one executor iteration per step).
+pub(crate) trait BoundStep {
+    /// SMALBE's ρ as a multiple of ‖PHP‖_est.
+    fn rho_factor(&self) -> f64 {
+        RHO_FACTOR
     }
-    fn summary(&self) -> &'static str {
-        "CGC on the dual functional, H applied through a Cholesky factor (§4.6)"
-    }
-    fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
-        solve(qp, ctx)
-    }
+    /// Prepare the first step: `h_norm` = ‖PHP + ρQ‖_est, `s.g` is exact.
+    fn start(&mut self, s: &DualState, h_norm: f64);
+    /// One step: moves `s.lam` within the bounds and keeps
+    /// `s.g` = Hλ̂ − b up to date.
+    fn step(&mut self, s: &mut DualState) -> Result<StepKind, String>;
+    /// The host recomputed `s.g` from scratch or changed `s.b` (SMALBE
+    /// update): drop what was built on the old gradient.
+    fn restart(&mut self, s: &DualState);
 }
 
-pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
-    let opts = ctx.settings;
-    if !qp.kernel.is_empty() {
-        let inner = Inner::Polyak {
-            multiple: opts.dual.multiple_release,
-        };
-        return crate::qp::dual::mprgp::solve_with(qp, ctx, inner, "dual");
-    }
-    let t0 = Instant::now();
-    let chol = ctx.ws.cholesky(&qp.c, &[])?;
-    let t_f = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
-    let m = qp.m();
-    let x0 = chol.solve(&qp.d);
-    let ax0 = qp.a.mul(&x0);
-    let h: Vec<f64> = ax0.iter().zip(&qp.g).map(|(a, g)| a - g).collect();
-    let ref_norm = norm(&ax0).max(norm(&qp.g)).max(1e-300);
-    let mut st = DualCgc {
-        qp,
-        chol: &chol,
-        tol: opts.tol,
-        multiple: opts.dual.multiple_release,
-        lam: vec![0.0; m],
-        grad: h.iter().map(|v| -v).collect(),
-        h,
-        in_j: vec![true; m],
-        ref_norm,
-        solves: 1,
-        cg_steps: 0,
-    };
-    let mut exec = ctx.executor("dual");
-    let (status, iters) = exec.run(&mut st);
-    // x = C⁻¹(d − Aᵀλ)
-    let mut x = qp.d.clone();
-    let atl = qp.a.mul_t(&st.lam);
-    for (xi, a) in x.iter_mut().zip(&atl) {
-        *xi -= a;
-    }
-    chol.solve_in_place(&mut x);
-    let t_it = t1.elapsed().as_secs_f64();
-    let active: Vec<bool> = st.lam.iter().map(|&l| l > 0.0).collect();
-    Ok(Output {
-        x,
-        lambda: st.lam,
-        active,
-        status,
-        iterations: iters,
-        inner_iterations: st.cg_steps,
-        log: exec.log,
-        timings: vec![("factor".into(), t_f), ("iterate".into(), t_it)],
-    })
-}
-
-struct DualCgc<'a> {
-    qp: &'a QpProblem,
-    chol: &'a Cholesky,
-    tol: f64,
-    multiple: bool,
-    lam: Vec<f64>,
-    /// θ'(λ) = Hλ − h
-    grad: Vec<f64>,
-    h: Vec<f64>,
-    /// Bound λ_i = 0 in the working set.
-    in_j: Vec<bool>,
-    ref_norm: f64,
-    solves: usize,
-    cg_steps: usize,
-}
-
-enum Face {
-    Min,
+/// What a [`BoundStep`] did (counted for the debug log).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum StepKind {
+    /// A conjugate-gradient step on the free set.
+    Cg,
+    /// MPRGP's expansion (feasible CG part, then projected gradient step).
+    Expansion,
+    /// MPRGP's proportioning step along the chopped gradient.
+    Proportioning,
+    /// Polyak: CG stopped on a blocking bound.
     Blocked,
-    Kmax,
-    Failed(String),
+    /// Polyak: release of bounds with negative multipliers.
+    Release,
+    /// Uzawa: projected (possibly extrapolated) gradient step.
+    Gradient,
 }
 
-impl DualCgc<'_> {
-    /// out = H v
-    fn apply_h(&mut self, v: &[f64], out: &mut [f64]) {
-        let mut w = self.qp.a.mul_t(v);
-        self.chol.solve_in_place(&mut w);
-        self.qp.a.mul_vec(&w, out);
+const KINDS: [(StepKind, &str); 6] = [
+    (StepKind::Cg, "CG"),
+    (StepKind::Expansion, "expansion"),
+    (StepKind::Proportioning, "proportioning"),
+    (StepKind::Blocked, "blocked"),
+    (StepKind::Release, "release"),
+    (StepKind::Gradient, "gradient"),
+];
+
+/// Dual solve with the given bound step; `name` prefixes messages.
+pub(crate) fn solve_with<S: BoundStep>(
+    qp: &QpProblem,
+    ctx: &mut Context,
+    step: S,
+    name: &'static str,
+) -> Result<Output, QpError> {
+    let opts = ctx.settings;
+    let t0 = Instant::now();
+    let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
+    let fac = ctx.ws.cholesky(&qp.c, &qp.kernel)?;
+    let t_factor = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    // The dual host sees the rows scaled by sᵢ (see [`row_scaling`]); C, d
+    // and the kernel are the caller's (C is not needed past the factor).
+    let s = row_scaling(qp);
+    let mut a = qp.a.clone();
+    for (i, si) in s.iter().enumerate() {
+        for v in &mut a.data[a.indptr[i]..a.indptr[i + 1]] {
+            *v *= si;
+        }
+    }
+    let sq = QpProblem {
+        c: crate::qp::Csr::zeros(0, 0),
+        d: qp.d.clone(),
+        a,
+        g: qp.g.iter().zip(&s).map(|(g, s)| g * s).collect(),
+        kernel: vec![],
+    };
+    let op = DualOp::new(&sq, fac, r, name)?;
+    let mut st = Smalbe::new(op, opts.tol, step, name)?;
+    let t_setup = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    let mut exec = ctx.executor(name);
+    let (status, iters) = exec.run(&mut st);
+    let t_it = t2.elapsed().as_secs_f64();
+    let mut res = st.into_result(
+        status,
+        iters,
+        exec.log,
+        vec![
+            ("factor".into(), t_factor),
+            ("setup".into(), t_setup),
+            ("iterate".into(), t_it),
+        ],
+    );
+    // Aᵀλ = Ãᵀμ with Ã = diag(s)A: λ = diag(s)μ.
+    for (l, si) in res.lambda.iter_mut().zip(&s) {
+        *l *= si;
+    }
+    Ok(res)
+}
+
+/// Row scaling sᵢ = 1/√(aᵢᵀ diag(C)⁻¹ aᵢ): Jacobi scaling of H by the cheap
+/// estimate of its diagonal. Same feasible set (λ ≥ 0 ⇔ μ ≥ 0), but Hᵢᵢ ≈ 1
+/// in every body's own stiffness scale, so a row whose compliance comes
+/// from a stiff body only no longer stalls the fixed-step methods, and the
+/// result is invariant under scaling C (BENCHMARKS.md, "Dual family notes").
+fn row_scaling(qp: &QpProblem) -> Vec<f64> {
+    let diag = qp.c.diag();
+    (0..qp.m())
+        .map(|i| {
+            let (cols, vals) = qp.a.row(i);
+            let h: f64 = cols
+                .iter()
+                .zip(vals)
+                .filter(|(&j, _)| diag[j] > 0.0)
+                .map(|(&j, &a)| a * a / diag[j])
+                .sum();
+            if h > 0.0 && h.is_finite() {
+                1.0 / h.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
+/// The dual operator λ ↦ (PHP + ρQ)λ and what defines it: the factor K of C
+/// (springs at the fixing DOFs when C is singular, so K⁻¹ is a generalised
+/// inverse on range C), the kernel basis R, G̃ = L⁻¹RᵀAᵀ with orthonormal
+/// rows (GGᵀ = LLᵀ), Q = G̃ᵀG̃, P = I − Q. With an empty kernel it is H.
+pub(crate) struct DualOp<'a> {
+    qp: &'a QpProblem,
+    fac: Cholesky,
+    /// Orthonormal basis of ker C.
+    r: Vec<Vec<f64>>,
+    /// Rows of G̃ (k × m, orthonormal).
+    gt: Vec<Vec<f64>>,
+    /// L with GGᵀ = LLᵀ (k×k row-major).
+    l: Vec<f64>,
+    /// SMALBE's penalty ρ (0 until the host sets it).
+    rho: f64,
+    /// Solves with the factor so far.
+    solves: usize,
+}
+
+impl<'a> DualOp<'a> {
+    /// The operator of `qp` (whose C is not used) with the factor `fac` of
+    /// its C and the orthonormal kernel basis `r`; refuses a kernel that no
+    /// contact row sees (G rank deficient).
+    pub(crate) fn new(
+        qp: &'a QpProblem,
+        fac: Cholesky,
+        r: Vec<Vec<f64>>,
+        name: &str,
+    ) -> Result<DualOp<'a>, QpError> {
+        let m = qp.m();
+        let k = r.len();
+        // G = RᵀAᵀ (k×m), GGᵀ = LLᵀ, G̃ = L⁻¹G.
+        let g0: Vec<Vec<f64>> = r.iter().map(|rl| qp.a.mul(rl)).collect();
+        let mut l = vec![0.0; k * k];
+        for a in 0..k {
+            for b in 0..k {
+                l[a * k + b] = dot(&g0[a], &g0[b]);
+            }
+        }
+        if !chol_factor(&mut l, k) {
+            return Err(QpError::Unsupported(format!(
+                "{name}: a rigid motion of a floating body is not restrained by any contact row \
+                 (A·R rank deficient), the dual equality constraint is degenerate; use cgc or ssn"
+            )));
+        }
+        let mut gt = vec![vec![0.0; m]; k];
+        let mut col = vec![0.0; k];
+        for i in 0..m {
+            for (c, row) in col.iter_mut().zip(&g0) {
+                *c = row[i];
+            }
+            chol_forward(&l, k, &mut col);
+            for (row, c) in gt.iter_mut().zip(&col) {
+                row[i] = *c;
+            }
+        }
+        Ok(DualOp {
+            qp,
+            fac,
+            r,
+            gt,
+            l,
+            rho: 0.0,
+            solves: 0,
+        })
+    }
+    /// Dimension k of the kernel.
+    pub(crate) fn k(&self) -> usize {
+        self.gt.len()
+    }
+    /// b ← K⁻¹ b
+    pub(crate) fn solve_k(&mut self, b: &mut [f64]) {
+        self.fac.solve_in_place(b);
         self.solves += 1;
     }
+    /// x(λ) = K⁻¹(d − Aᵀλ) (rows with λᵢ = 0 skipped).
+    pub(crate) fn x_of(&mut self, lam: &[f64]) -> Vec<f64> {
+        let qp = self.qp;
+        let mut b = qp.d.clone();
+        for (i, &li) in lam.iter().enumerate() {
+            if li != 0.0 {
+                let (c, v) = qp.a.row(i);
+                for (&j, &a) in c.iter().zip(v) {
+                    b[j] -= a * li;
+                }
+            }
+        }
+        self.solve_k(&mut b);
+        b
+    }
+    /// h = A K⁻¹ d − g
+    pub(crate) fn h_vec(&mut self) -> Vec<f64> {
+        let mut t = self.qp.d.clone();
+        self.solve_k(&mut t);
+        let qp = self.qp;
+        qp.a.mul(&t).iter().zip(&qp.g).map(|(a, g)| a - g).collect()
+    }
+    /// H v = A K⁻¹ Aᵀ v
+    pub(crate) fn h(&mut self, v: &[f64]) -> Vec<f64> {
+        let mut t = self.qp.a.mul_t(v);
+        self.solve_k(&mut t);
+        self.qp.a.mul(&t)
+    }
+    /// G̃ v
+    fn gmul(&self, v: &[f64]) -> Vec<f64> {
+        self.gt.iter().map(|row| dot(row, v)).collect()
+    }
+    /// out += G̃ᵀ c
+    fn gt_add(&self, c: &[f64], out: &mut [f64]) {
+        for (row, &cl) in self.gt.iter().zip(c) {
+            for (o, r) in out.iter_mut().zip(row) {
+                *o += cl * r;
+            }
+        }
+    }
+    /// v ← P v
+    fn project(&self, v: &mut [f64]) {
+        if self.k() == 0 {
+            return;
+        }
+        let c: Vec<f64> = self.gmul(v).iter().map(|a| -a).collect();
+        self.gt_add(&c, v);
+    }
+    /// (PHP + ρQ) v
+    pub(crate) fn apply(&mut self, v: &[f64]) -> Vec<f64> {
+        if self.k() == 0 {
+            return self.h(v);
+        }
+        let mut pv = v.to_vec();
+        self.project(&mut pv);
+        let mut out = self.h(&pv);
+        self.project(&mut out);
+        if self.rho != 0.0 {
+            let q: Vec<f64> = self.gmul(v).iter().map(|a| self.rho * a).collect();
+            self.gt_add(&q, &mut out);
+        }
+        out
+    }
+    /// ‖(PHP + ρQ)‖ estimated by [`power::norm_estimate`] from the projected
+    /// fixed start vector.
+    pub(crate) fn norm_estimate(&mut self) -> f64 {
+        let mut v = power::start_vector(self.qp.m());
+        self.project(&mut v);
+        power::norm_estimate(v, POWER_ITERS, |v| self.apply(v))
+    }
+}
 
-    /// Projected gradient norm (bound components zeroed).
-    fn proj_norm(&self) -> f64 {
-        self.grad
-            .iter()
-            .zip(&self.in_j)
-            .filter(|(_, &b)| !b)
-            .map(|(g, _)| g * g)
+/// The state the bound steps share with the host.
+pub(crate) struct DualState<'a> {
+    /// The operator H = PHP + ρQ of the inner problem.
+    pub(crate) op: DualOp<'a>,
+    /// Lower bounds ℓ = −λ̃ of λ̂ (zero without a kernel).
+    pub(crate) lb: Vec<f64>,
+    /// The iterate λ̂ (λ = λ̂ + λ̃), always ≥ ℓ.
+    pub(crate) lam: Vec<f64>,
+    /// The gradient g = (PHP + ρQ)λ̂ − b, kept current by every step.
+    pub(crate) g: Vec<f64>,
+    /// The linear term b = b̂ − G̃ᵀμ (changed by the SMALBE update only).
+    pub(crate) b: Vec<f64>,
+    /// g was recomputed from scratch and not updated since.
+    pub(crate) fresh: bool,
+    /// Relative tolerance: the loop stops at ‖gᴾ‖ ≤ tol·ref_g.
+    pub(crate) tol: f64,
+    /// The scale of the gradient, max(‖h‖, ‖b̂‖).
+    pub(crate) ref_g: f64,
+    /// Precision SMALBE asks of the current inner solve, min(M‖G̃λ̂‖, η)
+    /// (0 without a kernel); set by the host before each step.
+    pub(crate) smalbe_tol: f64,
+    /// Method name for messages.
+    pub(crate) name: &'static str,
+}
+
+impl DualState<'_> {
+    /// g ← (PHP + ρQ)λ̂ − b from scratch.
+    pub(crate) fn refresh(&mut self) {
+        let ax = self.op.apply(&self.lam);
+        self.g = ax.iter().zip(&self.b).map(|(a, b)| a - b).collect();
+        self.fresh = true;
+    }
+    /// λ̂ᵢ off its bound.
+    pub(crate) fn is_free(&self, i: usize) -> bool {
+        self.lam[i] > self.lb[i]
+    }
+    /// Free gradient φ (zero at the bounds).
+    pub(crate) fn phi(&self) -> Vec<f64> {
+        (0..self.lam.len())
+            .map(|i| if self.is_free(i) { self.g[i] } else { 0.0 })
+            .collect()
+    }
+    /// Chopped gradient β = min(g, 0) at the bounds (zero on the free set).
+    pub(crate) fn beta(&self) -> Vec<f64> {
+        (0..self.lam.len())
+            .map(|i| {
+                if self.is_free(i) {
+                    0.0
+                } else {
+                    self.g[i].min(0.0)
+                }
+            })
+            .collect()
+    }
+    /// ‖gᴾ‖ = ‖φ + β‖
+    pub(crate) fn gp_norm(&self) -> f64 {
+        (0..self.lam.len())
+            .map(|i| {
+                let v = if self.is_free(i) {
+                    self.g[i]
+                } else {
+                    self.g[i].min(0.0)
+                };
+                v * v
+            })
             .sum::<f64>()
             .sqrt()
     }
-
-    fn refresh(&mut self) {
-        let lam = self.lam.clone();
-        let mut hl = vec![0.0; lam.len()];
-        self.apply_h(&lam, &mut hl);
-        for ((g, a), b) in self.grad.iter_mut().zip(&hl).zip(&self.h) {
-            *g = a - b;
-        }
-    }
-
-    fn face_cg(&mut self) -> Face {
-        let m = self.qp.m();
-        let nfree = self.in_j.iter().filter(|b| !**b).count();
-        let kmax = 2 * nfree + 10;
-        let mut p = vec![0.0; m];
-        let mut w = vec![0.0; m];
-        let mut r_old = 0.0;
-        for k in 0..kmax {
-            let r: f64 = self.proj_norm().powi(2);
-            if r.sqrt() <= self.tol * self.ref_norm {
-                return Face::Min;
-            }
-            let beta = if k == 0 { 0.0 } else { r / r_old };
-            for i in 0..m {
-                p[i] = if self.in_j[i] {
-                    0.0
-                } else {
-                    -self.grad[i] + beta * p[i]
-                };
-            }
-            r_old = r;
-            self.apply_h(&p, &mut w);
-            self.cg_steps += 1;
-            let a2 = dot(&p, &w);
-            if !(a2 > 0.0) {
-                return Face::Failed(format!(
-                    "dual Hessian not positive on a search direction ((p,Hp) = {a2:e})"
-                ));
-            }
-            let alpha = r / a2;
-            let mut abar = f64::INFINITY;
-            let mut istar = usize::MAX;
-            for i in 0..m {
-                if !self.in_j[i] && p[i] < 0.0 {
-                    let t = (self.lam[i] / -p[i]).max(0.0);
-                    if t < abar {
-                        abar = t;
-                        istar = i;
-                    }
-                }
-            }
-            if istar != usize::MAX && abar < alpha {
-                axpy(abar, &p, &mut self.lam);
-                axpy(abar, &w, &mut self.grad);
-                self.lam[istar] = 0.0;
-                self.in_j[istar] = true;
-                for i in 0..m {
-                    if self.lam[i] < 0.0 {
-                        self.lam[i] = 0.0;
-                    }
-                }
-                return Face::Blocked;
-            }
-            axpy(alpha, &p, &mut self.lam);
-            axpy(alpha, &w, &mut self.grad);
-        }
-        Face::Kmax
-    }
-
-    fn record(&self, res: f64) -> IterRecord {
-        IterRecord {
-            iter: 0,
-            residual: res,
-            active: self.in_j.iter().filter(|b| !**b).count(),
-            inner: self.cg_steps,
-        }
-    }
 }
 
-impl Iterative for DualCgc<'_> {
-    fn step(&mut self) -> Step {
-        // Scale of A x(λ) − g at the current λ: A x(λ) = g − θ'(λ).
-        let ax = self
-            .grad
+/// SMALBE-M host (methods.md §7): a [`BoundStep`] on the augmented
+/// Lagrangian, multiplier updates μ ← μ + ρG̃λ̂ when ‖gᴾ‖ ≤ max(min(M‖G̃λ̂‖,
+/// η), 0.1·tol·‖h‖), M ← M/β when the Lagrangian did not grow by ρ/2‖G̃λ̂‖².
+struct Smalbe<'a, S> {
+    s: DualState<'a>,
+    step: S,
+    /// λ̃ (the homogenising shift).
+    shift: Vec<f64>,
+    /// Multiplier μ of G̃λ̂ = 0.
+    mu: Vec<f64>,
+    /// ‖ẽ‖
+    e_norm: f64,
+    /// SMALBE's M.
+    mpar: f64,
+    /// SMALBE's η.
+    eta: f64,
+    /// The augmented Lagrangian at the previous update.
+    lag_prev: Option<f64>,
+    /// Multiplier updates so far.
+    outer: usize,
+    /// Steps by kind, in the order of [`KINDS`].
+    counts: [usize; 6],
+}
+
+impl<'a, S: BoundStep> Smalbe<'a, S> {
+    fn new(
+        mut op: DualOp<'a>,
+        tol: f64,
+        mut step: S,
+        name: &'static str,
+    ) -> Result<Smalbe<'a, S>, QpError> {
+        let m = op.qp.m();
+        let k = op.k();
+        let mut et: Vec<f64> = op.r.iter().map(|rl| dot(rl, &op.qp.d)).collect();
+        chol_forward(&op.l, k, &mut et);
+        let mut shift = vec![0.0; m];
+        op.gt_add(&et, &mut shift);
+        let h = op.h_vec();
+        let mut bhat = h.clone();
+        if k > 0 {
+            let hs = op.h(&shift);
+            for (b, v) in bhat.iter_mut().zip(&hs) {
+                *b -= v;
+            }
+            op.project(&mut bhat);
+        }
+        // ‖PHP‖ by power iteration (ρ = 0 here).
+        let hnorm = if m == 0 { 1.0 } else { op.norm_estimate() };
+        if !(hnorm > 0.0 && hnorm.is_finite()) {
+            return Err(QpError::Factor(format!(
+                "{name}: ‖H‖ estimate {hnorm} is not positive"
+            )));
+        }
+        op.rho = if k > 0 {
+            step.rho_factor() * hnorm
+        } else {
+            0.0
+        };
+        let ref_g = norm(&h).max(norm(&bhat)).max(f64::MIN_POSITIVE);
+        let e_norm = norm(&et);
+        let lb: Vec<f64> = shift.iter().map(|s| -s).collect();
+        let lam: Vec<f64> = lb.iter().map(|&l| l.max(0.0)).collect();
+        // ‖PHP + ρQ‖ = max(‖PHP‖, ρ): PHP and ρQ act on orthogonal subspaces.
+        let h_norm = hnorm.max(op.rho);
+        let mut s = DualState {
+            op,
+            lb,
+            lam,
+            g: vec![0.0; m],
+            b: bhat,
+            fresh: false,
+            tol,
+            ref_g,
+            smalbe_tol: 0.0,
+            name,
+        };
+        s.refresh();
+        step.start(&s, h_norm);
+        Ok(Smalbe {
+            s,
+            step,
+            shift,
+            mu: vec![0.0; k],
+            e_norm,
+            mpar: smalbe_m0(ref_g, e_norm, hnorm),
+            eta: ETA_FACTOR * ref_g,
+            lag_prev: None,
+            outer: 0,
+            counts: [0; 6],
+        })
+    }
+
+    /// (‖G̃λ̂‖, its reference max(‖ẽ‖, ‖λ‖))
+    fn feas(&self) -> (f64, f64) {
+        if self.s.op.k() == 0 {
+            return (0.0, 1.0);
+        }
+        let lam_norm = self
+            .s
+            .lam
             .iter()
-            .zip(&self.qp.g)
-            .map(|(d, g)| (g - d) * (g - d))
+            .zip(&self.shift)
+            .map(|(a, b)| (a + b) * (a + b))
             .sum::<f64>()
             .sqrt();
-        self.ref_norm = ax.max(norm(&self.qp.g)).max(1e-300);
-        let res = self.proj_norm() / self.ref_norm;
-        if res <= self.tol {
-            // Face minimum: the multiplier of bound i ∈ J is u_i = θ'_i.
-            let m = self.qp.m();
-            let ubar = (0..m)
-                .filter(|&i| self.in_j[i])
-                .fold(0.0f64, |a, i| a.max(self.grad[i].abs()));
-            let ubar = if ubar > 0.0 { ubar } else { 1.0 };
-            let thr = -self.tol * ubar;
-            let neg: Vec<usize> = (0..m)
-                .filter(|&i| self.in_j[i] && self.grad[i] < thr)
-                .collect();
-            if neg.is_empty() {
-                return Step::Done(Status::Converged, self.record(res));
-            }
-            if self.multiple {
-                for &i in &neg {
-                    self.in_j[i] = false;
-                }
-            } else if let Some(&i) = neg
+        (
+            norm(&self.s.op.gmul(&self.s.lam)),
+            self.e_norm.max(lam_norm).max(f64::MIN_POSITIVE),
+        )
+    }
+
+    fn record(&self, residual: f64) -> IterRecord {
+        IterRecord {
+            iter: 0,
+            residual,
+            active: (0..self.s.lam.len()).filter(|&i| self.s.is_free(i)).count(),
+            inner: self.s.op.solves,
+        }
+    }
+
+    /// SMALBE multiplier update μ ← μ + ρG̃λ̂ and the M update.
+    fn smalbe_update(&mut self) {
+        let s = &mut self.s;
+        let gx = s.op.gmul(&s.lam);
+        let rho = s.op.rho;
+        let inc: Vec<f64> = gx.iter().map(|v| rho * v).collect();
+        for (m, d) in self.mu.iter_mut().zip(&inc) {
+            *m += d;
+        }
+        let neg: Vec<f64> = inc.iter().map(|v| -v).collect();
+        s.op.gt_add(&neg, &mut s.b);
+        s.op.gt_add(&inc, &mut s.g);
+        let lag = 0.5
+            * s.lam
                 .iter()
-                .min_by(|&&a, &&b| self.grad[a].total_cmp(&self.grad[b]))
-            {
-                self.in_j[i] = false;
+                .zip(s.g.iter().zip(&s.b))
+                .map(|(x, (g, b))| x * (g - b))
+                .sum::<f64>();
+        if let Some(prev) = self.lag_prev {
+            if lag < prev + 0.5 * rho * dot(&gx, &gx) {
+                self.mpar /= SMALBE_BETA;
             }
         }
-        match self.face_cg() {
-            Face::Failed(msg) => Step::Done(Status::Failed(msg), self.record(res)),
-            Face::Min | Face::Blocked | Face::Kmax => {
-                self.refresh();
-                Step::Continue(self.record(res))
+        self.lag_prev = Some(lag);
+        self.outer += 1;
+        self.step.restart(&self.s);
+    }
+
+    /// λ (exact zeros at the bounds), x = K⁻¹(d − Aᵀλ) − Rα.
+    fn primal(&mut self) -> (Vec<f64>, Vec<f64>) {
+        let s = &mut self.s;
+        let qp = s.op.qp;
+        let m = qp.m();
+        let lam: Vec<f64> = (0..m)
+            .map(|i| {
+                if s.is_free(i) {
+                    (s.lam[i] + self.shift[i]).max(0.0)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mut x = s.op.x_of(&lam);
+        let k = s.op.k();
+        if k > 0 {
+            // α = L⁻ᵀ(μ + ρG̃λ̂ + G̃(Ax̂ − g)) makes −(Ax − g) the Lagrangian
+            // gradient up to O(‖G̃λ̂‖).
+            let r: Vec<f64> = qp.a.mul(&x).iter().zip(&qp.g).map(|(a, g)| a - g).collect();
+            let gs = s.op.gmul(&r);
+            let gx = s.op.gmul(&s.lam);
+            let mut alpha: Vec<f64> = (0..k)
+                .map(|l| self.mu[l] + s.op.rho * gx[l] + gs[l])
+                .collect();
+            chol_backward(&s.op.l, k, &mut alpha);
+            for (rl, &al) in s.op.r.iter().zip(&alpha) {
+                for (xi, ri) in x.iter_mut().zip(rl) {
+                    *xi -= al * ri;
+                }
             }
+        }
+        (lam, x)
+    }
+
+    /// λ (exact zeros at the bounds) and the recovered x; a converged status
+    /// becomes `Failed` when x violates Ax ≤ g or complementarity by more
+    /// than 100·tol·‖h‖; `active` = λᵢ > 0 or (g − Ax)ᵢ ≤ 10·tol·‖h‖.
+    fn into_result(
+        mut self,
+        status: Status,
+        iterations: usize,
+        log: Vec<IterRecord>,
+        timings: Vec<(String, f64)>,
+    ) -> Output {
+        let qp = self.s.op.qp;
+        let name = self.s.name;
+        if log::log_enabled!(log::Level::Debug) {
+            let steps: Vec<String> = KINDS
+                .iter()
+                .zip(&self.counts)
+                .filter(|(_, &c)| c > 0)
+                .map(|((_, label), c)| format!("{c} {label}"))
+                .collect();
+            log::debug!(
+                "{name}: steps: {}; {} SMALBE updates, ρ = {:e}",
+                steps.join(", "),
+                self.outer,
+                self.s.op.rho
+            );
+        }
+        let (lambda, x) = self.primal();
+        let tol = self.s.tol;
+        let ref_g = self.s.ref_g;
+        let s: Vec<f64> = qp.a.mul(&x).iter().zip(&qp.g).map(|(a, g)| a - g).collect();
+        let gap_tol = 10.0 * tol * ref_g;
+        let active: Vec<bool> = (0..qp.m())
+            .map(|i| lambda[i] > 0.0 || s[i] >= -gap_tol)
+            .collect();
+        // Primal feasibility and complementarity of the recovered x.
+        let viol = s.iter().fold(0.0f64, |a, &v| a.max(v));
+        let compl = (0..qp.m())
+            .filter(|&i| lambda[i] > 0.0)
+            .fold(0.0f64, |a, i| a.max(s[i].abs()));
+        let rounding = 1e-13 * (norm_inf(&x) + norm_inf(&qp.g));
+        let limit = 100.0 * tol * ref_g + rounding;
+        let status = if status.converged() && !(viol <= limit && compl <= limit) {
+            Status::Failed(format!(
+                "{name}: the dual converged but the recovered x violates Ax ≤ g by {viol:e} or complementarity \
+                 by {compl:e} (limit 100·tol·‖h‖ = {limit:e})"
+            ))
+        } else {
+            status
+        };
+        Output {
+            x,
+            lambda,
+            active,
+            status,
+            iterations,
+            inner_iterations: self.s.op.solves,
+            log,
+            timings,
         }
     }
 }
 
-/// One step of the report's CGC on the bounds λ̂ ≥ ℓ for the SMALBE host:
-/// release (line search along the chopped gradient β, restricted to its most
-/// negative component unless `multiple`) when the face is minimised, else
-/// one CG step on the face, stopped at the first blocking bound.
-pub(crate) fn polyak_step(st: &mut Mprgp, multiple: bool) -> Result<(), String> {
-    let mdim = st.x.len();
-    let phi = st.phi();
-    let mut beta = st.beta();
-    st.fresh = false;
-    let face_tol = if st.op.k() > 0 {
-        let (fe, _) = st.feas();
-        (st.tol * st.ref_g).max(0.5 * (st.mpar * fe).min(st.eta))
-    } else {
-        st.tol * st.ref_g
-    };
-    if norm(&beta) > 0.0 && norm(&phi) <= face_tol {
-        if !multiple {
-            let imin = (0..mdim)
-                .min_by(|&a, &b| beta[a].total_cmp(&beta[b]))
-                .unwrap_or(0);
-            for (i, b) in beta.iter_mut().enumerate() {
-                if i != imin {
-                    *b = 0.0;
+impl<S: BoundStep> Iterative for Smalbe<'_, S> {
+    fn step(&mut self) -> Step {
+        let (tol, ref_g) = (self.s.tol, self.s.ref_g);
+        let mut gp = self.s.gp_norm();
+        let (mut fe, mut fe_ref) = self.feas();
+        let res = |gp: f64, fe: f64, fe_ref: f64| (gp / ref_g).max(fe / fe_ref);
+        if gp <= tol * ref_g && fe <= tol * fe_ref {
+            if !self.s.fresh {
+                // Accept the stop only with an exact gradient.
+                self.s.refresh();
+                gp = self.s.gp_norm();
+                (fe, fe_ref) = self.feas();
+                self.step.restart(&self.s);
+            }
+            if gp <= tol * ref_g && fe <= tol * fe_ref {
+                return Step::Done(Status::Converged, self.record(res(gp, fe, fe_ref)));
+            }
+        }
+        let r = res(gp, fe, fe_ref);
+        if self.s.op.k() > 0 {
+            // The floor 0.1·tol·‖h‖: below it the inner problem is solved to
+            // the final precision, and M may have shrunk until M‖G̃λ̂‖ is
+            // under rounding.
+            let smalbe_tol = (self.mpar * fe).min(self.eta);
+            if gp <= smalbe_tol.max(0.1 * tol * ref_g) {
+                self.smalbe_update();
+                return Step::Continue(self.record(r));
+            }
+            self.s.smalbe_tol = smalbe_tol;
+        }
+        match self.step.step(&mut self.s) {
+            Ok(kind) => {
+                if let Some(i) = KINDS.iter().position(|(k, _)| *k == kind) {
+                    self.counts[i] += 1;
                 }
+                Step::Continue(self.record(r))
             }
+            Err(msg) => Step::Done(Status::Failed(msg), self.record(r)),
         }
-        let ad = st.op.apply(&beta);
-        let dad = dot(&beta, &ad);
-        if !dad.is_finite() || dad <= 0.0 {
-            return Err(format!(
-                "dual: non-positive curvature βᵀHβ = {dad:e} (H should be SPD)"
-            ));
-        }
-        let a = dot(&st.g, &beta) / dad;
-        for i in 0..mdim {
-            st.x[i] = (st.x[i] - a * beta[i]).max(st.lb[i]);
-            st.g[i] -= a * ad[i];
-        }
-        st.p = st.phi();
-        st.counts[2] += 1;
-        return Ok(());
     }
-    if dot(&st.p, &st.p) == 0.0 {
-        st.p = phi;
-    }
-    let ap = st.op.apply(&st.p);
-    let pap = dot(&st.p, &ap);
-    if !pap.is_finite() || pap <= 0.0 {
-        return Err(format!(
-            "dual: non-positive curvature pᵀHp = {pap:e} (H should be SPD)"
-        ));
-    }
-    let acg = dot(&st.g, &st.p) / pap;
-    let mut af = f64::INFINITY;
-    let mut block = usize::MAX;
-    for i in 0..mdim {
-        if st.p[i] > 0.0 {
-            let t = ((st.x[i] - st.lb[i]) / st.p[i]).max(0.0);
-            if t < af {
-                af = t;
-                block = i;
+}
+
+/// The initial SMALBE M, a compliance converting ‖G̃λ̂‖ (a force) into the
+/// inner tolerance on ‖gᴾ‖ (a gap): ‖h‖/‖ẽ‖, capped by ‖PHP‖ so that it
+/// stays finite when the loads do no work on the free rigid motions (ẽ = 0,
+/// the rule for a partial kernel); invariant under scaling C, d or g.
+fn smalbe_m0(ref_g: f64, e_norm: f64, hnorm: f64) -> f64 {
+    ref_g / e_norm.max(ref_g / hnorm).max(f64::MIN_POSITIVE)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::qp::ssn::tests::two_blocks;
+
+    /// G̃ has orthonormal rows, P annihilates them, PHP + ρQ is symmetric
+    /// with eigenvalue ρ on range G̃ᵀ, and the power estimate of ‖PHP‖ is
+    /// positive and at most trace H.
+    #[test]
+    fn dual_operator_structure() {
+        let qp = two_blocks(6, 4, true);
+        let r = orthonormal_kernel(&qp.c, &qp.kernel).unwrap();
+        let fac = Cholesky::new(&qp.c, &qp.kernel).unwrap();
+        let mut op = DualOp::new(&qp, fac, r, "test").unwrap();
+        let (k, m) = (op.k(), qp.m());
+        assert!(k > 0 && m > k);
+        for a in 0..k {
+            for b in 0..k {
+                let want = if a == b { 1.0 } else { 0.0 };
+                assert!((dot(&op.gt[a], &op.gt[b]) - want).abs() <= 1e-12);
             }
+            let mut v = op.gt[a].clone();
+            op.project(&mut v);
+            assert!(norm(&v) <= 1e-12, "P G̃ᵀ ≠ 0");
         }
+        let hnorm = op.norm_estimate();
+        assert!(hnorm > 0.0);
+        op.rho = 7.0 * hnorm;
+        let u: Vec<f64> = (0..m).map(|i| ((i * 13 % 7) as f64) - 3.0).collect();
+        let v: Vec<f64> = (0..m).map(|i| ((i * 5 % 11) as f64) - 4.5).collect();
+        let (hu, hv) = (op.apply(&u), op.apply(&v));
+        let asym = (dot(&u, &hv) - dot(&v, &hu)).abs();
+        assert!(
+            asym <= 1e-12 * norm(&u) * norm(&hv),
+            "not symmetric: {asym:e}"
+        );
+        // (PHP + ρQ) G̃ᵀe₀ = ρ G̃ᵀe₀
+        let g0 = op.gt[0].clone();
+        let w = op.apply(&g0);
+        let d: Vec<f64> = w.iter().zip(&g0).map(|(a, b)| a - op.rho * b).collect();
+        assert!(norm(&d) <= 1e-10 * op.rho, "{:e}", norm(&d));
+        // ‖PHP v‖ for a unit v: at most ‖PHP‖ ≤ ‖H‖ ≤ trace H (H ⪰ 0).
+        op.rho = 0.0;
+        let trace: f64 = (0..m)
+            .map(|i| {
+                let mut e = vec![0.0; m];
+                e[i] = 1.0;
+                op.h(&e)[i]
+            })
+            .sum();
+        assert!(hnorm <= trace * (1.0 + 1e-12), "{hnorm} > trace {trace}");
     }
-    if acg <= af {
-        axpy(-acg, &st.p, &mut st.x);
-        axpy(-acg, &ap, &mut st.g);
-        let phin = st.phi();
-        let gamma = dot(&phin, &ap) / pap;
-        for (pi, fi) in st.p.iter_mut().zip(&phin) {
-            *pi = fi - gamma * *pi;
-        }
-        st.counts[0] += 1;
-    } else {
-        // Stop on the blocking bound; CG restarts on the smaller face.
-        for ((xi, pi), li) in st.x.iter_mut().zip(&st.p).zip(&st.lb) {
-            *xi = (*xi - af * pi).max(*li);
-        }
-        st.x[block] = st.lb[block];
-        axpy(-af, &ap, &mut st.g);
-        st.p = st.phi();
-        st.counts[1] += 1;
-    }
-    Ok(())
 }

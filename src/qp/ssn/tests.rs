@@ -373,9 +373,9 @@ fn wrong_kernel_is_rejected() {
     ));
 }
 
-pub(crate) fn example(name: &str) -> crate::pipeline::Prepared {
+pub(crate) fn example(name: &str) -> crate::run::Prepared {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("meshes/{name}.toml"));
-    crate::pipeline::prepare(&path, false).unwrap_or_else(|e| panic!("{name}: {e}"))
+    crate::run::prepare(&path, false).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 /// A string (n interior nodes, both ends fixed) pressed by a uniform
