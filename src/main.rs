@@ -103,6 +103,6 @@ fn main() {
         });
     }
     let mut cli = signorini::cli::Cli::parse();
-    cli.build.parallel = !threads.is_some_and(|t| t <= 1);
+    cli.build.parallel = threads.is_none_or(|t| t > 1);
     std::process::exit(signorini::cli::run(cli));
 }
