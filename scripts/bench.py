@@ -421,6 +421,13 @@ def write_report(path: Path, res: dict, args, cmdline: str) -> None:
             w(f"| signorini end to end ≤ 0.5× FEniCSx linear elastic | {fam}, {s['size']} | {best['name']} total {fmt(best['total'])} s ÷ {fmt(fx['t_total'])} s = {fmt(r)} | {'yes' if r <= 0.5 else 'no'} |")
     w("")
     w("Raw results: `" + res["raw"] + "`.\n")
+    # The hand-written notes of the file being replaced (everything from
+    # "## Notes" on) are kept: measurements behind the methods' parameters.
+    if path.exists():
+        old = path.read_text()
+        k = old.find("\n## Notes\n")
+        if k >= 0:
+            w(old[k + 1:].rstrip("\n") + "\n")
     path.write_text("\n".join(L))
 
 

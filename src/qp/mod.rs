@@ -28,6 +28,8 @@ pub mod registry;
 pub mod settings;
 pub mod ssn;
 #[cfg(test)]
+pub(crate) mod testing;
+#[cfg(test)]
 mod tests_methods;
 
 pub use crate::linalg::sparse::{self, Csr};

@@ -2,10 +2,12 @@
 //! against CGC with the Cholesky preconditioner on small two-body contact
 //! problems: 2D trusses on a square grid (with diagonals, hence rigid), one
 //! contact row per pair of facing nodes, g = 0 and g > 0, coercive and
-//! semicoercive (a floating body resting in a V-shaped contact).
+//! semicoercive (a floating body resting in a V-shaped contact). The
+//! reference is `qp::testing::reference`.
 
 use crate::linalg::sparse::{norm, norm_inf};
 use crate::qp::precond::PrecondKind;
+use crate::qp::testing::reference;
 use crate::qp::{primal::cgc, registry, Csr, QpError, QpProblem, QpResult, SolveOptions, Status};
 
 #[derive(Clone, Copy, Debug)]
@@ -156,14 +158,6 @@ fn opts(tol: f64) -> SolveOptions {
         o.settings.cgc.preconditioner = PrecondKind::Cholesky;
         o
     }
-}
-
-fn reference(qp: &QpProblem) -> QpResult {
-    // (CGC's residual floor on the semicoercive problems is ≈1e-13.)
-    let r = registry::solve("cgc", qp, &opts(1e-11)).expect("cgc");
-    assert!(r.status.converged(), "reference: {}", r.status.describe());
-    assert!(r.kkt.within(1e-9), "reference KKT {:?}", r.kkt);
-    r
 }
 
 fn rel_err(x: &[f64], y: &[f64]) -> f64 {

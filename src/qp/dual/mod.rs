@@ -676,7 +676,7 @@ fn smalbe_m0(ref_g: f64, e_norm: f64, hnorm: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::qp::ssn::tests::two_blocks;
+    use crate::qp::testing::two_blocks;
 
     /// G̃ has orthonormal rows, P annihilates them, PHP + ρQ is symmetric
     /// with eigenvalue ρ on range G̃ᵀ, and the power estimate of ‖PHP‖ is

@@ -139,7 +139,7 @@ mod tests {
     use crate::linalg::cholesky::Cholesky;
     use crate::linalg::kernel::orthonormal_kernel;
     use crate::linalg::sparse::{dot, norm_inf};
-    use crate::qp::ssn::tests::{compare, reference, two_blocks};
+    use crate::qp::testing::{compare, reference, two_blocks};
     use crate::qp::{kkt, run_direct, SolveOptions};
 
     fn opts() -> SolveOptions {
@@ -216,7 +216,7 @@ mod tests {
     #[test]
     fn shipped_examples_agree_with_cgc() {
         for name in ["two_blocks", "floating_block", "three_bodies"] {
-            let prep = crate::qp::ssn::tests::example(name);
+            let prep = crate::qp::testing::example(name);
             let qp = &prep.model.qp;
             assert!(!qp.kernel.is_empty(), "{name} should be semicoercive");
             let refr = reference(qp);

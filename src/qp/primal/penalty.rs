@@ -1,50 +1,19 @@
-//! Exterior penalty with relaxation (methods.md §4.4). With gaps, the penalty
-//! acts on (a_j, x) − g_j:
+//! Exterior penalty with relaxation (docs/methods.md §4.4): minimise
+//! h_ε(x, t) = f(x) + Σ_j ((a_j, x) − g_j + t_j)² / (2ε_j), t ≥ 0, by sweeps
+//! of Gauss–Seidel/SOR over x (ω = `omega`; C and Aᵀ by rows, no
+//! allocation) followed by the exact t_j = max(0, g_j − (a_j, x)).
 //!
-//! ```text
-//!   h_ε(x, t) = f(x) + 1/(2ε_p) Σ_j ((a_j, x) − g_j + t_j)²,   t ≥ 0,
-//! ```
+//! ε: the setting `penalty` for every row (the report's), else one per row,
+//! ε_j = 1/([`PENALTY_FACTOR`] · min c_kk over the row's unknowns), so a
+//! soft body under a stiff one is penalised in its own scale (§8.4).
+//! Stop when ‖x^{k+1} − x^k‖ ≤ tol·‖x^k‖; λ = (Ax − g)⁺/ε, exact
+//! stationarity for the penalised problem, feasibility to O(ε).
 //!
-//! minimised by block relaxation: one sweep = Gauss–Seidel/SOR (ω =
-//! `omega`, 1 = Gauss–Seidel) over the x_i with the current s_j =
-//! (a_j,x) − g_j + t_j, then the exact projected minimisation
-//! t_j = max(0, g_j − (a_j,x)), so s_j = ((a_j,x) − g_j)⁺. The sweep allocates
-//! nothing (C by rows, Aᵀ by rows = A by columns).
-//!
-//! ε_p: the setting `penalty` (one value for every row, as in the report), or by
-//! default one per row, ε_j = 1/(10³ · min c_kk over the unknowns k of row
-//! j): 1/ε_j three orders of magnitude above the stiffness of the softer body
-//! the row touches, whose motion the violation O(ε_j·λ_j) is measured against (the report's best values were one to two orders above the
-//! entries of C; one more order buys accuracy — the error of x_ε is O(ε_p),
-//! here ≈ 10⁻³ relative — at the price of slower relaxation). Per row, so
-//! that a soft body under a stiff one is not penalised with the stiff one's
-//! scale: a global ε_p = 1/(10³·max c_ii) makes C + A_JᵀA_J/ε_p as badly
-//! conditioned as the stiffness contrast times 10³ (at a contrast of 2·10⁵
-//! the penalised stationarity then stalled at 1.2·10⁻⁶).
-//!
-//! Stopping: ERR = ‖x^{k+1} − x^k‖ / max(‖x^k‖, tiny) < tol (§5 made
-//! relative), MAXIT = `max_iter` sweeps. Result: λ = (Ax − g)⁺/ε_p,
-//! active = {λ > 0}; the largest constraint violation max (Ax − g)⁺ (= O(ε_p))
-//! is reported by `log::info!`. The KKT stationarity holds exactly for this λ
-//! at the penalty minimiser; primal feasibility only to O(ε_p).
-//!
-//! **Subspace correction** (`accelerate`, default on; not in the
-//! report). Gauss–Seidel on h_ε converges at the rate of GS on the stiffened
-//! C + A_JᵀA_J/ε_p: on the shipped models 100 000 sweeps did not reach
-//! tol = 1e-10 (ω = 1 to 1.95 made no difference). So every
-//! [`CORRECTION_EVERY`] sweeps the penalised energy g_ε is minimised exactly on
-//! the current penalty set J = {j : (a_j,x) > g_j}, a linear solve with
-//! C + A_JᵀA_J/ε_p (sparse Cholesky) giving y, followed by an exact line
-//! search of g_ε on the segment [x, y] (a semismooth Newton step for
-//! ∇g_ε = 0), so the iteration stays a descent method on the same g_ε
-//! and converges to the same x_ε; once J is right the next sweep meets the
-//! stopping test. A singular C + A_JᵀA_J/ε_p (a floating body J does not hold
-//! yet) skips the correction. `accelerate = false` runs the report's plain
-//! relaxation.
-//!
-//! Semicoercive C needs nothing special: the relaxation only needs c_ii > 0,
-//! and the penalised problem has a minimiser whenever the contact holds the
-//! floating bodies (otherwise the sweeps drift and MAXIT is reported).
+//! `accelerate` (default): every [`CORRECTION_EVERY`] sweeps, minimise the
+//! penalised energy exactly on the current penalty set (one sparse
+//! Cholesky of C + A_JᵀW A_J on the fixed pattern of C + AᵀA, then an exact
+//! line search): a descent step on the same function, so x_ε is unchanged.
+//! Measurements behind these choices: BENCHMARKS.md, "Notes".
 
 use crate::linalg::augmented::AugPattern;
 use crate::linalg::cholesky::Workspace;

@@ -20,7 +20,7 @@ mod lowrank;
 mod path;
 mod schur;
 #[cfg(test)]
-pub(crate) mod tests;
+mod tests;
 
 use crate::linalg::augmented::AugPattern;
 use crate::linalg::cholesky::{Cholesky, Workspace};

@@ -1,173 +1,13 @@
 //! Tests of SSN: agreement with cgc/mprgp/asm on lattices and the shipped
 //! examples, both linear-algebra paths, the Woodbury update, the growth limit,
-//! determinism, the certificate. The generators and `reference`/`compare` are
-//! shared with `qp::dual::mprgp`'s tests.
+//! determinism, the certificate. The generator, `reference` and `compare` are
+//! `qp::testing`'s.
 
 use super::*;
 use crate::linalg::sparse::{norm, Csr};
 use crate::qp::executor::Executor;
-use crate::qp::{kkt, precond::PrecondKind, primal::cgc, run_direct, SolveOptions};
-
-/// Two square spring lattices (bars along the grid lines and both
-/// diagonals, 2 DOFs per node), the lower one clamped at its bottom row,
-/// stacked with a small vertical offset; node-to-node contact rows between
-/// the lower block's top row and the upper block's bottom row
-/// (n = (0, 1), the outward normal of the lower body). Gaps: 0 on the left
-/// part of the interface, growing on the right.
-///
-/// * `floating = false`: the upper block is clamped at its top row; the load
-///   pushes its left part down and pulls its right part up.
-/// * `floating = true`: the upper block only has u_x = 0 on its left column,
-///   so its vertical translation is held by contact alone (kernel vector
-///   in `qp.kernel`); the load presses it down with an uplift at the right.
-pub(crate) fn two_blocks(nx: usize, ny: usize, floating: bool) -> QpProblem {
-    let nn = nx * ny;
-    // global node p: block b ∈ {0 (lower), 1 (upper)}, (i, j)
-    let node = |b: usize, i: usize, j: usize| b * nn + j * nx + i;
-    let mut trip_full: Vec<(usize, usize, f64)> = vec![];
-    let mut bar = |p: usize, q: usize, dir: [f64; 2], k: f64| {
-        let l = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
-        let e = [dir[0] / l, dir[1] / l];
-        for a in 0..2 {
-            for b in 0..2 {
-                let v = k * e[a] * e[b];
-                trip_full.push((2 * p + a, 2 * p + b, v));
-                trip_full.push((2 * q + a, 2 * q + b, v));
-                trip_full.push((2 * p + a, 2 * q + b, -v));
-                trip_full.push((2 * q + a, 2 * p + b, -v));
-            }
-        }
-    };
-    for b in 0..2 {
-        let kk = if b == 0 { 1.0 } else { 2.5 };
-        for j in 0..ny {
-            for i in 0..nx {
-                if i + 1 < nx {
-                    bar(node(b, i, j), node(b, i + 1, j), [1.0, 0.0], kk);
-                }
-                if j + 1 < ny {
-                    bar(node(b, i, j), node(b, i, j + 1), [0.0, 1.0], kk);
-                }
-                if i + 1 < nx && j + 1 < ny {
-                    bar(node(b, i, j), node(b, i + 1, j + 1), [1.0, 1.0], 0.5 * kk);
-                    bar(node(b, i + 1, j), node(b, i, j + 1), [-1.0, 1.0], 0.5 * kk);
-                }
-            }
-        }
-    }
-    // Fixed DOFs.
-    let mut fixed = vec![false; 4 * nn];
-    for i in 0..nx {
-        fixed[2 * node(0, i, 0)] = true;
-        fixed[2 * node(0, i, 0) + 1] = true;
-        if !floating {
-            fixed[2 * node(1, i, ny - 1)] = true;
-            fixed[2 * node(1, i, ny - 1) + 1] = true;
-        }
-    }
-    if floating {
-        for j in 0..ny {
-            fixed[2 * node(1, 0, j)] = true;
-        }
-    }
-    let mut map = vec![usize::MAX; 4 * nn];
-    let mut n = 0;
-    for (dof, f) in fixed.iter().enumerate() {
-        if !f {
-            map[dof] = n;
-            n += 1;
-        }
-    }
-    let trip: Vec<(usize, usize, f64)> = trip_full
-        .iter()
-        .filter(|(i, j, _)| map[*i] != usize::MAX && map[*j] != usize::MAX)
-        .map(|&(i, j, v)| (map[i], map[j], v))
-        .collect();
-    let c = Csr::from_triplets(n, n, &trip);
-    // Loads on the upper block.
-    let mut d = vec![0.0; n];
-    for j in 0..ny {
-        for i in 0..nx {
-            let dy = map[2 * node(1, i, j) + 1];
-            let dx = map[2 * node(1, i, j)];
-            let t = i as f64 / (nx - 1) as f64;
-            let fy = if floating {
-                -1.0 + 1.6 * t * t
-            } else {
-                -1.0 + 2.2 * t
-            };
-            if dy != usize::MAX {
-                d[dy] += 0.05 * fy;
-            }
-            if dx != usize::MAX {
-                d[dx] += 0.01 * (j as f64 - 1.0);
-            }
-        }
-    }
-    // gravity-like load on the lower block
-    for j in 1..ny {
-        for i in 0..nx {
-            d[map[2 * node(0, i, j) + 1]] -= 0.01;
-        }
-    }
-    let mut at = vec![];
-    let mut g = vec![];
-    for i in 0..nx {
-        let lo = map[2 * node(0, i, ny - 1) + 1];
-        let up = map[2 * node(1, i, 0) + 1];
-        let r = g.len();
-        at.push((r, lo, 1.0));
-        at.push((r, up, -1.0));
-        let t = i as f64 / (nx - 1) as f64;
-        g.push(if t < 0.4 { 0.0 } else { 0.02 * (t - 0.4) });
-    }
-    let a = Csr::from_triplets(g.len(), n, &at);
-    let mut kernel = vec![];
-    if floating {
-        let mut z = vec![0.0; n];
-        for j in 0..ny {
-            for i in 0..nx {
-                z[map[2 * node(1, i, j) + 1]] = 1.0;
-            }
-        }
-        kernel.push(z);
-    }
-    QpProblem { c, d, a, g, kernel }
-}
-
-pub(crate) fn reference(qp: &QpProblem) -> Output {
-    let opts = {
-        let mut o = SolveOptions::default();
-        o.settings.tol = 1e-12;
-        o.settings.cgc.preconditioner = PrecondKind::Cholesky;
-        o
-    };
-    let r = run_direct(cgc::solve, qp, &opts).expect("cgc");
-    assert!(r.status.converged(), "cgc: {:?}", r.status);
-    r
-}
-
-/// x agrees to `rel`, active sets equal, KKT ≤ 1e-8, λ ≥ 0.
-pub(crate) fn compare(qp: &QpProblem, r: &Output, refr: &Output, rel: f64) {
-    assert!(r.status.converged(), "{:?}", r.status);
-    let diff: Vec<f64> = r.x.iter().zip(&refr.x).map(|(a, b)| a - b).collect();
-    let e = norm(&diff) / norm(&refr.x).max(1e-300);
-    assert!(e <= rel, "x differs: {e:e}");
-    assert_eq!(r.active, refr.active, "active sets differ");
-    let k = kkt::residuals(qp, &r.x, &r.lambda);
-    assert!(k.max() <= 1e-8, "{k:?}");
-    assert!(r.lambda.iter().all(|&l| l >= 0.0), "λ < 0");
-    let ldiff: Vec<f64> = r
-        .lambda
-        .iter()
-        .zip(&refr.lambda)
-        .map(|(a, b)| a - b)
-        .collect();
-    assert!(
-        norm(&ldiff) <= 1e-6 * norm(&refr.lambda).max(1e-300),
-        "λ differs"
-    );
-}
+use crate::qp::testing::{compare, example, reference, two_blocks, Solution};
+use crate::qp::{kkt, run_direct, SolveOptions};
 
 fn opts() -> SolveOptions {
     {
@@ -177,12 +17,12 @@ fn opts() -> SolveOptions {
     }
 }
 
-fn nontrivial(r: &Output) {
-    let na = r.active.iter().filter(|b| **b).count();
+fn nontrivial(r: &impl Solution) {
+    let na = r.active().iter().filter(|b| **b).count();
     assert!(
-        na > 0 && na < r.active.len(),
+        na > 0 && na < r.active().len(),
         "active {na} of {}",
-        r.active.len()
+        r.active().len()
     );
     // some active row with g > 0 would be nice but is not required
 }
@@ -373,11 +213,6 @@ fn wrong_kernel_is_rejected() {
     ));
 }
 
-pub(crate) fn example(name: &str) -> crate::run::Prepared {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("meshes/{name}.toml"));
-    crate::run::prepare(&path, false).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
 /// A string (n interior nodes, both ends fixed) pressed by a uniform
 /// load onto a parabolic obstacle touching it at the middle node: the
 /// 1D analogue of Hertz. With only the middle row glued, the first
@@ -470,8 +305,8 @@ fn shipped_examples() {
         // interface opens), PDAS releases it in 17 steps.
         let maxit = if name == "cantilevers" { 20 } else { 15 };
         assert!(r.iterations <= maxit, "{name}: {} iterations", r.iterations);
-        let refr = if ["floating_block", "two_blocks", "three_bodies"].contains(&name) {
-            reference(qp)
+        let refr: Output = if ["floating_block", "two_blocks", "three_bodies"].contains(&name) {
+            reference(qp).into()
         } else {
             let m = run_direct(crate::qp::dual::mprgp::solve, qp, &opts()).unwrap();
             assert!(m.status.converged(), "{name}: mprgp {:?}", m.status);
