@@ -355,30 +355,3 @@ fn report_keystones() {
         }
     }
 }
-
-/// Diagnostic (not a check): the same table for a problem file,
-/// `REPORT_TOML=model.toml [REPORT_METHODS=a,b] cargo test --release --lib
-/// report_toml -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn report_toml() {
-    let Ok(path) = std::env::var("REPORT_TOML") else {
-        return;
-    };
-    let methods = std::env::var("REPORT_METHODS").unwrap_or("mprgp,dual,uzawa,asm-cgh".into());
-    let prep = crate::run::prepare(std::path::Path::new(&path), false).unwrap();
-    let qp = &prep.model.qp;
-    eprintln!("n {} m {} k {}", qp.n(), qp.m(), qp.kernel.len());
-    let opts = SolveOptions::default();
-    let refr = registry::solve("asm", qp, &opts).unwrap();
-    eprintln!("asm: {}", report(qp, &refr, &refr));
-    for m in methods.split(',') {
-        let t = std::time::Instant::now();
-        let r = registry::solve(m, qp, &opts).unwrap();
-        eprintln!(
-            "{m}: {} ({:.2} s)",
-            report(qp, &r, &refr),
-            t.elapsed().as_secs_f64()
-        );
-    }
-}
