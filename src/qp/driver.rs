@@ -4,14 +4,15 @@
 //! [`Context`] (its validated [`Settings`], the caller's [`Workspace`] for
 //! factor reuse, the checked warm start, an [`Executor`] with the caller's
 //! observers, a phase timer) and returns an [`Output`]. Everything that is the
-//! same for every method happens here, once ([`run`]): the data check, the
+//! same for every method happens here, once ([`run`]); the caller's
+//! observers ([`SolveOptions::observers`]) see every iteration: the data check, the
 //! boundedness decision on the kernel (§8.2), the warm-start check (§8.3),
 //! the fallback when an unbounded claim fails its certificate, and the KKT
 //! certificate and energy (§8.4) that turn an [`Output`] into a [`QpResult`].
 //! A method cannot return a certificate of its own: [`Output`] has none, so a
 //! sub-solver's result (preelim's inner CGC) never carries a blank one.
 
-use super::executor::Executor;
+use super::executor::{Executor, Observer};
 use super::recession::{self, Boundedness};
 use super::settings::Settings;
 use super::{kkt, IterRecord, Kkt, QpError, QpProblem, QpResult, SolveOptions, Status};
@@ -91,6 +92,9 @@ impl<'a> Context<'a> {
             self.opts.progress.then_some(label.as_str()),
         );
         e.deadline = self.opts.deadline;
+        for o in &self.opts.observers {
+            e.observers.push(Box::new(Forward(o.clone())));
+        }
         e
     }
 
@@ -107,6 +111,18 @@ impl<'a> Context<'a> {
     /// The phases timed so far (taken: a second call returns none).
     pub fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.timings)
+    }
+}
+
+/// Hands an executor's records to an observer the caller shares.
+struct Forward(super::SharedObserver);
+
+impl Observer for Forward {
+    fn observe(&mut self, rec: &IterRecord) {
+        self.0.borrow_mut().observe(rec);
+    }
+    fn finish(&mut self) {
+        self.0.borrow_mut().finish();
     }
 }
 
@@ -292,4 +308,50 @@ pub fn check_warm_start(qp: &QpProblem, x0: &[f64]) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::qp::testing::two_blocks;
+    use std::cell::RefCell;
+    use std::rc::Rc;
+
+    /// Counts records and finishes.
+    #[derive(Default)]
+    struct Count {
+        records: usize,
+        finished: usize,
+        last_iter: usize,
+    }
+
+    impl Observer for Count {
+        fn observe(&mut self, rec: &IterRecord) {
+            self.records += 1;
+            self.last_iter = rec.iter;
+        }
+        fn finish(&mut self) {
+            self.finished += 1;
+        }
+    }
+
+    /// The caller's observer sees every iteration of the method it chose,
+    /// for each family, and one `finish` per executor run.
+    #[test]
+    fn the_callers_observer_sees_every_iteration() {
+        let qp = two_blocks(8, 4, true);
+        for name in ["cgc", "asm", "mprgp", "ssn", "penalty"] {
+            let count = Rc::new(RefCell::new(Count::default()));
+            let opts = SolveOptions {
+                observers: vec![count.clone()],
+                ..Default::default()
+            };
+            let r = crate::qp::registry::solve(name, &qp, &opts).unwrap();
+            assert!(r.status.converged(), "{name}: {:?}", r.status);
+            let c = count.borrow();
+            assert_eq!(c.records, r.iterations, "{name}");
+            assert_eq!(c.last_iter, r.iterations, "{name}");
+            assert_eq!(c.finished, 1, "{name}");
+        }
+    }
 }

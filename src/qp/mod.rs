@@ -165,10 +165,15 @@ pub(crate) fn run_direct(
     f(qp, &mut Context::new(opts, &ws))
 }
 
+/// An observer the caller keeps (to read what it saw after the solve) and
+/// hands to the driver, which shows it every iteration of every executor.
+pub type SharedObserver = std::rc::Rc<std::cell::RefCell<dyn executor::Observer>>;
+
 /// What a caller asks of the driver besides the problem: the settings
 /// (validated by the driver) and the run control — progress, label,
-/// deadline, warm start — which belong to the caller, not to the problem file.
-#[derive(Debug, Clone, Default)]
+/// deadline, warm start, observers — which belong to the caller, not to the
+/// problem file.
+#[derive(Clone, Default)]
 pub struct SolveOptions {
     pub settings: Settings,
     /// Print progress to stderr for long solves.
@@ -181,6 +186,21 @@ pub struct SolveOptions {
     pub deadline: Option<std::time::Instant>,
     /// Warm start (load steps, restart): used by methods that can, when feasible.
     pub x0: Option<Vec<f64>>,
+    /// Observers of every iteration record, besides the progress bar.
+    pub observers: Vec<SharedObserver>,
+}
+
+impl std::fmt::Debug for SolveOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SolveOptions")
+            .field("settings", &self.settings)
+            .field("progress", &self.progress)
+            .field("label", &self.label)
+            .field("deadline", &self.deadline)
+            .field("x0", &self.x0.as_ref().map(|x| x.len()))
+            .field("observers", &self.observers.len())
+            .finish()
+    }
 }
 
 impl SolveOptions {
