@@ -116,7 +116,8 @@ pub struct Kkt {
     pub contact_balance: f64,
 }
 
-/// What every method returns.
+/// What the driver returns: a method's [`Output`] (the same fields) with
+/// the certificate, the energy and the driver's notes.
 #[derive(Debug, Clone)]
 pub struct QpResult {
     pub x: Vec<f64>,
