@@ -942,11 +942,18 @@ def main(argv=None) -> int:
         if "a" in parts:
             t0 = time.time()
             prob = Problem(toml, with_contact=False, gmsh=gmsh, point_force_thickness=args.force_thickness)
-            conflict = None
-            try:
-                _, _, floating = prob.reduction()
-            except Conflict as e:
-                conflict, floating = str(e), []
+            conflict, floating = None, []
+            # Any step's prescribed values may conflict (e.g. a plate side that
+            # moves while the slip line below it is fixed), so every step is tried.
+            base_cfg = prob.cfg
+            for cfg_s in step_cfgs:
+                prob.cfg = cfg_s
+                try:
+                    _, _, floating = prob.reduction()
+                except Conflict as e:
+                    conflict, floating = str(e), []
+                    break
+            prob.cfg = base_cfg
             outa = tmp / "no_contact"
             outa.mkdir(parents=True, exist_ok=True)
             rc, txt, cmd = run_signorini(exe, toml, outa, ["--no-contact"])

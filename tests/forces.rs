@@ -43,6 +43,7 @@ const SHIPPED: &[&str] = &[
     "cantilevers",
     "hip",
     "geodynamic",
+    "geodynamic_steps",
 ];
 
 /// |a + b| ≤ tol · scale, for force and moment.

@@ -5,7 +5,7 @@ use std::path::Path;
 use signorini::io::atomic::{write_atomic, IoError};
 use signorini::io::hdf5::{append_step, create_checkpoint, read_checkpoint};
 use signorini::io::vtu::{read_pvd, read_vtu_arrays, write_contact_vtu, write_pvd, write_vtu};
-use signorini::io::{ContactGeometry, OutMesh, StepInfo, StepOutput};
+use signorini::io::{Change, ContactGeometry, OutMesh, StepInfo, StepOutput};
 
 /// Two bodies, one triangle each, touching along y = 0 from x = 0 to x = 1.
 /// The two interface nodes are duplicated (points 0,1 in body 0 and 3,4 in
@@ -72,6 +72,7 @@ fn step(t: f64, scale: f64) -> StepOutput {
             time_solve: 0.1 * s,
             time_total: 0.16,
         },
+        change: None,
     }
 }
 
@@ -698,4 +699,58 @@ fn non_finite_values_survive() {
 fn io_error_is_send_sync_for_anyhow() {
     fn check<T: std::error::Error + Send + Sync + 'static>() {}
     check::<IoError>();
+}
+
+/// The change fields of `[output] reference_step` go through the checkpoint
+/// unchanged, and into the VTU pair with component names; a change of the
+/// wrong length is refused before anything is written.
+#[test]
+fn change_fields_roundtrip_through_hdf5_and_vtu() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("model.h5");
+    let m = mesh(true);
+    create_checkpoint(&p, &m, &attrs()).unwrap();
+    let s1 = step(0.5, 1.0);
+    let mut s2 = step(1.0, 2.0);
+    s2.change = Some(Change::between(&s2, &s1, 1));
+    let c = s2.change.as_ref().unwrap();
+    let d = |s: &StepOutput| s.displacement[2];
+    assert_eq!(
+        c.displacement[2],
+        [d(&s2)[0] - d(&s1)[0], d(&s2)[1] - d(&s1)[1]]
+    );
+    assert!((c.displacement[2][0] - 0.2).abs() < 1e-15);
+    assert_eq!(c.stress[0][0], 1.5e8);
+    append_step(&p, 1, &s1).unwrap();
+    append_step(&p, 2, &s2).unwrap();
+    let ck = read_checkpoint(&p).unwrap();
+    assert_eq!(ck.steps[0].change, None);
+    assert_eq!(ck.steps[1].change, s2.change);
+
+    let v = dir.path().join("model.vtu");
+    write_vtu(&v, &m, &s2, false).unwrap();
+    let r = read_vtu_arrays(&v).unwrap();
+    let du = r.point_array("displacement_change").unwrap();
+    assert_eq!(du.num_comp, 3);
+    let c2 = c.displacement[2];
+    assert_eq!(du.values[6..9], [c2[0], c2[1], 0.0]);
+    let ds = r.cell_array("stress_change").unwrap();
+    assert_eq!((ds.num_comp, ds.values[0]), (4, 1.5e8));
+    let xml = std::fs::read_to_string(&v).unwrap();
+    assert!(xml.contains(r#"ComponentName0="dux""#), "component names");
+    let vc = dir.path().join("model_contact.vtu");
+    write_contact_vtu(&vc, &m, &s2, false).unwrap();
+    let rc = read_vtu_arrays(&vc).unwrap();
+    assert_eq!(
+        rc.point_array("contact_pressure_change").unwrap().values,
+        vec![2e5, 0.0]
+    );
+
+    let mut bad = s2.clone();
+    bad.change.as_mut().unwrap().stress.pop();
+    let q = dir.path().join("bad.vtu");
+    assert!(write_vtu(&q, &m, &bad, false).is_err());
+    assert!(!q.exists());
+    assert!(append_step(&p, 3, &bad).is_err());
+    assert_eq!(read_checkpoint(&p).unwrap().steps.len(), 2);
 }

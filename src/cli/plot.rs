@@ -51,6 +51,14 @@ pub struct PlotArgs {
     /// Logarithmic colour scale (values ≤ 0 get the bottom colour).
     #[arg(long)]
     pub log: bool,
+    /// Draw the change since the reference step ([output] reference_step):
+    /// displacement_change, stress_change, contact_pressure_change.
+    #[arg(long)]
+    pub change: bool,
+    /// With --contact: every step of the checkpoint in one figure, one
+    /// curve per step (a load-step sequence).
+    #[arg(long, conflicts_with = "step")]
+    pub all_steps: bool,
 }
 
 /// "MIN,MAX" as two numbers.
@@ -80,6 +88,8 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
     let opts = PlotOptions {
         range,
         log: a.log,
+        change: a.change,
+        all_steps: a.all_steps,
         step: a.step,
         field,
         scale: a.scale,
@@ -100,6 +110,11 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                 } else {
                     field.name().to_string()
                 };
+                let what = if a.change {
+                    format!("{what} change since the reference step")
+                } else {
+                    what
+                };
                 let unit = if a.contact {
                     " Pa"
                 } else {
@@ -109,7 +124,11 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                         _ => "",
                     }
                 };
-                println!("step {} of {}, {what}", s.step, s.steps);
+                if a.all_steps {
+                    println!("steps 1 to {}, {what}", s.steps);
+                } else {
+                    println!("step {} of {}, {what}", s.step, s.steps);
+                }
                 if let Some((lo, hi)) = s.range {
                     println!(
                         "range: {} to {}{unit}{}",

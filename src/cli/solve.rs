@@ -255,6 +255,14 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
             x[0], x[1], u[0], u[1]
         );
     }
+    if let Some(k) = s.reference_step {
+        println!(
+            "reference   step {k}: displacement_change, stress_change and contact_pressure_change (this step minus step {k}) in the VTU and HDF5 outputs of step {k} and later"
+        );
+    }
+    if let Some(rows) = &s.steps {
+        print_steps(rows);
+    }
     let phases: Vec<String> = res
         .timings
         .iter()
@@ -276,4 +284,42 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
     println!("            {}", out.contact_vtu.display());
     println!("            {}", out.h5.display());
     println!("            {}", out.json.display());
+}
+
+/// The per-step table (the report's §3.4 table; `steps` in the JSON).
+fn print_steps(rows: &[run::StepRow]) {
+    println!(
+        "steps       {:>5} {:>10} {:>8} {:>9} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>9} {:>9}",
+        "step",
+        "t",
+        "nodes",
+        "triangles",
+        "DOFs",
+        "rows",
+        "active",
+        "opened",
+        "closed",
+        "iter",
+        "solve [s]",
+        "step [s]"
+    );
+    let opt = |v: Option<usize>| v.map_or_else(|| "-".to_string(), |v| v.to_string());
+    for r in rows {
+        println!(
+            "            {:>5} {:>10} {:>8} {:>9} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>9.3} {:>9.3}{}",
+            r.step,
+            format!("{}", r.t),
+            r.nodes,
+            r.triangles,
+            r.dofs,
+            r.constraints,
+            r.active,
+            opt(r.opened),
+            opt(r.closed),
+            r.iterations,
+            r.time_solve,
+            r.time_step,
+            if r.converged { "" } else { "  NOT CONVERGED" }
+        );
+    }
 }

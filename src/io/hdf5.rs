@@ -14,7 +14,7 @@ use ::hdf5::types::VarLenUnicode;
 use ::hdf5::{File, Group, H5Type, Location};
 
 use super::atomic::{write_atomic, IoError};
-use super::{ContactGeometry, OutMesh, StepInfo, StepOutput};
+use super::{Change, ContactGeometry, OutMesh, StepInfo, StepOutput};
 
 /// Everything a checkpoint holds.
 ///
@@ -46,6 +46,9 @@ use super::{ContactGeometry, OutMesh, StepInfo, StepOutput};
 ///     contact_pressure f64 [rows], gap f64 [rows], active u8 [rows]
 ///     attrs: time, energy, kkt_*, time_* (f64); iterations (u64);
 ///            converged (u8 0/1); method, preconditioner (strings)
+///     with `[output] reference_step` (that step and later ones):
+///     displacement_change f64 [n, 2], stress_change f64 [m, 4],
+///     contact_pressure_change f64 [rows]; attr reference_step (u64)
 /// ```
 #[derive(Debug, Clone, Default)]
 pub struct Checkpoint {
@@ -347,7 +350,14 @@ fn check_step(ctx: &Ctx, s: &StepOutput, n: usize, m: usize, r: usize) -> Result
         ("gap", s.gap.len(), r),
         ("active", s.active.len(), r),
     ];
-    for (what, got, want) in lens {
+    let change = s.change.as_ref().map(|c| {
+        [
+            ("displacement_change", c.displacement.len(), n),
+            ("stress_change", c.stress.len(), m),
+            ("contact_pressure_change", c.contact_pressure.len(), r),
+        ]
+    });
+    for (what, got, want) in lens.into_iter().chain(change.into_iter().flatten()) {
         if got != want {
             return Err(ctx.format(format!(
                 "step field {what} has {got} entries, the mesh needs {want}"
@@ -370,6 +380,19 @@ fn write_step(ctx: &Ctx, g: &Group, s: &StepOutput) -> Result<(), IoError> {
     write_ds(ctx, g, "contact_pressure", &[r], &s.contact_pressure)?;
     write_ds(ctx, g, "gap", &[r], &s.gap)?;
     write_ds(ctx, g, "active", &[r], &s.active)?;
+    if let Some(c) = &s.change {
+        write_ds(
+            ctx,
+            g,
+            "displacement_change",
+            &[n, 2],
+            &flat2(&c.displacement),
+        )?;
+        let ds: Vec<f64> = c.stress.iter().flatten().copied().collect();
+        write_ds(ctx, g, "stress_change", &[m, 4], &ds)?;
+        write_ds(ctx, g, "contact_pressure_change", &[r], &c.contact_pressure)?;
+        set_attr_scalar(ctx, g, "reference_step", &(c.reference_step as u64))?;
+    }
 
     let i = &s.info;
     set_attr_scalar(ctx, g, "time", &s.time)?;
@@ -641,6 +664,24 @@ fn read_step(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<StepOutput, IoError
     let (_, contact_pressure) = read_ds::<f64>(ctx, g, "contact_pressure", None, r)?;
     let (_, gap) = read_ds::<f64>(ctx, g, "gap", None, r)?;
     let (_, active) = read_ds::<u8>(ctx, g, "active", None, r)?;
+    let change = if g.link_exists("displacement_change") {
+        let (_, du) = read_ds::<f64>(ctx, g, "displacement_change", Some(2), n)?;
+        let (_, ds) = read_ds::<f64>(ctx, g, "stress_change", Some(4), m)?;
+        let (_, dp) = read_ds::<f64>(ctx, g, "contact_pressure_change", None, r)?;
+        let k = get_attr::<u64>(ctx, g, "reference_step")?;
+        Some(Change {
+            reference_step: usize::try_from(k)
+                .map_err(|_| ctx.format(format!("{}@reference_step: {k} too large", g.name())))?,
+            displacement: pairs(&du),
+            stress: ds
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect(),
+            contact_pressure: dp,
+        })
+    } else {
+        None
+    };
 
     let iterations = get_attr::<u64>(ctx, g, "iterations")?;
     let info = StepInfo {
@@ -673,5 +714,6 @@ fn read_step(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<StepOutput, IoError
         active,
         reaction: vec![],
         info,
+        change,
     })
 }

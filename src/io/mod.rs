@@ -79,6 +79,51 @@ pub struct StepOutput {
     pub reaction: Vec<[f64; 2]>,
     /// Solver record stored as attributes.
     pub info: StepInfo,
+    /// The change since the reference step (`[output] reference_step`), on
+    /// that step and every later one.
+    pub change: Option<Change>,
+}
+
+/// A step's fields minus those of the reference step: what the loads added
+/// since then (e.g. plate motion on top of the gravity state).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Change {
+    /// The reference step (1-based).
+    pub reference_step: usize,
+    /// Per output point: u − u_ref.
+    pub displacement: Vec<[f64; 2]>,
+    /// Per triangle: σ − σ_ref (σxx, σyy, σxy, σzz).
+    pub stress: Vec<[f64; 4]>,
+    /// Per contact row: p − p_ref.
+    pub contact_pressure: Vec<f64>,
+}
+
+impl Change {
+    /// The fields of `step` minus those of `reference` (same mesh).
+    pub fn between(step: &StepOutput, reference: &StepOutput, reference_step: usize) -> Change {
+        let sub2 = |a: &[f64; 2], b: &[f64; 2]| [a[0] - b[0], a[1] - b[1]];
+        Change {
+            reference_step,
+            displacement: step
+                .displacement
+                .iter()
+                .zip(&reference.displacement)
+                .map(|(a, b)| sub2(a, b))
+                .collect(),
+            stress: step
+                .stress
+                .iter()
+                .zip(&reference.stress)
+                .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2], a[3] - b[3]])
+                .collect(),
+            contact_pressure: step
+                .contact_pressure
+                .iter()
+                .zip(&reference.contact_pressure)
+                .map(|(a, b)| a - b)
+                .collect(),
+        }
+    }
 }
 
 /// Scalars of one step, written as HDF5 attributes and into the JSON summary.

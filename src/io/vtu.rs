@@ -102,8 +102,10 @@ fn i32_array(name: &str, data: impl Iterator<Item = i64>) -> Attribute {
 /// Component names of the multi-component arrays, as ParaView shows them.
 const COMPONENT_NAMES: &[(&str, &[&str])] = &[
     ("displacement", &["ux", "uy", "uz"]),
+    ("displacement_change", &["dux", "duy", "duz"]),
     ("reaction", &["Rx", "Ry", "Rz"]),
     ("stress", &["sxx", "syy", "sxy", "szz"]),
+    ("stress_change", &["dsxx", "dsyy", "dsxy", "dszz"]),
     ("principal_stress", &["s1", "s2"]),
     ("normal", &["nx", "ny", "nz"]),
     ("tangent", &["tx", "ty", "tz"]),
@@ -226,8 +228,9 @@ fn add_zero_counts(mut buf: Vec<u8>) -> Vec<u8> {
 /// `contact_role` (0 none, 1 conforming pair, 2 slave, 3 master), and
 /// `reaction` (3 components) when the step has one. Cell data:
 /// `stress` (σxx, σyy, σxy, and σzz in plane strain), `von_mises`,
-/// `principal_stress` (2), `material`. Points are the undeformed coordinates
-/// with z = 0.
+/// `principal_stress` (2), `material`. With a reference step, point data
+/// `displacement_change` and cell data `stress_change` too. Points are the
+/// undeformed coordinates with z = 0.
 pub fn write_vtu(
     path: &Path,
     mesh: &OutMesh,
@@ -296,7 +299,7 @@ pub fn write_vtu(
         .iter()
         .flat_map(|s| s[..ncomp].iter().copied())
         .collect();
-    let cell = vec![
+    let mut cell = vec![
         f64_array("stress", ncomp as u32, stress),
         f64_array("von_mises", 1, step.von_mises.clone()),
         f64_array(
@@ -306,6 +309,28 @@ pub fn write_vtu(
         ),
         i32_array("material", mesh.material.iter().map(|&k| i64::from(k))),
     ];
+    if let Some(c) = &step.change {
+        check_len(path, "displacement_change", c.displacement.len(), n)?;
+        check_len(path, "stress_change", c.stress.len(), m)?;
+        point.push(array(
+            "displacement_change",
+            ElementType::Vectors,
+            IOBuffer::F64(
+                c.displacement
+                    .iter()
+                    .flat_map(|u| [u[0], u[1], 0.0])
+                    .collect(),
+            ),
+        ));
+        cell.push(f64_array(
+            "stress_change",
+            ncomp as u32,
+            c.stress
+                .iter()
+                .flat_map(|s| s[..ncomp].iter().copied())
+                .collect(),
+        ));
+    }
 
     let piece = UnstructuredGridPiece {
         points: points3(&mesh.points),
@@ -345,7 +370,7 @@ fn contact_roles(mesh: &OutMesh) -> Vec<i64> {
 /// (3 components, z = 0), `multiplier`, `interface` (Int32), `tangent`
 /// (n rotated by +90°: the direction of increasing arc length along a
 /// counter-clockwise boundary of the first side), `role` (1 conforming,
-/// 2 slave). With no
+/// 2 slave), and `contact_pressure_change` with a reference step. With no
 /// contact rows a valid empty grid is written.
 pub fn write_contact_vtu(
     path: &Path,
@@ -382,7 +407,7 @@ pub fn write_contact_vtu(
         types: vec![CellType::Line; k],
     };
 
-    let point = vec![
+    let mut point = vec![
         f64_array("contact_pressure", 1, step.contact_pressure.clone()),
         f64_array("gap", 1, step.gap.clone()),
         i32_array("active", step.active.iter().map(|&a| i64::from(a))),
@@ -409,6 +434,20 @@ pub fn write_contact_vtu(
             }),
         ),
     ];
+
+    if let Some(ch) = &step.change {
+        check_len(
+            path,
+            "contact_pressure_change",
+            ch.contact_pressure.len(),
+            r,
+        )?;
+        point.push(f64_array(
+            "contact_pressure_change",
+            1,
+            ch.contact_pressure.clone(),
+        ));
+    }
 
     let piece = UnstructuredGridPiece {
         points: points3(&c.points),

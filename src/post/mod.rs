@@ -109,6 +109,7 @@ pub fn step_output_with_forces(
         contact_pressure,
         gap,
         active,
+        change: None,
         info: StepInfo {
             converged: res.status.converged(),
             iterations: res.iterations,

@@ -3,7 +3,10 @@
 //! * the deformed mesh, every triangle coloured by a field (viridis colour
 //!   map and colour bar; a legend for the categorical fields `material` and
 //!   `body`), x and y at the same scale;
-//! * or the contact pressure along each interface against arc length.
+//! * or the contact pressure along each interface against arc length, of
+//!   one step or of every step (one curve each: a load-step sequence);
+//! * with `change`, the fields relative to the reference step
+//!   (`[output] reference_step`) instead of the absolute ones.
 //!
 //! PNG is rasterised in memory (nodal fields interpolated linearly inside
 //! each triangle, per pixel) and encoded with `png`; SVG draws one polygon
@@ -183,6 +186,11 @@ pub struct PlotOptions {
     pub range: Option<(f64, f64)>,
     /// Logarithmic colour scale (positive values; others get the bottom colour).
     pub log: bool,
+    /// Draw the change since the reference step (displacement_change,
+    /// stress_change, contact_pressure_change) instead of the fields.
+    pub change: bool,
+    /// With `contact`: one curve per step, every step of the checkpoint.
+    pub all_steps: bool,
 }
 
 impl Default for PlotOptions {
@@ -197,6 +205,8 @@ impl Default for PlotOptions {
             edges: None,
             range: None,
             log: false,
+            change: false,
+            all_steps: false,
         }
     }
 }
@@ -266,6 +276,14 @@ fn check_options(opts: &PlotOptions) -> Result<(), PlotError> {
             "--log applies to the mesh fields, not to the contact plot (--contact)",
         ));
     }
+    if opts.all_steps && !opts.contact {
+        return Err(err(
+            "--all-steps draws the contact pressure of every step: add --contact",
+        ));
+    }
+    if opts.all_steps && opts.step.is_some() {
+        return Err(err("--all-steps and --step exclude each other"));
+    }
     Ok(())
 }
 
@@ -289,9 +307,28 @@ pub fn render(
             if nsteps == 1 { "" } else { "s" }
         )));
     }
-    let step = &ck.steps[step_no - 1];
     let mesh = &ck.mesh;
-    check_consistent(mesh, step)?;
+    // The steps drawn (all of them for the contact plot of a sequence), as
+    // changes since the reference step with `change`.
+    let picked: Vec<usize> = if opts.all_steps {
+        (1..=nsteps).collect()
+    } else {
+        vec![step_no]
+    };
+    let mut drawn = Vec::with_capacity(picked.len());
+    for &k in &picked {
+        let st = &ck.steps[k - 1];
+        check_consistent(mesh, st)?;
+        drawn.push((
+            k,
+            if opts.change {
+                change_of(st, k)?
+            } else {
+                st.clone()
+            },
+        ));
+    }
+    let step = &drawn[drawn.len() - 1].1;
     let max_u = step
         .displacement
         .iter()
@@ -312,7 +349,7 @@ pub fn render(
             let mut buf = vec![255u8; (w as usize) * (h as usize) * 3];
             {
                 let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-                draw(&root, true, mesh, step, name, step_no, opts, &mut summary)?;
+                draw(&root, true, mesh, &drawn, name, opts, &mut summary)?;
                 root.present().map_err(de)?;
             }
             encode_png(&buf, w, h)?
@@ -321,7 +358,7 @@ pub fn render(
             let mut s = String::new();
             {
                 let root = SVGBackend::with_string(&mut s, (w, h)).into_drawing_area();
-                draw(&root, false, mesh, step, name, step_no, opts, &mut summary)?;
+                draw(&root, false, mesh, &drawn, name, opts, &mut summary)?;
                 root.present().map_err(de)?;
             }
             s.into_bytes()
@@ -335,19 +372,28 @@ fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     raster: bool,
     mesh: &OutMesh,
-    step: &StepOutput,
+    drawn: &[(usize, StepOutput)],
     name: &str,
-    step_no: usize,
     opts: &PlotOptions,
     summary: &mut PlotSummary,
 ) -> Result<(), PlotError> {
     root.fill(&WHITE).map_err(de)?;
     let fs = font_size(opts.width, opts.height);
+    let (step_no, step) = (drawn[drawn.len() - 1].0, &drawn[drawn.len() - 1].1);
+    let since = match step.change.as_ref() {
+        Some(c) if opts.change => format!(", change since step {}", c.reference_step),
+        _ => String::new(),
+    };
     if opts.contact {
-        let title = format!("{name} — step {step_no} — contact pressure");
-        summary.range = draw_contact(root, &mesh.contact, step, &title, fs, opts.range)?;
+        let (steps, what) = if opts.all_steps {
+            (format!("steps 1–{step_no}{since}"), "contact pressure")
+        } else {
+            (format!("step {step_no}{since}"), "contact pressure")
+        };
+        let title = format!("{name} — {steps} — {what}");
+        summary.range = draw_contact(root, &mesh.contact, drawn, &title, fs, opts.range)?;
     } else {
-        let title = format!("{name} — step {step_no} — {}", opts.field.name());
+        let title = format!("{name} — step {step_no}{since} — {}", opts.field.name());
         let scale = match opts.scale {
             Some(s) => s,
             None => auto_scale(&mesh.points, summary.max_displacement),
@@ -356,6 +402,41 @@ fn draw<DB: DrawingBackend>(
         summary.range = draw_mesh(root, raster, mesh, step, opts, scale, &title, fs)?;
     }
     Ok(())
+}
+
+/// Step `k` as its change since the reference step: displacement, stress
+/// (von Mises and principal stresses of the stress change) and contact
+/// pressure replaced by the differences.
+fn change_of(step: &StepOutput, k: usize) -> Result<StepOutput, PlotError> {
+    let Some(c) = &step.change else {
+        return Err(err(format!(
+            "--change: step {k} has no change fields (solve with [output] reference_step = N; steps before N have none)"
+        )));
+    };
+    if c.displacement.len() != step.displacement.len()
+        || c.stress.len() != step.stress.len()
+        || c.contact_pressure.len() != step.contact_pressure.len()
+    {
+        return Err(err(format!(
+            "step {k}: the change fields do not match the mesh"
+        )));
+    }
+    Ok(StepOutput {
+        displacement: c.displacement.clone(),
+        von_mises: c
+            .stress
+            .iter()
+            .map(crate::fem::element::von_mises)
+            .collect(),
+        principal: c
+            .stress
+            .iter()
+            .map(crate::fem::element::principal)
+            .collect(),
+        stress: c.stress.clone(),
+        contact_pressure: c.contact_pressure.clone(),
+        ..step.clone()
+    })
 }
 
 fn check_consistent(mesh: &OutMesh, step: &StepOutput) -> Result<(), PlotError> {
@@ -1161,13 +1242,15 @@ pub fn arc_lengths(c: &ContactGeometry, chains: &[Vec<usize>]) -> Vec<Vec<(f64, 
 }
 
 /// The contact pressure against arc length, one panel per interface (each
-/// with its own pressure axis unless `range` fixes it). Each panel says
-/// where its arc length starts: the first contact point of the interface's
-/// first chain (at the first side: the lower body, or the slave).
+/// with its own pressure axis unless `range` fixes it), one curve per step
+/// drawn (coloured along viridis with a legend when there are several).
+/// Each panel says where its arc length starts: the first contact point of
+/// the interface's first chain (at the first side: the lower body, or the
+/// slave).
 fn draw_contact<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     c: &ContactGeometry,
-    step: &StepOutput,
+    steps: &[(usize, StepOutput)],
     title: &str,
     fs: f64,
     range: Option<(f64, f64)>,
@@ -1182,8 +1265,8 @@ fn draw_contact<DB: DrawingBackend>(
         .max()
         .unwrap_or(0)
         .max(c.interface_names.len());
-    // (interface name, start point, polyline pieces of (arc length, pressure)).
-    type Series = (String, [f64; 2], Vec<Vec<(f64, f64)>>);
+    // (interface name, start point, its pieces of (arc length, row)).
+    type Series = (String, [f64; 2], Vec<Vec<(f64, usize)>>);
     let mut series: Vec<Series> = Vec::new();
     for i in 0..n_if {
         let chains = interface_chains(c, i as u32);
@@ -1196,28 +1279,69 @@ fn draw_contact<DB: DrawingBackend>(
             .cloned()
             .unwrap_or_else(|| format!("interface {i}"));
         let start = c.points[chains[0][0]];
-        let pieces = arc_lengths(c, &chains)
-            .into_iter()
-            .map(|p| {
-                p.into_iter()
-                    .map(|(s, r)| (s, step.contact_pressure[r]))
-                    .collect()
-            })
-            .collect();
-        series.push((name, start, pieces));
+        series.push((name, start, arc_lengths(c, &chains)));
     }
     if series.is_empty() {
         return Err(err("no contact segment in the checkpoint"));
     }
-    let body = titled(root, title, fs)?;
+    let many = steps.len() > 1;
+    let color_of = |j: usize, k: usize| {
+        if many {
+            viridis(j as f64 / (steps.len() - 1) as f64 * 0.9)
+        } else {
+            category_color(k)
+        }
+    };
+    let mut body = titled(root, title, fs)?;
+    if many {
+        // One legend for every panel, in a strip under the title (the
+        // steps have the same colours in each), wrapped onto more lines
+        // when the labels do not fit on one.
+        let style = ("sans-serif", fs * 0.85).into_font().color(&BLACK);
+        let (sw, _) = body.dim_in_pixel();
+        let (x0, line_h) = ((fs * 1.5) as i32, (fs * 1.6) as i32);
+        let mut placed = vec![];
+        let (mut x, mut y) = (x0, (fs * 0.9) as i32);
+        for (j, (no, st)) in steps.iter().enumerate() {
+            let label = format!("step {no} (t = {})", fmt_num(st.time));
+            let (tw, _) = body.estimate_text_size(&label, &style).map_err(de)?;
+            let w = (fs * 2.2) as i32 + tw as i32 + (fs * 1.0) as i32;
+            if x + w > sw as i32 && x > x0 {
+                x = x0;
+                y += line_h;
+            }
+            placed.push((j, label, x, y));
+            x += w;
+        }
+        let (strip, rest) = body.split_vertically((y + (fs * 1.0) as i32).max(1) as u32);
+        for (j, label, x, y) in placed {
+            strip
+                .draw(&PathElement::new(
+                    vec![(x, y), (x + (fs * 1.8) as i32, y)],
+                    color_of(j, 0).stroke_width(4),
+                ))
+                .map_err(de)?;
+            strip
+                .draw(&Text::new(
+                    label,
+                    (x + (fs * 2.2) as i32, y - (fs * 0.45) as i32),
+                    style.clone(),
+                ))
+                .map_err(de)?;
+        }
+        body = rest;
+    }
     let panels = body.split_evenly((series.len(), 1));
     let mut total: Option<(f64, f64)> = None;
     for (k, ((name, start, pieces), panel)) in series.iter().zip(&panels).enumerate() {
         let pts = || {
-            pieces
-                .iter()
-                .flatten()
-                .filter(|(s, p)| s.is_finite() && p.is_finite())
+            steps.iter().flat_map(|(_, st)| {
+                pieces
+                    .iter()
+                    .flatten()
+                    .map(|&(s, r)| (s, st.contact_pressure[r]))
+                    .filter(|(s, p)| s.is_finite() && p.is_finite())
+            })
         };
         let smax = pts().map(|q| q.0).fold(0.0, f64::max);
         let (plo, phi) = pts().fold((0.0f64, 0.0f64), |(a, b), q| (a.min(q.1), b.max(q.1)));
@@ -1228,7 +1352,7 @@ fn draw_contact<DB: DrawingBackend>(
         let yr = match range {
             Some((lo, hi)) => lo..hi,
             None => {
-                let pad = (phi - plo).max(phi.abs()).max(1e-300) * 0.06;
+                let pad = (phi - plo).max(phi.abs()).max(plo.abs()).max(1e-300) * 0.06;
                 if phi > plo {
                     (plo - if plo < 0.0 { pad } else { 0.0 })..(phi + pad)
                 } else {
@@ -1266,21 +1390,21 @@ fn draw_contact<DB: DrawingBackend>(
             .y_label_formatter(&|v| fmt_num(*v))
             .draw()
             .map_err(de)?;
-        let color = category_color(k);
-        for piece in pieces {
-            chart
-                .draw_series(LineSeries::new(
-                    piece.iter().copied(),
-                    color.stroke_width(2),
-                ))
-                .map_err(de)?;
-            chart
-                .draw_series(
-                    piece
-                        .iter()
-                        .map(|&p| Circle::new(p, (fs * 0.22).max(2.0) as i32, color.filled())),
-                )
-                .map_err(de)?;
+        let radius = (fs * if many { 0.16 } else { 0.22 }).max(2.0) as i32;
+        for (j, (_, st)) in steps.iter().enumerate() {
+            let color = color_of(j, k);
+            for piece in pieces {
+                let line: Vec<(f64, f64)> = piece
+                    .iter()
+                    .map(|&(s, r)| (s, st.contact_pressure[r]))
+                    .collect();
+                chart
+                    .draw_series(LineSeries::new(line.iter().copied(), color.stroke_width(2)))
+                    .map_err(de)?;
+                chart
+                    .draw_series(line.iter().map(|&p| Circle::new(p, radius, color.filled())))
+                    .map_err(de)?;
+            }
         }
     }
     Ok(total)

@@ -196,6 +196,10 @@ pub struct OutputSection {
     /// zlib-compress VTU arrays.
     #[serde(default)]
     pub compress: bool,
+    /// Load step (1-based) whose state is the reference: this step and every
+    /// later one get `displacement_change`, `stress_change` and
+    /// `contact_pressure_change` relative to it (docs/problem-format.md §2, §6).
+    pub reference_step: Option<usize>,
 }
 
 /// One load step (extension): pseudo-time `t`, a factor on every load
@@ -621,6 +625,15 @@ impl Problem {
                         i + 1
                     )));
                 }
+            }
+        }
+        if let Some(k) = f.output.reference_step {
+            let n = f.nsteps();
+            if k == 0 || k > n {
+                return Err(self.invalid(format!(
+                    "[output] reference_step = {k}: load steps count from 1, and the problem has {n} step{}",
+                    if n == 1 { "" } else { "s" }
+                )));
             }
         }
         for (name, p) in &f.output.probes {

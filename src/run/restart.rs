@@ -6,6 +6,7 @@
 use super::prepare::{fingerprint, fingerprint_diff, Prepared};
 use super::RunError;
 use crate::io::hdf5::{read_checkpoint, Checkpoint};
+use crate::io::StepOutput;
 use std::path::{Path, PathBuf};
 
 /// A checkpoint to continue from.
@@ -17,6 +18,11 @@ pub struct Restart {
     pub steps_done: usize,
     /// Displacements of its last step (per output point): the warm start.
     pub displacement: Option<Vec<[f64; 2]>>,
+    /// Active flags of its last step (per contact row): the state the next
+    /// step's opened/closed counts refer to.
+    pub active: Option<Vec<u8>>,
+    /// The step `[output] reference_step` names, if the checkpoint holds it.
+    pub reference: Option<StepOutput>,
 }
 
 impl Restart {
@@ -24,10 +30,22 @@ impl Restart {
     pub fn read(path: &Path, prep: &Prepared) -> Result<Restart, RunError> {
         let ck = read_checkpoint(path).map_err(|e| RunError::Restart(format!("--restart: {e}")))?;
         check(path, &ck, &fingerprint(prep, prep.no_contact), prep).map_err(RunError::Restart)?;
+        let reference = prep
+            .problem
+            .file
+            .output
+            .reference_step
+            .and_then(|k| ck.steps.get(k.wrapping_sub(1)))
+            .map(|s| StepOutput {
+                change: None,
+                ..s.clone()
+            });
         Ok(Restart {
             path: path.to_path_buf(),
             steps_done: ck.steps.len(),
             displacement: ck.steps.last().map(|s| s.displacement.clone()),
+            active: ck.steps.last().map(|s| s.active.clone()),
+            reference,
         })
     }
 }

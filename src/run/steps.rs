@@ -12,7 +12,7 @@ use super::restart::Restart;
 use super::summary::{StepRow, Summary, Timings};
 use super::RunError;
 use crate::fem::Model;
-use crate::io::StepOutput;
+use crate::io::{Change, StepOutput};
 use crate::linalg::cholesky::Workspace;
 use crate::post::{self, forces::Forces};
 use crate::qp::{registry, QpResult, SolveOptions};
@@ -213,6 +213,10 @@ impl<'a> Run<'a> {
             });
         }
         let mut u_prev = self.restart.as_ref().and_then(|r| r.displacement.clone());
+        let mut active_prev = self.restart.as_ref().and_then(|r| r.active.clone());
+        // The state the `*_change` fields refer to (docs/problem-format.md §6).
+        let kref = file.output.reference_step;
+        let mut reference = self.restart.as_ref().and_then(|r| r.reference.clone());
         let mut pending: Vec<String> = vec![];
         let mut rows = vec![];
         let mut certified = true;
@@ -248,6 +252,14 @@ impl<'a> Run<'a> {
             output.info.time_assemble = t_assemble;
             output.info.time_solve = t_solve;
             output.info.time_total = ts.elapsed().as_secs_f64();
+            if kref == Some(s + 1) {
+                reference = Some(output.clone());
+            }
+            if let (Some(k), Some(r)) = (kref, &reference) {
+                if s + 1 >= k {
+                    output.change = Some(Change::between(&output, r, k));
+                }
+            }
             let verdict = Verdict::of(method, &res, self.kkt_target, self.strict);
             let step = Step {
                 index: s,
@@ -274,15 +286,33 @@ impl<'a> Run<'a> {
                 _ => pending.extend(names),
             }
             let t_write = t_w.elapsed().as_secs_f64();
+            let flips = |from: u8| {
+                active_prev.as_ref().map(|p: &Vec<u8>| {
+                    p.iter()
+                        .zip(&output.active)
+                        .filter(|(a, b)| **a == from && **b != from)
+                        .count()
+                })
+            };
             rows.push(StepRow {
                 step: s + 1,
                 t: file.step_time(s),
                 converged: res.status.converged(),
                 iterations: res.iterations,
+                inner_iterations: res.inner_iterations,
                 kkt_max: res.kkt.max(),
                 energy: res.energy,
+                nodes: model_ref.topo.points.len(),
+                triangles: model_ref.topo.triangles.len(),
+                dofs: model_ref.qp.n(),
+                constraints: model_ref.qp.m(),
                 active: res.active.iter().filter(|a| **a).count(),
+                opened: flips(1),
+                closed: flips(0),
+                time_solve: t_solve,
+                time_step: ts.elapsed().as_secs_f64(),
             });
+            active_prev = Some(output.active.clone());
             certified &= matches!(verdict, Verdict::Certified | Verdict::Penalised);
             u_prev = Some(output.displacement.clone());
             let timings = Timings {

@@ -43,6 +43,9 @@ pub struct Summary {
     /// One row per load step solved (only with `[[steps]]`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub steps: Option<Vec<StepRow>>,
+    /// `[output] reference_step`: the step the `*_change` fields refer to.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference_step: Option<usize>,
 }
 
 /// The KKT residuals of the last step and the verdict (docs/methods.md §8.4).
@@ -88,16 +91,33 @@ pub struct Timings {
     pub phases: BTreeMap<String, f64>,
 }
 
-/// One load step in `steps`.
+/// One load step in `steps`: the report's per-step table (its §3.4:
+/// elements, equations, contact nodes, iterations, time) and the result.
 #[derive(Debug, Clone, Serialize)]
 pub struct StepRow {
     pub step: usize,
     pub t: f64,
     pub converged: bool,
     pub iterations: usize,
+    pub inner_iterations: usize,
     pub kkt_max: f64,
     pub energy: f64,
+    /// Output points (interface nodes once per body), triangles, unknowns.
+    pub nodes: usize,
+    pub triangles: usize,
+    pub dofs: usize,
+    /// Contact rows (constraints of the QP) and those active at the end.
+    pub constraints: usize,
     pub active: usize,
+    /// Rows that were active after the previous step and are not now (the
+    /// interface opened there), and the reverse; null for the first step
+    /// of a run that does not continue a checkpoint.
+    pub opened: Option<usize>,
+    pub closed: Option<usize>,
+    /// Wall time of the solve and of the whole step (assemble, solve,
+    /// post-process, write) \[s\].
+    pub time_solve: f64,
+    pub time_step: f64,
 }
 
 impl Summary {
@@ -183,6 +203,7 @@ impl Summary {
                 ..timings
             },
             steps,
+            reference_step: prep.problem.file.output.reference_step,
         }
     }
 
