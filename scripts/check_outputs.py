@@ -225,6 +225,19 @@ def check_h5(path: Path, name: str):
                         f"/steps/{s}/principal_stress inconsistent with stress (trace or order σ1 ≥ σ2)")
                 if not data["plane_strain"]:
                     P.check(np.abs(st_[:, 3]).max() == 0, f"/steps/{s}/stress: σzz ≠ 0 in plane stress")
+            # [output] reference_step: the *_change datasets are this step's
+            # fields minus the reference step's, exactly (h5py's own reading).
+            if "displacement_change" in st:
+                k = int(st.attrs.get("reference_step", 0))
+                ref_name = f"{k:04d}"
+                if P.check(ref_name in f["steps"] and k <= int(s),
+                           f"/steps/{s}@reference_step = {k}: no such earlier step"):
+                    ref = f["steps"][ref_name]
+                    for ds, base in (("displacement_change", "displacement"), ("stress_change", "stress"),
+                                     ("contact_pressure_change", "contact_pressure")):
+                        if P.check(ds in st, f"/steps/{s}/{ds} missing"):
+                            P.check(np.array_equal(st[ds][()], st[base][()] - ref[base][()]),
+                                    f"/steps/{s}/{ds} is not {base} minus /steps/{ref_name}/{base}")
             sd["attrs"] = {k: st.attrs[k] for k in st.attrs}
             data["steps"][int(s)] = sd
     # the JSON summary, when present
