@@ -16,8 +16,10 @@
 //! supernodes, elimination tree). [`Cholesky::new`] reuses nothing.
 
 use crate::linalg::sparse::Csr;
-use faer::linalg::solvers::SolveCore;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Side};
 use std::cell::{Cell, RefCell};
@@ -30,10 +32,19 @@ use std::sync::Arc;
 
 pub struct Cholesky {
     n: usize,
-    llt: Arc<Llt<usize, f64>>,
+    llt: Arc<Factor>,
     /// DOFs that received a spring (empty for SPD C).
     pub fixing: Vec<usize>,
 }
+
+/// A numeric factor: the symbolic analysis it was made on and the values of L.
+struct Factor {
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    values: Vec<f64>,
+}
+
+/// How many symbolic analyses a [`Workspace`] keeps (C and C + AᵀA for ssn).
+const SYMBOLIC_KEPT: usize = 2;
 
 impl Cholesky {
     /// Factor C, regularised along `kernel` (may be empty), reusing nothing.
@@ -49,6 +60,8 @@ impl Cholesky {
 #[derive(Default)]
 pub struct Workspace {
     last: RefCell<Option<CacheEntry>>,
+    /// The latest symbolic analyses (most recent first), by size and pattern.
+    symbolic: RefCell<Vec<SymbolicEntry>>,
     numeric_reused: Cell<usize>,
     symbolic_reused: Cell<usize>,
 }
@@ -58,14 +71,61 @@ impl Workspace {
         Workspace::default()
     }
 
-    /// Forget the kept factorization (frees its memory).
+    /// Forget the kept factorization and symbolic analyses (frees their memory).
     pub fn clear(&self) {
         self.last.replace(None);
+        self.symbolic.borrow_mut().clear();
     }
 
     /// How often this workspace reused a numeric factor and a symbolic analysis.
     pub fn reuse_counts(&self) -> (usize, usize) {
         (self.numeric_reused.get(), self.symbolic_reused.get())
+    }
+
+    /// The symbolic analysis (AMD ordering) of the lower pattern `sym`, kept
+    /// or made and kept; true if it was kept.
+    fn symbolic_of(
+        &self,
+        sym: &SymbolicSparseColMat<usize>,
+        hp: u64,
+    ) -> Result<(Arc<SymbolicCholesky<usize>>, bool), FactorError> {
+        let n = sym.nrows();
+        let mut kept = self.symbolic.borrow_mut();
+        if let Some(k) = kept.iter().position(|e| e.n == n && e.pattern == hp) {
+            let e = kept.remove(k);
+            let s = e.symbolic.clone();
+            kept.insert(0, e);
+            return Ok((s, true));
+        }
+        let s = Arc::new(
+            factorize_symbolic_cholesky(
+                sym.as_ref(),
+                Side::Lower,
+                SymmetricOrdering::Amd,
+                Default::default(),
+            )
+            .map_err(|e| FactorError(format!("symbolic analysis: {e:?}")))?,
+        );
+        kept.insert(
+            0,
+            SymbolicEntry {
+                n,
+                pattern: hp,
+                symbolic: s.clone(),
+            },
+        );
+        kept.truncate(SYMBOLIC_KEPT);
+        Ok((s, false))
+    }
+
+    /// [`FactorCost`] of the pattern of `c` from its symbolic analysis, which
+    /// the workspace keeps: a later [`Workspace::cholesky`] of a matrix with
+    /// this pattern does not repeat it.
+    pub fn factor_cost(&self, c: &Csr) -> Result<FactorCost, FactorError> {
+        let (sym, _) = lower_csc(c, &[]);
+        let hp = pattern_hash(&sym);
+        let (s, _) = self.symbolic_of(&sym, hp)?;
+        Ok(cost_of(&s))
     }
 
     /// Factor C, regularised along `kernel` (may be empty), reusing the kept
@@ -83,22 +143,14 @@ impl Workspace {
             .map(|&i| (i, if diag[i] > 0.0 { diag[i] } else { scale }))
             .collect();
         let (sym, vals) = lower_csc(c, &shift);
-        let hp = hash_words(sym.col_ptr().iter().chain(sym.row_idx()).map(|&v| v as u64));
+        let hp = pattern_hash(&sym);
         let hv = hash_words(vals.iter().map(|v| v.to_bits()));
-        let mut symbolic = None;
-        let mut hit = None;
-        if let Some(e) = self
+        let hit = self
             .last
             .borrow()
             .as_ref()
-            .filter(|e| e.n == c.nrows && e.pattern == hp)
-        {
-            if e.values == hv {
-                hit = Some(e.llt.clone());
-            } else {
-                symbolic = Some(e.symbolic.clone());
-            }
-        }
+            .filter(|e| e.n == c.nrows && e.pattern == hp && e.values == hv)
+            .map(|e| e.llt.clone());
         if let Some(llt) = hit {
             self.numeric_reused.set(self.numeric_reused.get() + 1);
             return Ok(Cholesky {
@@ -107,26 +159,37 @@ impl Workspace {
                 fixing,
             });
         }
-        if symbolic.is_some() {
+        let t_prep = t0.elapsed().as_secs_f64();
+        // Drop the kept factor before allocating a new one (peak memory).
+        self.last.replace(None);
+        let (symbolic, reused) = self.symbolic_of(&sym, hp)?;
+        if reused {
             self.symbolic_reused.set(self.symbolic_reused.get() + 1);
         }
-        let t_prep = t0.elapsed().as_secs_f64();
-        let reused = symbolic.is_some();
-        let symbolic = match symbolic {
-            Some(s) => s,
-            None => SymbolicLlt::try_new(sym.as_ref(), Side::Lower)
-                .map_err(|e| FactorError(format!("symbolic analysis: {e:?}")))?,
-        };
         let t_sym = t0.elapsed().as_secs_f64() - t_prep;
         let mat = SparseColMatRef::new(sym.as_ref(), &vals);
-        // Drop the kept factor before allocating a new one (peak memory).
-        self.clear();
-        let llt = Llt::try_new_with_symbolic(symbolic.clone(), mat, Side::Lower).map_err(|e| {
-            FactorError(format!(
-                "C is not positive definite ({e:?}); a body may be free to move without the kernel being known"
-            ))
-        })?;
-        let llt = Arc::new(llt);
+        let mut values = vec![0.0; symbolic.len_val()];
+        let par = faer::get_global_parallelism();
+        let mut mem = MemBuffer::try_new(
+            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        )
+        .map_err(|_| FactorError("out of memory for the numeric factorization".into()))?;
+        symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut values,
+                mat,
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .map_err(|e| {
+                FactorError(format!(
+                    "C is not positive definite ({e:?}); a body may be free to move without the kernel being known"
+                ))
+            })?;
+        let llt = Arc::new(Factor { symbolic, values });
         log::debug!(
             "Cholesky: n = {}, nnz(lower C) = {}, prepare {t_prep:.3} s, symbolic {t_sym:.3} s{}, numeric {:.3} s",
             c.nrows,
@@ -138,7 +201,6 @@ impl Workspace {
             n: c.nrows,
             pattern: hp,
             values: hv,
-            symbolic,
             llt: llt.clone(),
         }));
         Ok(Cholesky {
@@ -153,8 +215,7 @@ impl Cholesky {
     /// x ← (C + springs)⁻¹ x
     pub fn solve_in_place(&self, x: &mut [f64]) {
         debug_assert_eq!(x.len(), self.n);
-        let m = MatMut::from_column_major_slice_mut(x, self.n, 1);
-        self.llt.solve_in_place_with_conj(Conj::No, m);
+        self.solve_many_in_place(x, 1);
     }
 
     /// X ← (C + springs)⁻¹ X for the n×k column-major block `x`: one pass
@@ -165,7 +226,15 @@ impl Cholesky {
             return;
         }
         let m = MatMut::from_column_major_slice_mut(x, self.n, k);
-        self.llt.solve_in_place_with_conj(Conj::No, m);
+        let f = &self.llt;
+        let par = faer::get_global_parallelism();
+        let mut mem = MemBuffer::new(f.symbolic.solve_in_place_scratch::<f64>(k, par));
+        LltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
+            Conj::No,
+            m,
+            par,
+            MemStack::new(&mut mem),
+        );
     }
 
     pub fn solve(&self, b: &[f64]) -> Vec<f64> {
@@ -190,17 +259,11 @@ pub struct FactorCost {
 /// [`FactorCost`] of the lower triangle of the symmetric pattern `c` (values
 /// ignored; a diagonal entry is assumed in every column, as in the factor).
 pub fn factor_cost(c: &Csr) -> Result<FactorCost, FactorError> {
-    use faer::sparse::linalg::cholesky::{
-        factorize_symbolic_cholesky, SymbolicCholeskyRaw, SymmetricOrdering,
-    };
-    let (sym, _) = lower_csc(c, &[]);
-    let s = factorize_symbolic_cholesky(
-        sym.as_ref(),
-        Side::Lower,
-        SymmetricOrdering::Amd,
-        Default::default(),
-    )
-    .map_err(|e| FactorError(format!("symbolic analysis: {e:?}")))?;
+    Workspace::new().factor_cost(c)
+}
+
+/// nnz(L) and Σⱼcⱼ² of a symbolic analysis.
+fn cost_of(s: &SymbolicCholesky<usize>) -> FactorCost {
     let (mut nnz, mut flops) = (0.0f64, 0.0f64);
     match s.raw() {
         SymbolicCholeskyRaw::Simplicial(t) => {
@@ -223,7 +286,7 @@ pub fn factor_cost(c: &Csr) -> Result<FactorCost, FactorError> {
             }
         }
     }
-    Ok(FactorCost { nnz, flops })
+    FactorCost { nnz, flops }
 }
 
 /// The last factorization (see the module doc).
@@ -231,8 +294,19 @@ struct CacheEntry {
     n: usize,
     pattern: u64,
     values: u64,
-    symbolic: SymbolicLlt<usize>,
-    llt: Arc<Llt<usize, f64>>,
+    llt: Arc<Factor>,
+}
+
+/// A kept symbolic analysis.
+struct SymbolicEntry {
+    n: usize,
+    pattern: u64,
+    symbolic: Arc<SymbolicCholesky<usize>>,
+}
+
+/// The hash of a lower CSC pattern.
+fn pattern_hash(sym: &SymbolicSparseColMat<usize>) -> u64 {
+    hash_words(sym.col_ptr().iter().chain(sym.row_idx()).map(|&v| v as u64))
 }
 
 /// A 64-bit hash of a word stream (multiply–rotate, as FxHash; collisions of
@@ -421,5 +495,32 @@ mod tests {
         let f5 = Cholesky::new(&c, &[]).unwrap();
         assert!(!Arc::ptr_eq(&f1.llt, &f5.llt));
         assert_eq!(reuse_counts(), (n0 + 1, s0 + 1));
+    }
+
+    /// A cost model's symbolic analyses are the factorizations' (ssn counts
+    /// C and C + AᵀA, then factors one of them): two patterns are kept.
+    #[test]
+    fn factor_cost_shares_its_analysis_with_the_factorization() {
+        let (a, b) = (lap1d(30, true), lap1d(31, true));
+        let ws = Workspace::new();
+        let ca = ws.factor_cost(&a).unwrap();
+        let cb = ws.factor_cost(&b).unwrap();
+        assert_eq!(ca, factor_cost(&a).unwrap());
+        assert!(cb.nnz > ca.nnz && ca.nnz >= 30.0);
+        let fa = ws.cholesky(&a, &[]).unwrap();
+        let fb = ws.cholesky(&b, &[]).unwrap();
+        assert_eq!(ws.reuse_counts(), (0, 2));
+        let x: Vec<f64> = (0..31).map(|i| 1.0 + i as f64).collect();
+        let y = fb.solve(&b.mul(&x));
+        assert!(x.iter().zip(&y).all(|(p, q)| (p - q).abs() < 1e-9));
+        let y = fa.solve(&a.mul(&x[..30]));
+        assert!(x.iter().zip(&y).all(|(p, q)| (p - q).abs() < 1e-9));
+        // A third pattern evicts the oldest analysis.
+        let _ = ws.factor_cost(&lap1d(32, true)).unwrap();
+        let _ = ws.factor_cost(&a).unwrap();
+        let mut b2 = b.clone();
+        b2.data.iter_mut().for_each(|v| *v *= 2.0);
+        let _ = ws.cholesky(&b2, &[]).unwrap();
+        assert_eq!(ws.reuse_counts(), (0, 2));
     }
 }

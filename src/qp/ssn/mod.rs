@@ -98,7 +98,7 @@ pub(crate) fn solve_traced(
     st.auto = path == Path::Auto;
     st.lowrank = path != Path::Refactor;
     if st.aug.is_some() {
-        st.costs = Costs::new(qp, st.aug.as_ref())?;
+        st.costs = Costs::new(qp, st.aug.as_ref(), ctx.ws)?;
     }
     if !augmented {
         st.ensure_dense()?;

@@ -1,7 +1,8 @@
 //! Which linear algebra an SSN step uses (docs/methods.md §7), decided from
 //! counts only, so that the same input takes the same path on every run.
-//! The symbolic analyses of C and of C + AᵀA ([`factor_cost`], AMD order)
-//! give nnz(L) and Σⱼcⱼ² per factor. In entries of L read by a solve: a
+//! The symbolic analyses of C and of C + AᵀA (AMD order), kept in the
+//! workspace for the factorizations that follow, give nnz(L) and Σⱼcⱼ² per
+//! factor. In entries of L read by a solve: a
 //! factorisation costs Σⱼcⱼ²/[`FLOPS_PER_ENTRY`], a solve nnz(L), one column
 //! of a blocked solve [`COL_FRACTION`]·nnz(L). The first step takes the Schur
 //! path when fac(C) + |J|·col(C) ≤ fac(K) + 6·solve(K). Later the Schur path
@@ -14,7 +15,7 @@
 use super::lowrank::LOWRANK_MAX;
 use super::Ssn;
 use crate::linalg::augmented::AugPattern;
-use crate::linalg::cholesky::factor_cost;
+use crate::linalg::cholesky::Workspace;
 use crate::qp::{QpError, QpProblem};
 
 /// Cost of one column in a blocked solve of BLOCK right-hand sides, as a
@@ -51,12 +52,19 @@ pub(super) struct Costs {
 }
 
 impl Costs {
-    pub(super) fn new(qp: &QpProblem, aug: Option<&AugPattern>) -> Result<Costs, QpError> {
-        let c = factor_cost(&qp.c)?;
+    /// The counts from the symbolic analyses, which `ws` keeps for the
+    /// factorizations that follow.
+    pub(super) fn new(
+        qp: &QpProblem,
+        aug: Option<&AugPattern>,
+        ws: &Workspace,
+    ) -> Result<Costs, QpError> {
         let k = match aug {
-            Some(a) => factor_cost(a.matrix())?,
-            None => c,
+            Some(a) => ws.factor_cost(a.matrix())?,
+            None => ws.factor_cost(&qp.c)?,
         };
+        // C last: the most recent analysis kept (the next factor is C's).
+        let c = ws.factor_cost(&qp.c)?;
         log::debug!(
             "ssn: counts: C: nnz(L) {:.3e}, Σc² {:.3e}; C + AᵀA: nnz(L) {:.3e}, Σc² {:.3e}",
             c.nnz,

@@ -585,9 +585,15 @@ fn deterministic_paths_and_results() {
 fn cost_model_counts() {
     let small = two_blocks(9, 5, false);
     let big = two_blocks(30, 10, false);
-    let cs = Costs::new(&small, Some(&AugPattern::new(&small.c, &small.a))).unwrap();
-    let cs2 = Costs::new(&small, Some(&AugPattern::new(&small.c, &small.a))).unwrap();
-    let cb = Costs::new(&big, Some(&AugPattern::new(&big.c, &big.a))).unwrap();
+    let ws = Workspace::new();
+    let cs = Costs::new(&small, Some(&AugPattern::new(&small.c, &small.a)), &ws).unwrap();
+    let cs2 = Costs::new(
+        &small,
+        Some(&AugPattern::new(&small.c, &small.a)),
+        &Workspace::new(),
+    )
+    .unwrap();
+    let cb = Costs::new(&big, Some(&AugPattern::new(&big.c, &big.a)), &ws).unwrap();
     assert_eq!(
         (cs.fac_c, cs.solve_c, cs.fac_k, cs.solve_k),
         (cs2.fac_c, cs2.solve_c, cs2.fac_k, cs2.solve_k)
