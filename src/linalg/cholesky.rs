@@ -21,7 +21,7 @@ use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, MatMut, Side};
+use faer::{Conj, Mat, MatMut, Side};
 use std::cell::{Cell, RefCell};
 
 /// A factorization that failed (C not positive definite, a bad pattern).
@@ -41,6 +41,64 @@ pub struct Cholesky {
 struct Factor {
     symbolic: Arc<SymbolicCholesky<usize>>,
     values: Vec<f64>,
+    border: Option<Border>,
+}
+
+/// The DOFs a bordered factor eliminates last and its trailing block.
+struct Border {
+    /// Position of each DOF in the border (usize::MAX: not in it).
+    pos: Vec<usize>,
+    /// L_bb, the trailing |border|² block of L (lower triangular).
+    lbb: Mat<f64>,
+}
+
+impl Border {
+    /// The trailing block of L, read from the factor's supernodes (or columns).
+    fn of(s: &SymbolicCholesky<usize>, values: &[f64], border: &[usize], n: usize) -> Border {
+        let nb = border.len();
+        let off = n - nb;
+        let mut pos = vec![usize::MAX; n];
+        for (k, &i) in border.iter().enumerate() {
+            pos[i] = k;
+        }
+        let mut lbb = Mat::<f64>::zeros(nb, nb);
+        match s.raw() {
+            SymbolicCholeskyRaw::Simplicial(t) => {
+                let (cp, ri) = (t.col_ptr(), t.row_idx());
+                for j in off..n {
+                    for k in cp[j]..cp[j + 1] {
+                        lbb[(ri[k] - off, j - off)] = values[k];
+                    }
+                }
+            }
+            SymbolicCholeskyRaw::Supernodal(t) => {
+                let l =
+                    faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef::new(t, values);
+                let (b, e) = (t.supernode_begin(), t.supernode_end());
+                for sn in 0..t.n_supernodes() {
+                    if e[sn] <= off {
+                        continue;
+                    }
+                    let node = l.supernode(sn);
+                    let (val, pattern) = (node.val(), node.pattern());
+                    let ncols = e[sn] - b[sn];
+                    for c in 0..ncols {
+                        let j = b[sn] + c;
+                        if j < off {
+                            continue;
+                        }
+                        for r in c..ncols {
+                            lbb[(b[sn] + r - off, j - off)] = val[(r, c)];
+                        }
+                        for (p, &i) in pattern.iter().enumerate() {
+                            lbb[(i - off, j - off)] = val[(ncols + p, c)];
+                        }
+                    }
+                }
+            }
+        }
+        Border { pos, lbb }
+    }
 }
 
 /// How many symbolic analyses a [`Workspace`] keeps (C and C + AᵀA for ssn).
@@ -82,12 +140,14 @@ impl Workspace {
         (self.numeric_reused.get(), self.symbolic_reused.get())
     }
 
-    /// The symbolic analysis (AMD ordering) of the lower pattern `sym`, kept
-    /// or made and kept; true if it was kept.
+    /// The symbolic analysis of the lower pattern `sym` (key `hp`), kept or
+    /// made and kept; true if it was kept. The ordering is AMD, or with a
+    /// `border`, AMD on the other DOFs followed by the border DOFs in order.
     fn symbolic_of(
         &self,
         sym: &SymbolicSparseColMat<usize>,
         hp: u64,
+        border: Option<&[usize]>,
     ) -> Result<(Arc<SymbolicCholesky<usize>>, bool), FactorError> {
         let n = sym.nrows();
         let mut kept = self.symbolic.borrow_mut();
@@ -97,15 +157,26 @@ impl Workspace {
             kept.insert(0, e);
             return Ok((s, true));
         }
-        let s = Arc::new(
-            factorize_symbolic_cholesky(
+        let fail = |e: faer::sparse::FaerError| FactorError(format!("symbolic analysis: {e:?}"));
+        let s = match border {
+            None => factorize_symbolic_cholesky(
                 sym.as_ref(),
                 Side::Lower,
                 SymmetricOrdering::Amd,
                 Default::default(),
-            )
-            .map_err(|e| FactorError(format!("symbolic analysis: {e:?}")))?,
-        );
+            ),
+            Some(b) => {
+                let (fwd, inv) = bordered_order(sym, b)?;
+                factorize_symbolic_cholesky(
+                    sym.as_ref(),
+                    Side::Lower,
+                    SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(&fwd, &inv, n)),
+                    Default::default(),
+                )
+            }
+        }
+        .map_err(fail)?;
+        let s = Arc::new(s);
         kept.insert(
             0,
             SymbolicEntry {
@@ -124,13 +195,37 @@ impl Workspace {
     pub fn factor_cost(&self, c: &Csr) -> Result<FactorCost, FactorError> {
         let (sym, _) = lower_csc(c, &[]);
         let hp = pattern_hash(&sym);
-        let (s, _) = self.symbolic_of(&sym, hp)?;
+        let (s, _) = self.symbolic_of(&sym, hp, None)?;
         Ok(cost_of(&s))
     }
 
     /// Factor C, regularised along `kernel` (may be empty), reusing the kept
     /// factor or symbolic analysis when the matrix or its pattern is the same.
     pub fn cholesky(&self, c: &Csr, kernel: &[Vec<f64>]) -> Result<Cholesky, FactorError> {
+        self.factor(c, kernel, None)
+    }
+
+    /// [`Workspace::cholesky`] with the DOFs `border` (distinct, in range)
+    /// eliminated last, in the order given: the trailing block of L is then
+    /// the factor of the Schur complement of K on them, and
+    /// [`Cholesky::border_inverse`] gives B K⁻¹ Bᵀ for any B that touches
+    /// only border DOFs at dense cost (docs/methods.md §7). Worth it when the
+    /// border is small against the factor (a dense |border|² block is added).
+    pub fn cholesky_bordered(
+        &self,
+        c: &Csr,
+        kernel: &[Vec<f64>],
+        border: &[usize],
+    ) -> Result<Cholesky, FactorError> {
+        self.factor(c, kernel, Some(border))
+    }
+
+    fn factor(
+        &self,
+        c: &Csr,
+        kernel: &[Vec<f64>],
+        border: Option<&[usize]>,
+    ) -> Result<Cholesky, FactorError> {
         let t0 = std::time::Instant::now();
         let fixing = fixing_dofs(kernel, c.nrows);
         let diag = c.diag();
@@ -143,7 +238,15 @@ impl Workspace {
             .map(|&i| (i, if diag[i] > 0.0 { diag[i] } else { scale }))
             .collect();
         let (sym, vals) = lower_csc(c, &shift);
-        let hp = pattern_hash(&sym);
+        // A bordered analysis is another ordering of the same pattern: keyed apart.
+        let hp = match border {
+            None => pattern_hash(&sym),
+            Some(b) => hash_words(
+                [pattern_hash(&sym), b.len() as u64]
+                    .into_iter()
+                    .chain(b.iter().map(|&i| i as u64)),
+            ),
+        };
         let hv = hash_words(vals.iter().map(|v| v.to_bits()));
         let hit = self
             .last
@@ -162,7 +265,7 @@ impl Workspace {
         let t_prep = t0.elapsed().as_secs_f64();
         // Drop the kept factor before allocating a new one (peak memory).
         self.last.replace(None);
-        let (symbolic, reused) = self.symbolic_of(&sym, hp)?;
+        let (symbolic, reused) = self.symbolic_of(&sym, hp, border)?;
         if reused {
             self.symbolic_reused.set(self.symbolic_reused.get() + 1);
         }
@@ -189,7 +292,12 @@ impl Workspace {
                     "C is not positive definite ({e:?}); a body may be free to move without the kernel being known"
                 ))
             })?;
-        let llt = Arc::new(Factor { symbolic, values });
+        let border = border.map(|b| Border::of(&symbolic, &values, b, c.nrows));
+        let llt = Arc::new(Factor {
+            symbolic,
+            values,
+            border,
+        });
         log::debug!(
             "Cholesky: n = {}, nnz(lower C) = {}, prepare {t_prep:.3} s, symbolic {t_sym:.3} s{}, numeric {:.3} s",
             c.nrows,
@@ -242,6 +350,104 @@ impl Cholesky {
         self.solve_in_place(&mut x);
         x
     }
+
+    /// H = B K⁻¹ Bᵀ (dense, rows × rows) for a B that touches only the
+    /// border DOFs of a bordered factor: with K's rows and columns ordered
+    /// interior then border, [K⁻¹]_bb is the inverse of the Schur complement
+    /// L_bb L_bbᵀ, so H = WᵀW with W = L_bb⁻¹ B_bᵀ. None without a border or
+    /// when B touches another DOF.
+    pub fn border_inverse(&self, b: &Csr) -> Option<Mat<f64>> {
+        let border = self.llt.border.as_ref()?;
+        let nb = border.lbb.nrows();
+        let mut w = Mat::<f64>::zeros(nb, b.nrows);
+        for r in 0..b.nrows {
+            let (cols, v) = b.row(r);
+            for (&k, &a) in cols.iter().zip(v) {
+                let p = *border.pos.get(k)?;
+                if p == usize::MAX {
+                    return None;
+                }
+                w[(p, r)] += a;
+            }
+        }
+        let par = faer::get_global_parallelism();
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+            border.lbb.as_ref(),
+            w.as_mut(),
+            par,
+        );
+        let mut h = Mat::<f64>::zeros(b.nrows, b.nrows);
+        faer::linalg::matmul::matmul(
+            h.as_mut(),
+            faer::Accum::Replace,
+            w.transpose(),
+            w.as_ref(),
+            1.0,
+            par,
+        );
+        Some(h)
+    }
+}
+
+/// The ordering of a bordered factor: AMD on the DOFs outside `border`
+/// (their submatrix of the lower pattern `sym`), then `border` in order.
+/// Returns (new → old, old → new).
+fn bordered_order(
+    sym: &SymbolicSparseColMat<usize>,
+    border: &[usize],
+) -> Result<(Vec<usize>, Vec<usize>), FactorError> {
+    use faer::sparse::linalg::amd;
+    let n = sym.nrows();
+    let mut in_b = vec![false; n];
+    for &i in border {
+        if i >= n || in_b[i] {
+            return Err(FactorError(format!(
+                "bordered factor: border DOF {i} out of range or repeated"
+            )));
+        }
+        in_b[i] = true;
+    }
+    let interior: Vec<usize> = (0..n).filter(|&i| !in_b[i]).collect();
+    let mut new_of = vec![usize::MAX; n];
+    for (k, &i) in interior.iter().enumerate() {
+        new_of[i] = k;
+    }
+    let ni = interior.len();
+    let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+    let mut col_ptr = Vec::with_capacity(ni + 1);
+    let mut row_idx = vec![];
+    col_ptr.push(0);
+    for &j in &interior {
+        for &i in &ri[cp[j]..cp[j + 1]] {
+            if !in_b[i] {
+                row_idx.push(new_of[i]);
+            }
+        }
+        col_ptr.push(row_idx.len());
+    }
+    let nnz = row_idx.len();
+    let sub = SymbolicSparseColMat::new_checked(ni, ni, col_ptr, None, row_idx);
+    let (mut perm, mut perm_inv) = (vec![0usize; ni], vec![0usize; ni]);
+    let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(ni, nnz))
+        .map_err(|_| FactorError("out of memory for the ordering".into()))?;
+    amd::order_maybe_unsorted(
+        &mut perm,
+        &mut perm_inv,
+        sub.as_ref(),
+        amd::Control::default(),
+        MemStack::new(&mut mem),
+    )
+    .map_err(|e| FactorError(format!("ordering: {e:?}")))?;
+    let fwd: Vec<usize> = perm
+        .iter()
+        .map(|&k| interior[k])
+        .chain(border.iter().copied())
+        .collect();
+    let mut inv = vec![0usize; n];
+    for (k, &i) in fwd.iter().enumerate() {
+        inv[i] = k;
+    }
+    Ok((fwd, inv))
 }
 
 /// What a sparse Cholesky factor of a pattern costs, counted before any
@@ -522,5 +728,86 @@ mod tests {
         b2.data.iter_mut().for_each(|v| *v *= 2.0);
         let _ = ws.cholesky(&b2, &[]).unwrap();
         assert_eq!(ws.reuse_counts(), (0, 2));
+    }
+
+    /// A 2D Laplacian on an nx×ny grid (5-point), Dirichlet on the left
+    /// column unless `floating` (then singular, kernel = constants).
+    fn lap2d(nx: usize, ny: usize, floating: bool) -> Csr {
+        let id = |i: usize, j: usize| i * ny + j;
+        let mut t = vec![];
+        for i in 0..nx {
+            for j in 0..ny {
+                for (a, b) in [(i + 1, j), (i, j + 1)] {
+                    if a < nx && b < ny {
+                        let (p, q) = (id(i, j), id(a, b));
+                        t.extend([(p, p, 1.0), (q, q, 1.0), (p, q, -1.0), (q, p, -1.0)]);
+                    }
+                }
+                if !floating && i == 0 {
+                    t.push((id(i, j), id(i, j), 1.0));
+                }
+            }
+        }
+        Csr::from_triplets(nx * ny, nx * ny, &t)
+    }
+
+    /// B K⁻¹ Bᵀ from the trailing block of a bordered factor equals the one
+    /// from solves with the ordinary factor, for SPD and for semicoercive C
+    /// (same springs), and the bordered factor solves as well as the other.
+    #[test]
+    fn border_inverse_matches_solves() {
+        for floating in [false, true] {
+            let (nx, ny) = (12, 9);
+            let c = lap2d(nx, ny, floating);
+            let n = nx * ny;
+            let kernel = if floating { vec![vec![1.0; n]] } else { vec![] };
+            // B: rows on the right column (weights as contact rows have).
+            let right: Vec<usize> = (0..ny).map(|j| (nx - 1) * ny + j).collect();
+            let mut tb = vec![];
+            for (r, w) in right.windows(2).enumerate() {
+                tb.push((r, w[0], 0.6));
+                tb.push((r, w[1], -0.4 - 0.01 * r as f64));
+            }
+            let b = Csr::from_triplets(ny - 1, n, &tb);
+            let mut border = right.clone();
+            border.reverse(); // any order
+            let ws = Workspace::new();
+            let fb = ws.cholesky_bordered(&c, &kernel, &border).unwrap();
+            let fp = Cholesky::new(&c, &kernel).unwrap();
+            assert_eq!(fb.fixing, fp.fixing);
+            let h = fb.border_inverse(&b).unwrap();
+            assert!(fp.border_inverse(&b).is_none(), "no border, no H");
+            for j in 0..b.nrows {
+                let mut aj = vec![0.0; n];
+                let (cols, v) = b.row(j);
+                for (&k, &a) in cols.iter().zip(v) {
+                    aj[k] = a;
+                }
+                let z = fp.solve(&aj);
+                let hj = b.mul(&z);
+                for i in 0..b.nrows {
+                    assert!(
+                        (h[(i, j)] - hj[i]).abs() <= 1e-10 * hj[j].abs(),
+                        "floating {floating}: H[{i},{j}] = {} vs {}",
+                        h[(i, j)],
+                        hj[i]
+                    );
+                }
+            }
+            let x: Vec<f64> = (0..n).map(|i| (0.3 * i as f64).sin()).collect();
+            let rhs = fp.solve(&x);
+            let rhs_b = fb.solve(&x);
+            for (p, q) in rhs.iter().zip(&rhs_b) {
+                assert!((p - q).abs() <= 1e-9 * (1.0 + p.abs()), "{p} vs {q}");
+            }
+            // A row touching an interior DOF has no dense H.
+            let inner = Csr::from_triplets(1, n, &[(0, 0, 1.0)]);
+            assert!(fb.border_inverse(&inner).is_none());
+            // The bordered analysis is kept apart from the AMD one.
+            let _ = ws.cholesky(&c, &kernel).unwrap();
+            let again = ws.cholesky_bordered(&c, &kernel, &border).unwrap();
+            assert!(again.border_inverse(&b).is_some());
+            assert!(ws.cholesky_bordered(&c, &kernel, &[0, 0]).is_err());
+        }
     }
 }

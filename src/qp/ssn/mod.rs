@@ -44,6 +44,10 @@ const BLOCK: usize = 32;
 const GROW_MIN: usize = BLOCK;
 /// Refinement steps of the final KKT solve (module doc).
 const REFINE_MAX: usize = 3;
+/// A border of at most BORDER_RATIO·√n unknowns is eliminated last ([`small_border`]).
+const BORDER_RATIO: f64 = 4.0;
+/// And at most this many (the dense trailing block: 8·BORDER_MAX² bytes).
+const BORDER_MAX: usize = 6000;
 /// The certificate an answer must meet to be returned as converged.
 pub(crate) const CERT_TARGET: f64 = 1e-6;
 
@@ -91,10 +95,16 @@ pub(crate) fn solve_traced(
     ctx: &mut Context,
     path: Path,
 ) -> Result<(Output, Vec<bool>), QpError> {
-    let augmented = path != Path::Schur;
+    // A small border: the Schur path on a bordered factor of C, which gives
+    // every column of A K⁻¹Aᵀ at once (no cost model needed).
+    let border = matches!(path, Path::Auto | Path::Schur)
+        .then(|| small_border(qp))
+        .flatten();
+    let augmented = path != Path::Schur && border.is_none();
     let t0 = Instant::now();
     let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
     let mut st = Ssn::new(qp, r, ctx.settings.tol, augmented, ctx.ws);
+    st.border = border;
     st.auto = path == Path::Auto;
     st.lowrank = path != Path::Refactor;
     if st.aug.is_some() {
@@ -125,6 +135,22 @@ pub(crate) fn solve_traced(
     ))
 }
 
+/// The border of a bordered factor (docs/methods.md §7): the unknowns A
+/// touches, if few enough that eliminating them last costs little, i.e. at
+/// most [`BORDER_RATIO`]·√n of them (a 2D mesh's largest separators have
+/// O(√n) unknowns) and at most [`BORDER_MAX`] (a dense |border|² block).
+/// Counts only, so the choice is the same on every run.
+pub(crate) fn small_border(qp: &QpProblem) -> Option<Vec<usize>> {
+    if qp.m() == 0 {
+        return None;
+    }
+    let mut cols: Vec<usize> = (0..qp.m()).flat_map(|i| qp.a.row(i).0.to_vec()).collect();
+    cols.sort_unstable();
+    cols.dedup();
+    let nb = cols.len() as f64;
+    (nb <= BORDER_RATIO * (qp.n() as f64).sqrt() && cols.len() <= BORDER_MAX).then_some(cols)
+}
+
 /// The largest KKT residual of (x, λ) as the driver computes it
 /// ([`crate::qp::kkt::residuals`], docs/methods.md §8.4); +∞ if anything is not finite.
 pub(crate) fn certificate(qp: &QpProblem, x: &[f64], lam: &[f64]) -> f64 {
@@ -139,6 +165,8 @@ struct Ssn<'a> {
     ws: &'a Workspace,
     /// Factor of C (+ springs) for the Schur-complement path, made on demand.
     fac: Option<Cholesky>,
+    /// The unknowns that factor eliminates last, when it is bordered.
+    border: Option<Vec<usize>>,
     /// The augmented path: pattern of C + AᵀA, ρ_j per row, the factor of K_J.
     aug: Option<AugPattern>,
     rho: Vec<f64>,
@@ -219,6 +247,7 @@ impl<'a> Ssn<'a> {
             qp,
             ws,
             fac: None,
+            border: None,
             rho: if aug.is_some() {
                 let cmax = norm_inf(&diag);
                 vec![RHO_FACTOR * if cmax > 0.0 { cmax } else { 1.0 }; m]
@@ -264,7 +293,17 @@ impl<'a> Ssn<'a> {
     fn ensure_dense(&mut self) -> Result<(), QpError> {
         if self.fac.is_none() {
             let t = Instant::now();
-            let fac = self.ws.cholesky(&self.qp.c, &self.qp.kernel)?;
+            let (c, kernel) = (&self.qp.c, &self.qp.kernel);
+            let fac = match &self.border {
+                Some(b) => self.ws.cholesky_bordered(c, kernel, b)?,
+                None => self.ws.cholesky(c, kernel)?,
+            };
+            // A bordered factor gives all of A K⁻¹Aᵀ at dense cost.
+            if let Some(h) = fac.border_inverse(&self.qp.a) {
+                for (j, hj) in self.h.iter_mut().enumerate() {
+                    *hj = Some(h.col(j).iter().copied().collect());
+                }
+            }
             self.t_factor += t.elapsed().as_secs_f64();
             self.x0 = fac.solve(&self.qp.d);
             self.solves += 1;
