@@ -12,8 +12,12 @@
 //! the FETI coarse problem for floating bodies). A settled J is certified by
 //! the KKT residual and refined (at most `REFINE_MAX` steps, then once on
 //! the Schur path); at most max(`GROW_MIN`, |J|) rows enter per step; a
-//! repeated J switches to single changes (anti-cycling). Counts:
-//! `iterations` = KKT solves, `inner_iterations` = sparse solves.
+//! repeated J switches to single changes (anti-cycling). When the unknowns
+//! A touches are few (`small_border`), C is factored with them last and the
+//! trailing block gives all of A K⁻¹Aᵀ at once (docs/methods.md §7): J is
+//! then found by dual-space steps with no sparse solve (`dense_start`), and
+//! the Newton loop only confirms it. Counts: `iterations` = KKT solves (the
+//! dual-space steps are not counted), `inner_iterations` = sparse solves.
 
 mod augmented;
 mod lowrank;
@@ -48,6 +52,8 @@ const REFINE_MAX: usize = 3;
 const BORDER_RATIO: f64 = 4.0;
 /// And at most this many (the dense trailing block: 8·BORDER_MAX² bytes).
 const BORDER_MAX: usize = 6000;
+/// Dual-space steps at most in [`Ssn::dense_start`].
+const DENSE_STEPS_MAX: usize = 100;
 /// The certificate an answer must meet to be returned as converged.
 pub(crate) const CERT_TARGET: f64 = 1e-6;
 
@@ -112,6 +118,9 @@ pub(crate) fn solve_traced(
     }
     if !augmented {
         st.ensure_dense()?;
+    }
+    if st.border.is_some() {
+        st.dense_start();
     }
     let mut exec = ctx.executor("ssn");
     let (status, iters) = exec.run(&mut st);
@@ -310,6 +319,60 @@ impl<'a> Ssn<'a> {
             self.fac = Some(fac);
         }
         Ok(())
+    }
+
+    /// With every column of H = A K⁻¹Aᵀ known (a bordered factor): primal–
+    /// dual active-set steps in the dual space alone — λ_J and α from
+    /// [`Ssn::schur_dense`], Ax = A K⁻¹d − H_{·J}λ_J + ARα from the columns —
+    /// with no sparse solve. The working set they settle on starts the
+    /// Newton loop, whose own steps (with x) decide and certify; τ here uses
+    /// ‖Ax‖∞ for the ‖x‖∞ it cannot see.
+    fn dense_start(&mut self) {
+        let qp = self.qp;
+        let m = qp.m();
+        if m == 0 || self.h.iter().any(Option::is_none) {
+            return;
+        }
+        let k = self.r.len();
+        let ax0: Vec<f64> = (0..m).map(|i| qp.a.row_dot(i, &self.x0)).collect();
+        let mut in_j = self.in_j.clone();
+        let mut seen: HashSet<Vec<bool>> = HashSet::new();
+        let mut steps = 0;
+        while steps < DENSE_STEPS_MAX && seen.insert(in_j.clone()) {
+            steps += 1;
+            let jset: Vec<usize> = (0..m).filter(|&i| in_j[i]).collect();
+            let ax0j: Vec<f64> = jset.iter().map(|&j| ax0[j]).collect();
+            let Some((w, alpha)) = self.schur_dense(&jset, &ax0j, &self.e, &qp.g) else {
+                break;
+            };
+            let mut lam = vec![0.0; m];
+            for (t, &j) in jset.iter().enumerate() {
+                lam[j] = w[t];
+            }
+            let ax: Vec<f64> = (0..m)
+                .map(|i| {
+                    let hi = self.h[i].as_ref().expect("every column known");
+                    let coupled: f64 = jset.iter().zip(&w).map(|(&j, wj)| hi[j] * wj).sum();
+                    let rigid: f64 = (0..k).map(|l| self.ar[i][l] * alpha[l]).sum();
+                    ax0[i] - coupled + rigid
+                })
+                .collect();
+            let c = self.cpar;
+            let scale = norm_inf(&lam) + c * norm_inf(&ax).max(norm_inf(&qp.g));
+            let tau = self.tol * if scale > 0.0 { scale } else { 1.0 };
+            let next: Vec<bool> = (0..m)
+                .map(|i| lam[i] + c * (ax[i] - qp.g[i]) > tau)
+                .collect();
+            if next == in_j {
+                break;
+            }
+            in_j = next;
+        }
+        log::debug!(
+            "ssn: dense start: {steps} steps in the dual space, |J| = {}",
+            in_j.iter().filter(|b| **b).count()
+        );
+        self.in_j = in_j;
     }
 
     /// Solve the KKT system on `in_j` (the path by the cost model); None if

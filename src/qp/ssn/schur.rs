@@ -44,35 +44,17 @@ impl Ssn<'_> {
         }
     }
 
-    /// The KKT system `Cx + A_Jᵀλ_J = d, A_J x = g_J` by the Schur complement
-    /// on the factor of C; None if it is singular (or C cannot be factored:
-    /// then `error` is set).
-    pub(super) fn schur_solve(
-        &mut self,
-        in_j: &[bool],
-        d: &[f64],
+    /// The multipliers of the KKT system of J = `jset` in the dual space
+    /// alone, from the cached columns: λ_J = S_J⁻¹(A_J K⁻¹d − g_J + G_Jᵀα)
+    /// and the coarse α (module doc), given `ax0` = A_J K⁻¹d and e = Rᵀd.
+    /// None if S_J or the coarse matrix is singular.
+    pub(super) fn schur_dense(
+        &self,
+        jset: &[usize],
+        ax0: &[f64],
+        e: &[f64],
         g: &[f64],
     ) -> Option<(Vec<f64>, Vec<f64>)> {
-        if let Err(e) = self.ensure_dense() {
-            self.error = Some(e);
-            return None;
-        }
-        let qp = self.qp;
-        // K⁻¹d and e = Rᵀd: cached for the problem's own d.
-        let own = std::ptr::eq(d.as_ptr(), qp.d.as_ptr());
-        let x0 = if own {
-            self.x0.clone()
-        } else {
-            self.solves += 1;
-            self.fac.as_ref().expect("factored").solve(d)
-        };
-        let e: Vec<f64> = if own {
-            self.e.clone()
-        } else {
-            self.r.iter().map(|rl| dot(rl, d)).collect()
-        };
-        let jset: Vec<usize> = (0..qp.m()).filter(|&i| in_j[i]).collect();
-        self.columns(&jset);
         let nj = jset.len();
         let k = self.r.len();
         let hs: Vec<&Vec<f64>> = jset
@@ -89,7 +71,7 @@ impl Ssn<'_> {
         });
         let s = SpdFactor::new(s.as_ref())?;
         // w = S⁻¹(A_J K⁻¹ d − g_J)
-        let mut w: Vec<f64> = jset.iter().map(|&j| qp.a.row_dot(j, &x0) - g[j]).collect();
+        let mut w: Vec<f64> = jset.iter().zip(ax0).map(|(&j, a)| a - g[j]).collect();
         s.solve_in_place(&mut w);
         let mut alpha = vec![0.0; k];
         if k > 0 {
@@ -135,6 +117,41 @@ impl Ssn<'_> {
                 }
             }
         }
+        Some((w, alpha))
+    }
+
+    /// The KKT system `Cx + A_Jᵀλ_J = d, A_J x = g_J` by the Schur complement
+    /// on the factor of C; None if it is singular (or C cannot be factored:
+    /// then `error` is set).
+    pub(super) fn schur_solve(
+        &mut self,
+        in_j: &[bool],
+        d: &[f64],
+        g: &[f64],
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        if let Err(e) = self.ensure_dense() {
+            self.error = Some(e);
+            return None;
+        }
+        let qp = self.qp;
+        // K⁻¹d and e = Rᵀd: cached for the problem's own d.
+        let own = std::ptr::eq(d.as_ptr(), qp.d.as_ptr());
+        let x0 = if own {
+            self.x0.clone()
+        } else {
+            self.solves += 1;
+            self.fac.as_ref().expect("factored").solve(d)
+        };
+        let e: Vec<f64> = if own {
+            self.e.clone()
+        } else {
+            self.r.iter().map(|rl| dot(rl, d)).collect()
+        };
+        let jset: Vec<usize> = (0..qp.m()).filter(|&i| in_j[i]).collect();
+        self.columns(&jset);
+        // A_J K⁻¹ d
+        let ax0: Vec<f64> = jset.iter().map(|&j| qp.a.row_dot(j, &x0)).collect();
+        let (w, alpha) = self.schur_dense(&jset, &ax0, &e, g)?;
         let mut lam = vec![0.0; qp.m()];
         for (t, &j) in jset.iter().enumerate() {
             lam[j] = w[t];

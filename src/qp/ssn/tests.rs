@@ -639,3 +639,38 @@ fn certificate_rejects_nan() {
     l[0] = f64::INFINITY;
     assert_eq!(certificate(&qp, &r.x, &l), f64::INFINITY);
 }
+
+/// A small border (the unknowns A touches): the bordered factor gives every
+/// column of A K⁻¹Aᵀ, the dual-space steps find J, and the Newton loop
+/// needs only K⁻¹d, one KKT solve and at most a refinement: the answer of
+/// the augmented path, coercive or floating, in a few sparse solves.
+#[test]
+fn bordered_factor_needs_no_column_solves() {
+    for floating in [false, true] {
+        let qp = two_blocks(16, 8, floating);
+        let border = small_border(&qp).expect("a small border");
+        assert!(border.len() < qp.n() / 4);
+        let refr = reference(&qp);
+        nontrivial(&refr);
+        let o = opts();
+        let (b, trace) =
+            solve_traced(&qp, &mut Context::new(&o, &Workspace::new()), Path::Auto).unwrap();
+        compare(&qp, &b, &refr, 1e-6);
+        assert!(trace.iter().all(|aug| !aug), "the Schur path: {trace:?}");
+        assert!(
+            b.inner_iterations <= 3 && b.iterations <= 2,
+            "{} KKT solves, {} sparse solves",
+            b.iterations,
+            b.inner_iterations
+        );
+        let a = solve_with(&qp, &o, Path::Augmented).unwrap();
+        assert_eq!(a.active, b.active, "floating {floating}");
+    }
+    // A border of more than 4√n unknowns is not bordered.
+    let mut qp = two_blocks(16, 8, false);
+    let n = qp.n();
+    let all: Vec<(usize, usize, f64)> = (0..n).map(|j| (0, j, 1e-3)).collect();
+    qp.a = Csr::from_triplets(1, n, &all);
+    qp.g = vec![1.0];
+    assert!(small_border(&qp).is_none());
+}
