@@ -149,7 +149,14 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let model = Model {
         topo,
         dofs,
-        qp: QpProblem { c, d, a, g, kernel },
+        qp: QpProblem {
+            c,
+            d,
+            a,
+            g,
+            kernel,
+            friction: None,
+        },
         qp_rows,
         kernel_body,
         plane: f.model.plane,
