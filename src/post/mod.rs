@@ -3,6 +3,7 @@
 //! contact pressure (λ / tributary length), current gap and active flag.
 
 pub mod forces;
+pub mod friction;
 pub mod plot;
 
 use crate::fem::{element, Model};
