@@ -24,6 +24,12 @@ fn tangential(row: &ContactRow) -> ContactRow {
     }
 }
 
+/// Coefficients c_p of the tangential relative displacement Σ c_p·u_p of
+/// `row` (its own coefficients with n turned by +90°).
+pub fn tangential_coefficients(row: &ContactRow) -> Vec<(usize, [f64; 2])> {
+    tangential(row).coefficients()
+}
+
 /// Index of the `[[contact]]` entry of each interface id (conforming
 /// pairs are numbered first, then the non-matching ones; `topology`, `pairs`).
 fn contact_of_interface(problem: &Problem) -> Vec<usize> {
