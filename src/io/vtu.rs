@@ -358,8 +358,8 @@ pub fn write_contact_vtu(
 
 /// The friction arrays of the contact VTU, one value per contact row
 /// (docs/problem-format.md §6): the tangential traction λ_t / (tributary
-/// length × thickness) [Pa], the slip of the step (tangential relative
-/// displacement increment) [m] and the state (0 open, 1 stick, 2 slip).
+/// length × thickness) (Pa), the slip of the step (tangential relative
+/// displacement increment) (m) and the state (0 open, 1 stick, 2 slip).
 pub struct FrictionArrays<'a> {
     pub tangential_traction: &'a [f64],
     pub slip: &'a [f64],

@@ -12,11 +12,11 @@ pub const STICK_MARGIN: f64 = 1e-6;
 /// Friction fields per contact row (rows left out of the QP: 0).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FrictionOutput {
-    /// λ_t [N] per row.
+    /// λ_t (N) per row.
     pub lambda_t: Vec<f64>,
-    /// λ_t / (tributary length × thickness) [Pa].
+    /// λ_t / (tributary length × thickness) (Pa).
     pub tangential_traction: Vec<f64>,
-    /// T x − t0: the tangential relative displacement increment of the step [m].
+    /// T x − t0: the tangential relative displacement increment of the step (m).
     pub slip: Vec<f64>,
     /// 0 open, 1 stick, 2 slip.
     pub state: Vec<u8>,

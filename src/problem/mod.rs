@@ -186,7 +186,7 @@ pub struct Contact {
     pub max_gap: Option<f64>,
     /// Coulomb friction coefficient μ ≥ 0 (default 0: frictionless).
     pub friction: Option<f64>,
-    /// Tresca friction: the bound of the tangential traction [Pa], ≥ 0.
+    /// Tresca friction: the bound of the tangential traction (Pa), ≥ 0.
     pub tresca: Option<f64>,
 }
 
