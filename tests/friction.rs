@@ -203,17 +203,10 @@ fn half_width(prep: &Prepared, fo: &FrictionOutput, pick: impl Fn(u8) -> bool) -
     0.5 * (right - left)
 }
 
-#[test]
-fn cattaneo_mindlin_stick_zone() {
-    // A cylinder pressed by P (its top lowered by 12 mm), then pulled by
-    // Q < μP (its top moved sideways by 3 mm) in a second load step; the
-    // two bodies are elastically similar, so normal and tangential problems
-    // uncouple and the stick zone is |x| ≤ c = a·√(1 − Q/(μP)) (Johnson,
-    // Contact Mechanics, 1985, §7.1), with a, P, Q measured on the solution.
-    let d = tempfile::tempdir().unwrap();
-    let msh = cattaneo_mesh(d.path());
-    let mu = 0.3;
-    let toml = format!(
+/// The Cattaneo–Mindlin model: the cylinder's top lowered by 12 mm in step
+/// 1, then moved sideways by 3 mm in step 2.
+fn cattaneo_toml(mu: f64) -> String {
+    format!(
         r#"[mesh]
 file = "MESH"
 [model]
@@ -238,9 +231,23 @@ friction = {mu}
 dirichlet = {{ cyl_top = [0.0, -0.012] }}
 [[steps]]
 dirichlet = {{ cyl_top = [0.003, -0.012] }}
+[solver]
+method = "ssn"
 "#
-    );
-    let p = model_file(d.path(), "cattaneo", &msh, &toml);
+    )
+}
+
+#[test]
+fn cattaneo_mindlin_stick_zone() {
+    // A cylinder pressed by P (its top lowered by 12 mm), then pulled by
+    // Q < μP (its top moved sideways by 3 mm) in a second load step; the
+    // two bodies are elastically similar, so normal and tangential problems
+    // uncouple and the stick zone is |x| ≤ c = a·√(1 − Q/(μP)) (Johnson,
+    // Contact Mechanics, 1985, §7.1), with a, P, Q measured on the solution.
+    let d = tempfile::tempdir().unwrap();
+    let msh = cattaneo_mesh(d.path());
+    let mu = 0.3;
+    let p = model_file(d.path(), "cattaneo", &msh, &cattaneo_toml(mu));
     let (prep, model, res) = solve(&p, "ssn");
     let fo = friction_output(model.as_ref().unwrap(), &res).unwrap();
     let pn: f64 = res.lambda.iter().sum();
@@ -386,4 +393,55 @@ fn huge_friction_is_the_glued_interface() {
             "{law}: Σλ_t = {lt}"
         );
     }
+}
+
+#[test]
+fn a_restart_after_the_first_step_slips_as_the_uninterrupted_run() {
+    // The slip of step 2 is measured from step 1's displacements, which a
+    // restart reads back from the checkpoint.
+    let d = tempfile::tempdir().unwrap();
+    let msh = cattaneo_mesh(d.path());
+    let p = model_file(d.path(), "cm", &msh, &cattaneo_toml(0.3));
+    let p = p.to_str().unwrap();
+    let full = d.path().join("full");
+    let part = d.path().join("part");
+    let (code, log) = run(&[
+        "solve",
+        p,
+        "--method",
+        "ssn",
+        "--out",
+        full.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{log}");
+    let (code, log) = run(&[
+        "solve",
+        p,
+        "--out",
+        part.to_str().unwrap(),
+        "--max-steps",
+        "1",
+    ]);
+    assert_eq!(code, 0, "{log}");
+    let ck = part.join("cm.h5");
+    let (code, log) = run(&[
+        "solve",
+        p,
+        "--method",
+        "ssn",
+        "--out",
+        part.to_str().unwrap(),
+        "--restart",
+        ck.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{log}");
+    let a = signorini::io::vtu::read_vtu_arrays(&full.join("cm_0002_contact.vtu")).unwrap();
+    let b = signorini::io::vtu::read_vtu_arrays(&part.join("cm_0002_contact.vtu")).unwrap();
+    for name in ["slip", "state", "tangential_traction"] {
+        let (x, y) = (a.point_array(name).unwrap(), b.point_array(name).unwrap());
+        assert_eq!(x.values, y.values, "{name}");
+    }
+    // Step 2 slips (the zones at the edges of the contact).
+    let slip = &a.point_array("slip").unwrap().values;
+    assert!(slip.iter().any(|v| v.abs() > 1e-7), "{slip:?}");
 }

@@ -1,4 +1,4 @@
-//! Friction on the contact rows (docs/methods.md §10): one tangential row
+//! Friction on the contact rows (docs/methods.md §9): one tangential row
 //! per QP contact row, the row's own coefficients
 //! ([`ContactRow::coefficients`]) with the normal n replaced by the tangent
 //! t = (−n_y, n_x), n turned by +90°. A conforming row measures
@@ -120,7 +120,7 @@ pub(super) fn build(
 }
 
 /// The tangential relative displacement of every QP row for the point
-/// displacements `u` (docs/methods.md §10.5).
+/// displacements `u` (docs/methods.md §9.5).
 pub fn tangential_displacement(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
     model
         .qp_rows

@@ -226,7 +226,7 @@ pub(super) fn check_semicoercive(m: &Model, problem: &Problem) -> Result<(), Fem
     check_supported(m, problem)?;
     if m.qp.friction.is_some() {
         // Friction may hold a sliding motion: the solver decides
-        // (docs/methods.md §10.3).
+        // (docs/methods.md §9.3).
         return Ok(());
     }
     check_sliding(m, problem)

@@ -124,7 +124,7 @@ pub fn compute(
 
 /// [`compute`] with the tangential force λ_t of every contact row (empty:
 /// frictionless), which acts along the row's tangential coefficients
-/// (docs/methods.md §10).
+/// (docs/methods.md §9).
 pub fn compute_with_friction(
     model: &Model,
     problem: &Problem,

@@ -1,6 +1,6 @@
 //! The friction outputs per contact row (docs/problem-format.md §6): the
 //! tangential traction, the slip of the step and the state open / stick /
-//! slip, from the solution of a frictional problem (docs/methods.md §10).
+//! slip, from the solution of a frictional problem (docs/methods.md §9).
 
 use crate::fem::Model;
 use crate::qp::QpResult;

@@ -30,7 +30,7 @@ pub trait Method: Sync {
         false
     }
     /// Whether the method solves frictional problems (`QpProblem::friction`,
-    /// docs/methods.md §10); the driver refuses the others.
+    /// docs/methods.md §9); the driver refuses the others.
     fn friction(&self) -> bool {
         false
     }
@@ -169,7 +169,7 @@ pub fn run(
     let mut notes = vec![];
     // With friction the tangential loads a floating body carries may be held
     // by friction: the frictionless decision does not apply, the method
-    // decides (docs/methods.md §10.3).
+    // decides (docs/methods.md §9.3).
     let bounded = if qp.friction.is_some() {
         Boundedness::Undecided("friction".into())
     } else {
@@ -229,7 +229,7 @@ pub fn run(
             }
         }
     }
-    // A frictional method returns [λ_n; λ_t] in `lambda` (docs/methods.md §10).
+    // A frictional method returns [λ_n; λ_t] in `lambda` (docs/methods.md §9).
     let mut lambda = r.lambda;
     let lambda_t = if qp.friction.is_some() && lambda.len() == 2 * qp.m() {
         lambda.split_off(qp.m())

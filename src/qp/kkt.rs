@@ -31,7 +31,7 @@ pub fn residuals(qp: &QpProblem, x: &[f64], lambda: &[f64]) -> Kkt {
 }
 
 /// [`residuals`] with the tangential forces `lambda_t` of a frictional
-/// problem (docs/methods.md §10.4): r = Cx − d + Aᵀλ + Tᵀλ_t, Γ also holds
+/// problem (docs/methods.md §9.4): r = Cx − d + Aᵀλ + Tᵀλ_t, Γ also holds
 /// the unknowns T touches, and `friction` = max of
 /// * the bound max((|λ_tᵢ| − sᵢ)⁺) / max(max|λ|, max|λ_t|, 1);
 /// * the slip rule Σ(sᵢ|vᵢ| − λ_tᵢvᵢ) / max(max(|λ|, |λ_t|)·max|x|, tiny),

@@ -46,12 +46,12 @@ pub struct QpProblem {
     /// A basis of ker C (rigid motions of floating bodies), if known. Methods
     /// that need C⁻¹ use it to regularise; CGC does not need it.
     pub kernel: Vec<Vec<f64>>,
-    /// Tangential rows and slip bounds (docs/methods.md §10); `None` is
+    /// Tangential rows and slip bounds (docs/methods.md §9); `None` is
     /// frictionless contact, solved exactly as without this field.
     pub friction: Option<Friction>,
 }
 
-/// The slip bound of each tangential row (docs/methods.md §10.1).
+/// The slip bound of each tangential row (docs/methods.md §9.1).
 #[derive(Debug, Clone, PartialEq)]
 pub enum SlipBound {
     /// Tresca: a given bound sᵢ ≥ 0 (N, the row's force).
@@ -60,7 +60,7 @@ pub enum SlipBound {
     Coulomb(Vec<f64>),
 }
 
-/// Friction on the contact rows (docs/methods.md §10): one tangential row of
+/// Friction on the contact rows (docs/methods.md §9): one tangential row of
 /// `t` per row of A (same order), the slip v = T x − t0 (t0: the tangential
 /// relative displacement of the previous load step) and its bound. The
 /// Tresca problem adds Σ sᵢ|vᵢ| to the energy; KKT: Cx − d + Aᵀλ_n + Tᵀλ_t = 0,
@@ -177,7 +177,7 @@ pub struct Kkt {
     /// ([`kkt::residuals`]).
     #[serde(default)]
     pub contact_balance: f64,
-    /// The friction conditions (docs/methods.md §10.4): |λ_t| ≤ s and slip
+    /// The friction conditions (docs/methods.md §9.4): |λ_t| ≤ s and slip
     /// only where the bound is reached, along λ_t; 0 without friction (and
     /// then left out of the JSON, which stays as it was).
     #[serde(default, skip_serializing_if = "is_zero")]

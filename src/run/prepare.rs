@@ -288,7 +288,7 @@ pub fn solve_model_in(
         let work = crate::linalg::sparse::dot(&model.qp.d, direction);
         if model.qp.friction.is_some() {
             return Err(bad(format!(
-                "the problem is unbounded: {} slides as a rigid body, its friction cannot hold the loads (dᵀr = {work:.4e} J for a motion of 1 m exceeds what friction dissipates, methods.md §10.3)",
+                "the problem is unbounded: {} slides as a rigid body, its friction cannot hold the loads (dᵀr = {work:.4e} J for a motion of 1 m exceeds what friction dissipates, methods.md §9.3)",
                 model.describe_rigid_motion(&u)
             )));
         }

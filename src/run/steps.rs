@@ -229,7 +229,7 @@ impl<'a> Run<'a> {
                 None
             };
             // Friction: the slip of this step is measured from the last
-            // step's displacements (docs/methods.md §10.5).
+            // step's displacements (docs/methods.md §9.5).
             if let (Some(m), Some(u)) = (model.as_mut(), u_prev.as_deref()) {
                 crate::fem::friction::start_step(m, Some(u));
             }

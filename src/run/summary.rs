@@ -53,7 +53,7 @@ pub struct KktSummary {
     pub complementarity: f64,
     pub stationarity: f64,
     pub contact_balance: f64,
-    /// The friction residual (docs/methods.md §10.4); only with friction.
+    /// The friction residual (docs/methods.md §9.4); only with friction.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<f64>,
     pub target: f64,

@@ -1,6 +1,6 @@
-//! `ssn` with friction (docs/methods.md §10.2): the primal–dual active set
+//! `ssn` with friction (docs/methods.md §9.2): the primal–dual active set
 //! method of Hüeber, Stadler & Wohlmuth (SISC 30, 2008) for the Tresca
-//! problem, and Coulomb as successive Tresca problems (§10.1, the report's
+//! problem, and Coulomb as successive Tresca problems (§9.1, the report's
 //! outer loop).
 //!
 //! One Newton step predicts, with c = mean diag C and v = T x − t0,
@@ -21,7 +21,7 @@
 //! A working set that leaves a rigid motion z free (B z = 0 for some z in
 //! ker C) is tested: if the loads do more work along ±z than friction can
 //! dissipate (dᵀz > Σ sᵢ|(Tz)ᵢ|, Az ≤ 0), the problem is unbounded — the
-//! block slides down the plane (§10.3); otherwise K is regularised along z
+//! block slides down the plane (§9.3); otherwise K is regularised along z
 //! for that step only.
 
 use crate::linalg::dense::sym_eigen;
