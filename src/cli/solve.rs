@@ -209,6 +209,12 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
         "contact     {} active of {}, max pressure {:.4e}, total force {:.4e}",
         s.active, s.constraints, s.contact.max_pressure, s.contact.total_force
     );
+    if let (Some(stick), Some(slip)) = (s.contact.stick, s.contact.slip) {
+        println!(
+            "friction    {stick} rows stick, {slip} slip; friction residual {:.2e}",
+            k.friction.unwrap_or(0.0)
+        );
+    }
     // Global balance: loads + reactions = 0 (contact forces are internal).
     let (lf, lm) = (s.loads.force, s.loads.moment);
     let mut rf = [0.0, 0.0];

@@ -15,6 +15,7 @@ mod conditions;
 mod contact;
 mod edges;
 pub mod element;
+pub mod friction;
 mod loads;
 mod pairs;
 mod rigid;
@@ -144,12 +145,25 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     lap.lap("loads");
     let (a, g, qp_rows) = contact::reduced_rows(mesh, &topo, &dofs, n, problem)?;
     lap.lap("contact rows");
+    let t_eff = match problem.file.model.plane {
+        Plane::Stress => problem.file.model.thickness,
+        Plane::Strain => 1.0,
+    };
+    let friction = friction::build(&topo, &dofs, n, problem, &qp_rows, t_eff)?;
+    lap.lap("friction rows");
     let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n);
     let f = &problem.file;
     let model = Model {
         topo,
         dofs,
-        qp: QpProblem { c, d, a, g, kernel },
+        qp: QpProblem {
+            c,
+            d,
+            a,
+            g,
+            kernel,
+            friction,
+        },
         qp_rows,
         kernel_body,
         plane: f.model.plane,
@@ -159,6 +173,8 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
         loads,
         body_names,
     };
+    let mut model = model;
+    friction::start_step(&mut model, None);
     lap.lap("rigid modes");
     rigid::check_semicoercive(&model, problem)?;
     lap.lap("semicoercivity check");

@@ -224,6 +224,11 @@ pub(super) fn check_semicoercive(m: &Model, problem: &Problem) -> Result<(), Fem
         return Ok(());
     }
     check_supported(m, problem)?;
+    if m.qp.friction.is_some() {
+        // Friction may hold a sliding motion: the solver decides
+        // (docs/methods.md §9.3).
+        return Ok(());
+    }
     check_sliding(m, problem)
 }
 

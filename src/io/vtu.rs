@@ -378,6 +378,28 @@ pub fn write_contact_vtu(
     step: &StepOutput,
     compress: bool,
 ) -> Result<(), IoError> {
+    write_contact_vtu_with_friction(path, mesh, step, None, compress)
+}
+
+/// The friction arrays of the contact VTU, one value per contact row
+/// (docs/problem-format.md §6): the tangential traction λ_t / (tributary
+/// length × thickness) (Pa), the slip of the step (tangential relative
+/// displacement increment) (m) and the state (0 open, 1 stick, 2 slip).
+pub struct FrictionArrays<'a> {
+    pub tangential_traction: &'a [f64],
+    pub slip: &'a [f64],
+    pub state: &'a [u8],
+}
+
+/// [`write_contact_vtu`] with the friction arrays `tangential_traction`,
+/// `slip` and `state` (Int32) when `friction` is given.
+pub fn write_contact_vtu_with_friction(
+    path: &Path,
+    mesh: &OutMesh,
+    step: &StepOutput,
+    friction: Option<&FrictionArrays>,
+    compress: bool,
+) -> Result<(), IoError> {
     let c = &mesh.contact;
     let r = c.points.len();
     check_len(path, "contact normal", c.normal.len(), r)?;
@@ -449,6 +471,18 @@ pub fn write_contact_vtu(
         ));
     }
 
+    if let Some(f) = friction {
+        check_len(path, "tangential_traction", f.tangential_traction.len(), r)?;
+        check_len(path, "slip", f.slip.len(), r)?;
+        check_len(path, "state", f.state.len(), r)?;
+        point.push(f64_array(
+            "tangential_traction",
+            1,
+            f.tangential_traction.to_vec(),
+        ));
+        point.push(f64_array("slip", 1, f.slip.to_vec()));
+        point.push(i32_array("state", f.state.iter().map(|&a| i64::from(a))));
+    }
     let piece = UnstructuredGridPiece {
         points: points3(&c.points),
         cells,

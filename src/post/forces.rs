@@ -119,11 +119,31 @@ pub fn compute(
     lambda: &[f64],
     pressure: &[f64],
 ) -> Forces {
+    compute_with_friction(model, problem, u, lambda, &[], pressure)
+}
+
+/// [`compute`] with the tangential force λ_t of every contact row (empty:
+/// frictionless), which acts along the row's tangential coefficients
+/// (docs/methods.md §9).
+pub fn compute_with_friction(
+    model: &Model,
+    problem: &Problem,
+    u: &[[f64; 2]],
+    lambda: &[f64],
+    lambda_t: &[f64],
+    pressure: &[f64],
+) -> Forces {
     let t = &model.topo;
     let np = t.points.len();
     let mut contact = vec![[0.0f64; 2]; np];
     for (row, &l) in t.contact.iter().zip(lambda) {
         for (p, c) in row.coefficients() {
+            contact[p][0] -= l * c[0];
+            contact[p][1] -= l * c[1];
+        }
+    }
+    for (row, &l) in t.contact.iter().zip(lambda_t) {
+        for (p, c) in crate::fem::friction::tangential_coefficients(row) {
             contact[p][0] -= l * c[0];
             contact[p][1] -= l * c[1];
         }
@@ -263,6 +283,16 @@ pub fn compute(
                 it.resultant.add(t.points[p], f);
             } else {
                 it.other.add(t.points[p], f);
+            }
+        }
+        if let Some(&lt) = lambda_t.get(r) {
+            for (p, c) in crate::fem::friction::tangential_coefficients(row) {
+                let f = [-lt * c[0], -lt * c[1]];
+                if p == row.first {
+                    it.resultant.add(t.points[p], f);
+                } else {
+                    it.other.add(t.points[p], f);
+                }
             }
         }
     }

@@ -3,6 +3,7 @@
 //! contact pressure (λ / tributary length), current gap and active flag.
 
 pub mod forces;
+pub mod friction;
 pub mod plot;
 
 use crate::fem::{element, Model};
@@ -97,7 +98,17 @@ pub fn step_output_with_forces(
             r.gap0 - s
         })
         .collect::<Vec<f64>>();
-    let mut forces = forces::compute(model, problem, &u, &multipliers, &contact_pressure);
+    let lambda_t = friction::friction_output(model, res)
+        .map(|f| f.lambda_t)
+        .unwrap_or_default();
+    let mut forces = forces::compute_with_friction(
+        model,
+        problem,
+        &u,
+        &multipliers,
+        &lambda_t,
+        &contact_pressure,
+    );
     let step = StepOutput {
         time,
         reaction: std::mem::take(&mut forces.point_reaction),

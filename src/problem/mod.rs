@@ -184,6 +184,10 @@ pub struct Contact {
     /// Non-matching: largest initial gap at which a slave node is paired
     /// (default: unlimited, i.e. every slave node that projects onto the master).
     pub max_gap: Option<f64>,
+    /// Coulomb friction coefficient μ ≥ 0 (default 0: frictionless).
+    pub friction: Option<f64>,
+    /// Tresca friction: the bound of the tangential traction (Pa), ≥ 0.
+    pub tresca: Option<f64>,
 }
 
 #[derive(Debug, Clone, Default, Deserialize)]
@@ -311,6 +315,14 @@ pub struct Problem {
 }
 
 impl Problem {
+    /// Whether any `[[contact]]` has friction (μ > 0 or a `tresca` bound).
+    pub fn has_friction(&self) -> bool {
+        self.file
+            .contact
+            .iter()
+            .any(|c| c.friction.is_some_and(|m| m > 0.0) || c.tresca.is_some())
+    }
+
     pub fn load(path: &Path) -> Result<Problem, ModelError> {
         let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
             path: path.to_path_buf(),
@@ -580,6 +592,22 @@ impl Problem {
                     return Err(
                         self.invalid(format!("[[contact]] #{}: max_gap must be >= 0", i + 1))
                     );
+                }
+            }
+            if c.friction.is_some() && c.tresca.is_some() {
+                return Err(self.invalid(format!(
+                    "[[contact]] #{}: give either friction = μ (Coulomb) or tresca = s (Tresca), not both",
+                    i + 1
+                )));
+            }
+            for (key, v) in [("friction", c.friction), ("tresca", c.tresca)] {
+                if let Some(v) = v {
+                    if !(v.is_finite() && v >= 0.0) {
+                        return Err(self.invalid(format!(
+                            "[[contact]] #{}: {key} = {v} must be a finite number >= 0",
+                            i + 1
+                        )));
+                    }
                 }
             }
         }

@@ -29,6 +29,11 @@ pub trait Method: Sync {
     fn preconditioned(&self) -> bool {
         false
     }
+    /// Whether the method solves frictional problems (`QpProblem::friction`,
+    /// docs/methods.md §9); the driver refuses the others.
+    fn friction(&self) -> bool {
+        false
+    }
     fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError>;
 }
 
@@ -149,8 +154,28 @@ pub fn run(
 ) -> Result<QpResult, QpError> {
     opts.settings.validate().map_err(QpError::BadParameter)?;
     check_problem(qp)?;
+    if qp.friction.is_some() && !method.friction() {
+        let able: Vec<&str> = super::registry::METHODS
+            .iter()
+            .filter(|m| m.friction())
+            .map(|m| m.name())
+            .collect();
+        return Err(QpError::Unsupported(format!(
+            "method \"{}\" solves frictionless contact only; the problem has friction ([[contact]] friction or tresca): use {}",
+            method.name(),
+            able.join(" or ")
+        )));
+    }
     let mut notes = vec![];
-    match recession::boundedness(qp) {
+    // With friction the tangential loads a floating body carries may be held
+    // by friction: the frictionless decision does not apply, the method
+    // decides (docs/methods.md §9.3).
+    let bounded = if qp.friction.is_some() {
+        Boundedness::Undecided("friction".into())
+    } else {
+        recession::boundedness(qp)
+    };
+    match bounded {
         Boundedness::Unbounded(c) => return Ok(unbounded_result(qp, c.direction)),
         Boundedness::Undecided(why) => {
             log::debug!("boundedness undecided ({why}); the method decides, its claim is checked")
@@ -174,6 +199,11 @@ pub fn run(
     if let Status::Unbounded { direction } = &r.status {
         match recession::certify(qp, direction) {
             Ok(c) => return Ok(unbounded_result(qp, c.direction)),
+            Err(why) if qp.friction.is_some() => {
+                r.status = Status::Failed(format!(
+                    "{name} reported an unbounded direction that fails the certificate ({why})"
+                ));
+            }
             Err(why) => {
                 let fb = fallback_for(name);
                 let note = format!(
@@ -199,14 +229,22 @@ pub fn run(
             }
         }
     }
-    let mut kkt = kkt::residuals(qp, &r.x, &r.lambda);
-    let energy = qp.energy(&r.x);
+    // A frictional method returns [λ_n; λ_t] in `lambda` (docs/methods.md §9).
+    let mut lambda = r.lambda;
+    let lambda_t = if qp.friction.is_some() && lambda.len() == 2 * qp.m() {
+        lambda.split_off(qp.m())
+    } else {
+        vec![]
+    };
+    let mut kkt = kkt::residuals_with_friction(qp, &r.x, &lambda, &lambda_t);
+    let energy = qp.energy_with_friction(&r.x, &lambda);
     if !energy.is_finite() {
         kkt = Kkt::not_finite();
     }
     Ok(QpResult {
         x: r.x,
-        lambda: r.lambda,
+        lambda,
+        lambda_t,
         active: r.active,
         status: r.status,
         iterations: r.iterations,
@@ -248,6 +286,7 @@ fn unbounded_result(qp: &QpProblem, direction: Vec<f64>) -> QpResult {
         timings: vec![],
         kkt: Kkt::not_finite(),
         energy: f64::NEG_INFINITY,
+        lambda_t: vec![],
         notes: vec![],
     }
 }
@@ -271,6 +310,35 @@ pub fn check_problem(qp: &QpProblem) -> Result<(), QpError> {
             return Err(QpError::BadParameter(format!(
                 "{what} has a non-finite entry ({}) at position {i}: loads, moduli or prescribed displacements overflow",
                 v[i]
+            )));
+        }
+    }
+    if let Some(f) = &qp.friction {
+        let (s, what) = match &f.bound {
+            crate::qp::SlipBound::Tresca(s) => (s, "slip bound s"),
+            crate::qp::SlipBound::Coulomb(mu) => (mu, "friction coefficient μ"),
+        };
+        if f.t.nrows != m || f.t.ncols != n || f.t0.len() != m || s.len() != m {
+            return Err(QpError::BadParameter(format!(
+                "inconsistent friction sizes: T {}×{}, t0 {}, {what} {} for {m} contact rows and {n} unknowns",
+                f.t.nrows, f.t.ncols, f.t0.len(), s.len()
+            )));
+        }
+        for (w, v) in [
+            ("the tangential matrix T", &f.t.data),
+            ("the slip offset t0", &f.t0),
+        ] {
+            if let Some(i) = v.iter().position(|e| !e.is_finite()) {
+                return Err(QpError::BadParameter(format!(
+                    "{w} has a non-finite entry ({}) at position {i}",
+                    v[i]
+                )));
+            }
+        }
+        if let Some(i) = s.iter().position(|e| !(e.is_finite() && *e >= 0.0)) {
+            return Err(QpError::BadParameter(format!(
+                "the {what} of contact row {i} is {}: it must be finite and ≥ 0",
+                s[i]
             )));
         }
     }

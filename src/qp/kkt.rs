@@ -27,12 +27,35 @@ pub const CONTACT_FLOOR: f64 = 1e-4;
 ///
 /// A zero denominator gives the raw numerator.
 pub fn residuals(qp: &QpProblem, x: &[f64], lambda: &[f64]) -> Kkt {
+    residuals_with_friction(qp, x, lambda, &[])
+}
+
+/// [`residuals`] with the tangential forces `lambda_t` of a frictional
+/// problem (docs/methods.md §9.4): r = Cx − d + Aᵀλ + Tᵀλ_t, Γ also holds
+/// the unknowns T touches, and `friction` = max of
+/// * the bound max((|λ_tᵢ| − sᵢ)⁺) / max(max|λ|, max|λ_t|, 1);
+/// * the slip rule Σ(sᵢ|vᵢ| − λ_tᵢvᵢ) / max(max(|λ|, |λ_t|)·max|x|, tiny),
+///   zero iff every slip vᵢ ≠ 0 has λ_tᵢ = sᵢ·sign vᵢ (given the bound),
+///
+/// with s the slip bound at λ and v = T x − t0. Without friction
+/// `lambda_t` must be empty and the result is [`residuals`]'s.
+pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda_t: &[f64]) -> Kkt {
     let finite = |v: &[f64]| v.iter().all(|e| e.is_finite());
-    if x.len() != qp.n() || lambda.len() != qp.m() || !finite(x) || !finite(lambda) {
+    let mt = if qp.friction.is_some() { qp.m() } else { 0 };
+    if x.len() != qp.n()
+        || lambda.len() != qp.m()
+        || lambda_t.len() != mt
+        || !finite(x)
+        || !finite(lambda)
+        || !finite(lambda_t)
+    {
         return Kkt::not_finite();
     }
     let cx = qp.c.mul(x);
-    let alam = qp.a.mul_t(lambda);
+    let mut alam = qp.a.mul_t(lambda);
+    if let Some(f) = &qp.friction {
+        f.t.mul_t_add(lambda_t, &mut alam);
+    }
     let r: Vec<f64> = cx
         .iter()
         .zip(&qp.d)
@@ -45,6 +68,11 @@ pub fn residuals(qp: &QpProblem, x: &[f64], lambda: &[f64]) -> Kkt {
     let mut on_gamma = vec![false; qp.n()];
     for &c in &qp.a.indices {
         on_gamma[c] = true;
+    }
+    if let Some(f) = &qp.friction {
+        for &c in &f.t.indices {
+            on_gamma[c] = true;
+        }
     }
     let r_gamma = r
         .iter()
@@ -64,12 +92,32 @@ pub fn residuals(qp: &QpProblem, x: &[f64], lambda: &[f64]) -> Kkt {
     let dual = lambda.iter().fold(0.0f64, |m, l| m.max(-l)) / lmax.max(1.0);
     let compl: f64 = lambda.iter().zip(&viol).map(|(l, v)| l * v).sum();
     let complementarity = compl.abs() / (lmax * xmax).max(f64::MIN_POSITIVE);
+    let friction = match &qp.friction {
+        None => 0.0,
+        Some(f) => {
+            let s = f.slip_bound(lambda);
+            let v = f.slip(x);
+            let lt = lmax.max(norm_inf(lambda_t));
+            let bound = lambda_t
+                .iter()
+                .zip(&s)
+                .fold(0.0f64, |m, (l, s)| m.max(l.abs() - s));
+            let slip: f64 = v
+                .iter()
+                .zip(&s)
+                .zip(lambda_t)
+                .map(|((v, s), l)| s * v.abs() - l * v)
+                .sum();
+            (bound / lt.max(1.0)).max(slip.abs() / (lt * xmax).max(f64::MIN_POSITIVE))
+        }
+    };
     let k = Kkt {
         primal,
         dual,
         complementarity,
         stationarity,
         contact_balance,
+        friction,
     };
     if k.max().is_finite() {
         k
@@ -95,6 +143,7 @@ impl Kkt {
             complementarity: f64::INFINITY,
             stationarity: f64::INFINITY,
             contact_balance: f64::INFINITY,
+            friction: f64::INFINITY,
         }
     }
     /// The largest residual; NaN if any is NaN (`f64::max` would drop it).
@@ -105,6 +154,7 @@ impl Kkt {
             self.complementarity,
             self.stationarity,
             self.contact_balance,
+            self.friction,
         ];
         if all.iter().any(|v| v.is_nan()) {
             return f64::NAN;
@@ -132,6 +182,7 @@ mod tests {
             a: Csr::from_triplets(1, 2, &[(0, 1, 1.0)]),
             g: vec![0.0],
             kernel: vec![],
+            friction: None,
         }
     }
 

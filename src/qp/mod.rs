@@ -46,6 +46,52 @@ pub struct QpProblem {
     /// A basis of ker C (rigid motions of floating bodies), if known. Methods
     /// that need C⁻¹ use it to regularise; CGC does not need it.
     pub kernel: Vec<Vec<f64>>,
+    /// Tangential rows and slip bounds (docs/methods.md §9); `None` is
+    /// frictionless contact, solved exactly as without this field.
+    pub friction: Option<Friction>,
+}
+
+/// The slip bound of each tangential row (docs/methods.md §9.1).
+#[derive(Debug, Clone, PartialEq)]
+pub enum SlipBound {
+    /// Tresca: a given bound sᵢ ≥ 0 (N, the row's force).
+    Tresca(Vec<f64>),
+    /// Coulomb: sᵢ = μᵢ·λ_nᵢ, the coefficient per row.
+    Coulomb(Vec<f64>),
+}
+
+/// Friction on the contact rows (docs/methods.md §9): one tangential row of
+/// `t` per row of A (same order), the slip v = T x − t0 (t0: the tangential
+/// relative displacement of the previous load step) and its bound. The
+/// Tresca problem adds Σ sᵢ|vᵢ| to the energy; KKT: Cx − d + Aᵀλ_n + Tᵀλ_t = 0,
+/// |λ_tᵢ| ≤ sᵢ, and vᵢ ≠ 0 only where λ_tᵢ = sᵢ·sign vᵢ.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Friction {
+    pub t: Csr,
+    pub t0: Vec<f64>,
+    pub bound: SlipBound,
+}
+
+impl Friction {
+    /// The slip bound s of each row at the normal forces `lambda_n`.
+    pub fn slip_bound(&self, lambda_n: &[f64]) -> Vec<f64> {
+        match &self.bound {
+            SlipBound::Tresca(s) => s.clone(),
+            SlipBound::Coulomb(mu) => mu
+                .iter()
+                .zip(lambda_n)
+                .map(|(m, l)| m * l.max(0.0))
+                .collect(),
+        }
+    }
+    /// The slip v = T x − t0.
+    pub fn slip(&self, x: &[f64]) -> Vec<f64> {
+        let mut v = self.t.mul(x);
+        for (vi, t0) in v.iter_mut().zip(&self.t0) {
+            *vi -= t0;
+        }
+        v
+    }
 }
 
 impl QpProblem {
@@ -59,6 +105,23 @@ impl QpProblem {
     pub fn energy(&self, x: &[f64]) -> f64 {
         let cx = self.c.mul(x);
         0.5 * sparse::dot(x, &cx) - sparse::dot(x, &self.d)
+    }
+    /// The energy with the friction dissipation Σ sᵢ|vᵢ| at the normal forces
+    /// `lambda_n` (the Tresca functional; [`QpProblem::energy`] without friction).
+    pub fn energy_with_friction(&self, x: &[f64], lambda_n: &[f64]) -> f64 {
+        let e = self.energy(x);
+        match &self.friction {
+            None => e,
+            Some(f) => {
+                let s = f.slip_bound(lambda_n);
+                e + f
+                    .slip(x)
+                    .iter()
+                    .zip(&s)
+                    .map(|(v, s)| s * v.abs())
+                    .sum::<f64>()
+            }
+        }
     }
 }
 
@@ -114,6 +177,15 @@ pub struct Kkt {
     /// ([`kkt::residuals`]).
     #[serde(default)]
     pub contact_balance: f64,
+    /// The friction conditions (docs/methods.md §9.4): |λ_t| ≤ s and slip
+    /// only where the bound is reached, along λ_t; 0 without friction (and
+    /// then left out of the JSON, which stays as it was).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub friction: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 /// What the driver returns: a method's [`Output`] (the same fields) with
@@ -133,6 +205,8 @@ pub struct QpResult {
     pub timings: Vec<(String, f64)>,
     pub kkt: Kkt,
     pub energy: f64,
+    /// The tangential forces λ_t, one per contact row (empty without friction).
+    pub lambda_t: Vec<f64>,
     /// What the driver did beyond the method: a fallback, a refused claim
     /// (registry::solve). Printed as warnings and written to the JSON.
     pub notes: Vec<String>,
@@ -141,9 +215,11 @@ pub struct QpResult {
 impl From<QpResult> for Output {
     /// The solution without its certificate (tests compare both kinds).
     fn from(r: QpResult) -> Output {
+        let mut lambda = r.lambda;
+        lambda.extend(r.lambda_t);
         Output {
             x: r.x,
-            lambda: r.lambda,
+            lambda,
             active: r.active,
             status: r.status,
             iterations: r.iterations,

@@ -301,6 +301,7 @@ mod tests {
             a: Csr::from_triplets(m, 3, rows),
             g: vec![0.0; m],
             kernel: vec![vec![1.0, 0.0, 0.0], vec![0.0, 1.0, 0.0]],
+            friction: None,
         }
     }
 
@@ -338,6 +339,7 @@ mod tests {
             a: Csr::zeros(0, 2),
             g: vec![],
             kernel: vec![],
+            friction: None,
         };
         assert!(certify(&q, &[0.0, 1.0]).is_err());
         assert_eq!(blocks(&q.c).1, 2);

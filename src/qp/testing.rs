@@ -172,7 +172,14 @@ pub(crate) fn two_blocks(nx: usize, ny: usize, floating: bool) -> QpProblem {
         }
         kernel.push(z);
     }
-    QpProblem { c, d, a, g, kernel }
+    QpProblem {
+        c,
+        d,
+        a,
+        g,
+        kernel,
+        friction: None,
+    }
 }
 
 /// The reference: CGC + Cholesky at tol 1e-11 (its residual floor on the

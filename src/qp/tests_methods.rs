@@ -147,7 +147,14 @@ fn two_bodies(v: Variant) -> QpProblem {
         }
         kernel = vec![tx, ty, rot];
     }
-    QpProblem { c, d, a, g, kernel }
+    QpProblem {
+        c,
+        d,
+        a,
+        g,
+        kernel,
+        friction: None,
+    }
 }
 
 fn opts(tol: f64) -> SolveOptions {
@@ -519,6 +526,7 @@ fn preelim_refuses_singular_c11() {
         a,
         g: vec![0.0],
         kernel: vec![vec![1.0, 1.0, 0.0]],
+        friction: None,
     };
     match registry::solve("preelim", &qp, &opts(1e-10)) {
         Err(QpError::Unsupported(msg)) => assert!(msg.contains("C11"), "{msg}"),

@@ -238,7 +238,19 @@ impl StepObserver for VtuWriter<'_> {
         let s = step.index;
         let staged = output_paths(&self.stage_dir, &self.name, step.multi.then_some(s + 1));
         io::vtu::write_vtu(&staged.vtu, self.om, step.output, self.compress)?;
-        io::vtu::write_contact_vtu(&staged.contact_vtu, self.om, step.output, self.compress)?;
+        let fo = crate::post::friction::friction_output(step.model, step.result);
+        let arrays = fo.as_ref().map(|f| io::vtu::FrictionArrays {
+            tangential_traction: &f.tangential_traction,
+            slip: &f.slip,
+            state: &f.state,
+        });
+        io::vtu::write_contact_vtu_with_friction(
+            &staged.contact_vtu,
+            self.om,
+            step.output,
+            arrays.as_ref(),
+            self.compress,
+        )?;
         let mut names = vec![fname(&staged.vtu), fname(&staged.contact_vtu)];
         if step.multi {
             let entries: Vec<(f64, String)> = (0..=s)

@@ -227,11 +227,16 @@ impl<'a> Run<'a> {
             let ts = Instant::now();
             // Without [[steps]] the prepared model is the problem; with steps
             // every step (the first included) gets its own loads.
-            let model = if multi {
+            let mut model = if multi {
                 Some(step_model(prep, s)?)
             } else {
                 None
             };
+            // Friction: the slip of this step is measured from the last
+            // step's displacements (docs/methods.md §9.5).
+            if let (Some(m), Some(u)) = (model.as_mut(), u_prev.as_deref()) {
+                crate::fem::friction::start_step(m, Some(u));
+            }
             let model_ref = model.as_ref().unwrap_or(&prep.model);
             let t_assemble = match model {
                 None => prep.t_assemble,

@@ -56,6 +56,9 @@ pub struct KktSummary {
     pub complementarity: f64,
     pub stationarity: f64,
     pub contact_balance: f64,
+    /// The friction residual (docs/methods.md §9.4); only with friction.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
     pub target: f64,
     pub certified: bool,
 }
@@ -66,6 +69,11 @@ pub struct ContactSummary {
     /// Σ λ over the contact rows.
     pub total_force: f64,
     pub interfaces: BTreeMap<String, InterfaceForce>,
+    /// With friction: the rows in contact that stick, and that slip.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stick: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slip: Option<usize>,
 }
 
 /// The output point nearest to a requested probe and its displacement.
@@ -153,6 +161,7 @@ impl Summary {
             })
             .collect();
         let k = &res.kkt;
+        let fo = crate::post::friction::friction_output(model, res);
         Summary {
             problem: prep.problem.name.clone(),
             method: method.to_string(),
@@ -178,6 +187,7 @@ impl Summary {
                 complementarity: k.complementarity,
                 stationarity: k.stationarity,
                 contact_balance: k.contact_balance,
+                friction: model.qp.friction.as_ref().map(|_| k.friction),
                 target,
                 certified,
             },
@@ -189,6 +199,8 @@ impl Summary {
                     .iter()
                     .map(|i| (i.name.clone(), i.clone()))
                     .collect(),
+                stick: fo.as_ref().map(|f| f.stick_count),
+                slip: fo.as_ref().map(|f| f.slip_count),
             },
             loads: forces.loads,
             reactions: forces

@@ -111,6 +111,7 @@ pub(crate) fn solve_with<S: BoundStep>(
         a,
         g: qp.g.iter().zip(&s).map(|(g, s)| g * s).collect(),
         kernel: vec![],
+        friction: None,
     };
     let op = DualOp::new(&sq, fac, r, name)?;
     let mut st = Smalbe::new(op, opts.tol, step, name)?;

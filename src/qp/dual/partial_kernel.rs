@@ -161,6 +161,7 @@ pub(crate) fn keystone(hold: Hold, e_key: f64, e_rock: f64, fx: f64) -> QpProble
         a,
         g: vec![0.0; m],
         kernel,
+        friction: None,
     }
 }
 

@@ -228,6 +228,7 @@ fn schur(
         a: a2,
         g: qp.g.clone(),
         kernel,
+        friction: None,
     };
     (red, np)
 }

@@ -20,6 +20,7 @@
 //! dual-space steps are not counted), `inner_iterations` = sparse solves.
 
 mod augmented;
+mod friction;
 mod lowrank;
 mod path;
 mod schur;
@@ -67,7 +68,13 @@ impl Method for SsnMethod {
     fn summary(&self) -> &'static str {
         "semismooth Newton / primal–dual active set, Schur complement with one Cholesky factor (§7)"
     }
+    fn friction(&self) -> bool {
+        true
+    }
     fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+        if qp.friction.is_some() {
+            return friction::solve(qp, ctx);
+        }
         solve(qp, ctx)
     }
 }

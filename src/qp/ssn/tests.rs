@@ -244,6 +244,7 @@ fn string_on_parabola(n: usize) -> QpProblem {
         a,
         g,
         kernel: vec![],
+        friction: None,
     }
 }
 
@@ -458,6 +459,7 @@ pub(crate) fn contrast_blocks(nx_lo: usize, nx_up: usize, ny: usize, contrast: f
         a,
         g,
         kernel: vec![tz, rot],
+        friction: None,
     }
 }
 

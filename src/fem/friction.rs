@@ -1,0 +1,164 @@
+//! Friction on the contact rows (docs/methods.md §9): one tangential row
+//! per QP contact row, the row's own coefficients
+//! ([`ContactRow::coefficients`]) with the normal n replaced by the tangent
+//! t = (−n_y, n_x), n turned by +90°. A conforming row measures
+//! t·(u_first − u_second), a non-matching one t·(Σ w u_master − u_slave):
+//! the tangential relative displacement, whose increment over a load step is
+//! the slip. The tangential force λ_t enters the balance like λ_n
+//! (Cx − d + Aᵀλ_n + Tᵀλ_t = 0) and opposes that slip.
+
+use super::conditions::PointDofs;
+use super::contact::ContactRow;
+use super::topology::Topology;
+use super::{FemError, Model};
+use crate::problem::Problem;
+use crate::qp::{Csr, Friction, SlipBound};
+
+/// The row with its normal turned by +90°: its coefficients are those of
+/// the tangential relative displacement.
+fn tangential(row: &ContactRow) -> ContactRow {
+    let n = row.normal;
+    ContactRow {
+        normal: [-n[1], n[0]],
+        ..row.clone()
+    }
+}
+
+/// Coefficients c_p of the tangential relative displacement Σ c_p·u_p of
+/// `row` (its own coefficients with n turned by +90°).
+pub fn tangential_coefficients(row: &ContactRow) -> Vec<(usize, [f64; 2])> {
+    tangential(row).coefficients()
+}
+
+/// Index of the `[[contact]]` entry of each interface id (conforming
+/// pairs are numbered first, then the non-matching ones; `topology`, `pairs`).
+fn contact_of_interface(problem: &Problem) -> Vec<usize> {
+    let c = &problem.file.contact;
+    (0..c.len())
+        .filter(|&i| c[i].on.is_some())
+        .chain((0..c.len()).filter(|&i| c[i].on.is_none()))
+        .collect()
+}
+
+/// How `[[contact]]` #i is named in messages.
+fn pair_name(problem: &Problem, i: usize) -> String {
+    let c = &problem.file.contact[i];
+    match (&c.on, &c.slave, &c.master) {
+        (Some(on), _, _) => format!("[[contact]] #{} on = \"{on}\"", i + 1),
+        (_, Some(s), Some(m)) => format!("[[contact]] #{} \"{s}\" -> \"{m}\"", i + 1),
+        _ => format!("[[contact]] #{}", i + 1),
+    }
+}
+
+/// The friction of the QP rows `qp_rows` (None without a friction key;
+/// t0 = 0, the reference configuration; see [`offset`] for load steps).
+pub(super) fn build(
+    topo: &Topology,
+    dofs: &[PointDofs],
+    n: usize,
+    problem: &Problem,
+    qp_rows: &[usize],
+    t_eff: f64,
+) -> Result<Option<Friction>, FemError> {
+    if !problem.has_friction() {
+        return Ok(None);
+    }
+    let contacts = &problem.file.contact;
+    let tresca = contacts.iter().any(|c| c.tresca.is_some());
+    let coulomb = contacts.iter().any(|c| c.friction.is_some_and(|m| m > 0.0));
+    if tresca && coulomb {
+        return Err(FemError::new(
+            &problem.path,
+            "[[contact]]: Tresca (tresca = s) and Coulomb (friction = μ) pairs in one problem are not supported; use one law for every pair".into(),
+        ));
+    }
+    let owner = contact_of_interface(problem);
+    let mut trip = vec![];
+    let mut bound = Vec::with_capacity(qp_rows.len());
+    let mut rows_of = vec![0usize; contacts.len()];
+    for (qi, &r) in qp_rows.iter().enumerate() {
+        let row = &topo.contact[r];
+        let ci = owner[row.interface as usize];
+        rows_of[ci] += 1;
+        let c = &contacts[ci];
+        bound.push(if tresca {
+            c.tresca.unwrap_or(0.0) * row.trib * t_eff
+        } else {
+            c.friction.unwrap_or(0.0)
+        });
+        for (p, cvec) in tangential(row).coefficients() {
+            let pd = dofs[p];
+            for k in 0..pd.ndof {
+                let v = cvec[0] * pd.t[k][0] + cvec[1] * pd.t[k][1];
+                if v.abs() > 1e-14 {
+                    trip.push((qi, pd.start + k, v));
+                }
+            }
+        }
+    }
+    for (ci, c) in contacts.iter().enumerate() {
+        let has = c.friction.is_some_and(|m| m > 0.0) || c.tresca.is_some();
+        if has && rows_of[ci] == 0 {
+            return Err(FemError::new(
+                &problem.path,
+                format!(
+                    "{}: friction is given but the pair has no contact rows (every point fixed, or no slave node projects onto the master)",
+                    pair_name(problem, ci)
+                ),
+            ));
+        }
+    }
+    Ok(Some(Friction {
+        t: Csr::from_triplets(qp_rows.len(), n, &trip),
+        t0: vec![0.0; qp_rows.len()],
+        bound: if tresca {
+            SlipBound::Tresca(bound)
+        } else {
+            SlipBound::Coulomb(bound)
+        },
+    }))
+}
+
+/// The tangential relative displacement of every QP row for the point
+/// displacements `u` (docs/methods.md §9.5).
+pub fn tangential_displacement(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
+    model
+        .qp_rows
+        .iter()
+        .map(|&r| {
+            tangential(&model.topo.contact[r])
+                .coefficients()
+                .iter()
+                .map(|(p, c)| c[0] * u[*p][0] + c[1] * u[*p][1])
+                .sum()
+        })
+        .collect()
+}
+
+/// The offset t0 that makes the slip T x − t0 the increment from the point
+/// displacements `u_prev` (the previous load step's; None: the reference
+/// configuration): the tangential displacement of `u_prev` less the part
+/// the prescribed displacements u0 of this model contribute.
+pub fn offset(model: &Model, u_prev: Option<&[[f64; 2]]>) -> Vec<f64> {
+    let u0: Vec<[f64; 2]> = model.dofs.iter().map(|p| p.u0).collect();
+    let from_u0 = tangential_displacement(model, &u0);
+    match u_prev {
+        None => from_u0.iter().map(|v| -v).collect(),
+        Some(u) => tangential_displacement(model, u)
+            .iter()
+            .zip(&from_u0)
+            .map(|(a, b)| a - b)
+            .collect(),
+    }
+}
+
+/// Set the slip offset of `model`'s friction from the previous step's point
+/// displacements (no-op without friction).
+pub fn start_step(model: &mut Model, u_prev: Option<&[[f64; 2]]>) {
+    if model.qp.friction.is_some() {
+        let t0 = offset(model, u_prev);
+        if let Some(f) = model.qp.friction.as_mut() {
+            f.t0 = t0;
+        }
+    }
+}

@@ -1,0 +1,619 @@
+//! `ssn` with friction (docs/methods.md §9.2): the primal–dual active set
+//! method of Hüeber, Stadler & Wohlmuth (SISC 30, 2008) for the Tresca
+//! problem, and Coulomb as successive Tresca problems (§9.1, the report's
+//! outer loop).
+//!
+//! One Newton step predicts, with c = mean diag C and v = T x − t0,
+//! * the normal set N = {i : λ_nᵢ + c(Ax − g)ᵢ > 0};
+//! * the stick set S = {i : sᵢ > 0, |λ_tᵢ + c_t vᵢ| ≤ sᵢ}; every other row
+//!   slips with the known force λ_tᵢ = sᵢ·sign(λ_tᵢ + c_t vᵢ), c_t = 10⁻²c;
+//!
+//! and solves the equality-constrained problem `Cx + Bᵀμ = d − T_Lᵀλ_L,
+//! Bx = b` with B = [A_N; T_S], b = [g_N; t0_S] through K = C + ρBᵀB
+//! (augmented Lagrangian steps μ ← μ + ρ(Bx − b); the multiplier is taken
+//! after the step, so Cx − d + Bᵀμ + T_Lᵀλ_L = 0 holds to the solve's
+//! backward error). The step is repeated until the sets no longer change
+//! (a KKT point of the Tresca problem); a set seen before, or one that
+//! frees a rigid motion friction can hold, is entered one row at a time.
+//! Coulomb starts glued (S = N) and
+//! then sets s = μλ_n from the last solution until s is stationary.
+//!
+//! A working set that leaves a rigid motion z free (B z = 0 for some z in
+//! ker C) is tested: if the loads do more work along ±z than friction can
+//! dissipate (dᵀz > Σ sᵢ|(Tz)ᵢ|, Az ≤ 0), the problem is unbounded — the
+//! block slides down the plane (§9.3); otherwise K is regularised along z
+//! for that step only.
+
+use crate::linalg::dense::sym_eigen;
+use crate::linalg::kernel::orthonormal_kernel;
+use crate::linalg::sparse::{dot, norm_inf, Csr};
+use crate::qp::executor::{Iterative, Step};
+use std::collections::HashSet;
+
+use crate::qp::{Context, Friction, IterRecord, Output, QpError, QpProblem, SlipBound, Status};
+
+/// ρ = RHO · max diag C in K = C + ρBᵀB.
+const RHO: f64 = super::RHO_FACTOR;
+/// Augmented Lagrangian steps per Newton step, at most.
+const AL_MAX: usize = 200;
+/// c_t = CT_FACTOR · c in the slip prediction |λ_t + c_t v| ≤ s: any
+/// c_t > 0 has the same fixed points; a small one lets the forces lead.
+/// With c_t = c the block of tests/friction.rs at tan θ = 0.9μ under
+/// Tresca cycled between stick zones; with 10⁻² it settles in 7 steps.
+const CT_FACTOR: f64 = 1e-2;
+/// Largest number of Coulomb updates of s.
+const OUTER_MAX: usize = 500;
+
+/// Solve the frictional `qp` (qp.friction is Some).
+pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+    let Some(fr) = qp.friction.as_ref() else {
+        return Err(QpError::BadParameter(
+            "ssn::friction called without friction".into(),
+        ));
+    };
+    let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
+    let mut st = State::new(qp, fr, r, ctx);
+    let mut exec = ctx.executor("ssn");
+    let (status, iters) = exec.run(&mut st);
+    if let Some(e) = st.error.take() {
+        return Err(e);
+    }
+    let mut lambda = st.ln;
+    lambda.extend(st.lt);
+    Ok(Output {
+        x: st.x,
+        lambda,
+        active: st.in_n,
+        status,
+        iterations: iters,
+        inner_iterations: st.inner,
+        log: exec.log,
+        timings: vec![],
+    })
+}
+
+/// How each row is held in a working set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+enum Tangential {
+    Stick,
+    /// Slips with λ_t = s·sign (the sign as a bool: true = positive).
+    Slip(bool),
+}
+
+struct State<'a> {
+    qp: &'a QpProblem,
+    fr: &'a Friction,
+    ws: &'a crate::linalg::cholesky::Workspace,
+    /// Orthonormal basis of ker C.
+    r: Vec<Vec<f64>>,
+    cpar: f64,
+    /// c_t of the slip prediction.
+    ct: f64,
+    rho: f64,
+    tol: f64,
+    x: Vec<f64>,
+    ln: Vec<f64>,
+    lt: Vec<f64>,
+    /// The current slip bound.
+    s: Vec<f64>,
+    /// Coulomb before its first update of s: S = N.
+    glued: bool,
+    in_n: Vec<bool>,
+    tang: Vec<Tangential>,
+    /// The sets of the last solve (None before the first).
+    last: Option<(Vec<bool>, Vec<Tangential>)>,
+    outer: usize,
+    inner: usize,
+    /// Working sets solved so far (anti-cycling; looked up, never iterated).
+    visited: HashSet<(Vec<bool>, Vec<Tangential>)>,
+    error: Option<QpError>,
+}
+
+impl<'a> State<'a> {
+    fn new(qp: &'a QpProblem, fr: &'a Friction, r: Vec<Vec<f64>>, ctx: &Context<'a>) -> Self {
+        let (n, m) = (qp.n(), qp.m());
+        let diag = qp.c.diag();
+        let cpar = (diag.iter().sum::<f64>() / n.max(1) as f64).max(f64::MIN_POSITIVE);
+        let cmax = norm_inf(&diag).max(f64::MIN_POSITIVE);
+        let x = ctx.x0.map_or_else(|| vec![0.0; n], |x0| x0.to_vec());
+        let ax = qp.a.mul(&x);
+        let scale = norm_inf(&x).max(norm_inf(&qp.g)).max(f64::MIN_POSITIVE);
+        let in_n: Vec<bool> = (0..m).map(|i| ax[i] - qp.g[i] >= -1e-12 * scale).collect();
+        let (s, glued) = match &fr.bound {
+            SlipBound::Tresca(s) => (s.clone(), false),
+            SlipBound::Coulomb(_) => (vec![0.0; m], true),
+        };
+        State {
+            qp,
+            fr,
+            ws: ctx.ws,
+            r,
+            cpar,
+            ct: CT_FACTOR * cpar,
+            rho: RHO * cmax,
+            tol: ctx.settings.tol,
+            x,
+            ln: vec![0.0; m],
+            lt: vec![0.0; m],
+            s,
+            glued,
+            tang: in_n
+                .iter()
+                .map(|&a| {
+                    if a {
+                        Tangential::Stick
+                    } else {
+                        Tangential::Slip(true)
+                    }
+                })
+                .collect(),
+            in_n,
+            last: None,
+            outer: 0,
+            inner: 0,
+            visited: HashSet::new(),
+            error: None,
+        }
+    }
+
+    /// The sets predicted at the current (x, λ_n, λ_t).
+    fn predict(&self) -> (Vec<bool>, Vec<Tangential>) {
+        let qp = self.qp;
+        let ax = qp.a.mul(&self.x);
+        let v = self.fr.slip(&self.x);
+        let n_set: Vec<bool> = (0..qp.m())
+            .map(|i| self.ln[i] + self.cpar * (ax[i] - qp.g[i]) > 0.0)
+            .collect();
+        let tang = (0..qp.m())
+            .map(|i| {
+                let z = self.lt[i] + self.ct * v[i];
+                if self.glued {
+                    if n_set[i] {
+                        Tangential::Stick
+                    } else {
+                        Tangential::Slip(true)
+                    }
+                } else if self.s[i] > 0.0 && z.abs() <= self.s[i] {
+                    Tangential::Stick
+                } else {
+                    Tangential::Slip(z > 0.0)
+                }
+            })
+            .collect();
+        (n_set, tang)
+    }
+
+    /// Whether the working set `(n_set, tang)` leaves a rigid motion free
+    /// along which the problem is bounded.
+    fn frees_a_bounded_motion(&self, n_set: &[bool], tang: &[Tangential]) -> bool {
+        let m = self.qp.m();
+        let brows: Vec<(bool, usize)> = (0..m)
+            .filter(|&i| n_set[i])
+            .map(|i| (false, i))
+            .chain(
+                (0..m)
+                    .filter(|&i| tang[i] == Tangential::Stick)
+                    .map(|i| (true, i)),
+            )
+            .collect();
+        let free = self.free_motions(&brows);
+        !free.is_empty() && self.unbounded_along(&free).is_none()
+    }
+
+    /// Move the current sets one row towards the prediction `(n_set, tang)`:
+    /// the row whose prediction is violated most (normal: |λ_n + c(Ax − g)|,
+    /// tangential: ||λ_t + c v| − s|).
+    fn single_change(&mut self, n_set: &[bool], tang: &[Tangential]) {
+        let qp = self.qp;
+        let ax = qp.a.mul(&self.x);
+        let v = self.fr.slip(&self.x);
+        let mut best: Option<(f64, usize, bool)> = None;
+        for i in 0..qp.m() {
+            if n_set[i] != self.in_n[i] {
+                let sc = (self.ln[i] + self.cpar * (ax[i] - qp.g[i])).abs();
+                if best.is_none_or(|b| sc > b.0) {
+                    best = Some((sc, i, false));
+                }
+            }
+            if tang[i] != self.tang[i] {
+                let sc = ((self.lt[i] + self.ct * v[i]).abs() - self.s[i]).abs();
+                if best.is_none_or(|b| sc > b.0) {
+                    best = Some((sc, i, true));
+                }
+            }
+        }
+        match best {
+            Some((_, i, false)) => self.in_n[i] = n_set[i],
+            Some((_, i, true)) => self.tang[i] = tang[i],
+            None => {}
+        }
+    }
+
+    /// The known force of a slipping row.
+    fn slip_force(&self, i: usize, t: Tangential) -> f64 {
+        match t {
+            Tangential::Slip(pos) if !self.glued => {
+                if pos {
+                    self.s[i]
+                } else {
+                    -self.s[i]
+                }
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Solve the equality-constrained problem of the working set; Ok(None)
+    /// when it is unbounded along a rigid motion (returned as the status).
+    fn solve_set(&mut self) -> Result<Option<Status>, QpError> {
+        let qp = self.qp;
+        let (n, m) = (qp.n(), qp.m());
+        // B's rows: (is tangential, row index).
+        let mut brows: Vec<(bool, usize)> = vec![];
+        for i in 0..m {
+            if self.in_n[i] {
+                brows.push((false, i));
+            }
+        }
+        for i in 0..m {
+            if self.tang[i] == Tangential::Stick {
+                brows.push((true, i));
+            }
+        }
+        let row = |&(t, i): &(bool, usize)| if t { self.fr.t.row(i) } else { qp.a.row(i) };
+        let b: Vec<f64> = brows
+            .iter()
+            .map(|&(t, i)| if t { self.fr.t0[i] } else { qp.g[i] })
+            .collect();
+        // d' = d − T_Lᵀ λ_L.
+        let mut dp = qp.d.clone();
+        let fl: Vec<f64> = (0..m).map(|i| -self.slip_force(i, self.tang[i])).collect();
+        self.fr.t.mul_t_add(&fl, &mut dp);
+        // Rigid motions left free by B.
+        let free = self.free_motions(&brows);
+        if !free.is_empty() {
+            if let Some(z) = self.unbounded_along(&free) {
+                return Ok(Some(Status::Unbounded { direction: z }));
+            }
+        }
+        // K = C + ρBᵀB on the pattern of C + AᵀA + TᵀT (same pattern every step).
+        let mut trip: Vec<(usize, usize, f64)> = Vec::with_capacity(qp.c.nnz());
+        for i in 0..n {
+            let (cols, vals) = qp.c.row(i);
+            for (&j, &v) in cols.iter().zip(vals) {
+                trip.push((i, j, v));
+            }
+        }
+        let mut in_b = vec![[false; 2]; m];
+        for &(t, i) in &brows {
+            in_b[i][t as usize] = true;
+        }
+        for (mat, t) in [(&qp.a, false), (&self.fr.t, true)] {
+            for i in 0..m {
+                let w = if in_b[i][t as usize] { self.rho } else { 0.0 };
+                let (cols, vals) = mat.row(i);
+                for (&j, &a) in cols.iter().zip(vals) {
+                    for (&k, &c) in cols.iter().zip(vals) {
+                        trip.push((j, k, w * a * c));
+                    }
+                }
+            }
+        }
+        let kmat = Csr::from_triplets(n, n, &trip);
+        let fac = self.ws.cholesky(&kmat, &free)?;
+        // Augmented Lagrangian steps from the last multipliers.
+        let mut mu: Vec<f64> = brows
+            .iter()
+            .map(|&(t, i)| if t { self.lt[i] } else { self.ln[i] })
+            .collect();
+        let bscale = norm_inf(&b);
+        let mut x = vec![0.0; n];
+        for _ in 0..AL_MAX {
+            // x = K⁻¹(d' + Bᵀ(ρb − μ))
+            let mut rhs = dp.clone();
+            for (k, br) in brows.iter().enumerate() {
+                let (cols, vals) = row(br);
+                let w = self.rho * b[k] - mu[k];
+                for (&j, &a) in cols.iter().zip(vals) {
+                    rhs[j] += w * a;
+                }
+            }
+            x = fac.solve(&rhs);
+            self.inner += 1;
+            let mut res = 0.0f64;
+            for (k, br) in brows.iter().enumerate() {
+                let (cols, vals) = row(br);
+                let bx: f64 = cols.iter().zip(vals).map(|(&j, &a)| a * x[j]).sum();
+                mu[k] += self.rho * (bx - b[k]);
+                res = res.max((bx - b[k]).abs());
+            }
+            let xs = norm_inf(&x).max(bscale).max(f64::MIN_POSITIVE);
+            if res <= 1e-14 * xs {
+                break;
+            }
+        }
+        if !x.iter().all(|v| v.is_finite()) {
+            return Ok(Some(Status::Failed(
+                "the KKT solve of a working set gave a non-finite iterate".into(),
+            )));
+        }
+        self.x = x;
+        self.ln = vec![0.0; m];
+        self.lt = (0..m).map(|i| self.slip_force(i, self.tang[i])).collect();
+        for (k, &(t, i)) in brows.iter().enumerate() {
+            if t {
+                self.lt[i] = mu[k];
+            } else {
+                self.ln[i] = mu[k];
+            }
+        }
+        Ok(None)
+    }
+
+    /// An orthonormal basis (as vectors of ℝⁿ) of the rigid motions z with
+    /// B z = 0.
+    fn free_motions(&self, brows: &[(bool, usize)]) -> Vec<Vec<f64>> {
+        let k = self.r.len();
+        if k == 0 {
+            return vec![];
+        }
+        let mut g = vec![vec![0.0; k]; k];
+        let mut bnorm = 0.0;
+        for &(t, i) in brows {
+            let (cols, vals) = if t {
+                self.fr.t.row(i)
+            } else {
+                self.qp.a.row(i)
+            };
+            bnorm += vals.iter().map(|v| v * v).sum::<f64>();
+            let br: Vec<f64> = self
+                .r
+                .iter()
+                .map(|rl| cols.iter().zip(vals).map(|(&j, &a)| a * rl[j]).sum())
+                .collect();
+            for a in 0..k {
+                for c in 0..k {
+                    g[a][c] += br[a] * br[c];
+                }
+            }
+        }
+        let (vals, vecs) = sym_eigen(&g);
+        let tol = 1e-9 * bnorm.max(1.0) / self.qp.n().max(1) as f64;
+        vals.iter()
+            .zip(&vecs)
+            .filter(|(e, _)| !(**e > tol))
+            .map(|(_, v)| {
+                let mut z = vec![0.0; self.qp.n()];
+                for (c, rl) in v.iter().zip(&self.r) {
+                    for (zj, rj) in z.iter_mut().zip(rl) {
+                        *zj += c * rj;
+                    }
+                }
+                z
+            })
+            .collect()
+    }
+
+    /// A free rigid motion ±z (z in span `free`) along which the loads do
+    /// more work than friction dissipates and no contact row closes.
+    fn unbounded_along(&self, free: &[Vec<f64>]) -> Option<Vec<f64>> {
+        let qp = self.qp;
+        // Steepest: the loads projected on the free motions, then each basis vector.
+        let mut cands: Vec<Vec<f64>> = vec![];
+        let mut p = vec![0.0; qp.n()];
+        for z in free {
+            let w = dot(&qp.d, z);
+            for (pj, zj) in p.iter_mut().zip(z) {
+                *pj += w * zj;
+            }
+        }
+        cands.push(p);
+        for z in free {
+            cands.push(z.clone());
+            cands.push(z.iter().map(|v| -v).collect());
+        }
+        for z in cands {
+            let zmax = norm_inf(&z);
+            if !(zmax > 0.0) {
+                continue;
+            }
+            let az = qp.a.mul(&z);
+            let arow: Vec<f64> = (0..qp.m())
+                .map(|i| {
+                    let (_, vals) = qp.a.row(i);
+                    vals.iter().map(|v| v.abs()).sum::<f64>() * zmax
+                })
+                .collect();
+            if az.iter().zip(&arow).any(|(a, s)| *a > 1e-10 * s) {
+                continue;
+            }
+            let tz = self.fr.t.mul(&z);
+            let work = dot(&qp.d, &z);
+            let dissipation: f64 = tz.iter().zip(&self.s).map(|(t, s)| s * t.abs()).sum();
+            let dscale: f64 = qp.d.iter().zip(&z).map(|(d, z)| (d * z).abs()).sum();
+            if work - dissipation > 1e-10 * dscale {
+                return Some(z);
+            }
+        }
+        None
+    }
+
+    fn record(&self, iter: usize) -> IterRecord {
+        let k = crate::qp::kkt::residuals_with_friction(self.qp, &self.x, &self.ln, &self.lt);
+        IterRecord {
+            iter,
+            residual: k.max(),
+            active: self.in_n.iter().filter(|a| **a).count(),
+            inner: self.inner,
+        }
+    }
+}
+
+impl Iterative for State<'_> {
+    fn step(&mut self) -> Step {
+        let it = self.outer + 1;
+        self.outer += 1;
+        if self.last.is_some() {
+            let (n_set, tang) = self.predict();
+            let settled = self
+                .last
+                .as_ref()
+                .is_some_and(|(ln, lt)| *ln == n_set && *lt == tang);
+            if settled {
+                // A KKT point of the current Tresca problem.
+                match &self.fr.bound {
+                    SlipBound::Tresca(_) => return Step::Done(Status::Converged, self.record(it)),
+                    SlipBound::Coulomb(mu) => {
+                        let s_new: Vec<f64> = mu
+                            .iter()
+                            .zip(&self.ln)
+                            .map(|(m, l)| m * l.max(0.0))
+                            .collect();
+                        let change = s_new
+                            .iter()
+                            .zip(&self.s)
+                            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+                        let smax = norm_inf(&s_new).max(f64::MIN_POSITIVE);
+                        if !self.glued && change <= self.tol * smax {
+                            return Step::Done(Status::Converged, self.record(it));
+                        }
+                        if self.outer > OUTER_MAX {
+                            return Step::Done(
+                                Status::Failed(format!(
+                                    "the Coulomb fixed point (s = μλ_n) did not settle in {OUTER_MAX} Newton steps (last change {:.3e} of max s)",
+                                    change / smax
+                                )),
+                                self.record(it),
+                            );
+                        }
+                        self.glued = false;
+                        self.s = s_new;
+                        let (n_set, tang) = self.predict();
+                        self.in_n = n_set;
+                        self.tang = tang;
+                    }
+                }
+            } else if self.visited.contains(&(n_set.clone(), tang.clone()))
+                || self.frees_a_bounded_motion(&n_set, &tang)
+            {
+                // A working set seen before (the full step cycles), or one
+                // that would let a body slide although friction holds it
+                // (an overshoot): change only the row that violates its
+                // prediction most (as in ssn's single changes).
+                self.single_change(&n_set, &tang);
+            } else {
+                self.in_n = n_set;
+                self.tang = tang;
+            }
+        }
+        self.visited.insert((self.in_n.clone(), self.tang.clone()));
+        self.last = Some((self.in_n.clone(), self.tang.clone()));
+        match self.solve_set() {
+            Ok(None) => Step::Continue(self.record(it)),
+            Ok(Some(status)) => Step::Done(status, self.record(it)),
+            Err(e) => {
+                let msg = e.to_string();
+                self.error = Some(e);
+                Step::Done(Status::Failed(msg), IterRecord::default())
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::qp::{registry, Csr, Friction, QpProblem, SlipBound, SolveOptions, Status};
+
+    /// A point on a rigid floor (−u_y ≤ 0) held by springs kx, ky, loaded by
+    /// (fx, fy): λ_n = −fy, and it sticks (u_x = 0, λ_t = fx) while
+    /// |fx| ≤ μλ_n, else slips with λ_t = μλ_n·sign fx, u_x = (fx − λ_t)/kx.
+    fn point(kx: f64, fx: f64, fy: f64, bound: SlipBound) -> QpProblem {
+        let mut trip = vec![(1, 1, 3.0)];
+        if kx > 0.0 {
+            trip.push((0, 0, kx));
+        }
+        QpProblem {
+            c: Csr::from_triplets(2, 2, &trip),
+            d: vec![fx, fy],
+            a: Csr::from_triplets(1, 2, &[(0, 1, -1.0)]),
+            g: vec![0.0],
+            kernel: if kx > 0.0 {
+                vec![]
+            } else {
+                vec![vec![1.0, 0.0]]
+            },
+            friction: Some(Friction {
+                t: Csr::from_triplets(1, 2, &[(0, 0, 1.0)]),
+                t0: vec![0.0],
+                bound,
+            }),
+        }
+    }
+
+    #[test]
+    fn a_point_sticks_and_slips_by_coulomb_and_tresca() {
+        let opts = SolveOptions::default();
+        for (fx, mu) in [(0.3, 0.5), (-0.3, 0.5), (0.7, 0.5), (-0.7, 0.5), (0.5, 0.0)] {
+            for bound in [
+                SlipBound::Coulomb(vec![mu]),
+                SlipBound::Tresca(vec![mu * 1.0]),
+            ] {
+                let qp = point(2.0, fx, -1.0, bound.clone());
+                let r = registry::solve("ssn", &qp, &opts).unwrap();
+                assert!(r.status.converged(), "{fx} {mu}: {:?}", r.status);
+                assert!(r.kkt.within(1e-10), "{:?}", r.kkt);
+                assert!((r.lambda[0] - 1.0).abs() < 1e-12);
+                let lt = if fx.abs() <= mu { fx } else { mu * fx.signum() };
+                assert!(
+                    (r.lambda_t[0] - lt).abs() < 1e-12,
+                    "{fx} {mu}: {:?}",
+                    r.lambda_t
+                );
+                assert!((r.x[0] - (fx - lt) / 2.0).abs() < 1e-12, "{:?}", r.x);
+            }
+        }
+    }
+
+    #[test]
+    fn a_floating_point_sticks_or_is_unbounded() {
+        let opts = SolveOptions::default();
+        let r = registry::solve(
+            "ssn",
+            &point(0.0, 0.3, -1.0, SlipBound::Coulomb(vec![0.5])),
+            &opts,
+        )
+        .unwrap();
+        assert!(
+            r.status.converged() && r.kkt.within(1e-10),
+            "{:?}",
+            r.status
+        );
+        assert!((r.lambda_t[0] - 0.3).abs() < 1e-12 && r.x[0].abs() < 1e-12);
+        let r = registry::solve(
+            "ssn",
+            &point(0.0, 0.7, -1.0, SlipBound::Coulomb(vec![0.5])),
+            &opts,
+        )
+        .unwrap();
+        assert!(
+            matches!(r.status, Status::Unbounded { .. }),
+            "{:?}",
+            r.status
+        );
+    }
+
+    #[test]
+    fn other_methods_refuse_friction_and_nan_fails_the_certificate() {
+        let qp = point(2.0, 0.3, -1.0, SlipBound::Coulomb(vec![0.5]));
+        let e = registry::solve("cgc", &qp, &SolveOptions::default()).unwrap_err();
+        assert!(e.to_string().contains("frictionless contact only"), "{e}");
+        let k = crate::qp::kkt::residuals_with_friction(&qp, &[0.0, 0.0], &[1.0], &[f64::NAN]);
+        assert!(!k.within(1e300));
+        // A tangential force above the bound fails the friction residual.
+        let k = crate::qp::kkt::residuals_with_friction(&qp, &[0.0, 0.0], &[1.0], &[0.6]);
+        assert!(k.friction > 1e-3, "{k:?}");
+        // A slip against λ_t fails it too.
+        let k = crate::qp::kkt::residuals_with_friction(&qp, &[0.1, 0.0], &[1.0], &[-0.5]);
+        assert!(k.friction > 1e-3, "{k:?}");
+    }
+}

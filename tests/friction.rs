@@ -1,0 +1,447 @@
+//! Friction (docs/methods.md §10): a block on an inclined plane sticks below
+//! the friction angle and is refused as sliding above it; Cattaneo–Mindlin
+//! partial slip; μ = 0 is the frictionless model bit for bit and a huge μ is
+//! the tangentially glued interface.
+
+mod common;
+
+use common::{meshes, root, run};
+use signorini::fem::Model;
+use signorini::post::friction::{friction_output, FrictionOutput};
+use signorini::qp::{QpResult, SolverSection};
+use signorini::run::{self, Prepared};
+use std::path::{Path, PathBuf};
+
+/// Write `toml` next to a copy of the mesh `msh` in `dir`.
+fn model_file(dir: &Path, name: &str, msh: &Path, toml: &str) -> PathBuf {
+    let mname = msh.file_name().unwrap();
+    std::fs::copy(msh, dir.join(mname)).unwrap();
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(&p, toml.replace("MESH", mname.to_str().unwrap())).unwrap();
+    p
+}
+
+/// Every load step of `path` by `method` through the library; the last
+/// step's model (None: the prepared one) and result.
+fn solve(path: &Path, method: &str) -> (Prepared, Option<Model>, QpResult) {
+    let prep = run::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
+    let flags = SolverSection {
+        method: Some(method.into()),
+        ..Default::default()
+    };
+    let (m, opts) = run::options(&prep.problem, &flags).unwrap();
+    let out = run::Run::new(&prep, &m, &opts)
+        .solve(&mut [], None)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(out.certified, "{}: not certified", path.display());
+    let last = out.last.unwrap();
+    (prep, last.model, last.result)
+}
+
+/// The floating block of meshes/floating_block.msh (no support but the
+/// contact) on its foundation, under gravity g = 9.81 turned by θ: the
+/// inclined plane. Both bodies plane strain, the foundation held.
+fn inclined(theta: f64, law: &str) -> String {
+    let g = 9.81;
+    format!(
+        r#"[mesh]
+file = "MESH"
+[model]
+plane = "strain"
+gravity = [{}, {}]
+[materials.foundation]
+E = 3.0e10
+nu = 0.2
+rho = 2400.0
+[materials.block]
+E = 1.0e10
+nu = 0.25
+rho = 2500.0
+[[dirichlet]]
+on = "found_bottom"
+u = [0.0, 0.0]
+[[slip]]
+on = "found_left"
+[[slip]]
+on = "found_right"
+[[contact]]
+on = "interface"
+{law}
+"#,
+        g * theta.sin(),
+        -g * theta.cos()
+    )
+}
+
+#[test]
+fn a_block_on_an_inclined_plane_sticks_below_the_friction_angle() {
+    let d = tempfile::tempdir().unwrap();
+    let msh = meshes().join("floating_block.msh");
+    let mu = 0.5;
+    // The block's weight per unit thickness (1 m × 1 m, ρ = 2500).
+    let w = 2500.0 * 9.81;
+    for (k, tan) in [0.1, 0.3, 0.45].into_iter().enumerate() {
+        let theta = f64::atan(tan);
+        for law in [format!("friction = {mu}"), format!("tresca = {}", 0.5 * w)] {
+            let p = model_file(d.path(), &format!("stick{k}"), &msh, &inclined(theta, &law));
+            let (prep, _, res) = solve(&p, "ssn");
+            let fo = friction_output(&prep.model, &res).expect("friction outputs");
+            let ln: f64 = res.lambda.iter().sum();
+            let lt: f64 = res.lambda_t.iter().sum();
+            // The contact holds the block's weight: λ_n = W cos θ, λ_t = W sin θ.
+            assert!(
+                (ln - w * theta.cos()).abs() < 1e-8 * w,
+                "{law}: Σλ_n = {ln}"
+            );
+            assert!(
+                (lt.abs() / ln - tan).abs() < 1e-9,
+                "{law}: Σλ_t/Σλ_n = {} for tan θ = {tan}",
+                lt.abs() / ln
+            );
+            // The block does not slide: a stick zone holds it (rows near the
+            // corners may slip where the shear traction concentrates, more
+            // under Tresca's uniform bound as tan θ nears μ) and the stick
+            // rows do not move.
+            assert!(fo.stick_count > 0, "{law}: {fo:?}");
+            if tan <= 0.3 {
+                assert!(2 * fo.stick_count >= fo.state.len(), "{law}: {fo:?}");
+            }
+            let umax = res.x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (s, v) in fo.state.iter().zip(&fo.slip) {
+                if *s == 1 {
+                    assert!(v.abs() <= 1e-9 * umax, "{law}: stick row slips {v}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_block_above_the_friction_angle_is_refused_as_sliding() {
+    let d = tempfile::tempdir().unwrap();
+    let msh = meshes().join("floating_block.msh");
+    for (law, tan) in [("friction = 0.5", 0.55), ("friction = 0.2", 0.3)] {
+        let p = model_file(d.path(), "slide", &msh, &inclined(f64::atan(tan), law));
+        let (code, log) = run(&[
+            "solve",
+            p.to_str().unwrap(),
+            "--method",
+            "ssn",
+            "--out",
+            d.path().join("out").to_str().unwrap(),
+        ]);
+        assert_eq!(code, 2, "{log}");
+        assert!(log.contains("unbounded") && log.contains("slides"), "{log}");
+        assert!(log.contains("translation along (1, 0)"), "{log}");
+    }
+}
+
+#[test]
+fn methods_without_friction_are_refused_and_bad_keys_are_named() {
+    let d = tempfile::tempdir().unwrap();
+    let msh = meshes().join("floating_block.msh");
+    let p = model_file(d.path(), "m", &msh, &inclined(0.1, "friction = 0.5"));
+    let out = d.path().join("out");
+    let (code, log) = run(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--method",
+        "cgc",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{log}");
+    assert!(
+        log.contains("frictionless contact only") && log.contains("ssn"),
+        "{log}"
+    );
+    for (law, want) in [
+        ("friction = 0.5\ntresca = 1.0", "not both"),
+        ("friction = -0.1", "friction = -0.1 must be"),
+        ("tresca = nan", "tresca = NaN must be"),
+    ] {
+        let p = model_file(d.path(), "bad", &msh, &inclined(0.1, law));
+        let (code, log) = run(&["solve", p.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        assert_eq!(code, 2, "{law}: {log}");
+        assert!(
+            log.contains(want) && log.contains("bad.toml"),
+            "{law}: {log}"
+        );
+    }
+}
+
+/// The Cattaneo–Mindlin mesh, made by gmsh from tests/data/friction/cattaneo.geo.
+fn cattaneo_mesh(dir: &Path) -> PathBuf {
+    let geo = root().join("tests/data/friction/cattaneo.geo");
+    std::fs::create_dir_all(dir.join("gmsh")).unwrap();
+    let out = dir.join("gmsh/cattaneo.msh");
+    let (code, log) = run(&["mesh", geo.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{log}");
+    out
+}
+
+/// x of each contact row's slave point and the half-width of the set of
+/// rows with `pick(state)`: the mean over both sides of the midpoint
+/// between the outermost picked row and the next row beyond it.
+fn half_width(prep: &Prepared, fo: &FrictionOutput, pick: impl Fn(u8) -> bool) -> f64 {
+    let t = &prep.model.topo;
+    let mut rows: Vec<(f64, bool)> = t
+        .contact
+        .iter()
+        .zip(&fo.state)
+        .map(|(r, &s)| (t.points[r.first][0], pick(s)))
+        .collect();
+    rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let first = rows.iter().position(|r| r.1).unwrap();
+    let last = rows.iter().rposition(|r| r.1).unwrap();
+    assert!(
+        first > 0 && last + 1 < rows.len(),
+        "the set reaches the end of the curve"
+    );
+    let left = 0.5 * (rows[first].0 + rows[first - 1].0);
+    let right = 0.5 * (rows[last].0 + rows[last + 1].0);
+    0.5 * (right - left)
+}
+
+/// The Cattaneo–Mindlin model: the cylinder's top lowered by 12 mm in step
+/// 1, then moved sideways by 3 mm in step 2.
+fn cattaneo_toml(mu: f64) -> String {
+    format!(
+        r#"[mesh]
+file = "MESH"
+[model]
+plane = "strain"
+[materials.cylinder]
+E = 2.0e11
+nu = 0.3
+[materials.block]
+E = 2.0e11
+nu = 0.3
+[[dirichlet]]
+on = "block_bottom"
+u = [0.0, 0.0]
+[[dirichlet]]
+on = "cyl_top"
+u = [0.0, 0.0]
+[[contact]]
+slave = "cyl_contact"
+master = "block_top"
+friction = {mu}
+[[steps]]
+dirichlet = {{ cyl_top = [0.0, -0.012] }}
+[[steps]]
+dirichlet = {{ cyl_top = [0.003, -0.012] }}
+[solver]
+method = "ssn"
+"#
+    )
+}
+
+#[test]
+fn cattaneo_mindlin_stick_zone() {
+    // A cylinder pressed by P (its top lowered by 12 mm), then pulled by
+    // Q < μP (its top moved sideways by 3 mm) in a second load step; the
+    // two bodies are elastically similar, so normal and tangential problems
+    // uncouple and the stick zone is |x| ≤ c = a·√(1 − Q/(μP)) (Johnson,
+    // Contact Mechanics, 1985, §7.1), with a, P, Q measured on the solution.
+    let d = tempfile::tempdir().unwrap();
+    let msh = cattaneo_mesh(d.path());
+    let mu = 0.3;
+    let p = model_file(d.path(), "cattaneo", &msh, &cattaneo_toml(mu));
+    let (prep, model, res) = solve(&p, "ssn");
+    let fo = friction_output(model.as_ref().unwrap(), &res).unwrap();
+    let pn: f64 = res.lambda.iter().sum();
+    let q: f64 = res.lambda_t.iter().sum::<f64>().abs();
+    let ratio = q / (mu * pn);
+    assert!(ratio > 0.3 && ratio < 0.8, "Q/(μP) = {ratio}");
+    let a = half_width(&prep, &fo, |s| s > 0);
+    let c = half_width(&prep, &fo, |s| s == 1);
+    let want = (1.0 - ratio).sqrt();
+    eprintln!(
+        "P = {pn:.4e}, Q = {q:.4e}, Q/(μP) = {ratio:.4}, a = {a:.5}, c = {c:.5}, c/a = {:.4}, want {want:.4}",
+        c / a
+    );
+    assert!(
+        fo.slip_count > 4 && fo.stick_count > 4,
+        "{} {}",
+        fo.stick_count,
+        fo.slip_count
+    );
+    assert!(
+        ((c / a) / want - 1.0).abs() < 0.04,
+        "c/a = {} want {want}",
+        c / a
+    );
+    // The slip zones slip the same way, along λ_t (the certificate's rule).
+    for (s, (v, l)) in fo.state.iter().zip(fo.slip.iter().zip(&fo.lambda_t)) {
+        if *s == 2 {
+            assert!(v * l >= 0.0, "slip {v} against λ_t {l}");
+        }
+    }
+}
+
+/// meshes/two_blocks with the upper block held only by the contact and a
+/// shear traction on top; `law` is the friction line of the interface.
+fn sheared_blocks(law: &str, contact: bool) -> String {
+    let c = if contact {
+        format!("[[contact]]\non = \"interface\"\n{law}\n")
+    } else {
+        String::new()
+    };
+    format!(
+        r#"[mesh]
+file = "MESH"
+[model]
+plane = "strain"
+[materials.lower]
+E = 2.0e9
+nu = 0.25
+[materials.upper]
+E = 2.0e9
+nu = 0.25
+[[dirichlet]]
+on = "bottom"
+u = [0.0, 0.0]
+[[slip]]
+on = "left_lower"
+[[slip]]
+on = "right_lower"
+[[traction]]
+on = "top"
+p = [1.0e5, -1.0e6]
+{c}"#
+    )
+}
+
+#[test]
+fn zero_friction_is_frictionless_bit_for_bit() {
+    let d = tempfile::tempdir().unwrap();
+    for (name, toml) in [
+        ("floating_block", "floating_block.toml"),
+        ("hertz", "hertz.toml"),
+    ] {
+        let src = std::fs::read_to_string(meshes().join(toml)).unwrap();
+        let with = src.replace("[[contact]]", "[[contact]]\nfriction = 0.0");
+        assert_ne!(src, with);
+        let mut outs = vec![];
+        for (k, text) in [src, with].iter().enumerate() {
+            let p = model_file(
+                d.path(),
+                &format!("{name}{k}"),
+                &meshes().join(format!("{name}.msh")),
+                text,
+            );
+            let out = d.path().join(format!("out{name}{k}"));
+            let (code, log) = run(&[
+                "solve",
+                p.to_str().unwrap(),
+                "--method",
+                "ssn",
+                "--out",
+                out.to_str().unwrap(),
+            ]);
+            assert_eq!(code, 0, "{log}");
+            outs.push((out, format!("{name}{k}")));
+        }
+        for ext in [".vtu", "_contact.vtu"] {
+            let a = std::fs::read(outs[0].0.join(format!("{}{ext}", outs[0].1))).unwrap();
+            let b = std::fs::read(outs[1].0.join(format!("{}{ext}", outs[1].1))).unwrap();
+            assert!(a == b, "{name}{ext} differs with friction = 0");
+        }
+    }
+}
+
+#[test]
+fn huge_friction_is_the_glued_interface() {
+    let d = tempfile::tempdir().unwrap();
+    let msh = meshes().join("two_blocks.msh");
+    let glued = model_file(d.path(), "glued", &msh, &sheared_blocks("", false));
+    let (gprep, _, gres) = solve(&glued, "cgc");
+    let ug = gprep.model.displacements(&gres.x);
+    for law in ["friction = 1.0e6", "tresca = 1.0e12"] {
+        let p = model_file(d.path(), "rough", &msh, &sheared_blocks(law, true));
+        let (prep, _, res) = solve(&p, "ssn");
+        let fo = friction_output(&prep.model, &res).unwrap();
+        assert_eq!(fo.slip_count, 0, "{law}");
+        assert_eq!(
+            fo.stick_count,
+            fo.state.len(),
+            "{law}: the interface stays closed"
+        );
+        // Same points (an interface node has a copy per body): compare by position.
+        let u = prep.model.displacements(&res.x);
+        let umax = ug
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v[0].abs()).max(v[1].abs()));
+        let gp = &gprep.model.topo.points;
+        let mut worst = 0.0f64;
+        for (p, x) in prep.model.topo.points.iter().enumerate() {
+            let q = signorini::post::nearest_point(gp, *x);
+            assert!((gp[q][0] - x[0]).abs() + (gp[q][1] - x[1]).abs() < 1e-12);
+            worst = worst
+                .max((u[p][0] - ug[q][0]).abs())
+                .max((u[p][1] - ug[q][1]).abs());
+        }
+        assert!(
+            worst <= 1e-8 * umax,
+            "{law}: max |u − u_glued| = {worst:.3e} of {umax:.3e}"
+        );
+        // The shear is carried: Σλ_t = the top traction's x resultant.
+        let lt: f64 = res.lambda_t.iter().sum();
+        assert!(
+            (lt.abs() - 1.0e5).abs() < 1e-6 * 1.0e5,
+            "{law}: Σλ_t = {lt}"
+        );
+    }
+}
+
+#[test]
+fn a_restart_after_the_first_step_slips_as_the_uninterrupted_run() {
+    // The slip of step 2 is measured from step 1's displacements, which a
+    // restart reads back from the checkpoint.
+    let d = tempfile::tempdir().unwrap();
+    let msh = cattaneo_mesh(d.path());
+    let p = model_file(d.path(), "cm", &msh, &cattaneo_toml(0.3));
+    let p = p.to_str().unwrap();
+    let full = d.path().join("full");
+    let part = d.path().join("part");
+    let (code, log) = run(&[
+        "solve",
+        p,
+        "--method",
+        "ssn",
+        "--out",
+        full.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{log}");
+    let (code, log) = run(&[
+        "solve",
+        p,
+        "--out",
+        part.to_str().unwrap(),
+        "--max-steps",
+        "1",
+    ]);
+    assert_eq!(code, 0, "{log}");
+    let ck = part.join("cm.h5");
+    let (code, log) = run(&[
+        "solve",
+        p,
+        "--method",
+        "ssn",
+        "--out",
+        part.to_str().unwrap(),
+        "--restart",
+        ck.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{log}");
+    let a = signorini::io::vtu::read_vtu_arrays(&full.join("cm_0002_contact.vtu")).unwrap();
+    let b = signorini::io::vtu::read_vtu_arrays(&part.join("cm_0002_contact.vtu")).unwrap();
+    for name in ["slip", "state", "tangential_traction"] {
+        let (x, y) = (a.point_array(name).unwrap(), b.point_array(name).unwrap());
+        assert_eq!(x.values, y.values, "{name}");
+    }
+    // Step 2 slips (the zones at the edges of the contact).
+    let slip = &a.point_array("slip").unwrap().values;
+    assert!(slip.iter().any(|v| v.abs() > 1e-7), "{slip:?}");
+}
