@@ -50,9 +50,9 @@ const GROW_MIN: usize = BLOCK;
 /// Refinement steps of the final KKT solve (module doc).
 const REFINE_MAX: usize = 3;
 /// A border of at most BORDER_RATIO·√n unknowns is eliminated last ([`small_border`]).
-const BORDER_RATIO: f64 = 4.0;
+const BORDER_RATIO: f64 = 12.0;
 /// And at most this many (the dense trailing block: 8·BORDER_MAX² bytes).
-const BORDER_MAX: usize = 6000;
+const BORDER_MAX: usize = 10000;
 /// Dual-space steps at most in [`Ssn::dense_start`].
 const DENSE_STEPS_MAX: usize = 100;
 /// The certificate an answer must meet to be returned as converged.

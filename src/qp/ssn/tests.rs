@@ -668,7 +668,7 @@ fn bordered_factor_needs_no_column_solves() {
         let a = solve_with(&qp, &o, Path::Augmented).unwrap();
         assert_eq!(a.active, b.active, "floating {floating}");
     }
-    // A border of more than 4√n unknowns is not bordered.
+    // A border of more than 12√n unknowns is not bordered.
     let mut qp = two_blocks(16, 8, false);
     let n = qp.n();
     let all: Vec<(usize, usize, f64)> = (0..n).map(|j| (0, j, 1e-3)).collect();
