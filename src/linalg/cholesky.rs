@@ -44,60 +44,94 @@ struct Factor {
     border: Option<Border>,
 }
 
-/// The DOFs a bordered factor eliminates last and its trailing block.
+/// The DOFs a bordered factor eliminates last (its trailing block of L is
+/// read in place from the factor's values).
 struct Border {
     /// Position of each DOF in the border (usize::MAX: not in it).
     pos: Vec<usize>,
-    /// L_bb, the trailing |border|² block of L (lower triangular).
-    lbb: Mat<f64>,
+    /// Size of the border.
+    nb: usize,
 }
 
 impl Border {
-    /// The trailing block of L, read from the factor's supernodes (or columns).
-    fn of(s: &SymbolicCholesky<usize>, values: &[f64], border: &[usize], n: usize) -> Border {
-        let nb = border.len();
-        let off = n - nb;
+    fn of(border: &[usize], n: usize) -> Border {
         let mut pos = vec![usize::MAX; n];
         for (k, &i) in border.iter().enumerate() {
             pos[i] = k;
         }
-        let mut lbb = Mat::<f64>::zeros(nb, nb);
-        match s.raw() {
-            SymbolicCholeskyRaw::Simplicial(t) => {
-                let (cp, ri) = (t.col_ptr(), t.row_idx());
-                for j in off..n {
-                    for k in cp[j]..cp[j + 1] {
-                        lbb[(ri[k] - off, j - off)] = values[k];
-                    }
-                }
-            }
-            SymbolicCholeskyRaw::Supernodal(t) => {
-                let l =
-                    faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef::new(t, values);
-                let (b, e) = (t.supernode_begin(), t.supernode_end());
-                for sn in 0..t.n_supernodes() {
-                    if e[sn] <= off {
-                        continue;
-                    }
-                    let node = l.supernode(sn);
-                    let (val, pattern) = (node.val(), node.pattern());
-                    let ncols = e[sn] - b[sn];
-                    for c in 0..ncols {
-                        let j = b[sn] + c;
-                        if j < off {
-                            continue;
-                        }
-                        for r in c..ncols {
-                            lbb[(b[sn] + r - off, j - off)] = val[(r, c)];
-                        }
-                        for (p, &i) in pattern.iter().enumerate() {
-                            lbb[(i - off, j - off)] = val[(ncols + p, c)];
-                        }
+        Border {
+            pos,
+            nb: border.len(),
+        }
+    }
+}
+
+/// W ← L_bb⁻¹ W for the trailing nb×nb block of the factor (`w` has nb
+/// rows): forward substitution over the trailing columns only, supernode by
+/// supernode (dense triangular solve on the diagonal block, then the update
+/// of the rows below), reading L where the factorization left it.
+fn trailing_forward(s: &SymbolicCholesky<usize>, values: &[f64], w: &mut Mat<f64>, par: faer::Par) {
+    let n = s.nrows();
+    let nb = w.nrows();
+    let off = n - nb;
+    let m = w.ncols();
+    match s.raw() {
+        SymbolicCholeskyRaw::Simplicial(t) => {
+            let (cp, ri) = (t.col_ptr(), t.row_idx());
+            for j in off..n {
+                let (k0, k1) = (cp[j], cp[j + 1]);
+                // The diagonal comes first in each column of L.
+                let d = values[k0];
+                for c in 0..m {
+                    let x = w[(j - off, c)] / d;
+                    w[(j - off, c)] = x;
+                    for k in k0 + 1..k1 {
+                        w[(ri[k] - off, c)] -= values[k] * x;
                     }
                 }
             }
         }
-        Border { pos, lbb }
+        SymbolicCholeskyRaw::Supernodal(t) => {
+            let l = faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef::new(t, values);
+            let (b, e) = (t.supernode_begin(), t.supernode_end());
+            let mut tmp = Mat::<f64>::zeros(0, 0);
+            for sn in 0..t.n_supernodes() {
+                if e[sn] <= off {
+                    continue;
+                }
+                let node = l.supernode(sn);
+                let (val, pattern) = (node.val(), node.pattern());
+                let ncols = e[sn] - b[sn];
+                // Columns of the supernode before the border have zero
+                // right-hand sides (B touches the border only): skipped.
+                let c0 = off.max(b[sn]) - b[sn];
+                let (r0, r1) = (b[sn] + c0 - off, e[sn] - off);
+                let diag = val.submatrix(c0, c0, ncols - c0, ncols - c0);
+                faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+                    diag,
+                    w.as_mut().subrows_mut(r0, r1 - r0),
+                    par,
+                );
+                if pattern.is_empty() {
+                    continue;
+                }
+                let below = val.submatrix(ncols, c0, pattern.len(), ncols - c0);
+                tmp.resize_with(pattern.len(), m, |_, _| 0.0);
+                faer::linalg::matmul::matmul(
+                    tmp.as_mut(),
+                    faer::Accum::Replace,
+                    below,
+                    w.as_ref().subrows(r0, r1 - r0),
+                    1.0,
+                    par,
+                );
+                for c in 0..m {
+                    for (p, &i) in pattern.iter().enumerate() {
+                        w[(i - off, c)] -= tmp[(p, c)];
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -292,7 +326,7 @@ impl Workspace {
                     "C is not positive definite ({e:?}); a body may be free to move without the kernel being known"
                 ))
             })?;
-        let border = border.map(|b| Border::of(&symbolic, &values, b, c.nrows));
+        let border = border.map(|b| Border::of(b, c.nrows));
         let llt = Arc::new(Factor {
             symbolic,
             values,
@@ -358,7 +392,7 @@ impl Cholesky {
     /// when B touches another DOF.
     pub fn border_inverse(&self, b: &Csr) -> Option<Mat<f64>> {
         let border = self.llt.border.as_ref()?;
-        let nb = border.lbb.nrows();
+        let nb = border.nb;
         let mut w = Mat::<f64>::zeros(nb, b.nrows);
         for r in 0..b.nrows {
             let (cols, v) = b.row(r);
@@ -371,11 +405,7 @@ impl Cholesky {
             }
         }
         let par = faer::get_global_parallelism();
-        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-            border.lbb.as_ref(),
-            w.as_mut(),
-            par,
-        );
+        trailing_forward(&self.llt.symbolic, &self.llt.values, &mut w, par);
         let mut h = Mat::<f64>::zeros(b.nrows, b.nrows);
         faer::linalg::matmul::matmul(
             h.as_mut(),
@@ -756,8 +786,13 @@ mod tests {
     /// (same springs), and the bordered factor solves as well as the other.
     #[test]
     fn border_inverse_matches_solves() {
-        for floating in [false, true] {
-            let (nx, ny) = (12, 9);
+        // The small grid factors simplicially, the large one in supernodes.
+        for (floating, (nx, ny)) in [
+            (false, (12, 9)),
+            (true, (12, 9)),
+            (false, (300, 60)),
+            (true, (300, 60)),
+        ] {
             let c = lap2d(nx, ny, floating);
             let n = nx * ny;
             let kernel = if floating { vec![vec![1.0; n]] } else { vec![] };
@@ -774,6 +809,8 @@ mod tests {
             let ws = Workspace::new();
             let fb = ws.cholesky_bordered(&c, &kernel, &border).unwrap();
             let fp = Cholesky::new(&c, &kernel).unwrap();
+            let supernodal = matches!(fb.llt.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_));
+            assert_eq!(supernodal, nx > 20, "{nx}×{ny}");
             assert_eq!(fb.fixing, fp.fixing);
             let h = fb.border_inverse(&b).unwrap();
             assert!(fp.border_inverse(&b).is_none(), "no border, no H");
