@@ -10,12 +10,14 @@ use crate::problem::Problem;
 use crate::qp::Csr;
 
 /// How a contact row couples points: n·(u_first − u_second) ≤ g (conforming,
-/// n outward of the lower body) or n·(Σ w u_master − u_slave) ≤ g (non-matching,
-/// n outward of the master).
+/// n outward of the lower body), n·(Σ w u_master − u_slave) ≤ g (non-matching
+/// node-to-segment, n outward of the master), or the same with the mortar
+/// weights M_jm / D_jj of any number of master points (docs/methods.md §7.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RowKind {
     Conforming,
     NonMatching,
+    Mortar,
 }
 
 /// One contact constraint row (docs/methods.md §2.7, §7 for non-matching).
@@ -30,9 +32,14 @@ pub struct ContactRow {
     pub normal: [f64; 2],
     /// Initial gap g ≥ 0.
     pub gap0: f64,
-    /// Length that the row's force acts on (half the adjacent segments).
+    /// Length that the row's force acts on (half the adjacent segments), or
+    /// the mortar weight D_jj of a mortar row (so that λ / trib is the
+    /// mortar multiplier, a traction).
     pub trib: f64,
     pub interface: u32,
+    /// Mortar rows: every master point with its weight M_jm / D_jj (empty
+    /// for the other kinds; `second` then holds the two heaviest of them).
+    pub masters: Vec<(usize, f64)>,
 }
 
 impl ContactRow {
@@ -48,6 +55,11 @@ impl ContactRow {
                         v.push((p, [w * n[0], w * n[1]]));
                     }
                 }
+                v
+            }
+            RowKind::Mortar => {
+                let mut v = vec![(self.first, [-n[0], -n[1]])];
+                v.extend(self.masters.iter().map(|&(p, w)| (p, [w * n[0], w * n[1]])));
                 v
             }
         }

@@ -16,6 +16,7 @@ mod contact;
 mod edges;
 pub mod element;
 mod loads;
+mod mortar;
 mod pairs;
 mod rigid;
 mod sort;
