@@ -505,3 +505,40 @@ fn mortar_and_nts_agree_as_the_mesh_is_refined() {
     assert!(df[2] < df[0], "Σλ differences {df:?}");
     assert!(dp[2] < dp[0], "p0 differences {dp:?}");
 }
+
+/// `discretization` on a conforming pair, or an unknown value: an error
+/// naming the file and the pair.
+#[test]
+fn bad_discretization_is_refused_naming_the_file_and_the_pair() {
+    let dir = tempfile::tempdir().unwrap();
+    let msh = dir.path().join("blocks.msh");
+    two_blocks_msh(&msh, 3, 4);
+    let p = patch_toml(dir.path(), &msh, "upper_bottom", "lower_top", "segment");
+    let e = run::prepare(&p, false)
+        .err()
+        .expect("unknown value accepted")
+        .to_string();
+    assert!(
+        e.contains(&p.display().to_string())
+            && e.contains("[[contact]] #1 (slave = \"upper_bottom\", master = \"lower_top\")")
+            && e.contains("discretization = \"segment\" is unknown"),
+        "{e}"
+    );
+    let text = std::fs::read_to_string(&p)
+        .unwrap()
+        .replace(
+            "slave = \"upper_bottom\"\nmaster = \"lower_top\"",
+            "on = \"upper_bottom\"",
+        )
+        .replace("\"segment\"", "\"mortar\"");
+    std::fs::write(&p, text).unwrap();
+    let e = run::prepare(&p, false)
+        .err()
+        .expect("conforming mortar accepted")
+        .to_string();
+    assert!(
+        e.contains(&p.display().to_string())
+            && e.contains("[[contact]] #1 (on = \"upper_bottom\"): discretization applies to non-matching pairs"),
+        "{e}"
+    );
+}
