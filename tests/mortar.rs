@@ -542,3 +542,61 @@ fn bad_discretization_is_refused_naming_the_file_and_the_pair() {
         "{e}"
     );
 }
+
+/// The hard punch (tests/hard/punch.toml) with the soft foundation as the
+/// mortar slave: its top is longer than the punch (slave segments partly
+/// outside the master) and the punch corners are rounded (a curved master).
+/// The closed nodes are contiguous, the pressure is symmetric, and the
+/// vertical resultant is the load, 1e6 Pa × 2 m.
+#[test]
+fn punch_with_the_foundation_as_mortar_slave_is_smooth_and_balanced() {
+    let dir = tempfile::tempdir().unwrap();
+    let hard = common::root().join("tests/hard");
+    let text = std::fs::read_to_string(hard.join("punch.toml"))
+        .unwrap()
+        .replace(
+            "file = \"punch.msh\"",
+            &format!("file = \"{}\"", hard.join("punch.msh").display()),
+        )
+        .replace("slave = \"punch_bottom\"", "slave = \"found_top\"")
+        .replace(
+            "master = \"found_top\"",
+            "master = \"punch_bottom\"\ndiscretization = \"mortar\"",
+        )
+        .replace("method = \"cgc\"", "method = \"ssn\"");
+    assert!(text.contains("discretization = \"mortar\""));
+    let p = dir.path().join("punch_mortar.toml");
+    std::fs::write(&p, text).unwrap();
+    let (prep, res, step) = solve(&p);
+    let t = &prep.model.topo;
+    let vertical: f64 = prep
+        .model
+        .qp_rows
+        .iter()
+        .zip(&res.lambda)
+        .map(|(&r, l)| l * t.contact[r].normal[1].abs())
+        .sum();
+    assert!(
+        (vertical / 2e6 - 1.0).abs() < 1e-8,
+        "vertical resultant {vertical}"
+    );
+    let mut prof: Vec<(f64, f64)> = t
+        .contact
+        .iter()
+        .zip(&step.contact_pressure)
+        .map(|(r, &p)| (t.points[r.first][0], p))
+        .collect();
+    prof.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let closed: Vec<usize> = (0..prof.len()).filter(|&i| prof[i].1 > 0.0).collect();
+    let (lo, hi) = (closed[0], *closed.last().unwrap());
+    assert_eq!(
+        closed.len(),
+        hi - lo + 1,
+        "open nodes inside the contact: {prof:?}"
+    );
+    let pmax = prof.iter().fold(0.0f64, |m, q| m.max(q.1));
+    for (i, q) in prof.iter().enumerate() {
+        let mirror = prof[prof.len() - 1 - i];
+        assert!((q.0 + mirror.0).abs() < 1e-9 && (q.1 - mirror.1).abs() < 1e-2 * pmax);
+    }
+}
