@@ -629,6 +629,9 @@ class Problem:
         for c in self.contacts:
             if "slave" not in c:
                 continue
+            if c.get("discretization", "nts") == "mortar":
+                rows.extend(self.mortar_rows(c))
+                continue
             msegs = []
             for a, b in m.lines(c["master"]):
                 ts = m.edge_tris.get((min(a, b), max(a, b)), [])
@@ -672,6 +675,116 @@ class Problem:
                         coef[q] = coef.get(q, 0) + w * n
                 rows.append({"coef": coef, "g": max(g, 0.0), "n": n, "first": tp.point_of[(v, sb)],
                              "second": tp.point_of[(a, mb)]})
+        return rows
+
+    def boundary_segments(self, name):
+        """(a, b, body, outward unit normal) of each segment of curve `name`."""
+        m, tp = self.m, self.topo
+        segs = []
+        for a, b in m.lines(name):
+            ts = m.edge_tris.get((min(a, b), max(a, b)), [])
+            if len(ts) != 1:
+                raise SetupError(f"segment {(a, b)} of {name!r} is not on the boundary of one body")
+            segs.append((a, b, int(tp.tri_body[ts[0]]), m.outward_normal(ts[0], a, b)))
+        return segs
+
+    def mortar_rows(self, c):
+        """Mortar rows of a non-matching pair, built here from the formulas of
+        docs/methods.md §7.1 (not from signorini's code): dual basis on the part
+        of each slave segment that sees the master (Popp et al. 2013), D, M and
+        the weighted gap by Gauss-Legendre quadrature (numpy's rule), the
+        projections by numpy's polynomial roots and 2x2 solves."""
+        m, tp = self.m, self.topo
+        ssegs, msegs = self.boundary_segments(c["slave"]), self.boundary_segments(c["master"])
+        nsum = {}
+        for a, b, body, n in ssegs:
+            for v in (a, b):
+                nsum[(v, body)] = nsum.get((v, body), np.zeros(2)) + n
+        nodal = {k: v / np.linalg.norm(v) for k, v in nsum.items()}
+        gx, gw = np.polynomial.legendre.leggauss(5)
+        gx, gw = 0.5 * (gx + 1.0), 0.5 * gw
+        cross = lambda u, v: u[0] * v[1] - u[1] * v[0]  # noqa: E731
+        D, M, G = {}, {}, {}
+        for a, b, sb, ns in ssegs:
+            x1, x2 = m.x[a], m.x[b]
+            n1, n2 = nodal[(a, sb)], nodal[(b, sb)]
+            L = np.linalg.norm(x2 - x1)
+            X = lambda s: (1 - s) * x1 + s * x2  # noqa: E731
+            Nf = lambda s: (1 - s) * n1 + s * n2  # noqa: E731
+
+            def ray(s, y1, y2):
+                # x(s) + t n(s) = y1 + xi (y2 - y1): solve for (t, xi)
+                n = Nf(s)
+                t, xi = np.linalg.solve(np.column_stack([n, -(y2 - y1)]), y1 - X(s))
+                return xi, t * np.linalg.norm(n)
+
+            def project(y):
+                # (x(s) - y) x n(s) = 0 as a polynomial in s; the real root nearest 1/2
+                d, e, dn = x1 - y, x2 - x1, n2 - n1
+                coef = [cross(e, dn), cross(d, dn) + cross(e, n1), cross(d, n1)]
+                while len(coef) > 1 and abs(coef[0]) <= 1e-14 * max(abs(coef[1]), 1e-300):
+                    coef = coef[1:]
+                r = [z.real for z in np.roots(coef) if abs(z.imag) <= 1e-12 * max(1.0, abs(z))]
+                return min(r, key=lambda z: abs(z - 0.5)) if r else None
+
+            cand = []
+            for mi, (ma, mb, mbody, nm) in enumerate(msegs):
+                if mbody == sb or nm @ ns >= 0:
+                    continue
+                sa, sbb = project(m.x[ma]), project(m.x[mb])
+                if sa is None or sbb is None:
+                    continue
+                s0, s1 = max(min(sa, sbb), 0.0), min(max(sa, sbb), 1.0)
+                if not s1 - s0 > 1e-12:
+                    continue
+                cand.append((abs(ray(0.5 * (s0 + s1), m.x[ma], m.x[mb])[1]), mi, s0, s1))
+            cand.sort(key=lambda q: (q[0], q[1]))
+            covered, pieces = [], []
+            for _, mi, s0, s1 in cand:
+                free = [(s0, s1)]
+                for c0, c1 in covered:
+                    free = [q for p0, p1 in free
+                            for q in ([(p0, p1)] if c1 <= p0 or c0 >= p1 else
+                                      [r for r in ((p0, c0), (c1, p1)) if r[1] > r[0]])]
+                pieces += [(p0, p1, mi) for p0, p1 in free if p1 - p0 > 1e-12]
+                covered.append((s0, s1))
+            if not pieces:
+                continue
+            # mass matrix and lumped weights on the seen part -> dual basis Phi = A N
+            quad = [(p0 + t * (p1 - p0), w * (p1 - p0) * L, mi) for p0, p1, mi in pieces for t, w in zip(gx, gw)]
+            Nv = np.array([[1 - s, s] for s, _, _ in quad])
+            W = np.array([w for _, w, _ in quad])
+            Me = (Nv * W[:, None]).T @ Nv
+            De = Nv.T @ W
+            A = np.linalg.solve(Me.T, np.diag(De)).T  # A = De Me^-1
+            for i, key in enumerate(((a, sb), (b, sb))):
+                D[key] = D.get(key, 0.0) + De[i]
+            for (s, w, mi), nv in zip(quad, Nv):
+                ma, mb, mbody, _ = msegs[mi]
+                xi, g = ray(s, m.x[ma], m.x[mb])
+                if g < -1e-6 * L:
+                    raise SetupError(f"mortar: initial penetration {g:.3e} on slave segment {(a, b)}")
+                phi = A @ nv
+                for i, key in enumerate(((a, sb), (b, sb))):
+                    G[key] = G.get(key, 0.0) + phi[i] * g * w
+                    mk = M.setdefault(key, {})
+                    for node, nw in ((ma, 1 - xi), (mb, xi)):
+                        q = tp.point_of[(node, mbody)]
+                        mk[q] = mk.get(q, 0.0) + phi[i] * nw * w
+        rows = []
+        for v, sb in sorted(D, key=lambda k: (k[1], int(m.tags[k[0]]))):
+            d = D[(v, sb)]
+            if not d > 0:
+                continue
+            g = G.get((v, sb), 0.0) / d
+            if "max_gap" in c and g > c["max_gap"]:
+                continue
+            n = -nodal[(v, sb)]  # outward of the master, as signorini writes it
+            coef = {tp.point_of[(v, sb)]: -n}
+            for q, w in M.get((v, sb), {}).items():
+                coef[q] = coef.get(q, 0) + (w / d) * n
+            rows.append({"coef": coef, "g": g, "n": n, "first": tp.point_of[(v, sb)], "second": None,
+                         "trib": d})
         return rows
 
 
@@ -784,6 +897,8 @@ def read_signorini(h5path: Path, step: int):
             "contact_first": f["mesh/contact_first"][:].astype(np.int64),
             "contact_second": f["mesh/contact_second"][:].astype(np.int64),
             "contact_normal": f["mesh/contact_normal"][:],
+            "contact_gap0": f["mesh/contact_gap0"][:],
+            "contact_pressure": st["contact_pressure"][:],
             "converged": int(st.attrs["converged"]),
         }
     return out
@@ -874,11 +989,29 @@ def compare(prob, u_ref, sig, tol, label, lam_ref=None, rows=None):
         nr = len(sig["multipliers"])
         if nr != len(rows):
             raise CheckError(f"{label}: signorini has {nr} contact rows, this model {len(rows)}")
-        perm = np.array([key[(int(idx[sig['contact_first'][i]]), int(idx[sig['contact_second'][i, 0]]))]
+        # a mortar row is keyed by its slave point alone (its second point is
+        # the heaviest of several masters, which ties may pick differently)
+        perm = np.array([key.get((int(idx[sig['contact_first'][i]]), int(idx[sig['contact_second'][i, 0]])),
+                                 key.get((int(idx[sig['contact_first'][i]]), None)))
                          for i in range(nr)])
+        if any(p is None for p in perm):
+            raise CheckError(f"{label}: a contact row of signorini has no counterpart here")
+        perm = perm.astype(np.int64)
         normals = np.array([rows[j]["n"] for j in perm])
         res["normals"] = rel(sig["contact_normal"], normals)
         res["multipliers"] = rel(sig["multipliers"], lam_ref[perm], 1e-6 * fl["force"])
+        mortar = np.array([rows[j].get("trib") is not None for j in perm])
+        if mortar.any():
+            # mortar rows: the weighted gaps g~/D and the pressure λ/D (the mortar traction)
+            L = float(np.ptp(prob.topo.x, axis=0).max())
+            model = prob.cfg.get("model", {})
+            te = float(model.get("thickness", 1.0)) if model.get("plane", "strain") == "stress" else 1.0
+            gref = np.array([rows[j]["g"] for j in perm])
+            res["mortar gap0"] = rel(sig["contact_gap0"][mortar], gref[mortar], 1e-12 * L)
+            pref = np.array([lam_ref[j] / (rows[j]["trib"] * te) if rows[j].get("trib") else 0.0
+                             for j in perm])
+            res["mortar pressure"] = rel(sig["contact_pressure"][mortar], pref[mortar],
+                                         1e-6 * fl["force"] / L)
     worst = max(res.values())
     line = "  ".join(f"{k} {v:.2e}" for k, v in res.items())
     ok = worst <= tol

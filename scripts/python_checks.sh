@@ -7,7 +7,8 @@
 #   2. scripts/fenicsx_crosscheck.py (Debian's /usr/bin/python3 with
 #      python3-dolfinx-real, python3-gmsh, python3-scipy, python3-h5py and
 #      Clarabel from PyPI in .venv/debian-site): linear elastic and contact solutions
-#      of an independent FEniCSx model against signorini's.
+#      of an independent FEniCSx model against signorini's, including two
+#      mortar pairs (hertz, the hard punch) whose rows are built in python.
 #
 # Usage: bash scripts/python_checks.sh [NAME ...]   (default: the examples below)
 #   SIGNORINI_WITH_PARAVIEW=1  also install Debian's python3-paraview (it provides
@@ -163,6 +164,26 @@ for n in "${EXAMPLES[@]}"; do
     stamp "fenicsx_crosscheck.py meshes/$n.toml"
     SIGNORINI="$EXE" SIGNORINI_PYDEPS="$PYDEPS" /usr/bin/python3 scripts/fenicsx_crosscheck.py "meshes/$n.toml" --tol 1e-8
     record "crosscheck $n" $?
+done
+
+# Mortar rows (docs/methods.md §7.1): hertz and the hard punch (foundation as
+# slave: a slave curve longer than the master, curved master corners) with
+# discretization = "mortar", against rows built independently in python.
+mortar_dir=$OUT/mortar
+mkdir -p "$mortar_dir"
+sed "s#^file *= *\"\(.*\)\"#file = \"$ROOT/meshes/\1\"#; s#^master = \"block_top\"#master = \"block_top\"\ndiscretization = \"mortar\"#" \
+    meshes/hertz.toml > "$mortar_dir/hertz_mortar.toml"
+sed "s#^file *= *\"\(.*\)\"#file = \"$ROOT/tests/hard/\1\"#; s#^slave = \"punch_bottom\"#slave = \"found_top\"#; s#^master = \"found_top\"#master = \"punch_bottom\"\ndiscretization = \"mortar\"#" \
+    tests/hard/punch.toml > "$mortar_dir/punch_mortar.toml"
+for t in hertz_mortar punch_mortar; do
+    stamp "fenicsx_crosscheck.py $t (mortar rows)"
+    if grep -q '^discretization = "mortar"' "$mortar_dir/$t.toml"; then
+        SIGNORINI="$EXE" SIGNORINI_PYDEPS="$PYDEPS" /usr/bin/python3 scripts/fenicsx_crosscheck.py "$mortar_dir/$t.toml" --tol 1e-8 --part b
+        record "crosscheck $t" $?
+    else
+        echo "FAIL $t: the mortar variant was not written (sed did not match)" >&2
+        record "crosscheck $t" 1
+    fi
 done
 
 stamp "finished"

@@ -10,16 +10,18 @@ use crate::problem::Problem;
 use crate::qp::Csr;
 
 /// How a contact row couples points: n·(u_first − u_second) ≤ g (conforming,
-/// n outward of the lower body) or n·(Σ w u_master − u_slave) ≤ g (non-matching,
-/// n outward of the master).
+/// n outward of the lower body), n·(Σ w u_master − u_slave) ≤ g (non-matching
+/// node-to-segment, n outward of the master), or the same with the mortar
+/// weights M_jm / D_jj of any number of master points (docs/methods.md §7.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RowKind {
     Conforming,
     NonMatching,
+    Mortar,
 }
 
 /// One contact constraint row (docs/methods.md §2.7, §7 for non-matching).
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct ContactRow {
     pub kind: RowKind,
     /// Point of body k (conforming) or the slave point.
@@ -30,9 +32,33 @@ pub struct ContactRow {
     pub normal: [f64; 2],
     /// Initial gap g ≥ 0.
     pub gap0: f64,
-    /// Length that the row's force acts on (half the adjacent segments).
+    /// Length that the row's force acts on (half the adjacent segments), or
+    /// the mortar weight D_jj of a mortar row (so that λ / trib is the
+    /// mortar multiplier, a traction).
     pub trib: f64,
     pub interface: u32,
+    /// Mortar rows: every master point with its weight M_jm / D_jj (empty
+    /// for the other kinds; `second` then holds the two heaviest of them).
+    pub masters: Vec<(usize, f64)>,
+}
+
+/// The derived format, with `masters` only on mortar rows: the text of the
+/// other rows (tests/fem_dump.rs compares models by it) stays as it was.
+impl std::fmt::Debug for ContactRow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut d = f.debug_struct("ContactRow");
+        d.field("kind", &self.kind)
+            .field("first", &self.first)
+            .field("second", &self.second)
+            .field("normal", &self.normal)
+            .field("gap0", &self.gap0)
+            .field("trib", &self.trib)
+            .field("interface", &self.interface);
+        if !self.masters.is_empty() {
+            d.field("masters", &self.masters);
+        }
+        d.finish()
+    }
 }
 
 impl ContactRow {
@@ -48,6 +74,11 @@ impl ContactRow {
                         v.push((p, [w * n[0], w * n[1]]));
                     }
                 }
+                v
+            }
+            RowKind::Mortar => {
+                let mut v = vec![(self.first, [-n[0], -n[1]])];
+                v.extend(self.masters.iter().map(|&(p, w)| (p, [w * n[0], w * n[1]])));
                 v
             }
         }
@@ -103,4 +134,53 @@ pub(super) fn reduced_rows(
     }
     let a = Csr::from_triplets(qp_rows.len(), n, &atrip);
     Ok((a, g, qp_rows))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The row as it was before mortar rows (derived Debug).
+    #[derive(Debug)]
+    #[allow(dead_code)]
+    struct ContactRow {
+        kind: RowKind,
+        first: usize,
+        second: [(usize, f64); 2],
+        normal: [f64; 2],
+        gap0: f64,
+        trib: f64,
+        interface: u32,
+    }
+
+    #[test]
+    fn debug_text_of_non_mortar_rows_is_unchanged() {
+        let row = super::ContactRow {
+            kind: RowKind::NonMatching,
+            first: 3,
+            second: [(7, 0.25), (8, 0.75)],
+            normal: [0.6, -0.8],
+            gap0: 1e-3,
+            trib: 0.125,
+            interface: 2,
+            masters: vec![],
+        };
+        let old = ContactRow {
+            kind: row.kind,
+            first: row.first,
+            second: row.second,
+            normal: row.normal,
+            gap0: row.gap0,
+            trib: row.trib,
+            interface: row.interface,
+        };
+        assert_eq!(format!("{row:?}"), format!("{old:?}"));
+        assert_eq!(format!("{:?}", [&row]), format!("{:?}", [&old]));
+        let mortar = super::ContactRow {
+            kind: RowKind::Mortar,
+            masters: vec![(7, 0.5), (8, 0.5)],
+            ..row
+        };
+        assert!(format!("{mortar:?}").contains("masters: [(7, 0.5), (8, 0.5)]"));
+    }
 }

@@ -17,6 +17,7 @@ mod edges;
 pub mod element;
 pub mod friction;
 mod loads;
+mod mortar;
 mod pairs;
 mod rigid;
 mod sort;

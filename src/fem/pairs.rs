@@ -69,6 +69,7 @@ impl Topology {
                     gap0: 0.0,
                     trib: t,
                     interface: a.interface,
+                    masters: vec![],
                 });
                 rows_at.entry(key).or_default().push((r, n));
             }
@@ -191,7 +192,8 @@ impl Topology {
         Ok(normals)
     }
 
-    /// Node-to-segment rows of non-matching pairs (docs/methods.md §7).
+    /// Node-to-segment rows of non-matching pairs (docs/methods.md §7), or
+    /// mortar rows (`discretization = "mortar"`, §7.1, `mortar.rs`).
     pub(super) fn build_nonmatching(
         &mut self,
         mesh: &Mesh,
@@ -212,7 +214,11 @@ impl Topology {
                 slaves: self.boundary_segments(mesh, problem, sg, &what, "slave", sname)?,
                 what,
             };
-            self.nonmatching_rows(mesh, problem, c, &pair)?;
+            if c.mortar() {
+                self.mortar_rows(mesh, problem, c, &pair)?;
+            } else {
+                self.nonmatching_rows(mesh, problem, c, &pair)?;
+            }
         }
         Ok(())
     }
@@ -316,6 +322,7 @@ impl Topology {
                 gap0: g.max(0.0),
                 trib,
                 interface: id,
+                masters: vec![],
             });
         }
         if row_of.is_empty() {
@@ -338,13 +345,14 @@ impl Topology {
 /// A boundary segment of a non-matching pair (master or slave): nodes,
 /// owner body, outward normal.
 type MasterSeg = (usize, usize, u32, [f64; 2]);
+pub(super) type BoundarySeg = MasterSeg;
 
 /// A non-matching pair: its interface, its name in messages, its segments.
-struct Pair {
-    id: u32,
-    what: String,
-    masters: Vec<MasterSeg>,
-    slaves: Vec<MasterSeg>,
+pub(super) struct Pair {
+    pub(super) id: u32,
+    pub(super) what: String,
+    pub(super) masters: Vec<MasterSeg>,
+    pub(super) slaves: Vec<MasterSeg>,
 }
 
 /// Orthogonal projection of `xs` on the segment (pa, pb): (distance, ξ) if

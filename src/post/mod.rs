@@ -26,7 +26,7 @@ pub fn out_mesh(model: &Model, mesh: &crate::mesh::Mesh) -> OutMesh {
         nonmatching: t
             .contact
             .iter()
-            .map(|r| r.kind == crate::fem::topology::RowKind::NonMatching)
+            .map(|r| r.kind != crate::fem::topology::RowKind::Conforming)
             .collect(),
     };
     OutMesh {

@@ -188,6 +188,17 @@ pub struct Contact {
     pub friction: Option<f64>,
     /// Tresca friction: the bound of the tangential traction (Pa), ≥ 0.
     pub tresca: Option<f64>,
+    /// Non-matching: "nts" (node-to-segment, the default) or "mortar"
+    /// (segment-to-segment with dual multipliers, docs/methods.md §7.1).
+    pub discretization: Option<String>,
+}
+
+impl Contact {
+    /// Whether this non-matching pair uses mortar rows (docs/methods.md §7.1);
+    /// the value was checked by `Problem::validate`.
+    pub fn mortar(&self) -> bool {
+        self.discretization.as_deref() == Some("mortar")
+    }
 }
 
 #[derive(Debug, Clone, Default, Deserialize)]
@@ -608,6 +619,28 @@ impl Problem {
                             i + 1
                         )));
                     }
+                }
+            }
+            if let Some(d) = &c.discretization {
+                let pair = match (&c.on, &c.slave, &c.master) {
+                    (Some(on), _, _) => format!("on = \"{}\"", shorten(on)),
+                    (_, Some(s), Some(m)) => {
+                        format!("slave = \"{}\", master = \"{}\"", shorten(s), shorten(m))
+                    }
+                    _ => String::new(),
+                };
+                if conf {
+                    return Err(self.invalid(format!(
+                        "[[contact]] #{} ({pair}): discretization applies to non-matching pairs (slave, master) only; a conforming pair has node-to-node rows",
+                        i + 1
+                    )));
+                }
+                if d != "nts" && d != "mortar" {
+                    return Err(self.invalid(format!(
+                        "[[contact]] #{} ({pair}): discretization = {:?} is unknown; use \"nts\" or \"mortar\"",
+                        i + 1,
+                        shorten(d)
+                    )));
                 }
             }
         }
