@@ -381,7 +381,13 @@ pub fn append_step_with_friction_in_place(
         let loc = format!("/steps/{}", step_name(index));
         let g = file.group(&loc).map_err(ctx.h5(loc.clone()))?;
         write_ds(&ctx, &g, "multipliers_t", &[r], &friction.multipliers_t)?;
-        write_ds(&ctx, &g, "tangential_traction", &[r], &friction.tangential_traction)?;
+        write_ds(
+            &ctx,
+            &g,
+            "tangential_traction",
+            &[r],
+            &friction.tangential_traction,
+        )?;
         write_ds(&ctx, &g, "slip", &[r], &friction.slip)?;
         write_ds(&ctx, &g, "state", &[r], &friction.state)?;
     }

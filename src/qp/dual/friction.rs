@@ -18,6 +18,11 @@ use crate::linalg::sparse::{norm_inf, Csr};
 use crate::qp::{Context, IterRecord, Output, QpError, QpProblem, SlipBound, Status};
 use std::time::Instant;
 
+/// The Coulomb loop stops at a relative change of s ≤ COULOMB_TOL_FACTOR·tol:
+/// each Tresca solve is accurate to tol in the dual gradient only, and on
+/// the inclined plane of tests/friction.rs at tol = 10⁻¹⁰ the change
+/// stagnated at 4.7·tol.
+const COULOMB_TOL_FACTOR: f64 = 100.0;
 /// Largest number of Tresca solves of the Coulomb loop.
 const OUTER_MAX: usize = 200;
 
@@ -113,7 +118,7 @@ pub(crate) fn solve_friction<S: BoundStep>(
                     "{name}: Coulomb update {outer}: change of s {:.3e}",
                     change / smax
                 );
-                if change <= ctx.settings.tol * smax {
+                if change <= COULOMB_TOL_FACTOR * ctx.settings.tol * smax {
                     true
                 } else if outer >= OUTER_MAX {
                     status = Status::Failed(format!(
