@@ -512,3 +512,65 @@ fn ssn_and_mprgp_agree_on_the_frictional_models() {
         );
     }
 }
+
+#[test]
+fn the_checkpoint_holds_the_friction_arrays() {
+    // docs/problem-format.md §6: a frictional step group has multipliers_t,
+    // tangential_traction, slip and state; a frictionless one has none.
+    let d = tempfile::tempdir().unwrap();
+    let msh = meshes().join("floating_block.msh");
+    let tan = 0.3;
+    let theta = f64::atan(tan);
+    let w = 2500.0 * 9.81;
+    let shipped = std::fs::read_to_string(meshes().join("floating_block.toml")).unwrap();
+    for (name, law) in [("rough", "friction = 0.5"), ("smooth", "")] {
+        // Without friction: the shipped (frictionless) floating block.
+        let toml = if law.is_empty() {
+            shipped.clone()
+        } else {
+            inclined(theta, law)
+        };
+        let p = model_file(d.path(), name, &msh, &toml);
+        let out = d.path().join(format!("out_{name}"));
+        let method = if law.is_empty() { "cgc" } else { "mprgp" };
+        let (code, log) = run(&[
+            "solve",
+            p.to_str().unwrap(),
+            "--method",
+            method,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{log}");
+        let ck = signorini::io::hdf5::read_checkpoint(&out.join(format!("{name}.h5"))).unwrap();
+        assert_eq!(ck.friction.len(), 1);
+        let rows = ck.mesh.contact.points.len();
+        match &ck.friction[0] {
+            None => assert!(law.is_empty(), "{name}: no friction arrays"),
+            Some(f) => {
+                assert!(!law.is_empty(), "{name}: friction arrays without friction");
+                assert_eq!(f.state.len(), rows);
+                let lt: f64 = f.multipliers_t.iter().sum();
+                assert!((lt.abs() - w * theta.sin()).abs() < 1e-6 * w, "Σλ_t = {lt}");
+                assert!(f.state.iter().all(|&s| s == 1 || s == 2), "{:?}", f.state);
+                assert!(f.state.iter().filter(|&&s| s == 1).count() * 2 >= rows);
+                let ratio: Vec<f64> = f
+                    .tangential_traction
+                    .iter()
+                    .zip(&f.multipliers_t)
+                    .zip(&ck.steps[0].contact_pressure)
+                    .zip(&ck.steps[0].multipliers)
+                    .filter(|(_, &ln)| ln > 0.0)
+                    .map(|(((tt, lt), p), ln)| (tt / lt) / (p / ln))
+                    .collect();
+                // Traction and pressure share the tributary length.
+                assert!(
+                    ratio
+                        .iter()
+                        .all(|r| (r - 1.0).abs() < 1e-9 || !r.is_finite()),
+                    "{ratio:?}"
+                );
+            }
+        }
+    }
+}
