@@ -13,7 +13,9 @@ NAME.h5 found there) it checks:
   attributes), /steps/NNNN (consecutive from 0001) with displacement,
   multipliers, active, stress, von_mises, principal_stress, contact_pressure,
   gap and the attributes method, preconditioner, iterations, converged,
-  kkt_*, energy, time; no NaN/Inf anywhere; NAME.json (if present) agrees.
+  kkt_*, energy, time; with friction multipliers_t, tangential_traction,
+  slip, state (0/1/2), all four; no NaN/Inf anywhere; NAME.json (if
+  present) agrees.
 * NAME.vtu (one step) or NAME_NNNN.vtu (load steps), read with pyvista:
   point/cell counts and coordinates/connectivity equal to /mesh; point data
   displacement (3 components, z = 0) and body, cell data stress (4 components
@@ -238,6 +240,17 @@ def check_h5(path: Path, name: str):
                         if P.check(ds in st, f"/steps/{s}/{ds} missing"):
                             P.check(np.array_equal(st[ds][()], st[base][()] - ref[base][()]),
                                     f"/steps/{s}/{ds} is not {base} minus /steps/{ref_name}/{base}")
+            # Friction (methods.md §9): all four arrays or none, one per row.
+            fr = ("multipliers_t", "tangential_traction", "slip", "state")
+            if any(ds in st for ds in fr):
+                for ds in fr:
+                    if P.check(ds in st, f"/steps/{s}/{ds} missing (the other friction arrays are there)"):
+                        a = st[ds][()]
+                        P.check(a.shape == (r,), f"/steps/{s}/{ds} has shape {a.shape}, expected {(r,)}")
+                        P.check(finite(a), f"/steps/{s}/{ds} contains NaN/Inf")
+                        sd[ds] = a
+                if "state" in sd:
+                    P.check(np.isin(sd["state"], (0, 1, 2)).all(), f"/steps/{s}/state: values other than 0/1/2")
             sd["attrs"] = {k: st.attrs[k] for k in st.attrs}
             data["steps"][int(s)] = sd
     # the JSON summary, when present
@@ -357,6 +370,11 @@ def check_contact_vtu(path: Path, h5, step: int):
     P.check(close(gap, sd["gap"]) or maxdiff(gap, sd["gap"]) <= 1e-15, "gap differs from the HDF5 step")
     P.check(np.array_equal(act, sd["active"]), "active differs from the HDF5 step")
     P.check(close(nrm[:, :2], h5["contact_normal"]), "normal differs from /mesh/contact_normal")
+    for name in ("tangential_traction", "slip", "state"):
+        if name in sd:
+            if P.check(name in g.point_data, f"point data {name!r} missing (the HDF5 step has it)"):
+                a = np.asarray(g.point_data[name]).ravel()
+                P.check(close(a, sd[name]) or maxdiff(a, sd[name]) == 0, f"{name} differs from the HDF5 step")
     P.done(f"{r} contact points, {k} segments, {int(act.sum())} active, max pressure {p.max():.4e}, "
            f"max gap {gap.max():.3e}; equals /steps/{step:04d}")
     return g

@@ -445,3 +445,132 @@ fn a_restart_after_the_first_step_slips_as_the_uninterrupted_run() {
     let slip = &a.point_array("slip").unwrap().values;
     assert!(slip.iter().any(|v| v.abs() > 1e-7), "{slip:?}");
 }
+
+/// [`solve`] with the relative tolerance `tol`.
+fn solve_tol(path: &Path, method: &str, tol: f64) -> (Prepared, QpResult) {
+    let prep = run::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
+    let flags = SolverSection {
+        method: Some(method.into()),
+        tol: Some(tol),
+        ..Default::default()
+    };
+    let (m, opts) = run::options(&prep.problem, &flags).unwrap();
+    let out = run::Run::new(&prep, &m, &opts)
+        .solve(&mut [], None)
+        .unwrap_or_else(|e| panic!("{method}: {e}"));
+    assert!(out.certified, "{}: not certified", path.display());
+    let res = out.last.unwrap().result;
+    assert!(res.kkt.within(1e-8), "{method}: {:?}", res.kkt);
+    (prep, res)
+}
+
+/// max |a − b| / max |a|
+fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let d = a
+        .iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    d / scale.max(f64::MIN_POSITIVE)
+}
+
+#[test]
+fn ssn_and_mprgp_agree_on_the_frictional_models() {
+    // Verification (4) of issue 16: the primal active set method and the
+    // box-constrained dual (docs/methods.md §9.2) are independent solvers of
+    // the same Tresca/Coulomb problems; they agree to 1e-6 in x, λ_n, λ_t.
+    let d = tempfile::tempdir().unwrap();
+    let w = 2500.0 * 9.81;
+    let block = meshes().join("floating_block.msh");
+    let blocks = meshes().join("two_blocks.msh");
+    let cat = cattaneo_mesh(d.path());
+    let cases = [
+        ("incl_c", &block, inclined(f64::atan(0.3), "friction = 0.5")),
+        (
+            "incl_t",
+            &block,
+            inclined(f64::atan(0.45), &format!("tresca = {}", 0.5 * w)),
+        ),
+        ("shear_c", &blocks, sheared_blocks("friction = 0.12", true)),
+        ("shear_t", &blocks, sheared_blocks("tresca = 1.1e5", true)),
+        ("cattaneo", &cat, cattaneo_toml(0.3)),
+    ];
+    for (name, msh, toml) in cases {
+        let p = model_file(d.path(), name, msh, &toml);
+        let (_, rs) = solve_tol(&p, "ssn", 1e-10);
+        let (_, rm) = solve_tol(&p, "mprgp", 1e-10);
+        let (dx, dn, dt) = (
+            rel_diff(&rs.x, &rm.x),
+            rel_diff(&rs.lambda, &rm.lambda),
+            rel_diff(&rs.lambda_t, &rm.lambda_t),
+        );
+        eprintln!("{name}: x {dx:.2e}, λ_n {dn:.2e}, λ_t {dt:.2e}");
+        assert!(
+            dx <= 1e-6 && dn <= 1e-6 && dt <= 1e-6,
+            "{name}: x {dx:e}, λ_n {dn:e}, λ_t {dt:e}"
+        );
+    }
+}
+
+#[test]
+fn the_checkpoint_holds_the_friction_arrays() {
+    // docs/problem-format.md §6: a frictional step group has multipliers_t,
+    // tangential_traction, slip and state; a frictionless one has none.
+    let d = tempfile::tempdir().unwrap();
+    let msh = meshes().join("floating_block.msh");
+    let tan = 0.3;
+    let theta = f64::atan(tan);
+    let w = 2500.0 * 9.81;
+    let shipped = std::fs::read_to_string(meshes().join("floating_block.toml")).unwrap();
+    for (name, law) in [("rough", "friction = 0.5"), ("smooth", "")] {
+        // Without friction: the shipped (frictionless) floating block.
+        let toml = if law.is_empty() {
+            shipped.clone()
+        } else {
+            inclined(theta, law)
+        };
+        let p = model_file(d.path(), name, &msh, &toml);
+        let out = d.path().join(format!("out_{name}"));
+        let method = if law.is_empty() { "cgc" } else { "mprgp" };
+        let (code, log) = run(&[
+            "solve",
+            p.to_str().unwrap(),
+            "--method",
+            method,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{log}");
+        let ck = signorini::io::hdf5::read_checkpoint(&out.join(format!("{name}.h5"))).unwrap();
+        assert_eq!(ck.friction.len(), 1);
+        let rows = ck.mesh.contact.points.len();
+        match &ck.friction[0] {
+            None => assert!(law.is_empty(), "{name}: no friction arrays"),
+            Some(f) => {
+                assert!(!law.is_empty(), "{name}: friction arrays without friction");
+                assert_eq!(f.state.len(), rows);
+                let lt: f64 = f.multipliers_t.iter().sum();
+                assert!((lt.abs() - w * theta.sin()).abs() < 1e-6 * w, "Σλ_t = {lt}");
+                assert!(f.state.iter().all(|&s| s == 1 || s == 2), "{:?}", f.state);
+                assert!(f.state.iter().filter(|&&s| s == 1).count() * 2 >= rows);
+                let ratio: Vec<f64> = f
+                    .tangential_traction
+                    .iter()
+                    .zip(&f.multipliers_t)
+                    .zip(&ck.steps[0].contact_pressure)
+                    .zip(&ck.steps[0].multipliers)
+                    .filter(|(_, &ln)| ln > 0.0)
+                    .map(|(((tt, lt), p), ln)| (tt / lt) / (p / ln))
+                    .collect();
+                // Traction and pressure share the tributary length.
+                assert!(
+                    ratio
+                        .iter()
+                        .all(|r| (r - 1.0).abs() < 1e-9 || !r.is_finite()),
+                    "{ratio:?}"
+                );
+            }
+        }
+    }
+}

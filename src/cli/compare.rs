@@ -123,6 +123,25 @@ pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i3
     } else {
         &prep.model
     };
+    // With friction only the methods that solve it are run (unless named):
+    // the others would all be refused (docs/methods.md §9.2).
+    let list: Vec<_> = if model.qp.friction.is_some() && a.methods.is_none() {
+        let kept: Vec<_> = list
+            .into_iter()
+            .filter(|(m, _)| registry::find(m).is_some_and(|m| m.friction()))
+            .collect();
+        if !quiet {
+            let names: Vec<&str> = kept.iter().map(|(m, _)| m.as_str()).collect();
+            eprintln!(
+                "compare: {} has friction; only the methods that solve it are run: {}",
+                prep.problem.name,
+                names.join(", ")
+            );
+        }
+        kept
+    } else {
+        list
+    };
     let base = a.solver.section.clone();
     let mut rows = vec![];
     let total = list.len();

@@ -49,12 +49,16 @@ use super::{Change, ContactGeometry, OutMesh, StepInfo, StepOutput};
 ///     with `[output] reference_step` (that step and later ones):
 ///     displacement_change f64 [n, 2], stress_change f64 [m, 4],
 ///     contact_pressure_change f64 [rows]; attr reference_step (u64)
+///     with friction (docs/methods.md §9): multipliers_t f64 [rows],
+///     tangential_traction f64 [rows], slip f64 [rows], state u8 [rows]
 /// ```
 #[derive(Debug, Clone, Default)]
 pub struct Checkpoint {
     pub mesh: OutMesh,
     /// The steps in increasing index order (1, 2, …).
     pub steps: Vec<StepOutput>,
+    /// The friction arrays of each step (same order; None: frictionless).
+    pub friction: Vec<Option<StepFriction>>,
     /// The string attributes of the root group (alphabetical order).
     pub attrs: Vec<(String, String)>,
 }
@@ -339,6 +343,81 @@ pub fn append_step_in_place(path: &Path, index: usize, step: &StepOutput) -> Res
     file.close().map_err(ctx.h5("/"))
 }
 
+/// The friction arrays of a step, per contact row (docs/problem-format.md
+/// §6): λ_t (N), the tangential traction (Pa), the slip of the step (m) and
+/// the state 0 open, 1 stick, 2 slip.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepFriction {
+    pub multipliers_t: Vec<f64>,
+    pub tangential_traction: Vec<f64>,
+    pub slip: Vec<f64>,
+    pub state: Vec<u8>,
+}
+
+/// [`append_step_in_place`] with the friction arrays of the step.
+pub fn append_step_with_friction_in_place(
+    path: &Path,
+    index: usize,
+    step: &StepOutput,
+    friction: &StepFriction,
+) -> Result<(), IoError> {
+    append_step_in_place(path, index, step)?;
+    let ctx = Ctx::writing(path);
+    let r = step.multipliers.len();
+    for (what, got) in [
+        ("multipliers_t", friction.multipliers_t.len()),
+        ("tangential_traction", friction.tangential_traction.len()),
+        ("slip", friction.slip.len()),
+        ("state", friction.state.len()),
+    ] {
+        if got != r {
+            return Err(ctx.format(format!(
+                "step field {what} has {got} entries, the mesh needs {r}"
+            )));
+        }
+    }
+    let file = File::open_rw(path).map_err(ctx.h5("/"))?;
+    {
+        let loc = format!("/steps/{}", step_name(index));
+        let g = file.group(&loc).map_err(ctx.h5(loc.clone()))?;
+        write_ds(&ctx, &g, "multipliers_t", &[r], &friction.multipliers_t)?;
+        write_ds(
+            &ctx,
+            &g,
+            "tangential_traction",
+            &[r],
+            &friction.tangential_traction,
+        )?;
+        write_ds(&ctx, &g, "slip", &[r], &friction.slip)?;
+        write_ds(&ctx, &g, "state", &[r], &friction.state)?;
+    }
+    file.close().map_err(ctx.h5("/"))
+}
+
+/// The friction arrays of the step group `g`, if it has them (all four).
+fn read_step_friction(ctx: &Ctx, g: &Group, rows: usize) -> Result<Option<StepFriction>, IoError> {
+    if !g.link_exists("multipliers_t") {
+        return Ok(None);
+    }
+    let r = Some(rows);
+    let (_, multipliers_t) = read_ds::<f64>(ctx, g, "multipliers_t", None, r)?;
+    let (_, tangential_traction) = read_ds::<f64>(ctx, g, "tangential_traction", None, r)?;
+    let (_, slip) = read_ds::<f64>(ctx, g, "slip", None, r)?;
+    let (_, state) = read_ds::<u8>(ctx, g, "state", None, r)?;
+    if let Some(&bad) = state.iter().find(|&&v| v > 2) {
+        return Err(ctx.format(format!(
+            "{}/state: {bad} is not 0 (open), 1 (stick) or 2 (slip)",
+            g.name()
+        )));
+    }
+    Ok(Some(StepFriction {
+        multipliers_t,
+        tangential_traction,
+        slip,
+        state,
+    }))
+}
+
 fn check_step(ctx: &Ctx, s: &StepOutput, n: usize, m: usize, r: usize) -> Result<(), IoError> {
     let lens = [
         ("displacement", s.displacement.len(), n),
@@ -576,6 +655,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
     mesh.plane_strain = plane_strain;
 
     let mut steps = Vec::new();
+    let mut friction = Vec::new();
     if file.link_exists("steps") {
         let sg = file.group("steps").map_err(ctx.h5("/steps"))?;
         let mut names: Vec<(usize, String)> = sg
@@ -588,9 +668,15 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
         for (_, name) in names {
             let g = sg.group(&name).map_err(ctx.h5(format!("/steps/{name}")))?;
             steps.push(read_step(&ctx, &g, &mesh)?);
+            friction.push(read_step_friction(&ctx, &g, mesh.contact.points.len())?);
         }
     }
-    Ok(Checkpoint { mesh, steps, attrs })
+    Ok(Checkpoint {
+        mesh,
+        steps,
+        friction,
+        attrs,
+    })
 }
 
 fn read_mesh(ctx: &Ctx, g: &Group) -> Result<OutMesh, IoError> {

@@ -181,7 +181,20 @@ impl StepObserver for CheckpointWriter<'_> {
                 None => create_checkpoint(self.prep, &self.staged, self.om, &self.fingerprint)?,
             }
         }
-        io::hdf5::append_step_in_place(&self.staged, step.index + 1, step.output)?;
+        match crate::post::friction::friction_output(step.model, step.result) {
+            Some(f) => io::hdf5::append_step_with_friction_in_place(
+                &self.staged,
+                step.index + 1,
+                step.output,
+                &io::hdf5::StepFriction {
+                    multipliers_t: f.lambda_t,
+                    tangential_traction: f.tangential_traction,
+                    slip: f.slip,
+                    state: f.state,
+                },
+            )?,
+            None => io::hdf5::append_step_in_place(&self.staged, step.index + 1, step.output)?,
+        }
         if step.multi {
             // Committed with this step: the next one extends the committed file.
             self.base = Some(self.target.clone());

@@ -14,12 +14,14 @@
 //! Counts: `iterations` = steps + multiplier updates, `inner_iterations` =
 //! solves with the factor.
 
+mod friction;
 pub mod mprgp;
 #[cfg(test)]
 pub(crate) mod partial_kernel;
 pub mod polyak;
 pub mod uzawa;
 
+pub(crate) use friction::solve_friction;
 pub use polyak::{solve, DualMethod};
 
 use crate::linalg::cholesky::Cholesky;
@@ -114,7 +116,7 @@ pub(crate) fn solve_with<S: BoundStep>(
         friction: None,
     };
     let op = DualOp::new(&sq, fac, r, name)?;
-    let mut st = Smalbe::new(op, opts.tol, step, name)?;
+    let mut st = Smalbe::new(op, opts.tol, step, name, None)?;
     let t_setup = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
     let mut exec = ctx.executor(name);
@@ -143,10 +145,15 @@ pub(crate) fn solve_with<S: BoundStep>(
 /// from a stiff body only no longer stalls the fixed-step methods, and the
 /// result is invariant under scaling C (BENCHMARKS.md, "Dual family notes").
 fn row_scaling(qp: &QpProblem) -> Vec<f64> {
-    let diag = qp.c.diag();
-    (0..qp.m())
+    row_scaling_of(&qp.c, &qp.a)
+}
+
+/// [`row_scaling`] of the rows of `a` against the diagonal of `c`.
+fn row_scaling_of(c: &crate::qp::Csr, a: &crate::qp::Csr) -> Vec<f64> {
+    let diag = c.diag();
+    (0..a.nrows)
         .map(|i| {
-            let (cols, vals) = qp.a.row(i);
+            let (cols, vals) = a.row(i);
             let h: f64 = cols
                 .iter()
                 .zip(vals)
@@ -313,9 +320,13 @@ impl<'a> DualOp<'a> {
 pub(crate) struct DualState<'a> {
     /// The operator H = PHP + ρQ of the inner problem.
     pub(crate) op: DualOp<'a>,
-    /// Lower bounds ℓ = −λ̃ of λ̂ (zero without a kernel).
+    /// Lower bounds ℓ = −λ̃ of λ̂ (zero without a kernel); −s − λ̃ on the
+    /// tangential rows of a frictional problem.
     pub(crate) lb: Vec<f64>,
-    /// The iterate λ̂ (λ = λ̂ + λ̃), always ≥ ℓ.
+    /// Upper bounds u of λ̂: +∞ on the contact rows, s − λ̃ on the
+    /// tangential rows of a frictional problem (docs/methods.md §9.2).
+    pub(crate) ub: Vec<f64>,
+    /// The iterate λ̂ (λ = λ̂ + λ̃), always in [ℓ, u].
     pub(crate) lam: Vec<f64>,
     /// The gradient g = (PHP + ρQ)λ̂ − b, kept current by every step.
     pub(crate) g: Vec<f64>,
@@ -341,9 +352,22 @@ impl DualState<'_> {
         self.g = ax.iter().zip(&self.b).map(|(a, b)| a - b).collect();
         self.fresh = true;
     }
-    /// λ̂ᵢ off its bound.
+    /// λ̂ᵢ off its bounds.
     pub(crate) fn is_free(&self, i: usize) -> bool {
-        self.lam[i] > self.lb[i]
+        self.lam[i] > self.lb[i] && self.lam[i] < self.ub[i]
+    }
+    /// The projected gradient of a row at a bound: min(g, 0) at ℓ, max(g, 0)
+    /// at u, 0 when ℓ = u (a row with slip bound 0).
+    fn chopped(&self, i: usize) -> f64 {
+        if self.lam[i] <= self.lb[i] {
+            if self.lam[i] >= self.ub[i] {
+                0.0
+            } else {
+                self.g[i].min(0.0)
+            }
+        } else {
+            self.g[i].max(0.0)
+        }
     }
     /// Free gradient φ (zero at the bounds).
     pub(crate) fn phi(&self) -> Vec<f64> {
@@ -351,14 +375,15 @@ impl DualState<'_> {
             .map(|i| if self.is_free(i) { self.g[i] } else { 0.0 })
             .collect()
     }
-    /// Chopped gradient β = min(g, 0) at the bounds (zero on the free set).
+    /// Chopped gradient β = min(g, 0) at the lower bounds, max(g, 0) at the
+    /// upper ones (zero on the free set).
     pub(crate) fn beta(&self) -> Vec<f64> {
         (0..self.lam.len())
             .map(|i| {
                 if self.is_free(i) {
                     0.0
                 } else {
-                    self.g[i].min(0.0)
+                    self.chopped(i)
                 }
             })
             .collect()
@@ -370,7 +395,7 @@ impl DualState<'_> {
                 let v = if self.is_free(i) {
                     self.g[i]
                 } else {
-                    self.g[i].min(0.0)
+                    self.chopped(i)
                 };
                 v * v
             })
@@ -401,6 +426,19 @@ struct Smalbe<'a, S> {
     outer: usize,
     /// Steps by kind, in the order of [`KINDS`].
     counts: [usize; 6],
+    /// Rows 0..m_n are contact rows (λ ≥ 0), the rest tangential rows.
+    m_n: usize,
+    /// Slip bounds s of the tangential rows (|λ| ≤ s).
+    upper: Vec<f64>,
+}
+
+/// The box of a frictional dual (docs/methods.md §9.2): rows `0..m_n` of
+/// the stacked B = [A; T] are contact rows with λ ≥ 0, row m_n + i is
+/// tangential with |λ| ≤ `upper[i]`; `lam0` (all rows) is a warm start.
+pub(crate) struct BoxBounds {
+    pub(crate) m_n: usize,
+    pub(crate) upper: Vec<f64>,
+    pub(crate) lam0: Option<Vec<f64>>,
 }
 
 impl<'a, S: BoundStep> Smalbe<'a, S> {
@@ -409,6 +447,7 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
         tol: f64,
         mut step: S,
         name: &'static str,
+        boxed: Option<&BoxBounds>,
     ) -> Result<Smalbe<'a, S>, QpError> {
         let m = op.qp.m();
         let k = op.k();
@@ -439,13 +478,32 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
         };
         let ref_g = norm(&h).max(norm(&bhat)).max(f64::MIN_POSITIVE);
         let e_norm = norm(&et);
-        let lb: Vec<f64> = shift.iter().map(|s| -s).collect();
-        let lam: Vec<f64> = lb.iter().map(|&l| l.max(0.0)).collect();
+        let mut lb: Vec<f64> = shift.iter().map(|s| -s).collect();
+        let mut ub = vec![f64::INFINITY; m];
+        let m_n = boxed.map_or(m, |b| b.m_n);
+        if let Some(b) = boxed {
+            for i in m_n..m {
+                lb[i] = -b.upper[i - m_n] - shift[i];
+                ub[i] = b.upper[i - m_n] - shift[i];
+            }
+        }
+        let mut lam: Vec<f64> = lb.iter().map(|&l| l.max(0.0)).collect();
+        if let Some(b) = boxed {
+            for i in m_n..m {
+                lam[i] = lam[i].min(ub[i]);
+            }
+            if let Some(l0) = &b.lam0 {
+                for i in 0..m {
+                    lam[i] = (l0[i] - shift[i]).max(lb[i]).min(ub[i]);
+                }
+            }
+        }
         // ‖PHP + ρQ‖ = max(‖PHP‖, ρ): PHP and ρQ act on orthogonal subspaces.
         let h_norm = hnorm.max(op.rho);
         let mut s = DualState {
             op,
             lb,
+            ub,
             lam,
             g: vec![0.0; m],
             b: bhat,
@@ -468,6 +526,8 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
             lag_prev: None,
             outer: 0,
             counts: [0; 6],
+            m_n,
+            upper: boxed.map_or(vec![], |b| b.upper.clone()),
         })
     }
 
@@ -532,9 +592,20 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
         let s = &mut self.s;
         let qp = s.op.qp;
         let m = qp.m();
+        let m_n = self.m_n;
         let lam: Vec<f64> = (0..m)
             .map(|i| {
-                if s.is_free(i) {
+                if i >= m_n {
+                    // A tangential row: exactly ±s at its bounds.
+                    let u = self.upper[i - m_n];
+                    if s.is_free(i) {
+                        (s.lam[i] + self.shift[i]).max(-u).min(u)
+                    } else if s.lam[i] <= s.lb[i] {
+                        -u
+                    } else {
+                        u
+                    }
+                } else if s.is_free(i) {
                     (s.lam[i] + self.shift[i]).max(0.0)
                 } else {
                     0.0
@@ -593,12 +664,14 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
         let ref_g = self.s.ref_g;
         let s: Vec<f64> = qp.a.mul(&x).iter().zip(&qp.g).map(|(a, g)| a - g).collect();
         let gap_tol = 10.0 * tol * ref_g;
-        let active: Vec<bool> = (0..qp.m())
+        let m_n = self.m_n;
+        let active: Vec<bool> = (0..m_n)
             .map(|i| lambda[i] > 0.0 || s[i] >= -gap_tol)
             .collect();
-        // Primal feasibility and complementarity of the recovered x.
-        let viol = s.iter().fold(0.0f64, |a, &v| a.max(v));
-        let compl = (0..qp.m())
+        // Primal feasibility and complementarity of the recovered x (the
+        // friction conditions are the driver's certificate).
+        let viol = s[..m_n].iter().fold(0.0f64, |a, &v| a.max(v));
+        let compl = (0..m_n)
             .filter(|&i| lambda[i] > 0.0)
             .fold(0.0f64, |a, i| a.max(s[i].abs()));
         let rounding = 1e-13 * (norm_inf(&x) + norm_inf(&qp.g));

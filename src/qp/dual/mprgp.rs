@@ -14,7 +14,7 @@
 //! the SMALBE parameters are the host's.
 
 use crate::linalg::sparse::{axpy, dot};
-use crate::qp::dual::{solve_with, BoundStep, DualState, StepKind};
+use crate::qp::dual::{solve_friction, solve_with, BoundStep, DualState, StepKind};
 use crate::qp::{Context, Method, Output, QpError, QpProblem};
 
 /// Proportioning parameter Γ.
@@ -35,10 +35,17 @@ impl Method for MprgpMethod {
     fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
         solve(qp, ctx)
     }
+    /// Tresca and Coulomb on the dual with box constraints (docs/methods.md §9.2).
+    fn friction(&self) -> bool {
+        true
+    }
 }
 
 /// Solve `qp` by MPRGP on the dual (SMALBE-M for a semicoercive C).
 pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+    if qp.friction.is_some() {
+        return solve_friction(qp, ctx, Mprgp::default, "mprgp");
+    }
     solve_with(qp, ctx, Mprgp::default(), "mprgp")
 }
 
@@ -68,7 +75,13 @@ impl BoundStep for Mprgp {
         let beta = s.beta();
         let phit_phi: f64 = (0..mdim)
             .filter(|&i| s.is_free(i))
-            .map(|i| ((s.lam[i] - s.lb[i]) / self.abar).min(phi[i]) * phi[i])
+            .map(|i| {
+                if phi[i] < 0.0 && s.ub[i] < f64::INFINITY {
+                    ((s.lam[i] - s.ub[i]) / self.abar).max(phi[i]) * phi[i]
+                } else {
+                    ((s.lam[i] - s.lb[i]) / self.abar).min(phi[i]) * phi[i]
+                }
+            })
             .sum();
         s.fresh = false;
         if dot(&beta, &beta) <= GAMMA * GAMMA * phit_phi {
@@ -88,6 +101,8 @@ impl BoundStep for Mprgp {
             for i in 0..mdim {
                 if self.p[i] > 0.0 {
                     af = af.min(((s.lam[i] - s.lb[i]) / self.p[i]).max(0.0));
+                } else if self.p[i] < 0.0 && s.ub[i] < f64::INFINITY {
+                    af = af.min(((s.lam[i] - s.ub[i]) / self.p[i]).max(0.0));
                 }
             }
             if acg <= af {
@@ -101,13 +116,13 @@ impl BoundStep for Mprgp {
                 Ok(StepKind::Cg)
             } else {
                 // Feasible part of the CG step, then a projected gradient step.
-                for ((xi, pi), li) in s.lam.iter_mut().zip(&self.p).zip(&s.lb) {
-                    *xi = (*xi - af * pi).max(*li);
+                for (i, (xi, pi)) in s.lam.iter_mut().zip(&self.p).enumerate() {
+                    *xi = (*xi - af * pi).max(s.lb[i]).min(s.ub[i]);
                 }
                 axpy(-af, &ap, &mut s.g);
                 let phih = s.phi();
-                for ((xi, fi), li) in s.lam.iter_mut().zip(&phih).zip(&s.lb) {
-                    *xi = (*xi - self.abar * fi).max(*li);
+                for (i, (xi, fi)) in s.lam.iter_mut().zip(&phih).enumerate() {
+                    *xi = (*xi - self.abar * fi).max(s.lb[i]).min(s.ub[i]);
                 }
                 s.refresh();
                 self.p = s.phi();
@@ -124,7 +139,7 @@ impl BoundStep for Mprgp {
             }
             let a = dot(&s.g, &beta) / dad;
             for i in 0..mdim {
-                s.lam[i] = (s.lam[i] - a * beta[i]).max(s.lb[i]);
+                s.lam[i] = (s.lam[i] - a * beta[i]).max(s.lb[i]).min(s.ub[i]);
                 s.g[i] -= a * ad[i];
             }
             self.p = s.phi();
@@ -209,6 +224,58 @@ mod tests {
         let r = run_direct(solve, &qp, &opts()).unwrap();
         assert!(r.status.converged(), "{:?}", r.status);
         assert!(kkt::residuals(&qp, &r.x, &r.lambda).max() <= 1e-10);
+    }
+
+    /// The point of `ssn::friction`'s tests on a floor, held by springs
+    /// (kx, 3) and loaded by (fx, −1): it sticks (λ_t = fx, u_x = 0) while
+    /// |fx| ≤ μ, else slips with λ_t = μ·sign fx, u_x = (fx − λ_t)/kx;
+    /// floating (kx = 0) it sticks through SMALBE's equality.
+    #[test]
+    fn a_point_sticks_and_slips_on_the_box_constrained_dual() {
+        use crate::qp::{registry, Friction, SlipBound};
+        for kx in [2.0, 0.0] {
+            for (fx, mu) in [
+                (0.3f64, 0.5),
+                (-0.3, 0.5),
+                (0.7, 0.5),
+                (-0.7, 0.5),
+                (0.5, 0.0),
+            ] {
+                if kx == 0.0 && fx.abs() > mu {
+                    continue;
+                }
+                for bound in [SlipBound::Coulomb(vec![mu]), SlipBound::Tresca(vec![mu])] {
+                    let mut trip = vec![(1, 1, 3.0)];
+                    if kx > 0.0 {
+                        trip.push((0, 0, kx));
+                    }
+                    let qp = QpProblem {
+                        c: crate::qp::Csr::from_triplets(2, 2, &trip),
+                        d: vec![fx, -1.0],
+                        a: crate::qp::Csr::from_triplets(1, 2, &[(0, 1, -1.0)]),
+                        g: vec![0.0],
+                        kernel: if kx > 0.0 {
+                            vec![]
+                        } else {
+                            vec![vec![1.0, 0.0]]
+                        },
+                        friction: Some(Friction {
+                            t: crate::qp::Csr::from_triplets(1, 2, &[(0, 0, 1.0)]),
+                            t0: vec![0.0],
+                            bound,
+                        }),
+                    };
+                    let r = registry::solve("mprgp", &qp, &opts()).unwrap();
+                    let lt = if fx.abs() <= mu { fx } else { mu * fx.signum() };
+                    let ux = if kx > 0.0 { (fx - lt) / kx } else { 0.0 };
+                    assert!(r.status.converged(), "{kx} {fx} {mu}: {:?}", r.status);
+                    assert!(r.kkt.within(1e-10), "{:?}", r.kkt);
+                    assert!((r.lambda[0] - 1.0).abs() < 1e-10, "{:?}", r.lambda);
+                    assert!((r.lambda_t[0] - lt).abs() < 1e-10, "{:?}", r.lambda_t);
+                    assert!((r.x[0] - ux).abs() < 1e-10, "{kx} {fx} {mu}: {:?}", r.x);
+                }
+            }
+        }
     }
 
     /// Shipped examples with a cheap CGC reference (all semicoercive);
