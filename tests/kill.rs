@@ -222,6 +222,7 @@ fn killed_runs_leave_complete_files_and_restart_to_the_same_result() {
         KillAt::After(Duration::from_millis(1000)),
         KillAt::Steps(1),
         KillAt::Steps(2),
+        KillAt::Steps(NSTEPS),
         KillAt::WhileAppending,
     ];
     let mut after_checkpoint = 0;
@@ -235,6 +236,15 @@ fn killed_runs_leave_complete_files_and_restart_to_the_same_result() {
         let ck = check_outputs(dir.path(), &when);
         let have = ck.as_ref().map_or(0, |c| c.steps.len());
         assert!(have >= seen, "{when}: the checkpoint lost steps");
+        // A finished checkpoint comes with its summary: the last commit
+        // renames the JSON before the checkpoint (a restart that finds all
+        // steps done has nothing to write it from).
+        if have == NSTEPS {
+            assert!(
+                dir.path().join(format!("{NAME}.json")).is_file(),
+                "{when}: all {NSTEPS} steps in the checkpoint but no summary"
+            );
+        }
         if have > 0 {
             after_checkpoint += 1;
         }

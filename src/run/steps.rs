@@ -285,9 +285,10 @@ impl<'a> Run<'a> {
                 names.extend(ob.on_step(&step).map_err(|e| unstage(&tx, e))?);
             }
             // A load step is one commit: its VTU pair, the time series and
-            // the checkpoint grown by this step.
+            // the checkpoint grown by this step. The last step's files wait
+            // for the summary (below).
             match tx.as_deref_mut() {
-                Some(t) if multi => t.commit(&names)?,
+                Some(t) if multi && s + 1 < steps.end => t.commit(&names)?,
                 _ => pending.extend(names),
             }
             let t_write = t_w.elapsed().as_secs_f64();
@@ -356,13 +357,18 @@ impl<'a> Run<'a> {
             },
             multi.then_some(rows),
         );
+        let mut last_commit = vec![];
         for ob in observers.iter_mut() {
-            pending.extend(ob.on_finish(&summary).map_err(|e| unstage(&tx, e))?);
+            last_commit.extend(ob.on_finish(&summary).map_err(|e| unstage(&tx, e))?);
         }
-        // The last commit: the JSON summary (the commit record) and, for a
-        // single solve, every other file with it.
+        // The last commit: the JSON summary first, then the last step's
+        // files (for a single solve, every file), the checkpoint among them.
+        // A run killed inside it leaves either a checkpoint without its last
+        // step (a restart solves that step again and writes the summary) or
+        // both; never a finished checkpoint without its summary.
+        last_commit.extend(pending);
         if let Some(t) = tx {
-            t.commit(&pending)?;
+            t.commit(&last_commit)?;
         }
         Ok(Outcome {
             steps,
