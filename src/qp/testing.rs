@@ -223,3 +223,30 @@ pub(crate) fn example(name: &str) -> crate::run::Prepared {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("meshes/{name}.toml"));
     crate::run::prepare(&path, false).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
+
+/// A point on a rigid floor (−u_y ≤ 0) held by springs kx (none: floating
+/// along x) and 3 (along y), loaded by (fx, fy), with friction `bound`:
+/// λ_n = −fy, and it sticks (u_x = 0, λ_t = fx) while |fx| ≤ s, else slips
+/// with λ_t = s·sign fx, u_x = (fx − λ_t)/kx (s = μλ_n or the Tresca bound).
+pub(crate) fn friction_point(kx: f64, fx: f64, fy: f64, bound: crate::qp::SlipBound) -> QpProblem {
+    let mut trip = vec![(1, 1, 3.0)];
+    if kx > 0.0 {
+        trip.push((0, 0, kx));
+    }
+    QpProblem {
+        c: Csr::from_triplets(2, 2, &trip),
+        d: vec![fx, fy],
+        a: Csr::from_triplets(1, 2, &[(0, 1, -1.0)]),
+        g: vec![0.0],
+        kernel: if kx > 0.0 {
+            vec![]
+        } else {
+            vec![vec![1.0, 0.0]]
+        },
+        friction: Some(crate::qp::Friction {
+            t: Csr::from_triplets(1, 2, &[(0, 0, 1.0)]),
+            t0: vec![0.0],
+            bound,
+        }),
+    }
+}

@@ -232,7 +232,7 @@ mod tests {
     /// floating (kx = 0) it sticks through SMALBE's equality.
     #[test]
     fn a_point_sticks_and_slips_on_the_box_constrained_dual() {
-        use crate::qp::{registry, Friction, SlipBound};
+        use crate::qp::{registry, SlipBound};
         for kx in [2.0, 0.0] {
             for (fx, mu) in [
                 (0.3f64, 0.5),
@@ -245,26 +245,7 @@ mod tests {
                     continue;
                 }
                 for bound in [SlipBound::Coulomb(vec![mu]), SlipBound::Tresca(vec![mu])] {
-                    let mut trip = vec![(1, 1, 3.0)];
-                    if kx > 0.0 {
-                        trip.push((0, 0, kx));
-                    }
-                    let qp = QpProblem {
-                        c: crate::qp::Csr::from_triplets(2, 2, &trip),
-                        d: vec![fx, -1.0],
-                        a: crate::qp::Csr::from_triplets(1, 2, &[(0, 1, -1.0)]),
-                        g: vec![0.0],
-                        kernel: if kx > 0.0 {
-                            vec![]
-                        } else {
-                            vec![vec![1.0, 0.0]]
-                        },
-                        friction: Some(Friction {
-                            t: crate::qp::Csr::from_triplets(1, 2, &[(0, 0, 1.0)]),
-                            t0: vec![0.0],
-                            bound,
-                        }),
-                    };
+                    let qp = crate::qp::testing::friction_point(kx, fx, -1.0, bound);
                     let r = registry::solve("mprgp", &qp, &opts()).unwrap();
                     let lt = if fx.abs() <= mu { fx } else { mu * fx.signum() };
                     let ux = if kx > 0.0 { (fx - lt) / kx } else { 0.0 };

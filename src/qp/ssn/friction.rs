@@ -522,33 +522,9 @@ impl Iterative for State<'_> {
 
 #[cfg(test)]
 mod tests {
-    use crate::qp::{registry, Csr, Friction, QpProblem, SlipBound, SolveOptions, Status};
+    use crate::qp::{registry, SlipBound, SolveOptions, Status};
 
-    /// A point on a rigid floor (−u_y ≤ 0) held by springs kx, ky, loaded by
-    /// (fx, fy): λ_n = −fy, and it sticks (u_x = 0, λ_t = fx) while
-    /// |fx| ≤ μλ_n, else slips with λ_t = μλ_n·sign fx, u_x = (fx − λ_t)/kx.
-    fn point(kx: f64, fx: f64, fy: f64, bound: SlipBound) -> QpProblem {
-        let mut trip = vec![(1, 1, 3.0)];
-        if kx > 0.0 {
-            trip.push((0, 0, kx));
-        }
-        QpProblem {
-            c: Csr::from_triplets(2, 2, &trip),
-            d: vec![fx, fy],
-            a: Csr::from_triplets(1, 2, &[(0, 1, -1.0)]),
-            g: vec![0.0],
-            kernel: if kx > 0.0 {
-                vec![]
-            } else {
-                vec![vec![1.0, 0.0]]
-            },
-            friction: Some(Friction {
-                t: Csr::from_triplets(1, 2, &[(0, 0, 1.0)]),
-                t0: vec![0.0],
-                bound,
-            }),
-        }
-    }
+    use crate::qp::testing::friction_point as point;
 
     #[test]
     fn a_point_sticks_and_slips_by_coulomb_and_tresca() {
