@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
-"""The signorini benchmark: families of the three-body and Hertz models at
-~10 k, 100 k and 1 M nodes, every method, the Cholesky limit, the peers.
+"""The signorini benchmark: families of the three-body, Hertz and rollers
+models at ~10 k, 100 k, 400 k and 1 M nodes (and 2 M for the three bodies),
+every method, the Cholesky limit, the peers.
 
 Usage (the README's command is `bash scripts/bench`, which installs what the
 peers need first):
 
-    python3 scripts/bench.py [--sizes 10k,100k,1m] [--families three_bodies,hertz]
+    python3 scripts/bench.py [--sizes 10k,100k,400k,1m,three_bodies:2m]
+                             [--families three_bodies,hertz,rollers] [--methods ssn,mprgp]
                              [--repeats 3] [--budget 600] [--peers clarabel,osqp]
                              [--no-fenicsx] [--work bench] [--out BENCHMARKS.md]
 
@@ -25,7 +27,9 @@ For each family and size it
      FEniCSx (scripts/bench_fenicsx.py, Debian's python3-dolfinx-real) and with
      `signorini solve --no-contact`, timed the same way;
   6. writes --out (BENCHMARKS.md): machine, date, commands, medians, ratios,
-     fitted growth exponents, and the raw results as JSON next to it.
+     fitted growth exponents, the issue-15 table (best method's whole process
+     and peak RSS against the limit's, determinism over the repeats), and the
+     raw results as JSON next to it.
 
 Runs whose median is longer than --long seconds (default 60) are not repeated.
 Exit status: 0 if the benchmark ran (whatever the methods did), 2 on a setup
@@ -49,7 +53,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-SIZES = {"10k": 10_000, "100k": 100_000, "1m": 1_000_000}
+SIZES = {"10k": 10_000, "100k": 100_000, "400k": 400_000, "1m": 1_000_000, "2m": 2_000_000}
 # Empirical: nodes ~ clscale^(-p) for these .geo files (p < 2: points with a
 # fixed size and boundary layers).
 CLSCALE_EXPONENT = 1.8
@@ -213,10 +217,14 @@ def repeated(fn, repeats: int, long_s: float):
     best = min(runs, key=lambda r: abs(key(r) - med))
     best = dict(best)
     best["repeats"] = len(runs)
+    # what must not depend on timing: the path (iterations, inner solves)
+    # and the answer (energy, probes), equal over the repeats
+    best["fingerprints"] = [json.dumps([r.get(k) for k in ("iterations", "inner", "energy", "probes", "status")])
+                            for r in runs]
     best["totals"] = totals
     if len(runs) > 1:
         # medians of every phase, not only of the total
-        for f in ("read", "assemble", "factor", "solve", "write", "total", "rss_mb",
+        for f in ("read", "assemble", "factor", "solve", "write", "total", "rss_mb", "wall",
                   "t_read", "t_setup", "t_solve", "t_total", "t_assemble", "t_factor",
                   "t_factor_solve", "t_compile"):
             vals = [r.get(f) for r in runs if isinstance(r.get(f), (int, float))]
@@ -420,6 +428,7 @@ def write_report(path: Path, res: dict, args, cmdline: str) -> None:
             r = best["total"] / fx["t_total"]
             w(f"| signorini end to end ≤ 0.5× FEniCSx linear elastic | {fam}, {s['size']} | {best['name']} total {fmt(best['total'])} s ÷ {fmt(fx['t_total'])} s = {fmt(r)} | {'yes' if r <= 0.5 else 'no'} |")
     w("")
+    write_issue15(w, res)
     w("Raw results: `" + res["raw"] + "`.\n")
     # The hand-written notes of the file being replaced (everything from
     # "## Notes" on) are kept: measurements behind the methods' parameters.
@@ -431,11 +440,66 @@ def write_report(path: Path, res: dict, args, cmdline: str) -> None:
     path.write_text("\n".join(L))
 
 
+def whole_best(s):
+    """The converged, certified method with the smallest whole-process wall
+    time (read, assemble, solve, write; process start to exit) at one size."""
+    best = None
+    for nm, r in s["methods"].items():
+        if "skipped" in r or not (r.get("converged") and r.get("certified")) or r.get("wall") is None:
+            continue
+        if best is None or r["wall"] < best[1]["wall"]:
+            best = (nm, r)
+    return best
+
+
+def write_issue15(w, res) -> None:
+    """The ratio table of issue 15: the best method against `signorini limit`
+    (one sparse Cholesky factorization and solve of the same C, no output),
+    both timed as whole processes, and the peak memory of each."""
+    w("## Contact at the price of one linear solve (issue 15)\n")
+    w("For each family and size: the converged, certified method with the smallest whole-process "
+      "wall time (`signorini solve`: read, assemble, solve, write VTU + HDF5 + JSON; process start to "
+      "exit, median of the repeats) against `signorini limit` on the same file (read, assemble, one "
+      "sparse Cholesky factorization and solve of C, no output), both timed the same way. "
+      "solve ÷ limit compares the solve phase with the limit's factor + solve. "
+      "Deterministic: every repeat took the same path and gave the same answer (iterations, inner "
+      "solves, energy and probe displacements equal).\n")
+    w("| family | size | DOFs | contact rows | best method | iterations (inner) | whole [s] | limit whole [s] | whole ÷ limit | solve ÷ limit | peak RSS ÷ limit | repeats | deterministic |")
+    w("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    growth = {}
+    for fam, fres in res["families"].items():
+        for s in fres["sizes"]:
+            lim = s.get("limit") or {}
+            b = whole_best(s)
+            if not b or not lim.get("wall"):
+                w(f"| {fam} | {s['size']} | {lim.get('n', '–')} | {s.get('m', '–')} | – | | | | | | | | |")
+                continue
+            nm, r = b
+            fp = r.get("fingerprints") or []
+            det = ("yes" if len(set(fp)) == 1 else "NO") if len(fp) > 1 else "(1 run)"
+            rss = r["rss_mb"] / lim["rss_mb"] if r.get("rss_mb") and lim.get("rss_mb") else None
+            w(f"| {fam} | {s['size']} | {lim.get('n')} | {s.get('m', '–')} | {nm} | {r.get('iterations')} ({r.get('inner')}) | "
+              f"{fmt(r['wall'])} | {fmt(lim['wall'])} | **{fmt(r['wall'] / lim['wall'])}** | "
+              f"{fmt(r['solve'] / lim['t_factor_solve'])} | {fmt(rss)} | {r.get('repeats', 1)} | {det} |")
+            growth.setdefault((fam, nm), []).append((lim.get("n"), r["solve"], s["size"]))
+    w("")
+    w("Growth of the best method's solve time, t ∝ n^p, least squares over the sizes from 100k on "
+      "(n = DOFs):\n")
+    w("| family | method | sizes | p |")
+    w("|---|---|---|---|")
+    for (fam, nm), pts in growth.items():
+        big = [(n, t) for n, t, sz in pts if SIZES[sz] >= 100_000]
+        p = fit_exponent(big)
+        w(f"| {fam} | {nm} | {', '.join(sz for _, _, sz in pts if SIZES[sz] >= 100_000)} | {fmt(p, 2) if p else '–'} |")
+    w("")
+
+
 # ----------------------------------------------------------------- main
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--sizes", default="10k,100k,1m")
-    ap.add_argument("--families", default="three_bodies,hertz")
+    ap.add_argument("--sizes", default="10k,100k,400k,1m,three_bodies:2m",
+                    help="comma list of sizes (" + ",".join(SIZES) + "); FAMILY:SIZE runs that size for that family only")
+    ap.add_argument("--families", default="three_bodies,hertz,rollers")
     ap.add_argument("--methods", default="", help="comma list of variants (e.g. mprgp,ssn,cgc+cholesky); default all")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--long", type=float, default=60.0, help="runs longer than this are not repeated")
@@ -464,8 +528,11 @@ def main() -> int:
     work = Path(args.work)
     work.mkdir(parents=True, exist_ok=True)
     venv_py = ROOT / ".venv" / "bin" / "python"
-    sizes = [s.strip().lower() for s in args.sizes.split(",") if s.strip()]
-    for s in sizes:
+    size_spec = []  # (family or None, size)
+    for s in [s.strip() for s in args.sizes.split(",") if s.strip()]:
+        fam_only, _, s = s.rpartition(":")
+        s = s.lower()
+        size_spec.append((fam_only or None, s))
         if s not in SIZES:
             print(f"bench: unknown size {s}; known: {', '.join(SIZES)}", file=sys.stderr)
             return 2
@@ -484,6 +551,7 @@ def main() -> int:
         history = {vname(v): [] for v in vs}
         failed = {}
         peer_hist = {p: [] for p in peers}
+        sizes = [s for f, s in sorted(size_spec, key=lambda fs: SIZES[fs[1]]) if f in (None, fam)]
         for size in sizes:
             target = SIZES[size]
             log(f"{fam} {size}: meshing")
@@ -502,6 +570,7 @@ def main() -> int:
                 d = json.loads(out.strip().splitlines()[-1])
                 d["rss_mb"] = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", tf.read_text()).group(1)) / 1024
                 d["total"] = d["t_factor_solve"]
+                d["wall"] = wall
                 return d
 
             srec["limit"] = repeated(limit_once, args.repeats, args.long)

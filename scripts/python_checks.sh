@@ -24,7 +24,7 @@ cd "$(dirname "$0")/.."
 ROOT=$PWD
 
 # Examples checked by default.
-DEFAULT_EXAMPLES=(two_blocks_eccentric three_bodies column hertz floating_block cantilevers two_blocks two_blocks_glued geodynamic geodynamic_steps hip)
+DEFAULT_EXAMPLES=(two_blocks_eccentric three_bodies column hertz floating_block cantilevers two_blocks two_blocks_glued geodynamic geodynamic_steps hip rollers)
 EXAMPLES=("$@")
 [ ${#EXAMPLES[@]} -gt 0 ] || EXAMPLES=("${DEFAULT_EXAMPLES[@]}")
 

@@ -15,8 +15,9 @@
 //! repeated J switches to single changes (anti-cycling). When the unknowns
 //! A touches are few (`small_border`), C is factored with them last and the
 //! trailing block gives all of A K⁻¹Aᵀ at once (docs/methods.md §7): J is
-//! then found by dual-space steps with no sparse solve (`dense_start`), and
-//! the Newton loop only confirms it. Counts: `iterations` = KKT solves (the
+//! then found by dual-space steps with no sparse solve (`dense_start`; from
+//! every row when the glued set does not hold the floating bodies), and the
+//! Newton loop only confirms it. Counts: `iterations` = KKT solves (the
 //! dual-space steps are not counted), `inner_iterations` = sparse solves.
 
 mod augmented;
@@ -350,7 +351,15 @@ impl<'a> Ssn<'a> {
             let jset: Vec<usize> = (0..m).filter(|&i| in_j[i]).collect();
             let ax0j: Vec<f64> = jset.iter().map(|&j| ax0[j]).collect();
             let Some((w, alpha)) = self.schur_dense(&jset, &ax0j, &self.e, &qp.g) else {
-                break;
+                // J does not hold the floating bodies (the glued start of
+                // rollers.toml: one row under each roller, which leaves its
+                // rotation free): restart from every row, which does when
+                // the problem is bounded, as the Newton loop would.
+                if in_j.iter().all(|b| *b) {
+                    break;
+                }
+                in_j = vec![true; m];
+                continue;
             };
             let mut lam = vec![0.0; m];
             for (t, &j) in jset.iter().enumerate() {
