@@ -44,6 +44,7 @@ const SHIPPED: &[&str] = &[
     "hip",
     "geodynamic",
     "geodynamic_steps",
+    "rollers",
 ];
 
 /// |a + b| ≤ tol · scale, for force and moment.
