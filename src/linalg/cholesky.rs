@@ -200,7 +200,13 @@ impl Workspace {
                 Default::default(),
             ),
             Some(b) => {
+                let t0 = std::time::Instant::now();
                 let (fwd, inv) = bordered_order(sym, b)?;
+                log::debug!(
+                    "Cholesky: bordered ordering ({} border DOFs) {:.3} s",
+                    b.len(),
+                    t0.elapsed().as_secs_f64()
+                );
                 factorize_symbolic_cholesky(
                     sym.as_ref(),
                     Side::Lower,
