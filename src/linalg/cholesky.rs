@@ -339,9 +339,10 @@ impl Workspace {
             border,
         });
         log::debug!(
-            "Cholesky: n = {}, nnz(lower C) = {}, prepare {t_prep:.3} s, symbolic {t_sym:.3} s{}, numeric {:.3} s",
+            "Cholesky: n = {}, nnz(lower C) = {}, nnz(L) = {}, prepare {t_prep:.3} s, symbolic {t_sym:.3} s{}, numeric {:.3} s",
             c.nrows,
             vals.len(),
+            llt.values.len(),
             if reused { " (reused)" } else { "" },
             t0.elapsed().as_secs_f64() - t_prep - t_sym
         );
