@@ -6,8 +6,8 @@ use super::SolveArgs;
 use crate::post;
 use crate::qp::SolveOptions;
 use crate::run::{
-    self, CheckpointWriter, Outcome, Prepared, Progress, Restart, Run, RunError, SummaryWriter,
-    Transaction, VtuWriter,
+    self, CheckpointWriter, Concurrent, Outcome, Prepared, Progress, Restart, Run, RunError,
+    SummaryWriter, Transaction, VtuWriter,
 };
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -77,8 +77,10 @@ fn solve(
     let om = post::out_mesh(&prep.model, &prep.mesh);
     let (sdir, fdir) = (tx.stage_dir().to_path_buf(), tx.dir().to_path_buf());
     let compress = a.compress || file.output.compress;
-    let mut vtu = VtuWriter::new(prep, &om, &sdir, &fdir, compress);
-    let mut checkpoint = CheckpointWriter::new(prep, &om, &sdir, &fdir, restart.as_ref());
+    let vtu = VtuWriter::new(prep, &om, &sdir, &fdir, compress);
+    let checkpoint = CheckpointWriter::new(prep, &om, &sdir, &fdir, restart.as_ref());
+    // The VTU pair and the checkpoint are written side by side.
+    let mut files = Concurrent(vtu, checkpoint);
     let mut json = SummaryWriter::new(prep, &sdir);
     let mut progress = Progress { quiet };
     let outcome = Run::new(prep, method, opts)
@@ -86,10 +88,7 @@ fn solve(
         .max_steps(a.max_steps)
         .restart(restart)
         .started(t0)
-        .solve(
-            &mut [&mut vtu, &mut checkpoint, &mut json, &mut progress],
-            Some(&mut tx),
-        )?;
+        .solve(&mut [&mut files, &mut json, &mut progress], Some(&mut tx))?;
     tx.finish();
     if !quiet {
         if outcome.last.is_none() {

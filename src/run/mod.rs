@@ -20,8 +20,8 @@ mod summary;
 
 pub use observe::{Progress, StepObserver};
 pub use output::{
-    create_checkpoint, output_paths, CheckpointWriter, Outputs, SummaryWriter, Transaction,
-    VtuWriter,
+    create_checkpoint, output_paths, CheckpointWriter, Concurrent, Outputs, SummaryWriter,
+    Transaction, VtuWriter,
 };
 pub use prepare::{
     fingerprint, fingerprint_diff, fnv1a, options, prepare, prepare_with, probes, reduce, solve,
