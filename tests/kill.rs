@@ -161,8 +161,12 @@ fn run_and_kill(dir: &Path, at: KillAt) -> usize {
         KillAt::Steps(k) => {
             let t0 = Instant::now();
             loop {
+                // Exit first, then the count: the last step's files appear
+                // only in the final commit, just before the process exits,
+                // so a count taken before the exit check could miss them.
+                let exited = child.try_wait().unwrap().is_some();
                 seen = steps_in(&h5);
-                if seen >= k || child.try_wait().unwrap().is_some() {
+                if seen >= k || exited {
                     break;
                 }
                 assert!(
