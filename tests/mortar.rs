@@ -12,15 +12,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 fn solve(path: &Path) -> (Prepared, QpResult, signorini::io::StepOutput) {
-    let prep = run::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
-    let (method, opts) = run::options(&prep.problem, &SolverSection::default()).unwrap();
-    let res = run::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
-    assert!(
-        res.status.converged(),
-        "{}: {:?}",
-        path.display(),
-        res.status
-    );
+    let (prep, res) = common::solve_file(path, &SolverSection::default());
     let step = signorini::post::step_output(&prep.model, &prep.problem, &res, 1.0);
     (prep, res, step)
 }

@@ -10,18 +10,7 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn solve_file(path: &Path, choice: &SolverSection) -> (Prepared, QpResult) {
-    let prep = run::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
-    let (method, opts) = run::options(&prep.problem, choice).unwrap();
-    let res = run::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
-    assert!(
-        res.status.converged(),
-        "{}: {:?}",
-        path.display(),
-        res.status
-    );
-    (prep, res)
-}
+use common::solve_file;
 
 fn solve_example(name: &str) -> (Prepared, QpResult) {
     solve_file(

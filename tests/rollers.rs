@@ -5,21 +5,17 @@
 //! method, and for the start of ssn's dual-space steps (docs/methods.md §7).
 
 use signorini::qp::{QpResult, SolverSection};
-use signorini::run::{self, Prepared};
+use signorini::run::Prepared;
 use std::f64::consts::PI;
 
 mod common;
 
 fn solve(method: &str) -> (Prepared, QpResult) {
-    let path = common::root().join("meshes/rollers.toml");
-    let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
     let choice = SolverSection {
         method: Some(method.into()),
         ..SolverSection::default()
     };
-    let (m, opts) = run::options(&prep.problem, &choice).unwrap();
-    let res = run::solve(&prep, &m, &opts).unwrap_or_else(|e| panic!("{e}"));
-    assert!(res.status.converged(), "{method}: {:?}", res.status);
+    let (prep, res) = common::solve_file(&common::root().join("meshes/rollers.toml"), &choice);
     assert!(
         signorini::qp::registry::certified(method, &res.kkt, 1e-6, true),
         "{method}: {:?}",

@@ -9,6 +9,25 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
+/// Prepare and solve a problem file in-process with the method `choice`
+/// picks (default: the file's own), asserting that the method converged.
+pub fn solve_file(
+    path: &Path,
+    choice: &signorini::qp::SolverSection,
+) -> (signorini::run::Prepared, signorini::qp::QpResult) {
+    use signorini::run;
+    let prep = run::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
+    let (method, opts) = run::options(&prep.problem, choice).unwrap();
+    let res = run::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        res.status.converged(),
+        "{}: {:?}",
+        path.display(),
+        res.status
+    );
+    (prep, res)
+}
+
 /// The `signorini` binary Cargo built for these tests.
 pub fn exe() -> &'static str {
     env!("CARGO_BIN_EXE_signorini")
