@@ -15,6 +15,7 @@
 //! pattern of C + AᵀA) reuses the symbolic analysis (AMD ordering,
 //! supernodes, elimination tree). [`Cholesky::new`] reuses nothing.
 
+use crate::linalg::rotation::{Rotation, RowBorder};
 use crate::linalg::sparse::Csr;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::cholesky::{
@@ -42,6 +43,8 @@ struct Factor {
     symbolic: Arc<SymbolicCholesky<usize>>,
     values: Vec<f64>,
     border: Option<Border>,
+    /// The factor is of TᵀKT (rotated rows, [`crate::linalg::rotation`]).
+    rot: Option<Arc<Rotation>>,
 }
 
 /// The DOFs a bordered factor eliminates last (its trailing block of L is
@@ -242,7 +245,7 @@ impl Workspace {
     /// Factor C, regularised along `kernel` (may be empty), reusing the kept
     /// factor or symbolic analysis when the matrix or its pattern is the same.
     pub fn cholesky(&self, c: &Csr, kernel: &[Vec<f64>]) -> Result<Cholesky, FactorError> {
-        self.factor(c, kernel, None)
+        self.factor(c, kernel, None, None)
     }
 
     /// [`Workspace::cholesky`] with the DOFs `border` (distinct, in range)
@@ -257,7 +260,21 @@ impl Workspace {
         kernel: &[Vec<f64>],
         border: &[usize],
     ) -> Result<Cholesky, FactorError> {
-        self.factor(c, kernel, Some(border))
+        self.factor(c, kernel, Some(border), None)
+    }
+
+    /// [`Workspace::cholesky_bordered`] on the border of rows `rb`: the
+    /// factor is of TᵀKT with its rotation T, solves and
+    /// [`Cholesky::border_inverse`] map back, so the result is used as the
+    /// factor of K (docs/methods.md §7, "Rotated rows").
+    pub fn cholesky_rows(
+        &self,
+        c: &Csr,
+        kernel: &[Vec<f64>],
+        rb: &RowBorder,
+    ) -> Result<Cholesky, FactorError> {
+        let rot = (!rb.rotation.is_empty()).then_some(&rb.rotation);
+        self.factor(c, kernel, Some(&rb.dofs), rot)
     }
 
     fn factor(
@@ -265,6 +282,7 @@ impl Workspace {
         c: &Csr,
         kernel: &[Vec<f64>],
         border: Option<&[usize]>,
+        rot: Option<&Arc<Rotation>>,
     ) -> Result<Cholesky, FactorError> {
         let t0 = std::time::Instant::now();
         let fixing = fixing_dofs(kernel, c.nrows);
@@ -277,7 +295,18 @@ impl Workspace {
             .iter()
             .map(|&i| (i, if diag[i] > 0.0 { diag[i] } else { scale }))
             .collect();
-        let (sym, vals) = lower_csc(c, &shift);
+        let (sym, vals) = match rot {
+            None => lower_csc(c, &shift),
+            Some(r) => {
+                let mut extra = vec![0.0; c.nrows];
+                for &(i, v) in &shift {
+                    extra[i] += v;
+                }
+                let (cp, ri, vals) = r.lower_csc(c, &extra);
+                let n = c.nrows;
+                (SymbolicSparseColMat::new_checked(n, n, cp, None, ri), vals)
+            }
+        };
         // A bordered analysis is another ordering of the same pattern: keyed apart.
         let hp = match border {
             None => pattern_hash(&sym),
@@ -287,7 +316,11 @@ impl Workspace {
                     .chain(b.iter().map(|&i| i as u64)),
             ),
         };
-        let hv = hash_words(vals.iter().map(|v| v.to_bits()));
+        let hv = hash_words(
+            vals.iter()
+                .map(|v| v.to_bits())
+                .chain(rot.into_iter().flat_map(|r| r.words())),
+        );
         let hit = self
             .last
             .borrow()
@@ -337,6 +370,7 @@ impl Workspace {
             symbolic,
             values,
             border,
+            rot: rot.cloned(),
         });
         log::debug!(
             "Cholesky: n = {}, nnz(lower C) = {}, nnz(L) = {}, prepare {t_prep:.3} s, symbolic {t_sym:.3} s{}, numeric {:.3} s",
@@ -374,8 +408,13 @@ impl Cholesky {
         if k == 0 {
             return;
         }
-        let m = MatMut::from_column_major_slice_mut(x, self.n, k);
         let f = &self.llt;
+        if let Some(r) = &f.rot {
+            for col in x.chunks_mut(self.n) {
+                r.apply_tt(col);
+            }
+        }
+        let m = MatMut::from_column_major_slice_mut(x, self.n, k);
         let par = faer::get_global_parallelism();
         let mut mem = MemBuffer::new(f.symbolic.solve_in_place_scratch::<f64>(k, par));
         LltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
@@ -384,6 +423,11 @@ impl Cholesky {
             par,
             MemStack::new(&mut mem),
         );
+        if let Some(r) = &f.rot {
+            for col in x.chunks_mut(self.n) {
+                r.apply_t(col);
+            }
+        }
     }
 
     pub fn solve(&self, b: &[f64]) -> Vec<f64> {
@@ -396,14 +440,31 @@ impl Cholesky {
     /// border DOFs of a bordered factor: with K's rows and columns ordered
     /// interior then border, [K⁻¹]_bb is the inverse of the Schur complement
     /// L_bb L_bbᵀ, so H = WᵀW with W = L_bb⁻¹ B_bᵀ. None without a border or
-    /// when B touches another DOF.
+    /// when B touches another DOF. On a rotated factor B is taken to BT,
+    /// whose rotated rows touch their border unknown only (entries below
+    /// 1e-12 of the row's largest, rounding of the reflection, are dropped).
     pub fn border_inverse(&self, b: &Csr) -> Option<Mat<f64>> {
         let border = self.llt.border.as_ref()?;
         let nb = border.nb;
         let mut w = Mat::<f64>::zeros(nb, b.nrows);
         for r in 0..b.nrows {
             let (cols, v) = b.row(r);
-            for (&k, &a) in cols.iter().zip(v) {
+            let bt;
+            let entries: Vec<(usize, f64)> = match &self.llt.rot {
+                Some(rot) => {
+                    bt = rot.row_of_bt(cols, v);
+                    let big = bt.iter().fold(0.0f64, |m, e| m.max(e.1.abs()));
+                    bt.iter()
+                        .copied()
+                        .filter(|&(k, a)| {
+                            a.abs() > 1e-12 * big
+                                || border.pos.get(k).is_some_and(|&p| p != usize::MAX)
+                        })
+                        .collect()
+                }
+                None => cols.iter().copied().zip(v.iter().copied()).collect(),
+            };
+            for (k, a) in entries {
                 let p = *border.pos.get(k)?;
                 if p == usize::MAX {
                     return None;

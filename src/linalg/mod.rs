@@ -9,4 +9,5 @@ pub mod cholesky;
 pub mod dense;
 pub mod kernel;
 pub mod power;
+pub mod rotation;
 pub mod sparse;

@@ -326,8 +326,15 @@ where
     fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
         let (a, b) = (&mut self.0, &mut self.1);
         let (ra, rb) = std::thread::scope(|s| {
-            let hb = s.spawn(|| b.on_step(step));
+            let hb = s.spawn(|| {
+                let t = std::time::Instant::now();
+                let r = b.on_step(step);
+                log::debug!("output (second thread) {:.3} s", t.elapsed().as_secs_f64());
+                r
+            });
+            let t = std::time::Instant::now();
             let ra = a.on_step(step);
+            log::debug!("output (first thread) {:.3} s", t.elapsed().as_secs_f64());
             let rb = match hb.join() {
                 Ok(r) => r,
                 Err(panic) => std::panic::resume_unwind(panic),

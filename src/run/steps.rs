@@ -252,6 +252,11 @@ impl<'a> Run<'a> {
             problem_s.file = file.at_step(s);
             let (mut output, forces) =
                 post::step_output_with_forces(model_ref, &problem_s, &res, file.step_time(s));
+            log::debug!(
+                "step {}: post-processing {:.3} s",
+                s + 1,
+                t_w.elapsed().as_secs_f64()
+            );
             output.info.method = method.to_string();
             output.info.preconditioner = preconditioner_label(method, self.opts);
             output.info.time_assemble = t_assemble;
@@ -282,7 +287,14 @@ impl<'a> Run<'a> {
             };
             let mut names = vec![];
             for ob in observers.iter_mut() {
+                let t = Instant::now();
                 names.extend(ob.on_step(&step).map_err(|e| unstage(&tx, e))?);
+                log::debug!(
+                    "step {}: output {:?} {:.3} s",
+                    s + 1,
+                    names.last(),
+                    t.elapsed().as_secs_f64()
+                );
             }
             // A load step is one commit: its VTU pair, the time series and
             // the checkpoint grown by this step. The last step's files wait

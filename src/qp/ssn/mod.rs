@@ -32,6 +32,7 @@ use crate::linalg::augmented::AugPattern;
 use crate::linalg::cholesky::{Cholesky, Workspace};
 /// The checked basis of ker C (re-exported for `qp::primal::cgc`).
 pub(crate) use crate::linalg::kernel::orthonormal_kernel;
+use crate::linalg::rotation::RowBorder;
 use crate::linalg::sparse::{dot, norm_inf};
 use crate::qp::executor::{Iterative, Step};
 use crate::qp::settings::SsnPath;
@@ -153,19 +154,23 @@ pub(crate) fn solve_traced(
 }
 
 /// The border of a bordered factor (docs/methods.md §7): the unknowns A
-/// touches, if few enough that eliminating them last costs little, i.e. at
-/// most [`BORDER_RATIO`]·√n of them (a 2D mesh's largest separators have
-/// O(√n) unknowns) and at most [`BORDER_MAX`] (a dense |border|² block).
-/// Counts only, so the choice is the same on every run.
-pub(crate) fn small_border(qp: &QpProblem) -> Option<Vec<usize>> {
+/// touches, a row whose unknowns no other row touches rotated onto one
+/// ([`RowBorder`]), if few enough that eliminating them last costs little,
+/// i.e. at most [`BORDER_RATIO`]·√n of them (a 2D mesh's largest separators
+/// have O(√n) unknowns) and at most [`BORDER_MAX`] (a dense |border|² block).
+/// Counts and values only, so the choice is the same on every run.
+pub(crate) fn small_border(qp: &QpProblem) -> Option<RowBorder> {
     if qp.m() == 0 {
         return None;
     }
-    let mut cols: Vec<usize> = (0..qp.m()).flat_map(|i| qp.a.row(i).0.to_vec()).collect();
-    cols.sort_unstable();
-    cols.dedup();
-    let nb = cols.len() as f64;
-    (nb <= BORDER_RATIO * (qp.n() as f64).sqrt() && cols.len() <= BORDER_MAX).then_some(cols)
+    let rb = RowBorder::new(&qp.c, &qp.kernel, &qp.a);
+    let nb = rb.len() as f64;
+    log::debug!(
+        "ssn: border of {} unknowns ({} rows rotated onto one)",
+        rb.len(),
+        rb.rotated()
+    );
+    (nb <= BORDER_RATIO * (qp.n() as f64).sqrt() && rb.len() <= BORDER_MAX).then_some(rb)
 }
 
 /// The largest KKT residual of (x, λ) as the driver computes it
@@ -183,7 +188,7 @@ struct Ssn<'a> {
     /// Factor of C (+ springs) for the Schur-complement path, made on demand.
     fac: Option<Cholesky>,
     /// The unknowns that factor eliminates last, when it is bordered.
-    border: Option<Vec<usize>>,
+    border: Option<RowBorder>,
     /// The augmented path: pattern of C + AᵀA, ρ_j per row, the factor of K_J.
     aug: Option<AugPattern>,
     rho: Vec<f64>,
@@ -312,7 +317,7 @@ impl<'a> Ssn<'a> {
             let t = Instant::now();
             let (c, kernel) = (&self.qp.c, &self.qp.kernel);
             let fac = match &self.border {
-                Some(b) => self.ws.cholesky_bordered(c, kernel, b)?,
+                Some(b) => self.ws.cholesky_rows(c, kernel, b)?,
                 None => self.ws.cholesky(c, kernel)?,
             };
             // A bordered factor gives all of A K⁻¹Aᵀ at dense cost.

@@ -344,6 +344,20 @@ fn floating_block_in_few_iterations() {
 /// top row, n = (0, 1); the upper block's bottom is curved (gap
 /// 0.02(s − 0.45)²), the load presses it down off-centre.
 pub(crate) fn contrast_blocks(nx_lo: usize, nx_up: usize, ny: usize, contrast: f64) -> QpProblem {
+    contrast_blocks_with(nx_lo, nx_up, ny, contrast, None)
+}
+
+/// [`contrast_blocks`], with `tilt = Some(θ)` (nx_lo = nx_up): node-to-node
+/// rows instead, bottom node of the upper block against the top node below
+/// it, along n = (sin θ, cos θ): each row touches four unknowns no other row
+/// touches (docs/methods.md §7, "Rotated rows").
+fn contrast_blocks_with(
+    nx_lo: usize,
+    nx_up: usize,
+    ny: usize,
+    contrast: f64,
+    tilt: Option<f64>,
+) -> QpProblem {
     let h = 0.5 / (ny - 1) as f64;
     // global node numbers and coordinates
     let lo = |i: usize, j: usize| j * nx_lo + i;
@@ -428,13 +442,22 @@ pub(crate) fn contrast_blocks(nx_lo: usize, nx_up: usize, ny: usize, contrast: f
     let mut g = vec![];
     for i in 0..nx_up {
         let s = i as f64 / (nx_up - 1) as f64;
-        let t = s * (nx_lo - 1) as f64;
-        let k = (t.floor() as usize).min(nx_lo - 2);
-        let w = t - k as f64;
         let r = g.len();
-        at.push((r, map[2 * lo(k, ny - 1) + 1], 1.0 - w));
-        at.push((r, map[2 * lo(k + 1, ny - 1) + 1], w));
-        at.push((r, map[2 * up(i, 0) + 1], -1.0));
+        if let Some(th) = tilt {
+            assert_eq!(nx_lo, nx_up);
+            let (sn, cs) = th.sin_cos();
+            at.push((r, map[2 * lo(i, ny - 1)], sn));
+            at.push((r, map[2 * lo(i, ny - 1) + 1], cs));
+            at.push((r, map[2 * up(i, 0)], -sn));
+            at.push((r, map[2 * up(i, 0) + 1], -cs));
+        } else {
+            let t = s * (nx_lo - 1) as f64;
+            let k = (t.floor() as usize).min(nx_lo - 2);
+            let w = t - k as f64;
+            at.push((r, map[2 * lo(k, ny - 1) + 1], 1.0 - w));
+            at.push((r, map[2 * lo(k + 1, ny - 1) + 1], w));
+            at.push((r, map[2 * up(i, 0) + 1], -1.0));
+        }
         g.push(0.02 * (s - 0.45) * (s - 0.45));
     }
     let a = Csr::from_triplets(g.len(), n, &at);
@@ -675,4 +698,49 @@ fn bordered_factor_needs_no_column_solves() {
     qp.a = Csr::from_triplets(1, n, &all);
     qp.g = vec![1.0];
     assert!(small_border(&qp).is_none());
+}
+
+/// Rotated rows (docs/methods.md §7): tilted node-to-node rows touch four
+/// unknowns each, a floating block 10⁴ and 10⁸ times stiffer than its
+/// foundation. The border is one unknown per row (the rows holding a fixing
+/// unknown keep theirs), the bordered path needs no column solve, and its
+/// answer is certified and agrees with the augmented path and `asm` to the
+/// rounding floor of [`stiffness_contrast_is_certified`].
+#[test]
+fn rotated_rows_under_stiffness_contrast() {
+    for contrast in [1e4, 1e8] {
+        let qp = contrast_blocks_with(14, 14, 6, contrast, Some(0.3));
+        let m = qp.m();
+        let rb = small_border(&qp).expect("a small border");
+        // Two kernel vectors: two fixing unknowns, on two rows at most.
+        assert!(rb.rotated() >= m - 2, "{} of {m} rotated", rb.rotated());
+        assert!(rb.len() <= m + 6, "border {} for {m} rows", rb.len());
+        let o = SolveOptions::default();
+        let (b, trace) =
+            solve_traced(&qp, &mut Context::new(&o, &Workspace::new()), Path::Auto).unwrap();
+        assert!(b.status.converged(), "{contrast:e}: {:?}", b.status);
+        nontrivial(&b);
+        assert!(trace.iter().all(|aug| !aug), "the Schur path: {trace:?}");
+        // K⁻¹d and the KKT solve; at 10⁸ two refinements (as unrotated).
+        let most = if contrast < 1e5 { 2 } else { 4 };
+        assert!(
+            b.iterations == 1 && b.inner_iterations <= most,
+            "{contrast:e}: {} KKT solves, {} sparse solves",
+            b.iterations,
+            b.inner_iterations
+        );
+        let cert = certificate(&qp, &b.x, &b.lambda);
+        assert!(cert <= CERT_TARGET, "{contrast:e}: certificate {cert:e}");
+        let aug = solve_with(&qp, &o, Path::Augmented).unwrap();
+        let asm = run_direct(crate::qp::active_set::solve, &qp, &o).unwrap();
+        let agree = 1e-8f64.max(1e2 * f64::EPSILON * contrast);
+        for (name, r) in [("augmented", &aug), ("asm", &asm)] {
+            assert_eq!(b.active, r.active, "{contrast:e} vs {name}");
+            let (dx, dl) = (max_rel_diff(&b.x, &r.x), max_rel_diff(&b.lambda, &r.lambda));
+            assert!(
+                dx <= agree && dl <= agree,
+                "{contrast:e} vs {name}: x {dx:e}, λ {dl:e}"
+            );
+        }
+    }
 }
