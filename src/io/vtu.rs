@@ -6,7 +6,7 @@
 //! zlib-compressed (`vtkZLibDataCompressor`, level 6) as well. Floating-point
 //! arrays are Float64, so values read back bit-exactly.
 //!
-//! Uncompressed files are streamed ([`stream_piece`]): each array is
+//! Uncompressed files are streamed (`stream_piece`): each array is
 //! base64-encoded straight into the file, with the bytes vtkio 0.7 writes
 //! (a test holds the two to that), without vtkio's in-memory XML document,
 //! which at 2 M DOFs cost seconds and several copies of a 300 MB buffer.
