@@ -257,10 +257,19 @@ impl Rotation {
         let mut acc = vec![0.0; n];
         let mut mark = vec![false; n];
         let mut touched: Vec<usize> = vec![];
+        // Rows in a group or with a column in one: the group's unknowns and
+        // their neighbours (C is symmetric).
+        let mut near = vec![false; n];
+        for &k in &self.dof {
+            near[k] = true;
+            for &i in c.row(k).0 {
+                near[i] = true;
+            }
+        }
         col_ptr.push(0);
         for j in 0..n {
             let (cols, v) = c.row(j);
-            let plain = self.group(j).is_none() && cols.iter().all(|&k| self.group(k).is_none());
+            let plain = !near[j];
             if plain {
                 let mut has_diag = false;
                 for (&i, &a) in cols.iter().zip(v) {

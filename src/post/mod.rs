@@ -57,21 +57,36 @@ pub fn step_output_with_forces(
     let t = &model.topo;
     let u = model.displacements(&res.x);
     let f = &problem.file;
-    let mut stress = Vec::with_capacity(t.triangles.len());
-    for (e, tri) in t.triangles.iter().enumerate() {
-        let m = &f.materials[&t.material_names[t.tri_material[e] as usize]];
-        let d = element::d_matrix(m, f.model.plane);
-        let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
-        let ue = [
-            u[tri[0]][0],
-            u[tri[0]][1],
-            u[tri[1]][0],
-            u[tri[1]][1],
-            u[tri[2]][0],
-            u[tri[2]][1],
-        ];
-        stress.push(element::stress(&p, &d, m, f.model.plane, &ue));
-    }
+    // Material and D once per material; elements in parallel (each its own
+    // result, collected in order: the same bits on any number of threads).
+    let mats: Vec<(&crate::problem::Material, [[f64; 3]; 3])> = t
+        .material_names
+        .iter()
+        .map(|name| {
+            let m = &f.materials[name];
+            (m, element::d_matrix(m, f.model.plane))
+        })
+        .collect();
+    let stress: Vec<_> = {
+        use rayon::prelude::*;
+        t.triangles
+            .par_iter()
+            .zip(t.tri_material.par_iter())
+            .map(|(tri, &k)| {
+                let (m, d) = &mats[k as usize];
+                let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
+                let ue = [
+                    u[tri[0]][0],
+                    u[tri[0]][1],
+                    u[tri[1]][0],
+                    u[tri[1]][1],
+                    u[tri[2]][0],
+                    u[tri[2]][1],
+                ];
+                element::stress(&p, d, m, f.model.plane, &ue)
+            })
+            .collect()
+    };
     let nrow = t.contact.len();
     let mut multipliers = vec![0.0; nrow];
     let mut active = vec![0u8; nrow];
@@ -112,8 +127,14 @@ pub fn step_output_with_forces(
     let step = StepOutput {
         time,
         reaction: std::mem::take(&mut forces.point_reaction),
-        von_mises: stress.iter().map(element::von_mises).collect(),
-        principal: stress.iter().map(element::principal).collect(),
+        von_mises: {
+            use rayon::prelude::*;
+            stress.par_iter().map(element::von_mises).collect()
+        },
+        principal: {
+            use rayon::prelude::*;
+            stress.par_iter().map(element::principal).collect()
+        },
         stress,
         displacement: u,
         multipliers,

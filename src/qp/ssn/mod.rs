@@ -219,6 +219,8 @@ struct Ssn<'a> {
     x0: Vec<f64>,
     /// Cached columns hⱼ = A K⁻¹aⱼ (length m) of the dual Hessian.
     h: Vec<Option<Vec<f64>>>,
+    /// The last dense Schur solve (`schur::DenseMemo`).
+    dense_memo: std::cell::RefCell<Option<schur::DenseMemo>>,
     tol: f64,
     /// The stiffness scale c.
     cpar: f64,
@@ -298,6 +300,7 @@ impl<'a> Ssn<'a> {
             x: vec![0.0; qp.n()],
             x0: vec![],
             h: vec![None; m],
+            dense_memo: Default::default(),
             tol,
             cpar,
             in_j: qp.g.iter().map(|&g| g <= 0.0).collect(),
@@ -321,7 +324,15 @@ impl<'a> Ssn<'a> {
                 None => self.ws.cholesky(c, kernel)?,
             };
             // A bordered factor gives all of A K⁻¹Aᵀ at dense cost.
-            if let Some(h) = fac.border_inverse(&self.qp.a) {
+            let tb = Instant::now();
+            let h = fac.border_inverse(&self.qp.a);
+            if h.is_some() {
+                log::debug!(
+                    "ssn: H = A K⁻¹Aᵀ from the border in {:.3} s",
+                    tb.elapsed().as_secs_f64()
+                );
+            }
+            if let Some(h) = h {
                 for (j, hj) in self.h.iter_mut().enumerate() {
                     *hj = Some(h.col(j).iter().copied().collect());
                 }
@@ -347,6 +358,7 @@ impl<'a> Ssn<'a> {
             return;
         }
         let k = self.r.len();
+        let t0 = Instant::now();
         let ax0: Vec<f64> = (0..m).map(|i| qp.a.row_dot(i, &self.x0)).collect();
         let mut in_j = self.in_j.clone();
         let mut seen: HashSet<Vec<bool>> = HashSet::new();
@@ -390,8 +402,9 @@ impl<'a> Ssn<'a> {
             in_j = next;
         }
         log::debug!(
-            "ssn: dense start: {steps} steps in the dual space, |J| = {}",
-            in_j.iter().filter(|b| **b).count()
+            "ssn: dense start: {steps} steps in the dual space, |J| = {}, {:.3} s",
+            in_j.iter().filter(|b| **b).count(),
+            t0.elapsed().as_secs_f64()
         );
         self.in_j = in_j;
     }

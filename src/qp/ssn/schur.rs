@@ -14,6 +14,18 @@ use crate::linalg::dense::SpdFactor;
 use crate::linalg::sparse::dot;
 use faer::Mat;
 
+/// The last system [`Ssn::schur_dense`] solved and its answer (compared
+/// by value: the same inputs give the same bits).
+#[derive(Default)]
+pub(super) struct DenseMemo {
+    jset: Vec<usize>,
+    ax0: Vec<f64>,
+    e: Vec<f64>,
+    gj: Vec<f64>,
+    w: Vec<f64>,
+    alpha: Vec<f64>,
+}
+
 impl Ssn<'_> {
     /// Compute the missing columns hⱼ, j ∈ `js`, BLOCK right-hand sides at a time.
     pub(super) fn columns(&mut self, js: &[usize]) {
@@ -49,6 +61,34 @@ impl Ssn<'_> {
     /// and the coarse α (module doc), given `ax0` = A_J K⁻¹d and e = Rᵀd.
     /// None if S_J or the coarse matrix is singular.
     pub(super) fn schur_dense(
+        &self,
+        jset: &[usize],
+        ax0: &[f64],
+        e: &[f64],
+        g: &[f64],
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        // The Newton loop's first KKT solve repeats the dual-space steps'
+        // last system (same J, same right-hand sides): answered from memory.
+        let gj: Vec<f64> = jset.iter().map(|&j| g[j]).collect();
+        let key = |m: &DenseMemo| m.jset == jset && m.ax0 == ax0 && m.e == e && m.gj == gj;
+        if let Some(m) = self.dense_memo.borrow().as_ref().filter(|m| key(m)) {
+            return Some((m.w.clone(), m.alpha.clone()));
+        }
+        let out = self.schur_dense_new(jset, ax0, e, g);
+        if let Some((w, alpha)) = &out {
+            self.dense_memo.replace(Some(DenseMemo {
+                jset: jset.to_vec(),
+                ax0: ax0.to_vec(),
+                e: e.to_vec(),
+                gj,
+                w: w.clone(),
+                alpha: alpha.clone(),
+            }));
+        }
+        out
+    }
+
+    fn schur_dense_new(
         &self,
         jset: &[usize],
         ax0: &[f64],
