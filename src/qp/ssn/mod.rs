@@ -166,7 +166,7 @@ pub(crate) fn small_border(qp: &QpProblem) -> Option<RowBorder> {
     let rb = RowBorder::new(&qp.c, &qp.kernel, &qp.a);
     let nb = rb.len() as f64;
     log::debug!(
-        "ssn: border of {} unknowns ({} rows rotated onto one)",
+        "ssn: border of {} unknowns ({} rows rotated, one unknown per coupled part)",
         rb.len(),
         rb.rotated()
     );
