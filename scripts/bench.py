@@ -508,7 +508,8 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--long", type=float, default=60.0, help="runs longer than this are not repeated")
     ap.add_argument("--budget", type=float, default=600.0, help="skip a run predicted to take longer [s]")
-    ap.add_argument("--peers", default="clarabel,osqp")
+    ap.add_argument("--peers", default="clarabel,osqp",
+                    help="peer solvers on the exported QP, comma-separated; 'none' (or '') for none")
     ap.add_argument("--no-fenicsx", action="store_true")
     ap.add_argument("--work", default=str(ROOT / "bench"))
     ap.add_argument("--out", default=str(ROOT / "BENCHMARKS.md"))
@@ -552,7 +553,7 @@ def main() -> int:
     if args.methods:
         want = [m.strip() for m in args.methods.split(",")]
         vs = [v for v in vs if vname(v) in want or v[0] in want]
-    peers = [p for p in args.peers.split(",") if p]
+    peers = [p for p in args.peers.split(",") if p and p != "none"]
     res = {"machine": machine(), "families": {}, "args": vars(args), "cmdline": cmdline}
     raw = Path(args.out).with_suffix(".json")
     res["raw"] = raw.name
