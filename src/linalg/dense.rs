@@ -120,6 +120,15 @@ impl SpdFactor {
             .solve_upper_triangular_in_place(ColMut::from_slice_mut(b));
     }
 
+    /// B ← (LLᵀ)⁻¹ B for every column of B at once (one pass over L).
+    pub fn solve_mat_in_place(&self, b: faer::MatMut<'_, f64>) {
+        let mut b = b;
+        self.l().solve_lower_triangular_in_place(b.as_mut());
+        self.l()
+            .transpose()
+            .solve_upper_triangular_in_place(b.as_mut());
+    }
+
     /// b ← (LLᵀ)⁻¹ b
     pub fn solve_in_place(&self, b: &mut [f64]) {
         self.forward_in_place(b);

@@ -30,6 +30,7 @@ mod tests;
 
 use crate::linalg::augmented::AugPattern;
 use crate::linalg::cholesky::{Cholesky, Workspace};
+use crate::linalg::dense::SpdFactor;
 /// The checked basis of ker C (re-exported for `qp::primal::cgc`).
 pub(crate) use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::rotation::RowBorder;
@@ -215,12 +216,17 @@ struct Ssn<'a> {
     ar: Vec<Vec<f64>>,
     /// e = Rᵀd.
     e: Vec<f64>,
-    /// K⁻¹d.
-    x0: Vec<f64>,
+    /// A K⁻¹d, every row.
+    ax0: Vec<f64>,
+    /// The forward half of K⁻¹d on a bordered factor.
+    fwd_d: Option<crate::linalg::cholesky::Forward>,
     /// Cached columns hⱼ = A K⁻¹aⱼ (length m) of the dual Hessian.
     h: Vec<Option<Vec<f64>>>,
     /// The last dense Schur solve (`schur::DenseMemo`).
     dense_memo: std::cell::RefCell<Option<schur::DenseMemo>>,
+    /// The factor of S over every row, once a working set held them all
+    /// (`schur::SjSolver`).
+    s_full: std::cell::RefCell<Option<Rc<SpdFactor>>>,
     tol: f64,
     /// The stiffness scale c.
     cpar: f64,
@@ -236,6 +242,27 @@ struct Ssn<'a> {
     trace: Vec<bool>,
     /// Whether the last solve of the current J used the augmented path.
     last_aug: bool,
+}
+
+/// The primal–dual active-set rule with each side's zero in its own
+/// units: a row of J stays unless λᵢ < −τ_λ, τ_λ = tol·‖λ‖∞; a row outside
+/// J enters when (Ax − g)ᵢ > τ_g, τ_g = tol·max(‖Ax‖∞, ‖g‖∞)
+/// (docs/methods.md §7). One threshold on F = λ + c(Ax − g), c the mean
+/// stiffness, mixed forces and lengths through c: under a stiffness
+/// contrast of 1e7 the loaded rows of the soft body had λ below it, left J,
+/// penetrated, came back, and the loop never settled.
+fn next_set(in_j: &[bool], lam: &[f64], ax: &[f64], g: &[f64], tol: f64) -> Vec<bool> {
+    let tau_l = tol * norm_inf(lam);
+    let tau_g = tol * norm_inf(ax).max(norm_inf(g));
+    (0..in_j.len())
+        .map(|i| {
+            if in_j[i] {
+                lam[i] >= -tau_l
+            } else {
+                ax[i] - g[i] > tau_g
+            }
+        })
+        .collect()
 }
 
 impl<'a> Ssn<'a> {
@@ -298,9 +325,11 @@ impl<'a> Ssn<'a> {
             ar,
             e,
             x: vec![0.0; qp.n()],
-            x0: vec![],
+            ax0: vec![],
+            fwd_d: None,
             h: vec![None; m],
             dense_memo: Default::default(),
+            s_full: Default::default(),
             tol,
             cpar,
             in_j: qp.g.iter().map(|&g| g <= 0.0).collect(),
@@ -314,7 +343,7 @@ impl<'a> Ssn<'a> {
         }
     }
 
-    /// Factor C (+ springs) and x0 = K⁻¹d for the Schur-complement path.
+    /// Factor C (+ springs) and A K⁻¹d for the Schur-complement path.
     fn ensure_dense(&mut self) -> Result<(), QpError> {
         if self.fac.is_none() {
             let t = Instant::now();
@@ -338,8 +367,24 @@ impl<'a> Ssn<'a> {
                 }
             }
             self.t_factor += t.elapsed().as_secs_f64();
-            self.x0 = fac.solve(&self.qp.d);
-            self.solves += 1;
+            // On a bordered factor A K⁻¹d needs only the forward half of the
+            // solve; the KKT answer finishes it (`Cholesky::forward`).
+            let half = fac
+                .forward(&self.qp.d)
+                .and_then(|f| fac.border_product(&f, &self.qp.a).map(|ax| (f, ax)));
+            match half {
+                Some((f, ax)) => {
+                    self.ax0 = ax;
+                    self.fwd_d = Some(f);
+                }
+                None => {
+                    let x0 = fac.solve(&self.qp.d);
+                    self.solves += 1;
+                    self.ax0 = (0..self.qp.m())
+                        .map(|i| self.qp.a.row_dot(i, &x0))
+                        .collect();
+                }
+            }
             self.fac = Some(fac);
         }
         Ok(())
@@ -359,7 +404,7 @@ impl<'a> Ssn<'a> {
         }
         let k = self.r.len();
         let t0 = Instant::now();
-        let ax0: Vec<f64> = (0..m).map(|i| qp.a.row_dot(i, &self.x0)).collect();
+        let ax0 = self.ax0.clone();
         let mut in_j = self.in_j.clone();
         let mut seen: HashSet<Vec<bool>> = HashSet::new();
         let mut steps = 0;
@@ -367,7 +412,7 @@ impl<'a> Ssn<'a> {
             steps += 1;
             let jset: Vec<usize> = (0..m).filter(|&i| in_j[i]).collect();
             let ax0j: Vec<f64> = jset.iter().map(|&j| ax0[j]).collect();
-            let Some((w, alpha)) = self.schur_dense(&jset, &ax0j, &self.e, &qp.g) else {
+            let Some((w, alpha)) = self.schur_dense(&jset, &ax0j, &self.e, &qp.g, false) else {
                 // J does not hold the floating bodies (the glued start of
                 // rollers.toml: one row under each roller, which leaves its
                 // rotation free): restart from every row, which does when
@@ -390,12 +435,7 @@ impl<'a> Ssn<'a> {
                     ax0[i] - coupled + rigid
                 })
                 .collect();
-            let c = self.cpar;
-            let scale = norm_inf(&lam) + c * norm_inf(&ax).max(norm_inf(&qp.g));
-            let tau = self.tol * if scale > 0.0 { scale } else { 1.0 };
-            let next: Vec<bool> = (0..m)
-                .map(|i| lam[i] + c * (ax[i] - qp.g[i]) > tau)
-                .collect();
+            let next = next_set(&in_j, &lam, &ax, &qp.g, self.tol);
             if next == in_j {
                 break;
             }
@@ -521,22 +561,25 @@ impl<'a> Ssn<'a> {
         }
     }
 
-    /// The complementarity function F = λ + c(Ax − g), the threshold τ and
-    /// the relative residual of the complementarity equation.
-    fn predict(&self) -> (Vec<f64>, f64, f64) {
+    /// The next working set ([`next_set`]), the complementarity function
+    /// F = λ + c(Ax − g) (which orders the rows that change) and the
+    /// relative residual of the complementarity equation (reported only).
+    fn predict(&self) -> (Vec<bool>, Vec<f64>, f64) {
         let qp = self.qp;
         let m = qp.m();
         let c = self.cpar;
-        let s: Vec<f64> = (0..m).map(|i| qp.a.row_dot(i, &self.x) - qp.g[i]).collect();
+        let ax: Vec<f64> = (0..m).map(|i| qp.a.row_dot(i, &self.x)).collect();
+        let next = next_set(&self.in_j, &self.lam, &ax, &qp.g, self.tol);
         let scale = norm_inf(&self.lam) + c * norm_inf(&self.x).max(norm_inf(&qp.g));
         let scale = if scale > 0.0 { scale } else { 1.0 };
-        let tau = self.tol * scale;
-        let fval: Vec<f64> = (0..m).map(|i| self.lam[i] + c * s[i]).collect();
+        let fval: Vec<f64> = (0..m)
+            .map(|i| self.lam[i] + c * (ax[i] - qp.g[i]))
+            .collect();
         let residual = (0..m)
             .map(|i| (self.lam[i] - fval[i].max(0.0)).abs())
             .fold(0.0f64, f64::max)
             / scale;
-        (fval, tau, residual)
+        (next, fval, residual)
     }
 
     fn n_active(&self) -> usize {
@@ -606,8 +649,7 @@ impl Iterative for Ssn<'_> {
         self.lam = lam;
         self.x = x;
 
-        let (mut fval, mut tau, mut residual) = self.predict();
-        let mut new_j: Vec<bool> = fval.iter().map(|&f| f > tau).collect();
+        let (mut new_j, mut fval, mut residual) = self.predict();
         if new_j == self.in_j {
             // J has settled: certify (x, λ), refining the solve if needed.
             let cert = self.refine();
@@ -619,8 +661,7 @@ impl Iterative for Ssn<'_> {
                     self.record(residual),
                 );
             }
-            (fval, tau, residual) = self.predict();
-            new_j = fval.iter().map(|&f| f > tau).collect();
+            (new_j, fval, residual) = self.predict();
             if new_j == self.in_j {
                 return Step::Done(Status::Converged, self.record(residual));
             }
@@ -645,10 +686,10 @@ impl Iterative for Ssn<'_> {
             let mut drop = (0.0f64, usize::MAX);
             let mut add = (0.0f64, usize::MAX);
             for (i, (&f, &inj)) in fval.iter().zip(&self.in_j).enumerate() {
-                if inj && f <= tau && -f >= drop.0 {
+                if inj && !new_j[i] && -f >= drop.0 {
                     drop = (-f, i);
                 }
-                if !inj && f > tau && f > add.0 {
+                if !inj && new_j[i] && f > add.0 {
                     add = (f, i);
                 }
             }

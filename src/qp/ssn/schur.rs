@@ -13,6 +13,7 @@ use super::{Ssn, BLOCK};
 use crate::linalg::dense::SpdFactor;
 use crate::linalg::sparse::dot;
 use faer::Mat;
+use std::rc::Rc;
 
 /// The last system [`Ssn::schur_dense`] solved and its answer (compared
 /// by value: the same inputs give the same bits).
@@ -59,13 +60,17 @@ impl Ssn<'_> {
     /// The multipliers of the KKT system of J = `jset` in the dual space
     /// alone, from the cached columns: λ_J = S_J⁻¹(A_J K⁻¹d − g_J + G_Jᵀα)
     /// and the coarse α (module doc), given `ax0` = A_J K⁻¹d and e = Rᵀd.
-    /// None if S_J or the coarse matrix is singular.
+    /// None if S_J or the coarse matrix is singular. `exact`: S_J is
+    /// factored itself; else S_J⁻¹ may come from the factor of S over every
+    /// row when that is cheaper ([`SjSolver`]: the dual-space steps, which
+    /// only choose J; such answers are not memorised).
     pub(super) fn schur_dense(
         &self,
         jset: &[usize],
         ax0: &[f64],
         e: &[f64],
         g: &[f64],
+        exact: bool,
     ) -> Option<(Vec<f64>, Vec<f64>)> {
         // The Newton loop's first KKT solve repeats the dual-space steps'
         // last system (same J, same right-hand sides): answered from memory.
@@ -74,7 +79,7 @@ impl Ssn<'_> {
         if let Some(m) = self.dense_memo.borrow().as_ref().filter(|m| key(m)) {
             return Some((m.w.clone(), m.alpha.clone()));
         }
-        let out = self.schur_dense_new(jset, ax0, e, g);
+        let out = self.schur_dense_new(jset, ax0, e, g, exact);
         if let Some((w, alpha)) = &out {
             self.dense_memo.replace(Some(DenseMemo {
                 jset: jset.to_vec(),
@@ -88,15 +93,42 @@ impl Ssn<'_> {
         out
     }
 
+    /// [`Ssn::schur_dense`] without the memory.
     fn schur_dense_new(
         &self,
         jset: &[usize],
         ax0: &[f64],
         e: &[f64],
         g: &[f64],
+        exact: bool,
     ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let s = self.sj_solver(jset, exact)?;
+        match self.schur_dense_with(&s, jset, ax0, e, g) {
+            Ok(out) => out,
+            // The complement's residual was refused: factor S_J.
+            Err(Refused) => {
+                let s = self.sj_solver(jset, true)?;
+                self.schur_dense_with(&s, jset, ax0, e, g).ok().flatten()
+            }
+        }
+    }
+
+    /// The solver of S_J = A_J K⁻¹A_Jᵀ, by flop count (never by time).
+    fn sj_solver(&self, jset: &[usize], exact: bool) -> Option<SjSolver> {
+        let m = self.qp.m();
         let nj = jset.len();
         let k = self.r.len();
+        let full = self.s_full.borrow().clone();
+        if let (false, Some(full)) = (exact, full) {
+            let nn = m - nj;
+            let (mf, njf, nnf) = (m as f64, nj as f64, nn as f64);
+            // |N| + 1 + k solves with the full factor against one factor of S_J.
+            if 2.0 * (nnf + 1.0 + k as f64) * mf * mf + nnf.powi(3) < njf.powi(3) / 3.0 {
+                if let Some(c) = SjSolver::complement(full, jset, m) {
+                    return Some(c);
+                }
+            }
+        }
         let hs: Vec<&Vec<f64>> = jset
             .iter()
             .map(|&j| self.h[j].as_ref().expect("column cached"))
@@ -109,19 +141,44 @@ impl Ssn<'_> {
                 0.0
             }
         });
-        let s = SpdFactor::new(s.as_ref())?;
-        // w = S⁻¹(A_J K⁻¹ d − g_J)
-        let mut w: Vec<f64> = jset.iter().zip(ax0).map(|(&j, a)| a - g[j]).collect();
-        s.solve_in_place(&mut w);
+        let s = Rc::new(SpdFactor::new(s.as_ref())?);
+        if nj == m && m > 0 {
+            self.s_full.replace(Some(s.clone()));
+        }
+        Some(SjSolver::Direct(s))
+    }
+
+    fn schur_dense_with(
+        &self,
+        s: &SjSolver,
+        jset: &[usize],
+        ax0: &[f64],
+        e: &[f64],
+        g: &[f64],
+    ) -> Result<Option<DualAnswer>, Refused> {
+        let k = self.r.len();
+        let hs: Vec<&Vec<f64>> = jset
+            .iter()
+            .map(|&j| self.h[j].as_ref().expect("column cached"))
+            .collect();
+        // w = S⁻¹(A_J K⁻¹ d − g_J) and Y = S⁻¹ G_Jᵀ (columns 1..=k), one
+        // multi-column solve.
+        let nj = jset.len();
+        let mut rhs = Mat::from_fn(nj, 1 + k, |t, c| {
+            if c == 0 {
+                ax0[t] - g[jset[t]]
+            } else {
+                self.ar[jset[t]][c - 1]
+            }
+        });
+        s.solve_mat_in_place(rhs.as_mut(), &hs, jset)?;
+        let mut w: Vec<f64> = rhs.col(0).iter().copied().collect();
         let mut alpha = vec![0.0; k];
         if k > 0 {
-            // Y = S⁻¹ G_Jᵀ (columns l), F = G_J Y.
-            let mut y: Vec<Vec<f64>> = Vec::with_capacity(k);
-            for l in 0..k {
-                let mut col: Vec<f64> = jset.iter().map(|&j| self.ar[j][l]).collect();
-                s.solve_in_place(&mut col);
-                y.push(col);
-            }
+            // F = G_J Y.
+            let y: Vec<Vec<f64>> = (1..=k)
+                .map(|c| rhs.col(c).iter().copied().collect())
+                .collect();
             let mut f = vec![0.0; k * k];
             for a in 0..k {
                 for b in 0..k {
@@ -140,7 +197,9 @@ impl Ssn<'_> {
                     f[b * k + a] = v;
                 }
             }
-            let f = SpdFactor::from_row_major(&f, k)?;
+            let Some(f) = SpdFactor::from_row_major(&f, k) else {
+                return Ok(None);
+            };
             // F α = e − G_J w
             for (l, al) in alpha.iter_mut().enumerate() {
                 let gw: f64 = jset
@@ -157,7 +216,7 @@ impl Ssn<'_> {
                 }
             }
         }
-        Some((w, alpha))
+        Ok(Some((w, alpha)))
     }
 
     /// The KKT system `Cx + A_Jᵀλ_J = d, A_J x = g_J` by the Schur complement
@@ -174,13 +233,14 @@ impl Ssn<'_> {
             return None;
         }
         let qp = self.qp;
-        // K⁻¹d and e = Rᵀd: cached for the problem's own d.
+        // A K⁻¹d and e = Rᵀd: cached for the problem's own d.
         let own = std::ptr::eq(d.as_ptr(), qp.d.as_ptr());
-        let x0 = if own {
-            self.x0.clone()
+        let ax0_all: Vec<f64> = if own {
+            self.ax0.clone()
         } else {
             self.solves += 1;
-            self.fac.as_ref().expect("factored").solve(d)
+            let x0 = self.fac.as_ref().expect("factored").solve(d);
+            (0..qp.m()).map(|i| qp.a.row_dot(i, &x0)).collect()
         };
         let e: Vec<f64> = if own {
             self.e.clone()
@@ -190,24 +250,33 @@ impl Ssn<'_> {
         let jset: Vec<usize> = (0..qp.m()).filter(|&i| in_j[i]).collect();
         self.columns(&jset);
         // A_J K⁻¹ d
-        let ax0: Vec<f64> = jset.iter().map(|&j| qp.a.row_dot(j, &x0)).collect();
-        let (w, alpha) = self.schur_dense(&jset, &ax0, &e, g)?;
+        let ax0: Vec<f64> = jset.iter().map(|&j| ax0_all[j]).collect();
+        let (w, alpha) = self.schur_dense(&jset, &ax0, &e, g, true)?;
         let mut lam = vec![0.0; qp.m()];
         for (t, &j) in jset.iter().enumerate() {
             lam[j] = w[t];
         }
-        // x = K⁻¹(d − A_Jᵀλ_J) + Rα: one solve.
-        let mut x = d.to_vec();
-        for (t, &j) in jset.iter().enumerate() {
-            let (cols, v) = qp.a.row(j);
-            for (&c, &a) in cols.iter().zip(v) {
-                x[c] -= w[t] * a;
+        // x = K⁻¹(d − A_Jᵀλ_J) + Rα: one solve, or the second half of the
+        // one whose forward half gave A K⁻¹d.
+        let fac = self.fac.as_ref().expect("ensure_dense before kkt_solve");
+        let finished = match (&self.fwd_d, own) {
+            (Some(f), true) => fac.finish(f, &qp.a, &lam),
+            _ => None,
+        };
+        let mut x = match finished {
+            Some(x) => x,
+            None => {
+                let mut x = d.to_vec();
+                for (t, &j) in jset.iter().enumerate() {
+                    let (cols, v) = qp.a.row(j);
+                    for (&c, &a) in cols.iter().zip(v) {
+                        x[c] -= w[t] * a;
+                    }
+                }
+                fac.solve_in_place(&mut x);
+                x
             }
-        }
-        self.fac
-            .as_ref()
-            .expect("ensure_dense before kkt_solve")
-            .solve_in_place(&mut x);
+        };
         self.solves += 1;
         for (rl, &al) in self.r.iter().zip(&alpha) {
             for (xi, ri) in x.iter_mut().zip(rl) {
@@ -218,5 +287,205 @@ impl Ssn<'_> {
             return None;
         }
         Some((lam, x))
+    }
+}
+
+/// How S_J⁻¹ is applied: its own factor, or from the factor of S over all
+/// m rows with N = the rows outside J, by the identity for the inverse of a
+/// principal block, S_JJ⁻¹ = P_JJ − P_JN P_NN⁻¹ P_NJ with P = S⁻¹: |N| solves
+/// with the full factor and a |N|×|N| system instead of a new |J|³/3 factor
+/// (the dual-space steps of a conforming interface start from every row and
+/// drop a few per step).
+/// The largest relative residual (∞-norm, per column) accepted from the
+/// complement before S_J is factored itself; a direct factor leaves about
+/// 1e-14 on the three-body crust.
+const COMPLEMENT_RESIDUAL: f64 = 1e-10;
+
+/// λ_J and the coarse α of a dual-space solve.
+type DualAnswer = (Vec<f64>, Vec<f64>);
+
+/// The complement's answer failed its residual test.
+struct Refused;
+
+enum SjSolver {
+    Direct(Rc<SpdFactor>),
+    Complement {
+        full: Rc<SpdFactor>,
+        /// Position of each row in J (usize::MAX: in N).
+        pos: Vec<usize>,
+        nset: Vec<usize>,
+        /// P_·N, m×|N|.
+        p_n: Mat<f64>,
+        p_nn: SpdFactor,
+    },
+}
+
+impl SjSolver {
+    fn complement(full: Rc<SpdFactor>, jset: &[usize], m: usize) -> Option<SjSolver> {
+        let mut pos = vec![usize::MAX; m];
+        for (t, &j) in jset.iter().enumerate() {
+            pos[j] = t;
+        }
+        let nset: Vec<usize> = (0..m).filter(|&i| pos[i] == usize::MAX).collect();
+        let nn = nset.len();
+        let mut p_n = Mat::<f64>::zeros(m, nn);
+        for (c, &i) in nset.iter().enumerate() {
+            p_n[(i, c)] = 1.0;
+        }
+        full.solve_mat_in_place(p_n.as_mut());
+        let p_nn = Mat::from_fn(nn, nn, |a, b| {
+            if b <= a {
+                0.5 * (p_n[(nset[a], b)] + p_n[(nset[b], a)])
+            } else {
+                0.0
+            }
+        });
+        let p_nn = SpdFactor::new(p_nn.as_ref())?;
+        Some(SjSolver::Complement {
+            full,
+            pos,
+            nset,
+            p_n,
+            p_nn,
+        })
+    }
+
+    /// R ← S_J⁻¹ R (rows indexed by position in J). The complement's
+    /// answer is checked on S_J itself (`hs`: the columns hⱼ, j ∈ J): None
+    /// if its relative residual exceeds [`COMPLEMENT_RESIDUAL`] (the caller
+    /// then factors S_J), a test on values only.
+    fn solve_mat_in_place(
+        &self,
+        r: faer::MatMut<'_, f64>,
+        hs: &[&Vec<f64>],
+        jset: &[usize],
+    ) -> Result<(), Refused> {
+        let mut r = r;
+        match self {
+            SjSolver::Direct(f) => f.solve_mat_in_place(r),
+            SjSolver::Complement {
+                full,
+                pos,
+                nset,
+                p_n,
+                p_nn,
+            } => {
+                let (m, c) = (pos.len(), r.ncols());
+                let b = r.to_owned();
+                let mut u = Mat::<f64>::zeros(m, c);
+                for (i, p) in pos.iter().enumerate() {
+                    if *p != usize::MAX {
+                        for l in 0..c {
+                            u[(i, l)] = r[(*p, l)];
+                        }
+                    }
+                }
+                full.solve_mat_in_place(u.as_mut());
+                let mut v = Mat::from_fn(nset.len(), c, |a, l| u[(nset[a], l)]);
+                p_nn.solve_mat_in_place(v.as_mut());
+                let mut pv = Mat::<f64>::zeros(m, c);
+                faer::linalg::matmul::matmul(
+                    pv.as_mut(),
+                    faer::Accum::Replace,
+                    p_n.as_ref(),
+                    v.as_ref(),
+                    1.0,
+                    faer::Par::Seq,
+                );
+                for (i, p) in pos.iter().enumerate() {
+                    if *p != usize::MAX {
+                        for l in 0..c {
+                            r[(*p, l)] = u[(i, l)] - pv[(i, l)];
+                        }
+                    }
+                }
+                // res = b − S_J r, S_J = (H_JJ + H_JJᵀ)/2 read by columns.
+                let nj = jset.len();
+                let mut sr = Mat::<f64>::zeros(nj, c);
+                for (t, ht) in hs.iter().enumerate() {
+                    for l in 0..c {
+                        let rt = r[(t, l)];
+                        let mut acc = 0.0;
+                        for (a, &j) in jset.iter().enumerate() {
+                            let h = ht[j];
+                            sr[(a, l)] += 0.5 * h * rt;
+                            acc += h * r[(a, l)];
+                        }
+                        sr[(t, l)] += 0.5 * acc;
+                    }
+                }
+                for l in 0..c {
+                    let (mut res, mut big) = (0.0f64, 0.0f64);
+                    for a in 0..nj {
+                        res = res.max((b[(a, l)] - sr[(a, l)]).abs());
+                        big = big.max(b[(a, l)].abs());
+                    }
+                    if !(res <= COMPLEMENT_RESIDUAL * big) {
+                        log::debug!(
+                            "ssn: complement residual {res:.2e} of {big:.2e}: factoring S_J"
+                        );
+                        return Err(Refused);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// S = MᵀM + I (m×m, SPD) as columns, from a fixed sequence.
+    fn spd(m: usize) -> Vec<Vec<f64>> {
+        let mm: Vec<f64> = (0..m * m).map(|k| (0.37 * k as f64).sin()).collect();
+        (0..m)
+            .map(|j| {
+                (0..m)
+                    .map(|i| {
+                        let d: f64 = (0..m).map(|k| mm[k * m + i] * mm[k * m + j]).sum();
+                        d + if i == j { 1.0 } else { 0.0 }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The complement (the factor of S over every row, N = the rows left
+    /// out) solves S_J as its own factor does, and refuses an answer that
+    /// does not satisfy S_J (here: columns of another matrix).
+    #[test]
+    fn complement_solves_s_j() {
+        let m = 40;
+        let s = spd(m);
+        let full = Rc::new(SpdFactor::new(Mat::from_fn(m, m, |i, j| s[j][i]).as_ref()).unwrap());
+        let jset: Vec<usize> = (0..m).filter(|i| ![3, 17, 18, 30].contains(i)).collect();
+        let nj = jset.len();
+        let hs: Vec<&Vec<f64>> = jset.iter().map(|&j| &s[j]).collect();
+        let rhs = Mat::from_fn(nj, 2, |a, c| (1.3 * a as f64 + c as f64).cos());
+        let direct =
+            SpdFactor::new(Mat::from_fn(nj, nj, |a, b| s[jset[b]][jset[a]]).as_ref()).unwrap();
+        let mut want = rhs.clone();
+        direct.solve_mat_in_place(want.as_mut());
+        let comp = SjSolver::complement(full.clone(), &jset, m).unwrap();
+        let mut got = rhs.clone();
+        assert!(comp.solve_mat_in_place(got.as_mut(), &hs, &jset).is_ok());
+        for a in 0..nj {
+            for c in 0..2 {
+                assert!(
+                    (got[(a, c)] - want[(a, c)]).abs() <= 1e-11 * (1.0 + want[(a, c)].abs()),
+                    "{} vs {}",
+                    got[(a, c)],
+                    want[(a, c)]
+                );
+            }
+        }
+        let other = spd(m + 1);
+        let hs_other: Vec<&Vec<f64>> = jset.iter().map(|&j| &other[j]).collect();
+        let mut bad = rhs.clone();
+        assert!(comp
+            .solve_mat_in_place(bad.as_mut(), &hs_other, &jset)
+            .is_err());
     }
 }
