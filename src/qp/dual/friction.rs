@@ -10,12 +10,14 @@
 //! them. Coulomb is a sequence of such Tresca problems, s = μ_f·λ_n of the
 //! previous one, the first one glued (s = ∞), each warm-started from the
 //! last multipliers, until s is stationary (the outer loop of §9.1, as in
-//! `ssn`).
+//! `ssn`), under-relaxed when it stops contracting ([`CoulombRelaxation`]).
 
 use super::{row_scaling_of, BoundStep, BoxBounds, DualOp, Smalbe};
 use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::sparse::{norm_inf, Csr};
-use crate::qp::{Context, IterRecord, Output, QpError, QpProblem, SlipBound, Status};
+use crate::qp::{
+    Context, CoulombRelaxation, IterRecord, Output, QpError, QpProblem, SlipBound, Status,
+};
 use std::time::Instant;
 
 /// The Coulomb loop stops at a relative change of s ≤ COULOMB_TOL_FACTOR·tol:
@@ -79,6 +81,7 @@ pub(crate) fn solve_friction<S: BoundStep>(
     let (mut iterations, mut inner) = (0, 0);
     let mut log: Vec<IterRecord> = vec![];
     let mut outer = 0;
+    let mut relax = CoulombRelaxation::default();
     loop {
         outer += 1;
         let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
@@ -115,8 +118,9 @@ pub(crate) fn solve_friction<S: BoundStep>(
                     .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
                 let smax = norm_inf(&s_new).max(f64::MIN_POSITIVE);
                 log::debug!(
-                    "{name}: Coulomb update {outer}: change of s {:.3e}",
-                    change / smax
+                    "{name}: Coulomb update {outer}: change of s {:.3e}, ω = {}",
+                    change / smax,
+                    relax.omega()
                 );
                 if change <= COULOMB_TOL_FACTOR * ctx.settings.tol * smax {
                     true
@@ -127,7 +131,7 @@ pub(crate) fn solve_friction<S: BoundStep>(
                     ));
                     true
                 } else {
-                    s_bound = s_new;
+                    s_bound = relax.next(&s_bound, s_new, outer == 1);
                     lam0 = Some(mu_scaled);
                     false
                 }

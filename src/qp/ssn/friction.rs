@@ -3,10 +3,16 @@
 //! problem, and Coulomb as successive Tresca problems (§9.1, the report's
 //! outer loop).
 //!
-//! One Newton step predicts, with c = mean diag C and v = T x − t0,
-//! * the normal set N = {i : λ_nᵢ + c(Ax − g)ᵢ > 0};
-//! * the stick set S = {i : sᵢ > 0, |λ_tᵢ + c_t vᵢ| ≤ sᵢ}; every other row
-//!   slips with the known force λ_tᵢ = sᵢ·sign(λ_tᵢ + c_t vᵢ), c_t = 10⁻²c;
+//! One Newton step predicts, with v = T x − t0 and a constant per row,
+//! cᵢ = 1 / Σ_k a_ik² / c_kk (the stiffness the row meets, set by its
+//! softer side; c_tᵢ = 10⁻² × the same sum over the row of T),
+//! * the normal set N = {i : λ_nᵢ + cᵢ(Ax − g)ᵢ > 0};
+//! * the stick set S = {i : sᵢ > 0, |λ_tᵢ + c_tᵢ vᵢ| ≤ sᵢ}; every other row
+//!   slips with the known force λ_tᵢ = sᵢ·sign(λ_tᵢ + c_tᵢ vᵢ);
+//!
+//! (one c for all rows, the mean of diag C, let a soft body's rows be
+//! judged at a stiff body's scale: a soft keystone between abutments
+//! 10²–10⁷ times stiffer cycled for 10 000 steps, docs/methods.md §9.2);
 //!
 //! and solves the equality-constrained problem `Cx + Bᵀμ = d − T_Lᵀλ_L,
 //! Bx = b` with B = [A_N; T_S], b = [g_N; t0_S] through K = C + ρBᵀB
@@ -16,7 +22,8 @@
 //! (a KKT point of the Tresca problem); a set seen before, or one that
 //! frees a rigid motion friction can hold, is entered one row at a time.
 //! Coulomb starts glued (S = N) and
-//! then sets s = μλ_n from the last solution until s is stationary.
+//! then moves s towards μλ_n of the last solution until s is stationary,
+//! under-relaxed when it stops contracting ([`CoulombRelaxation`]).
 //!
 //! A working set that leaves a rigid motion z free (B z = 0 for some z in
 //! ker C) is tested: if the loads do more work along ±z than friction can
@@ -30,13 +37,15 @@ use crate::linalg::sparse::{dot, norm_inf, Csr};
 use crate::qp::executor::{Iterative, Step};
 use std::collections::HashSet;
 
-use crate::qp::{Context, Friction, IterRecord, Output, QpError, QpProblem, SlipBound, Status};
+use crate::qp::{
+    Context, CoulombRelaxation, Friction, IterRecord, Output, QpError, QpProblem, SlipBound, Status,
+};
 
-/// ρ = RHO · max diag C in K = C + ρBᵀB.
+/// ρᵢ = RHO · (the row's stiffness) in K = C + Bᵀ diag(ρ) B.
 const RHO: f64 = super::RHO_FACTOR;
 /// Augmented Lagrangian steps per Newton step, at most.
 const AL_MAX: usize = 200;
-/// c_t = CT_FACTOR · c in the slip prediction |λ_t + c_t v| ≤ s: any
+/// c_tᵢ = CT_FACTOR · cᵢ in the slip prediction |λ_t + c_t v| ≤ s: any
 /// c_t > 0 has the same fixed points; a small one lets the forces lead.
 /// With c_t = c the block of tests/friction.rs at tan θ = 0.9μ under
 /// Tresca cycled between stick zones; with 10⁻² it settles in 7 steps.
@@ -72,6 +81,29 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
     })
 }
 
+/// factor / Σ_k b_ik² / c_kk for each row of `b`: the stiffness the row
+/// meets, dominated by its softer side (`fallback` for a row with no
+/// finite positive sum).
+fn row_stiffness(b: &Csr, diag: &[f64], fallback: f64, factor: f64) -> Vec<f64> {
+    (0..b.nrows)
+        .map(|i| {
+            let (cols, vals) = b.row(i);
+            let flex: f64 = cols
+                .iter()
+                .zip(vals)
+                .filter(|(&k, _)| diag[k] > 0.0)
+                .map(|(&k, &v)| v * v / diag[k])
+                .sum();
+            let c = if flex > 0.0 && flex.is_finite() {
+                1.0 / flex
+            } else {
+                fallback
+            };
+            factor * c
+        })
+        .collect()
+}
+
 /// How each row is held in a working set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 enum Tangential {
@@ -86,10 +118,16 @@ struct State<'a> {
     ws: &'a crate::linalg::cholesky::Workspace,
     /// Orthonormal basis of ker C.
     r: Vec<Vec<f64>>,
-    cpar: f64,
-    /// c_t of the slip prediction.
-    ct: f64,
-    rho: f64,
+    /// cᵢ of the normal prediction, per row of A.
+    cn: Vec<f64>,
+    /// c_tᵢ of the slip prediction, per row of T.
+    ct: Vec<f64>,
+    /// ρᵢ of K = C + Bᵀ diag(ρ) B for a normal row (index 0) and a
+    /// tangential row (index 1): RHO × the row's stiffness, so that a soft
+    /// body's rows are not weighted at a stiff body's scale (with one ρ =
+    /// RHO·max diag C, λ = μ + ρ(Bx − b) lost all but ~6 digits on a soft
+    /// keystone 10⁷ times softer than its abutments).
+    rho: Vec<[f64; 2]>,
     tol: f64,
     x: Vec<f64>,
     ln: Vec<f64>,
@@ -98,6 +136,8 @@ struct State<'a> {
     s: Vec<f64>,
     /// Coulomb before its first update of s: S = N.
     glued: bool,
+    /// The Coulomb update of s.
+    relax: CoulombRelaxation,
     in_n: Vec<bool>,
     tang: Vec<Tangential>,
     /// The sets of the last solve (None before the first).
@@ -113,8 +153,15 @@ impl<'a> State<'a> {
     fn new(qp: &'a QpProblem, fr: &'a Friction, r: Vec<Vec<f64>>, ctx: &Context<'a>) -> Self {
         let (n, m) = (qp.n(), qp.m());
         let diag = qp.c.diag();
-        let cpar = (diag.iter().sum::<f64>() / n.max(1) as f64).max(f64::MIN_POSITIVE);
-        let cmax = norm_inf(&diag).max(f64::MIN_POSITIVE);
+        let cmean = (diag.iter().sum::<f64>() / n.max(1) as f64).max(f64::MIN_POSITIVE);
+        let cn = row_stiffness(&qp.a, &diag, cmean, 1.0);
+        let kt = row_stiffness(&fr.t, &diag, cmean, 1.0);
+        let rho = cn
+            .iter()
+            .zip(&kt)
+            .map(|(a, b)| [RHO * a, RHO * b])
+            .collect();
+        let ct = kt.iter().map(|k| CT_FACTOR * k).collect();
         let x = ctx.x0.map_or_else(|| vec![0.0; n], |x0| x0.to_vec());
         let ax = qp.a.mul(&x);
         let scale = norm_inf(&x).max(norm_inf(&qp.g)).max(f64::MIN_POSITIVE);
@@ -128,15 +175,16 @@ impl<'a> State<'a> {
             fr,
             ws: ctx.ws,
             r,
-            cpar,
-            ct: CT_FACTOR * cpar,
-            rho: RHO * cmax,
+            cn,
+            ct,
+            rho,
             tol: ctx.settings.tol,
             x,
             ln: vec![0.0; m],
             lt: vec![0.0; m],
             s,
             glued,
+            relax: CoulombRelaxation::default(),
             tang: in_n
                 .iter()
                 .map(|&a| {
@@ -162,11 +210,11 @@ impl<'a> State<'a> {
         let ax = qp.a.mul(&self.x);
         let v = self.fr.slip(&self.x);
         let n_set: Vec<bool> = (0..qp.m())
-            .map(|i| self.ln[i] + self.cpar * (ax[i] - qp.g[i]) > 0.0)
+            .map(|i| self.ln[i] + self.cn[i] * (ax[i] - qp.g[i]) > 0.0)
             .collect();
         let tang = (0..qp.m())
             .map(|i| {
-                let z = self.lt[i] + self.ct * v[i];
+                let z = self.lt[i] + self.ct[i] * v[i];
                 if self.glued {
                     if n_set[i] {
                         Tangential::Stick
@@ -210,13 +258,13 @@ impl<'a> State<'a> {
         let mut best: Option<(f64, usize, bool)> = None;
         for i in 0..qp.m() {
             if n_set[i] != self.in_n[i] {
-                let sc = (self.ln[i] + self.cpar * (ax[i] - qp.g[i])).abs();
+                let sc = (self.ln[i] + self.cn[i] * (ax[i] - qp.g[i])).abs();
                 if best.is_none_or(|b| sc > b.0) {
                     best = Some((sc, i, false));
                 }
             }
             if tang[i] != self.tang[i] {
-                let sc = ((self.lt[i] + self.ct * v[i]).abs() - self.s[i]).abs();
+                let sc = ((self.lt[i] + self.ct[i] * v[i]).abs() - self.s[i]).abs();
                 if best.is_none_or(|b| sc > b.0) {
                     best = Some((sc, i, true));
                 }
@@ -290,7 +338,11 @@ impl<'a> State<'a> {
         }
         for (mat, t) in [(&qp.a, false), (&self.fr.t, true)] {
             for i in 0..m {
-                let w = if in_b[i][t as usize] { self.rho } else { 0.0 };
+                let w = if in_b[i][t as usize] {
+                    self.rho[i][t as usize]
+                } else {
+                    0.0
+                };
                 let (cols, vals) = mat.row(i);
                 for (&j, &a) in cols.iter().zip(vals) {
                     for (&k, &c) in cols.iter().zip(vals) {
@@ -313,7 +365,7 @@ impl<'a> State<'a> {
             let mut rhs = dp.clone();
             for (k, br) in brows.iter().enumerate() {
                 let (cols, vals) = row(br);
-                let w = self.rho * b[k] - mu[k];
+                let w = self.rho[br.1][br.0 as usize] * b[k] - mu[k];
                 for (&j, &a) in cols.iter().zip(vals) {
                     rhs[j] += w * a;
                 }
@@ -324,7 +376,7 @@ impl<'a> State<'a> {
             for (k, br) in brows.iter().enumerate() {
                 let (cols, vals) = row(br);
                 let bx: f64 = cols.iter().zip(vals).map(|(&j, &a)| a * x[j]).sum();
-                mu[k] += self.rho * (bx - b[k]);
+                mu[k] += self.rho[br.1][br.0 as usize] * (bx - b[k]);
                 res = res.max((bx - b[k]).abs());
             }
             let xs = norm_inf(&x).max(bscale).max(f64::MIN_POSITIVE);
@@ -474,6 +526,11 @@ impl Iterative for State<'_> {
                             .zip(&self.s)
                             .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
                         let smax = norm_inf(&s_new).max(f64::MIN_POSITIVE);
+                        log::debug!(
+                            "ssn: Coulomb update at step {it}: change of s {:.3e}, ω = {}",
+                            change / smax,
+                            self.relax.omega()
+                        );
                         if !self.glued && change <= self.tol * smax {
                             return Step::Done(Status::Converged, self.record(it));
                         }
@@ -486,8 +543,8 @@ impl Iterative for State<'_> {
                                 self.record(it),
                             );
                         }
+                        self.s = self.relax.next(&self.s, s_new, self.glued);
                         self.glued = false;
-                        self.s = s_new;
                         let (n_set, tang) = self.predict();
                         self.in_n = n_set;
                         self.tang = tang;
