@@ -214,3 +214,29 @@ fn vtu_names_components_and_writes_reactions() {
     assert!((sum_y - w).abs() <= 1e-8 * w, "{sum_y} vs {w}");
     assert!(back.point_array("contact_role").is_some());
 }
+
+/// One slave curve over two blocks (tests/data/two_on_one): the resultant
+/// is on both, named "a+b", and carries the whole load (1e6 Pa on the two
+/// 1 m tops). Before, `on_body` named the first row's body only ("a"),
+/// beside a force that was both blocks'.
+#[test]
+fn a_slave_curve_over_two_bodies_names_both() {
+    let path = root().join("tests/data/two_on_one/two_on_one.toml");
+    let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
+    let (method, opts) = run::options(&prep.problem, &SolverSection::default()).unwrap();
+    let res = run::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
+    assert!(res.status.converged() && res.kkt.within(1e-6));
+    let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let f = forces::compute(
+        &prep.model,
+        &prep.problem,
+        &step.displacement,
+        &step.multipliers,
+        &step.contact_pressure,
+    );
+    assert_eq!(f.interfaces.len(), 1);
+    let it = &f.interfaces[0];
+    assert_eq!(it.on_body, "a+b", "{}", it.name);
+    let fy = it.resultant.force[1];
+    assert!((fy - 2.0e6).abs() <= 1e-8 * 2.0e6, "F_y = {fy:e}");
+}

@@ -48,7 +48,8 @@ pub struct InterfaceForce {
     /// The interface name: `on`, or "slave->master".
     pub name: String,
     /// The side the resultant acts on: the slave curve (non-matching) or
-    /// the body of lower index (conforming `on =`), by body name.
+    /// the body of lower index (conforming `on =`), by body name; bodies
+    /// joined by `+` when that side spans several.
     pub on_body: String,
     #[serde(flatten)]
     pub resultant: Resultant,
@@ -285,6 +286,9 @@ pub fn compute_with_friction(
             max_pressure: 0.0,
         })
         .collect();
+    // The bodies of the rows' first points, in row order: a slave curve
+    // may run over several bodies, and the resultant is on all of them.
+    let mut sides: Vec<Vec<u32>> = vec![vec![]; interfaces.len()];
     for (r, row) in t.contact.iter().enumerate() {
         let it = &mut interfaces[row.interface as usize];
         let l = lambda.get(r).copied().unwrap_or(0.0);
@@ -295,12 +299,9 @@ pub fn compute_with_friction(
         if let Some(&pr) = pressure.get(r) {
             it.max_pressure = it.max_pressure.max(pr);
         }
-        if it.on_body.is_empty() {
-            it.on_body = model
-                .body_names
-                .get(t.point_body[row.first] as usize)
-                .cloned()
-                .unwrap_or_default();
+        let body = t.point_body[row.first];
+        if !sides[row.interface as usize].contains(&body) {
+            sides[row.interface as usize].push(body);
         }
         for (p, c) in row.coefficients() {
             let f = [-l * c[0], -l * c[1]];
@@ -320,6 +321,19 @@ pub fn compute_with_friction(
                 }
             }
         }
+    }
+    for (it, bodies) in interfaces.iter_mut().zip(&sides) {
+        it.on_body = bodies
+            .iter()
+            .map(|&b| {
+                model
+                    .body_names
+                    .get(b as usize)
+                    .cloned()
+                    .unwrap_or_default()
+            })
+            .collect::<Vec<_>>()
+            .join("+");
     }
     let mut loads = Resultant::default();
     let mut reactions = Resultant::default();
