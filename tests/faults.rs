@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::{exe, joined, meshes, run, run_with_deadline};
+use common::{command, exe, joined, meshes, run, run_with_deadline};
 
 /// Exit 2 with exactly one `error:` line and no panic; returns that line.
 fn assert_bad_input(code: i32, log: &str, what: &str) -> String {
@@ -182,7 +182,7 @@ fn a_second_run_of_the_same_name_fails_at_once_naming_the_holder() {
     // lock; at least one completes, and the outputs are one run's, whole.
     let steps = meshes().join("three_bodies_steps.toml");
     let spawn = || {
-        Command::new(exe())
+        command()
             .args([
                 "solve",
                 steps.to_str().unwrap(),
@@ -380,6 +380,34 @@ fn restart_refuses_a_checkpoint_of_another_problem() {
     assert_eq!(code, 0, "{log}");
 }
 
+/// A checkpoint that another program holds open for writing (HDF5 locks it
+/// with flock, as `File::lock` does here): the restart is refused as bad
+/// input, naming the file and saying what the lock means.
+#[test]
+fn a_checkpoint_locked_by_another_program_is_named() {
+    let d = tempfile::tempdir().unwrap();
+    let good = partial_checkpoint(&d.path().join("a"), 1);
+    let held = std::fs::File::open(&good).unwrap();
+    held.lock().unwrap();
+    let steps = meshes().join("three_bodies_steps.toml");
+    let o = command()
+        .env_remove("HDF5_USE_FILE_LOCKING")
+        .args(["solve", steps.to_str().unwrap(), "--out"])
+        .arg(d.path().join("b"))
+        .arg("--restart")
+        .arg(&good)
+        .output()
+        .unwrap();
+    let (code, log) = joined(&o);
+    let line = assert_bad_input(code, &log, "locked checkpoint");
+    assert!(
+        line.contains(good.to_str().unwrap()) && line.contains("open in another program"),
+        "{line}"
+    );
+    assert!(!d.path().join("b").join("three_bodies_steps.h5").exists());
+    drop(held);
+}
+
 #[test]
 fn crafted_checkpoints_are_refused_without_a_crash() {
     let d = tempfile::tempdir().unwrap();
@@ -556,6 +584,7 @@ fn out_of_memory_is_exit_2_not_an_abort() {
     );
     std::fs::write(&toml, text).unwrap();
     let o = Command::new("sh")
+        .env("HDF5_USE_FILE_LOCKING", "FALSE")
         .arg("-c")
         .arg(format!(
             "ulimit -v 1048576 && exec {} solve {} --out {} --quiet",

@@ -239,3 +239,98 @@ fn a_wedged_keystone_with_friction_is_certified_at_any_contrast() {
         assert!(dx < 1e-6, "{what}: ssn and mprgp differ by {dx:.2e}");
     }
 }
+
+/// tests/data/gasket: a rubber gasket in a steel groove (three non-matching
+/// pairs, corner nodes on two of them) under a steel plate held only by the
+/// gasket and two slip lines, the gasket floating too, so C has a partial
+/// kernel (the plate's vertical slide) and the gasket's three rigid modes.
+/// At contrasts 1e4 and 1e8 (loads scaled with the rubber, so the strains
+/// are the same) every exact method named is certified and agrees with ssn
+/// on x and λ; the slip lines carry no vertical force, so the groove floor
+/// carries the whole load through the gasket, and the two walls push on it
+/// with equal and opposite forces.
+#[test]
+fn a_gasket_under_a_sliding_plate_balances_at_any_contrast() {
+    use signorini::post::{self, forces};
+    use signorini::qp::SolverSection;
+    use signorini::run;
+    let dir = root().join("tests/data/gasket");
+    let base = std::fs::read_to_string(dir.join("gasket.toml")).expect("gasket.toml");
+    let tmp = tempfile::tempdir().expect("tempdir");
+    for e_rubber in [2.0e7, 2.0e3] {
+        let s = e_rubber / 2.0e5;
+        let text = base
+            .replace("E = 2.0e5", &format!("E = {e_rubber:e}"))
+            .replace("pn = -2.0e4", &format!("pn = {:e}", -2.0e4 * s))
+            .replace("pn = -5.0e3", &format!("pn = {:e}", -5.0e3 * s))
+            .replace(
+                "file = \"gasket.msh\"",
+                &format!("file = {:?}", dir.join("gasket.msh")),
+            );
+        assert!(!text.contains("2.0e5") && !text.contains("2.0e4"));
+        let path = tmp.path().join(format!("gasket_{e_rubber:e}.toml"));
+        std::fs::write(&path, &text).expect("write toml");
+        let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            prep.model.qp.kernel.len() >= 4,
+            "the plate and the gasket float"
+        );
+        let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
+        let load = 3.75e4 * s; // (20 + 5) kPa × 1.5 m
+        let mut reference: Option<(Vec<f64>, Vec<f64>)> = None;
+        for method in ["ssn", "asm", "mprgp", "dual"] {
+            let what = format!("rubber E = {e_rubber:e}, {method}");
+            let r = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{what}: {e}"));
+            assert!(
+                matches!(r.status, Status::Converged) && r.kkt.within(1e-6),
+                "{what}: {} {:?}",
+                r.status.describe(),
+                r.kkt
+            );
+            match &reference {
+                None => reference = Some((r.x.clone(), r.lambda.clone())),
+                Some((x, l)) => {
+                    let (dx, dl) = (rel(&r.x, x), rel(&r.lambda, l));
+                    assert!(dx < 1e-6 && dl < 1e-6, "{what}: x {dx:.2e}, λ {dl:.2e}");
+                }
+            }
+            let step = post::step_output(&prep.model, &prep.problem, &r, 1.0);
+            let f = forces::compute(
+                &prep.model,
+                &prep.problem,
+                &step.displacement,
+                &step.multipliers,
+                &step.contact_pressure,
+            );
+            let on = |name: &str| {
+                f.interfaces
+                    .iter()
+                    .find(|i| i.name == name)
+                    .unwrap_or_else(|| panic!("{what}: no interface {name}"))
+                    .resultant
+            };
+            let floor = on("gasket_bottom->groove_floor");
+            let top = on("gasket_top->plate_bottom");
+            let (left, right) = (
+                on("gasket_left->groove_left"),
+                on("gasket_right->groove_right"),
+            );
+            assert!(
+                (floor.force[1] - load).abs() < 1e-6 * load,
+                "{what}: floor {floor:?}"
+            );
+            assert!(
+                (top.force[1] + load).abs() < 1e-6 * load,
+                "{what}: top {top:?}"
+            );
+            assert!(
+                left.force[0] > 0.1 * load,
+                "{what}: the walls hold the gasket: {left:?}"
+            );
+            assert!(
+                (left.force[0] + right.force[0]).abs() < 1e-6 * load,
+                "{what}: walls {left:?} {right:?}"
+            );
+        }
+    }
+}

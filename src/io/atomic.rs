@@ -29,7 +29,7 @@ pub enum IoError {
     #[error("{}: VTK error: {message}", .path.display())]
     Vtk { path: PathBuf, message: String },
     /// An error reported by the HDF5 library.
-    #[error("{}: HDF5 error at {location}: {cause}", .path.display())]
+    #[error("{}: HDF5 error at {location}: {cause}{}", .path.display(), lock_hint(.cause))]
     Hdf5 {
         path: PathBuf,
         location: String,
@@ -444,5 +444,16 @@ impl Drop for OutputLock {
         // Unlink while still holding the lock, then release it.
         let _ = std::fs::remove_file(&self.path);
         drop(self.file.take());
+    }
+}
+
+/// HDF5 locks a file while it is open for writing (h5py's `File(..., "a")`,
+/// another signorini run): say so, since errno 11 alone does not.
+fn lock_hint(cause: &::hdf5::Error) -> &'static str {
+    if cause.to_string().contains("unable to lock file") {
+        " (is the file open in another program, such as h5py or another signorini run? \
+         close it, or run with HDF5_USE_FILE_LOCKING=FALSE if it is only being read)"
+    } else {
+        ""
     }
 }

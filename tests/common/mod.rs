@@ -34,8 +34,18 @@ pub fn exe() -> &'static str {
 }
 
 /// A command for the `signorini` binary, to add arguments to.
+///
+/// Without HDF5's file locks: a test that edits a checkpoint in this
+/// process holds an flock on it while the file is open, and a child that
+/// another test spawns in that moment inherits the descriptor (HDF5 does
+/// not open with O_CLOEXEC) and keeps the lock while it runs; the restart
+/// that reads the edited file then failed with "unable to lock file"
+/// (tests/faults.rs, once in CI). The lock guards against concurrent
+/// writers, which the tests do not have; the product keeps it.
 pub fn command() -> Command {
-    Command::new(exe())
+    let mut c = Command::new(exe());
+    c.env("HDF5_USE_FILE_LOCKING", "FALSE");
+    c
 }
 
 /// The crate's root directory.

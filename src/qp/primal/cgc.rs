@@ -373,6 +373,14 @@ impl Iterative for Cgc<'_> {
                     || self.tightened >= TIGHTEN
                     || self.tol_eff <= self.floor
                 {
+                    log::debug!(
+                        "cgc: face minimum accepted: energy-norm residual {res:.2e} (tol {:.1e}, \
+                         floor {:.1e}), Euclidean {:.2e}, {} tightenings",
+                        self.tol_eff,
+                        self.floor,
+                        self.gp_norm / scale,
+                        self.tightened
+                    );
                     return Step::Done(Status::Converged, self.record(res));
                 }
                 self.tol_eff /= 10.0;
