@@ -70,6 +70,15 @@ pub struct Cgc<'a> {
     /// to `ref_norm` ([`Cgc::rounding_floor`]); the stopping test is
     /// max(tol, floor).
     floor: f64,
+    /// The last FACE_CG ended because the residual, already below `floor`,
+    /// stopped decreasing ([`FACE_STALL`] steps without halving): the face
+    /// minimum is resolved to rounding. `floor` is a worst-case bound (10³
+    /// above the noise actually reached on a floating plate at a contrast of
+    /// 10⁸), so it only licenses the stop; the stall decides it.
+    stalled: bool,
+    /// The last FACE_CG ended at a face minimum (tolerance met or stalled);
+    /// restoring the face after it may lift the residual again, up to `floor`.
+    resolved: bool,
     /// The energy-norm tolerance in force: `tol`, divided by 10 (at most
     /// [`TIGHTEN`] times) while a face minimum misses the Euclidean test.
     tol_eff: f64,
@@ -93,6 +102,9 @@ pub struct Cgc<'a> {
 const EUCLID: f64 = 1e3;
 /// At most this many tenfold tightenings of the energy-norm tolerance.
 const TIGHTEN: usize = 6;
+/// FACE_CG steps without halving the projected gradient after which a
+/// residual below the rounding floor counts as resolved (see `Cgc::stalled`).
+const FACE_STALL: usize = 20;
 
 enum FaceEnd {
     Min,
@@ -149,6 +161,8 @@ impl<'a> Cgc<'a> {
             lam: vec![0.0; m],
             ref_norm: dot(&qp.d, &wd).max(0.0).sqrt(),
             floor: 0.0,
+            stalled: false,
+            resolved: false,
             tol_eff: tol,
             tightened: 0,
             gp_norm: f64::INFINITY,
@@ -252,12 +266,27 @@ impl<'a> Cgc<'a> {
         let mut p = vec![0.0; n];
         let mut w = vec![0.0; n];
         let mut r_old = 0.0;
+        self.stalled = false;
+        self.resolved = false;
+        // The last residual that halved its predecessor anchor, and the steps since.
+        let (mut anchor, mut since) = (f64::INFINITY, 0usize);
         for k in 0..kmax {
             let (z, r) = self.project();
             if !r.is_finite() {
                 return FaceEnd::Unbounded(vec![f64::NAN]);
             }
-            if r.max(0.0).sqrt() <= self.tol_eff.max(self.floor) * self.ref_norm {
+            let rs = r.max(0.0).sqrt();
+            if rs <= self.tol_eff * self.ref_norm {
+                self.resolved = true;
+                return FaceEnd::Min;
+            }
+            if rs < 0.5 * anchor {
+                (anchor, since) = (rs, 0);
+            } else {
+                since += 1;
+            }
+            if since >= FACE_STALL && rs <= self.floor * self.ref_norm {
+                (self.stalled, self.resolved) = (true, true);
                 return FaceEnd::Min;
             }
             if k == 0 {
@@ -351,7 +380,7 @@ impl Iterative for Cgc<'_> {
         self.floor = self.rounding_floor();
         let (_, r) = self.project();
         let res = r.max(0.0).sqrt() / self.ref_norm;
-        if res <= self.tol_eff.max(self.floor) {
+        if res <= self.tol_eff || (self.resolved && res <= self.floor) {
             // Face minimum: λ_J are the KKT multipliers of this face.
             let jset = self.working_set();
             let lbar = jset.iter().fold(0.0f64, |m, &j| m.max(self.lam[j].abs()));
@@ -371,13 +400,14 @@ impl Iterative for Cgc<'_> {
                 let scale = norm(&self.qp.d).max(norm(&cx)).max(f64::MIN_POSITIVE);
                 if self.gp_norm / scale <= EUCLID * self.tol
                     || self.tightened >= TIGHTEN
-                    || self.tol_eff <= self.floor
+                    || self.stalled
                 {
                     log::debug!(
                         "cgc: face minimum accepted: energy-norm residual {res:.2e} (tol {:.1e}, \
-                         floor {:.1e}), Euclidean {:.2e}, {} tightenings",
+                         floor {:.1e}, stalled {}), Euclidean {:.2e}, {} tightenings",
                         self.tol_eff,
                         self.floor,
+                        self.stalled,
                         self.gp_norm / scale,
                         self.tightened
                     );
