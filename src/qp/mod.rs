@@ -243,6 +243,14 @@ pub struct Kkt {
     /// then left out of the JSON, which stays as it was).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub friction: f64,
+    /// The rounding level of `stationarity`: what computing r = Cx − d + Aᵀλ
+    /// in f64 may leave of an exact answer, on the same scale
+    /// ([`kkt::residuals`], docs/methods.md §8.4).
+    #[serde(default)]
+    pub stationarity_floor: f64,
+    /// The rounding level of `contact_balance`, on its scale.
+    #[serde(default)]
+    pub balance_floor: f64,
 }
 
 fn is_zero(v: &f64) -> bool {

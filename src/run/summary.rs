@@ -59,6 +59,10 @@ pub struct KktSummary {
     /// The friction residual (docs/methods.md §9.4); only with friction.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<f64>,
+    /// Rounding levels of stationarity and contact balance (docs/methods.md
+    /// §8.4): a residual at or below its floor (≤ 1e-4) counts as resolved.
+    pub stationarity_floor: f64,
+    pub balance_floor: f64,
     pub target: f64,
     pub certified: bool,
 }
@@ -188,6 +192,8 @@ impl Summary {
                 stationarity: k.stationarity,
                 contact_balance: k.contact_balance,
                 friction: model.qp.friction.as_ref().map(|_| k.friction),
+                stationarity_floor: k.stationarity_floor,
+                balance_floor: k.balance_floor,
                 target,
                 certified,
             },

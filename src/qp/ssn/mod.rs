@@ -178,7 +178,7 @@ pub(crate) fn small_border(qp: &QpProblem) -> Option<RowBorder> {
 /// ([`crate::qp::kkt::residuals`], docs/methods.md §8.4); +∞ if anything is not finite.
 pub(crate) fn certificate(qp: &QpProblem, x: &[f64], lam: &[f64]) -> f64 {
     // ssn refines until its answer passes the test the driver applies.
-    crate::qp::kkt::residuals(qp, x, lam).max()
+    crate::qp::kkt::residuals(qp, x, lam).judged()
 }
 
 /// The state of the iteration.
