@@ -238,8 +238,9 @@ fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
 /// smallest KKT residual; each row's `rel_diff` = ‖x − x_ref‖/‖x_ref‖ and
 /// `rel_diff_lambda` = ‖λ − λ_ref‖/‖λ_ref‖ (the contact forces), and
 /// `agrees` = converged, certified (KKT ≤ `kkt_target`), both differences
-/// ≤ its tolerance and the same active set. Both tolerances are 1e-6, except
-/// for `penalty`, whose minimiser x_ε is O(ε_p) away from x: its x tolerance
+/// ≤ its tolerance and the same active set. Both tolerances are 1e-6 (or the
+/// rounding floor of the row's or the reference's stationarity, if larger:
+/// docs/methods.md §8.4), except for `penalty`, whose minimiser x_ε is O(ε_p) away from x: its x tolerance
 /// (`agree_tol`) is max(1e-6, 10·its relative constraint violation), the
 /// violation being the observable O(ε_p) scale of that run; its contact
 /// forces are those of contact springs of compliance ε_j, off by about
@@ -294,13 +295,19 @@ pub fn table_json(
                     .into_iter()
                     .map(|(n, _, _, v)| (n, v))
                     .collect();
+                // Two answers at the rounding floor differ by about the
+                // floor, relative (docs/methods.md §8.4).
+                let base = reference
+                    .map_or(0.0, |rf| rf.kkt.stationarity_floor)
+                    .max(q.kkt.stationarity_floor)
+                    .clamp(1e-6, crate::qp::kkt::FLOOR_CAP);
                 let (agree_tol, agree_tol_lambda) = if r.method == "penalty" {
                     (
-                        (10.0 * q.kkt.primal).max(1e-6),
-                        penalty_lambda_tol.max(1e-6),
+                        (10.0 * q.kkt.primal).max(base),
+                        penalty_lambda_tol.max(base),
                     )
                 } else {
-                    (1e-6, 1e-6)
+                    (base, base)
                 };
                 let cert = certified(r, q);
                 let (rel, rel_l, agrees) = match reference {
