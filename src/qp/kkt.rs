@@ -76,7 +76,15 @@ pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda
     {
         return Kkt::not_finite();
     }
-    let cx = qp.c.mul(x);
+    // Cx and |C||x| in one pass (Cx summed as Csr::mul does: the same bits).
+    let (cx, c_abs_x): (Vec<f64>, Vec<f64>) = (0..qp.n())
+        .map(|i| {
+            let (cols, vals) = qp.c.row(i);
+            let s: f64 = cols.iter().zip(vals).map(|(&j, &a)| a * x[j]).sum();
+            let t: f64 = cols.iter().zip(vals).map(|(&j, &a)| (a * x[j]).abs()).sum();
+            (s, t)
+        })
+        .unzip();
     let mut alam = qp.a.mul_t(lambda);
     if let Some(f) = &qp.friction {
         f.t.mul_t_add(lambda_t, &mut alam);
@@ -109,15 +117,10 @@ pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda
     let balance_scale = norm(&alam).max(CONTACT_FLOOR * scale);
     let contact_balance = ratio(r_gamma, balance_scale);
     // e = ε(|C||x| + |d| + |A|ᵀ|λ| (+ |T|ᵀ|λ_t|)).
-    let mut e: Vec<f64> = (0..qp.n())
-        .map(|i| {
-            let (cols, vals) = qp.c.row(i);
-            cols.iter()
-                .zip(vals)
-                .map(|(&j, v)| (v * x[j]).abs())
-                .sum::<f64>()
-                + qp.d[i].abs()
-        })
+    let mut e: Vec<f64> = c_abs_x
+        .iter()
+        .zip(&qp.d)
+        .map(|(a, d)| a + d.abs())
         .collect();
     let mut abs_t_add = |m: &crate::linalg::sparse::Csr, v: &[f64]| {
         for (i, vi) in v.iter().enumerate() {
