@@ -452,3 +452,76 @@ fn a_block_on_a_rubber_slope_is_certified_and_balanced_at_any_contrast() {
         }
     }
 }
+
+/// The same block held on the slope by Coulomb friction alone (μ = 0.6 >
+/// tan 25°; the stop removed) at a contrast of 2.1e7: not refused as
+/// sliding, and the slope carries the whole weight, (0, W), normal and
+/// tangential together. Frictional ssn leaves 0.51‖e‖ of rounding in its
+/// stationarity (1.34e-6 > 1e-6; its solves are with C + ρBᵀB) and is
+/// certified at the floor; mprgp is certified outright; they agree.
+#[test]
+fn a_block_held_on_a_rubber_slope_by_friction_alone_is_certified() {
+    use signorini::post::{self, forces};
+    use signorini::qp::SolverSection;
+    use signorini::run;
+    let dir = root().join("tests/data/slope");
+    let text = std::fs::read_to_string(dir.join("slope.toml"))
+        .expect("slope.toml")
+        .replace("E = 1.0e6", "E = 1.0e4")
+        .replace("rho = 7850.0", "rho = 78.5")
+        .replace(
+            "[[contact]]\nslave = \"block_left\"\nmaster = \"stop\"\n",
+            "",
+        )
+        .replace("master = \"slope\"", "master = \"slope\"\nfriction = 0.6")
+        .replace(
+            "file = \"slope.msh\"",
+            &format!("file = {:?}", dir.join("slope.msh")),
+        );
+    assert!(text.contains("friction = 0.6") && !text.contains("\"stop\""));
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let path = tmp.path().join("slope_friction.toml");
+    std::fs::write(&path, &text).expect("write toml");
+    let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
+    let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
+    let w = 78.5 * 9.81 * 1.2 * 0.6;
+    let mut xs = vec![];
+    for method in ["ssn", "mprgp"] {
+        let r = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{method}: {e}"));
+        assert!(
+            matches!(r.status, Status::Converged) && r.kkt.within(1e-6),
+            "{method}: {} {:?}",
+            r.status.describe(),
+            r.kkt
+        );
+        let step = post::step_output(&prep.model, &prep.problem, &r, 1.0);
+        let lambda_t = post::friction::friction_output(&prep.model, &r)
+            .expect("friction fields")
+            .lambda_t;
+        let f = forces::compute_with_friction(
+            &prep.model,
+            &prep.problem,
+            &step.displacement,
+            &step.multipliers,
+            &lambda_t,
+            &step.contact_pressure,
+        );
+        let on = f
+            .interfaces
+            .iter()
+            .find(|i| i.name == "block_bottom->slope")
+            .expect("interface")
+            .resultant;
+        assert!(
+            on.force[0].abs() < 1e-6 * w && (on.force[1] - w).abs() < 1e-6 * w,
+            "{method}: the slope carries {:?}, the weight is {w}",
+            on.force
+        );
+        xs.push(r.x);
+    }
+    assert!(
+        rel(&xs[0], &xs[1]) < 1e-6,
+        "ssn and mprgp: {:.2e}",
+        rel(&xs[0], &xs[1])
+    );
+}
