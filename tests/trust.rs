@@ -252,25 +252,28 @@ fn a_wedged_keystone_with_friction_is_certified_at_any_contrast() {
 /// with equal and opposite forces.
 #[test]
 fn a_gasket_under_a_sliding_plate_balances_at_any_contrast() {
-    use signorini::post::{self, forces};
+    use signorini::post;
     use signorini::qp::SolverSection;
     use signorini::run;
     let dir = root().join("tests/data/gasket");
-    let base = std::fs::read_to_string(dir.join("gasket.toml")).expect("gasket.toml");
     let tmp = tempfile::tempdir().expect("tempdir");
     for e_rubber in [2.0e7, 2.0e3] {
         let s = e_rubber / 2.0e5;
-        let text = base
-            .replace("E = 2.0e5", &format!("E = {e_rubber:e}"))
-            .replace("pn = -2.0e4", &format!("pn = {:e}", -2.0e4 * s))
-            .replace("pn = -5.0e3", &format!("pn = {:e}", -5.0e3 * s))
-            .replace(
-                "file = \"gasket.msh\"",
-                &format!("file = {:?}", dir.join("gasket.msh")),
-            );
-        assert!(!text.contains("2.0e5") && !text.contains("2.0e4"));
-        let path = tmp.path().join(format!("gasket_{e_rubber:e}.toml"));
-        std::fs::write(&path, &text).expect("write toml");
+        let (e, pl, pr) = (
+            format!("E = {e_rubber:e}"),
+            format!("pn = {:e}", -2.0e4 * s),
+            format!("pn = {:e}", -5.0e3 * s),
+        );
+        let path = common::model_variant(
+            &dir,
+            "gasket.toml",
+            &[
+                ("E = 2.0e5", &e),
+                ("pn = -2.0e4", &pl),
+                ("pn = -5.0e3", &pr),
+            ],
+            &tmp.path().join(format!("gasket_{e_rubber:e}.toml")),
+        );
         let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
         assert!(
             prep.model.qp.kernel.len() >= 4,
@@ -309,21 +312,8 @@ fn a_gasket_under_a_sliding_plate_balances_at_any_contrast() {
                     assert!(dx < 1e-6 && dl < 1e-6, "{what}: x {dx:.2e}, λ {dl:.2e}");
                 }
             }
-            let step = post::step_output(&prep.model, &prep.problem, &r, 1.0);
-            let f = forces::compute(
-                &prep.model,
-                &prep.problem,
-                &step.displacement,
-                &step.multipliers,
-                &step.contact_pressure,
-            );
-            let on = |name: &str| {
-                f.interfaces
-                    .iter()
-                    .find(|i| i.name == name)
-                    .unwrap_or_else(|| panic!("{what}: no interface {name}"))
-                    .resultant
-            };
+            let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
+            let on = |name: &str| interface_resultant(&f, name, &what);
             let floor = on("gasket_bottom->groove_floor");
             let top = on("gasket_top->plate_bottom");
             let (left, right) = (
@@ -363,23 +353,20 @@ fn a_gasket_under_a_sliding_plate_balances_at_any_contrast() {
 /// analytic resultants and to the other methods.
 #[test]
 fn a_block_on_a_rubber_slope_is_certified_and_balanced_at_any_contrast() {
-    use signorini::post::{self, forces};
+    use signorini::post;
     use signorini::qp::SolverSection;
     use signorini::run;
     let dir = root().join("tests/data/slope");
-    let base = std::fs::read_to_string(dir.join("slope.toml")).expect("slope.toml");
     let tmp = tempfile::tempdir().expect("tempdir");
     let theta = 25f64.to_radians();
     for (e_pad, rho) in [(1.0e6, 7850.0), (1.0e3, 7.85)] {
-        let text = base
-            .replace("E = 1.0e6", &format!("E = {e_pad:e}"))
-            .replace("rho = 7850.0", &format!("rho = {rho:e}"))
-            .replace(
-                "file = \"slope.msh\"",
-                &format!("file = {:?}", dir.join("slope.msh")),
-            );
-        let path = tmp.path().join(format!("slope_{e_pad:e}.toml"));
-        std::fs::write(&path, &text).expect("write toml");
+        let (e, r) = (format!("E = {e_pad:e}"), format!("rho = {rho:e}"));
+        let path = common::model_variant(
+            &dir,
+            "slope.toml",
+            &[("E = 1.0e6", &e), ("rho = 7850.0", &r)],
+            &tmp.path().join(format!("slope_{e_pad:e}.toml")),
+        );
         let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(prep.model.qp.kernel.len(), 3, "the block floats");
         let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
@@ -423,21 +410,8 @@ fn a_block_on_a_rubber_slope_is_certified_and_balanced_at_any_contrast() {
                     );
                 }
             }
-            let step = post::step_output(&prep.model, &prep.problem, &r, 1.0);
-            let f = forces::compute(
-                &prep.model,
-                &prep.problem,
-                &step.displacement,
-                &step.multipliers,
-                &step.contact_pressure,
-            );
-            let on = |name: &str| {
-                f.interfaces
-                    .iter()
-                    .find(|i| i.name == name)
-                    .unwrap_or_else(|| panic!("{what}: no interface {name}"))
-                    .resultant
-            };
+            let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
+            let on = |name: &str| interface_resultant(&f, name, &what);
             let (slope, stop) = (on("block_bottom->slope"), on("block_left->stop"));
             for (got, want, name) in [(slope, slope_force, "slope"), (stop, stop_force, "stop")] {
                 let err =
@@ -461,27 +435,25 @@ fn a_block_on_a_rubber_slope_is_certified_and_balanced_at_any_contrast() {
 /// certified at the floor; mprgp is certified outright; they agree.
 #[test]
 fn a_block_held_on_a_rubber_slope_by_friction_alone_is_certified() {
-    use signorini::post::{self, forces};
+    use signorini::post;
     use signorini::qp::SolverSection;
     use signorini::run;
     let dir = root().join("tests/data/slope");
-    let text = std::fs::read_to_string(dir.join("slope.toml"))
-        .expect("slope.toml")
-        .replace("E = 1.0e6", "E = 1.0e4")
-        .replace("rho = 7850.0", "rho = 78.5")
-        .replace(
-            "[[contact]]\nslave = \"block_left\"\nmaster = \"stop\"\n",
-            "",
-        )
-        .replace("master = \"slope\"", "master = \"slope\"\nfriction = 0.6")
-        .replace(
-            "file = \"slope.msh\"",
-            &format!("file = {:?}", dir.join("slope.msh")),
-        );
-    assert!(text.contains("friction = 0.6") && !text.contains("\"stop\""));
     let tmp = tempfile::tempdir().expect("tempdir");
-    let path = tmp.path().join("slope_friction.toml");
-    std::fs::write(&path, &text).expect("write toml");
+    let path = common::model_variant(
+        &dir,
+        "slope.toml",
+        &[
+            ("E = 1.0e6", "E = 1.0e4"),
+            ("rho = 7850.0", "rho = 78.5"),
+            (
+                "[[contact]]\nslave = \"block_left\"\nmaster = \"stop\"\n",
+                "",
+            ),
+            ("master = \"slope\"", "master = \"slope\"\nfriction = 0.6"),
+        ],
+        &tmp.path().join("slope_friction.toml"),
+    );
     let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
     let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
     let w = 78.5 * 9.81 * 1.2 * 0.6;
@@ -494,24 +466,8 @@ fn a_block_held_on_a_rubber_slope_by_friction_alone_is_certified() {
             r.status.describe(),
             r.kkt
         );
-        let step = post::step_output(&prep.model, &prep.problem, &r, 1.0);
-        let lambda_t = post::friction::friction_output(&prep.model, &r)
-            .expect("friction fields")
-            .lambda_t;
-        let f = forces::compute_with_friction(
-            &prep.model,
-            &prep.problem,
-            &step.displacement,
-            &step.multipliers,
-            &lambda_t,
-            &step.contact_pressure,
-        );
-        let on = f
-            .interfaces
-            .iter()
-            .find(|i| i.name == "block_bottom->slope")
-            .expect("interface")
-            .resultant;
+        let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
+        let on = interface_resultant(&f, "block_bottom->slope", method);
         assert!(
             on.force[0].abs() < 1e-6 * w && (on.force[1] - w).abs() < 1e-6 * w,
             "{method}: the slope carries {:?}, the weight is {w}",
@@ -524,4 +480,18 @@ fn a_block_held_on_a_rubber_slope_by_friction_alone_is_certified() {
         "ssn and mprgp: {:.2e}",
         rel(&xs[0], &xs[1])
     );
+}
+
+/// The resultant of the contact forces of interface `name` (post's own
+/// forces, tangential ones included).
+fn interface_resultant(
+    f: &signorini::post::forces::Forces,
+    name: &str,
+    what: &str,
+) -> signorini::post::forces::Resultant {
+    f.interfaces
+        .iter()
+        .find(|i| i.name == name)
+        .unwrap_or_else(|| panic!("{what}: no interface {name}"))
+        .resultant
 }

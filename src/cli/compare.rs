@@ -240,8 +240,9 @@ fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
 /// `agrees` = converged, certified (KKT ≤ `kkt_target`), both differences
 /// ≤ its tolerance and the same active set. Both tolerances are 1e-6 (or the
 /// rounding floor of the row's or the reference's stationarity, if larger:
-/// docs/methods.md §8.4), except for `penalty`, whose minimiser x_ε is O(ε_p) away from x: its x tolerance
-/// (`agree_tol`) is max(1e-6, 10·its relative constraint violation), the
+/// docs/methods.md §8.4), except for `penalty`, whose minimiser x_ε is
+/// O(ε_p) away from x: its x tolerance (`agree_tol`) is max(that, 10·its
+/// relative constraint violation), the
 /// violation being the observable O(ε_p) scale of that run; its contact
 /// forces are those of contact springs of compliance ε_j, off by about
 /// ε_j·c_kk relative per row (10⁻³ by default, methods.md §4.4) and by more

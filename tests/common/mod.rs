@@ -308,3 +308,23 @@ pub fn read_array(path: &Path) -> (usize, usize, Vec<f64>) {
     assert_eq!(v.len(), nr * nc);
     (nr, nc, v)
 }
+
+/// A variant of the model `dir/toml` written to `out`: each (from, to) edit
+/// applied (each `from` must occur), and the mesh file made absolute so the
+/// variant can live anywhere.
+pub fn model_variant(dir: &Path, toml: &str, edits: &[(&str, &str)], out: &Path) -> PathBuf {
+    let mut text = std::fs::read_to_string(dir.join(toml)).expect("read the model");
+    for (from, to) in edits {
+        assert!(text.contains(from), "{toml}: no {from:?} to edit");
+        text = text.replace(from, to);
+    }
+    let text: String = text
+        .lines()
+        .map(|l| match l.strip_prefix("file = \"") {
+            Some(rest) => format!("file = {:?}\n", dir.join(rest.trim_end_matches('"'))),
+            None => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::write(out, text).expect("write the variant");
+    out.to_path_buf()
+}

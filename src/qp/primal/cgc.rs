@@ -67,8 +67,8 @@ pub struct Cgc<'a> {
     /// Scale of the projected gradient (W⁻¹-norm of d, or of the first one).
     ref_norm: f64,
     /// Rounding level of the projected gradient at the current x, relative
-    /// to `ref_norm` ([`Cgc::rounding_floor`]); the stopping test is
-    /// max(tol, floor).
+    /// to `ref_norm` ([`Cgc::rounding_floor`]): a residual below it ends a
+    /// face only once FACE_CG has stalled there (`stalled`, `resolved`).
     floor: f64,
     /// The last FACE_CG ended because the residual, already below `floor`,
     /// stopped decreasing ([`FACE_STALL`] steps without halving): the face
