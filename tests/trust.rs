@@ -495,3 +495,96 @@ fn interface_resultant(
         .unwrap_or_else(|| panic!("{what}: no interface {name}"))
         .resultant
 }
+
+/// A segmental arch of five voussoirs held only by contact on radial joints
+/// (tests/data/arch: 15 rigid modes, conforming inner joints, non-matching
+/// springings, a soft crown block at contrast 2e5 to the steel abutments).
+///
+/// Frictionless, the voussoirs can slide along all six joints at once
+/// without opening any (translations along the joints' radial directions
+/// that close the chain: a 4-parameter family on which gravity does work),
+/// so the problem is unbounded: refused before any method runs, naming
+/// every voussoir's motion. With Coulomb friction 0.8 ssn and mprgp are
+/// certified and agree, and each voussoir is in equilibrium under the forces
+/// the post-processing reports: on v1, v3, v4 and v5 (gravity only; the
+/// haunch load is on v2) the two joints carry the weight ρ g A,
+/// A = (28/360) π (2.6² − 2²), and no net horizontal force: the arch's
+/// thrust passes from joint to joint unchanged.
+#[test]
+fn an_arch_of_voussoirs_slides_without_friction_and_stands_with_it() {
+    use signorini::post;
+    use signorini::qp::SolverSection;
+    use signorini::run;
+    let dir = root().join("tests/data/arch");
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let frictionless = common::model_variant(
+        &dir,
+        "arch.toml",
+        &[("friction = 0.8\n", "")],
+        &tmp.path().join("arch_frictionless.toml"),
+    );
+    let said = match run::prepare(&frictionless, false) {
+        Ok(_) => panic!("the frictionless arch was accepted"),
+        Err(e) => format!("{e:#}"),
+    };
+    assert!(said.contains("unbounded"), "{said}");
+    for v in ["v1", "v2", "v3", "v4", "v5"] {
+        assert!(said.contains(&format!("body '{v}' (translation")), "{said}");
+    }
+
+    let prep = run::prepare(&dir.join("arch.toml"), false).unwrap_or_else(|e| panic!("{e}"));
+    let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
+    let area = 28.0 / 360.0 * std::f64::consts::PI * (2.6f64.powi(2) - 2.0f64.powi(2));
+    let (w_stone, w_crown) = (2400.0 * 9.81 * area, 1200.0 * 9.81 * area);
+    let mut xs = vec![];
+    for method in ["ssn", "mprgp"] {
+        let r = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{method}: {e}"));
+        assert!(
+            matches!(r.status, Status::Converged) && r.kkt.within(1e-6),
+            "{method}: {} {:?}",
+            r.status.describe(),
+            r.kkt
+        );
+        let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
+        // The force on body `on` across interface `name`.
+        let on = |name: &str, body: &str| {
+            let i = f
+                .interfaces
+                .iter()
+                .find(|i| i.name == name)
+                .unwrap_or_else(|| panic!("{method}: no interface {name}"));
+            if i.on_body == body {
+                i.resultant.force
+            } else {
+                i.other.force
+            }
+        };
+        let sum = |a: [f64; 2], b: [f64; 2]| [a[0] + b[0], a[1] + b[1]];
+        let blocks = [
+            (
+                "v1",
+                sum(on("joint1", "v1"), on("spring_r_v->spring_r_a", "v1")),
+                w_stone,
+            ),
+            ("v3", sum(on("joint2", "v3"), on("joint3", "v3")), w_crown),
+            ("v4", sum(on("joint3", "v4"), on("joint4", "v4")), w_stone),
+            (
+                "v5",
+                sum(on("joint4", "v5"), on("spring_l_v->spring_l_a", "v5")),
+                w_stone,
+            ),
+        ];
+        for (v, force, w) in blocks {
+            assert!(
+                force[0].abs() < 1e-3 * w && (force[1] - w).abs() < 1e-3 * w,
+                "{method}: the joints of {v} carry {force:?}, its weight is {w}"
+            );
+        }
+        xs.push(r.x);
+    }
+    assert!(
+        rel(&xs[0], &xs[1]) < 1e-6,
+        "ssn and mprgp: {:.2e}",
+        rel(&xs[0], &xs[1])
+    );
+}

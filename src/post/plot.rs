@@ -1241,6 +1241,19 @@ pub fn arc_lengths(c: &ContactGeometry, chains: &[Vec<usize>]) -> Vec<Vec<(f64, 
         .collect()
 }
 
+/// (rows, columns) of the contact plot's panels for `n` interfaces: one
+/// column up to three, then a grid, so that a panel keeps room for its
+/// caption, ticks and axis names (six panels stacked in a 900 px figure had
+/// 80 px each, and their tick labels overlapped).
+fn contact_grid(n: usize) -> (usize, usize) {
+    let cols = match n {
+        0..=3 => 1,
+        4..=8 => 2,
+        _ => 3,
+    };
+    (n.div_ceil(cols).max(1), cols)
+}
+
 /// The contact pressure against arc length, one panel per interface (each
 /// with its own pressure axis unless `range` fixes it), one curve per step
 /// drawn (coloured along viridis with a legend when there are several).
@@ -1331,7 +1344,7 @@ fn draw_contact<DB: DrawingBackend>(
         }
         body = rest;
     }
-    let panels = body.split_evenly((series.len(), 1));
+    let panels = body.split_evenly(contact_grid(series.len()));
     let mut total: Option<(f64, f64)> = None;
     for (k, ((name, start, pieces), panel)) in series.iter().zip(&panels).enumerate() {
         let pts = || {
@@ -1378,8 +1391,13 @@ fn draw_contact<DB: DrawingBackend>(
             .y_label_area_size((fs * 6.0) as u32)
             .build_cartesian_2d(xr, yr)
             .map_err(de)?;
+        // As many pressure ticks as the panel's plot height holds at about
+        // two font heights apart.
+        let (_, ph) = panel.dim_in_pixel();
+        let y_ticks = ((ph as f64 - fs * 7.0) / (fs * 2.2)).clamp(2.0, 10.0) as usize;
         chart
             .configure_mesh()
+            .y_labels(y_ticks)
             .x_desc("arc length s [m]")
             .y_desc("contact pressure [Pa]")
             .light_line_style(WHITE.mix(0.0))
@@ -1413,6 +1431,18 @@ fn draw_contact<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn many_interfaces_are_drawn_on_a_grid_every_panel_in_it() {
+        for n in 1..=20 {
+            let (r, c) = contact_grid(n);
+            assert!(r * c >= n && r * c < n + c, "{n}: {r}×{c}");
+            // At the default 900 px, a panel keeps ≥ 150 px.
+            assert!(900 / r >= 150 || n > 18, "{n}: {r} rows");
+        }
+        assert_eq!(contact_grid(2), (2, 1));
+        assert_eq!(contact_grid(6), (3, 2));
+    }
 
     #[test]
     fn numbers_are_short() {
