@@ -298,13 +298,7 @@ fn a_gasket_under_a_sliding_plate_balances_at_any_contrast() {
             };
             let (_, opts) = run::options(&prep.problem, &choice).expect("options");
             let what = format!("rubber E = {e_rubber:e}, {method}");
-            let r = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{what}: {e}"));
-            assert!(
-                matches!(r.status, Status::Converged) && r.kkt.within(1e-6),
-                "{what}: {} {:?}",
-                r.status.describe(),
-                r.kkt
-            );
+            let r = solve_certified(&prep, method, &opts, &what);
             match &reference {
                 None => reference = Some((r.x.clone(), r.lambda.clone())),
                 Some((x, l)) => {
@@ -459,13 +453,7 @@ fn a_block_held_on_a_rubber_slope_by_friction_alone_is_certified() {
     let w = 78.5 * 9.81 * 1.2 * 0.6;
     let mut xs = vec![];
     for method in ["ssn", "mprgp"] {
-        let r = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{method}: {e}"));
-        assert!(
-            matches!(r.status, Status::Converged) && r.kkt.within(1e-6),
-            "{method}: {} {:?}",
-            r.status.describe(),
-            r.kkt
-        );
+        let r = solve_certified(&prep, method, &opts, method);
         let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
         let on = interface_resultant(&f, "block_bottom->slope", method);
         assert!(
@@ -480,6 +468,24 @@ fn a_block_held_on_a_rubber_slope_by_friction_alone_is_certified() {
         "ssn and mprgp: {:.2e}",
         rel(&xs[0], &xs[1])
     );
+}
+
+/// `method` on a prepared model, which must converge with a certificate
+/// (≤ 1e-6, rounding floor included); `what` names the case on failure.
+fn solve_certified(
+    prep: &signorini::run::Prepared,
+    method: &str,
+    opts: &SolveOptions,
+    what: &str,
+) -> signorini::qp::QpResult {
+    let r = signorini::run::solve(prep, method, opts).unwrap_or_else(|e| panic!("{what}: {e}"));
+    assert!(
+        matches!(r.status, Status::Converged) && r.kkt.within(1e-6),
+        "{what}: {} {:?}",
+        r.status.describe(),
+        r.kkt
+    );
+    r
 }
 
 /// The resultant of the contact forces of interface `name` (post's own
@@ -538,13 +544,7 @@ fn an_arch_of_voussoirs_slides_without_friction_and_stands_with_it() {
     let (w_stone, w_crown) = (2400.0 * 9.81 * area, 1200.0 * 9.81 * area);
     let mut xs = vec![];
     for method in ["ssn", "mprgp"] {
-        let r = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{method}: {e}"));
-        assert!(
-            matches!(r.status, Status::Converged) && r.kkt.within(1e-6),
-            "{method}: {} {:?}",
-            r.status.describe(),
-            r.kkt
-        );
+        let r = solve_certified(&prep, method, &opts, method);
         let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
         // The force on body `on` across interface `name`.
         let on = |name: &str, body: &str| {
