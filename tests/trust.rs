@@ -588,3 +588,51 @@ fn an_arch_of_voussoirs_slides_without_friction_and_stands_with_it() {
         rel(&xs[0], &xs[1])
     );
 }
+
+/// A rubber ring pressed between two steel plates (tests/data/ring,
+/// contrast 2e4): nothing fixes where along the plates the ring sits (it
+/// slides along every contact row without opening one, and no load works
+/// on that motion), so the solution is unique only up to that translation.
+/// Every exact method returns the one without it, certified, says so, and
+/// agrees with the others; each plate carries the lid's load, 1 kPa × 2 m.
+/// Before, ssn, mprgp, dual and preelim refused the problem (a singular KKT
+/// system, a degenerate dual equality, a singular C₁₁) and the methods that
+/// solved it returned the ring shifted by different amounts.
+#[test]
+fn a_ring_free_to_slide_between_two_plates_gets_one_answer() {
+    use signorini::post;
+    use signorini::qp::SolverSection;
+    use signorini::run;
+    let prep = run::prepare(&root().join("tests/data/ring/ring.toml"), false)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
+    let load = 1e3 * 2.0;
+    let mut reference: Option<Vec<f64>> = None;
+    for method in ["asm", "ssn", "mprgp", "dual", "preelim"] {
+        let r = solve_certified(&prep, method, &opts, method);
+        assert!(
+            r.notes
+                .iter()
+                .any(|n| n.contains("unique only up to 1 rigid motion")),
+            "{method}: {:?}",
+            r.notes
+        );
+        let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
+        for pair in ["ring_out->bottom_face", "ring_out->top_face"] {
+            let on = interface_resultant(&f, pair, method);
+            assert!(
+                on.force[0].abs() < 1e-6 * load && (on.force[1].abs() - load).abs() < 1e-6 * load,
+                "{method}: {pair} carries {:?}",
+                on.force
+            );
+        }
+        match &reference {
+            None => reference = Some(r.x),
+            Some(x) => assert!(
+                rel(&r.x, x) < 1e-6,
+                "{method}: x {:.2e} from asm",
+                rel(&r.x, x)
+            ),
+        }
+    }
+}

@@ -186,6 +186,9 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
         "status      {} after {} iterations ({} inner)",
         s.status, s.iterations, s.inner_iterations
     );
+    for note in &s.notes {
+        println!("note        {note}");
+    }
     let k = &s.kkt;
     println!(
         "KKT         primal {:.2e}  dual {:.2e}  complementarity {:.2e}  stationarity {:.2e}  contact balance {:.2e}  → {}",

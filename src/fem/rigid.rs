@@ -313,7 +313,7 @@ fn check_sliding(m: &Model, problem: &Problem) -> Result<(), FemError> {
                 )));
             }
             log::warn!(
-                "a rigid motion of {} is free (loads do no work on it): the solution is not unique",
+                "a rigid motion of {} slides along every contact without opening it and the loads do no work on it: unless friction holds it, the solution is unique only up to it, and the one returned has no component along it (methods.md §1.7)",
                 describe_mode(m, c)
             );
         }

@@ -580,6 +580,17 @@ pub fn fmt_num(v: f64) -> String {
     }
 }
 
+/// An axis tick: [`fmt_num`], with a value within rounding of zero against
+/// the axis span written as 0 (ticks are sums of steps: a centred axis put
+/// "-2.22e-16" where 0 belonged).
+fn tick(v: f64, span: f64) -> String {
+    if v.abs() <= 1e-9 * span.abs() {
+        "0".into()
+    } else {
+        fmt_num(v)
+    }
+}
+
 fn trim_zeros(s: &str) -> String {
     if s.contains('.') {
         let t = s.trim_end_matches('0').trim_end_matches('.');
@@ -854,8 +865,8 @@ fn draw_mesh<DB: DrawingBackend>(
         .y_desc("y [m]")
         .label_style(("sans-serif", fs * 0.9))
         .axis_desc_style(("sans-serif", fs))
-        .x_label_formatter(&|v| fmt_num(*v))
-        .y_label_formatter(&|v| fmt_num(*v))
+        .x_label_formatter(&|v| tick(*v, 2.0 * hx))
+        .y_label_formatter(&|v| tick(*v, 2.0 * hy))
         .draw()
         .map_err(de)?;
 
@@ -1374,6 +1385,7 @@ fn draw_contact<DB: DrawingBackend>(
             }
         };
         let xr = 0.0..if smax > 0.0 { smax } else { 1.0 };
+        let (xspan, yspan) = (xr.end - xr.start, yr.end - yr.start);
         let caption = format!(
             "{name} (arc length from ({}, {}){})",
             fmt_num(start[0]),
@@ -1404,8 +1416,8 @@ fn draw_contact<DB: DrawingBackend>(
             .bold_line_style(BLACK.mix(0.12))
             .label_style(("sans-serif", fs * 0.9))
             .axis_desc_style(("sans-serif", fs))
-            .x_label_formatter(&|v| fmt_num(*v))
-            .y_label_formatter(&|v| fmt_num(*v))
+            .x_label_formatter(&|v| tick(*v, xspan))
+            .y_label_formatter(&|v| tick(*v, yspan))
             .draw()
             .map_err(de)?;
         let radius = (fs * if many { 0.16 } else { 0.22 }).max(2.0) as i32;
@@ -1442,6 +1454,13 @@ mod tests {
         }
         assert_eq!(contact_grid(2), (2, 1));
         assert_eq!(contact_grid(6), (3, 2));
+    }
+
+    #[test]
+    fn a_tick_within_rounding_of_zero_is_zero() {
+        assert_eq!(tick(-2.220446049250313e-16, 2.2), "0");
+        assert_eq!(tick(1e-3, 2.2), "0.001");
+        assert_eq!(tick(-0.4, 2.2), "-0.4");
     }
 
     #[test]

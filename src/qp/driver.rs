@@ -6,7 +6,8 @@
 //! observers, a phase timer) and returns an [`Output`]. Everything that is the
 //! same for every method happens here, once ([`run`]); the caller's
 //! observers ([`SolveOptions::observers`]) see every iteration: the data check, the
-//! boundedness decision on the kernel (§8.2), the warm-start check (§8.3),
+//! boundedness decision on the kernel (§8.2), the free motions held while the
+//! method runs and removed from its answer (§1.7), the warm-start check (§8.3),
 //! the fallback when an unbounded claim fails its certificate, and the KKT
 //! certificate and energy (§8.4) that turn an [`Output`] into a [`QpResult`].
 //! A method cannot return a certificate of its own: [`Output`] has none, so a
@@ -194,8 +195,28 @@ pub fn run(
             opts = &checked;
         }
     }
+    // Rigid motions along which the solution is not unique (a ring between
+    // two flat plates): held by springs while the method runs, and the
+    // answer returned without them (docs/methods.md §1.7).
+    let free = recession::free_motions(qp);
+    let held;
+    let qs = if free.is_empty() {
+        qp
+    } else {
+        let note = format!(
+            "the solution is unique only up to {} rigid motion{} that slide{} along every contact without opening it and on which the loads do no work; the answer returned has no component along {} (docs/methods.md §1.7)",
+            free.len(),
+            if free.len() > 1 { "s" } else { "" },
+            if free.len() > 1 { "" } else { "s" },
+            if free.len() > 1 { "them" } else { "it" },
+        );
+        log::info!("{note}");
+        notes.push(note);
+        held = recession::pinned(qp, &free);
+        &held
+    };
     let name = method.name();
-    let mut r = solve_once(method, qp, opts, ws)?;
+    let mut r = solve_once(method, qs, opts, ws)?;
     if let Status::Unbounded { direction } = &r.status {
         match recession::certify(qp, direction) {
             Ok(c) => return Ok(unbounded_result(qp, c.direction)),
@@ -214,7 +235,7 @@ pub fn run(
                 let fm =
                     super::registry::find(fb).ok_or_else(|| QpError::BadParameter(fb.into()))?;
                 let t = std::mem::take(&mut r.timings);
-                r = solve_once(fm, qp, opts, ws)?;
+                r = solve_once(fm, qs, opts, ws)?;
                 r.timings = t
                     .into_iter()
                     .map(|(k, v)| (format!("{name}-{k}"), v))
@@ -229,6 +250,7 @@ pub fn run(
             }
         }
     }
+    recession::without_free(&mut r.x, &free);
     // A frictional method returns [λ_n; λ_t] in `lambda` (docs/methods.md §9).
     let mut lambda = r.lambda;
     let lambda_t = if qp.friction.is_some() && lambda.len() == 2 * qp.m() {

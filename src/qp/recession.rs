@@ -25,7 +25,7 @@
 //! zero curvature; (Ar)ᵢ ≤ 10⁻⁹·Σⱼ|Aᵢⱼrⱼ| for every row; and
 //! dᵀr > 10⁻⁹·Σⱼ|dⱼrⱼ|.
 
-use crate::linalg::sparse::{dot, norm, Csr};
+use crate::linalg::sparse::{dot, norm, norm_inf, Csr};
 use crate::qp::QpProblem;
 
 /// Relative tolerance of Cr = 0 per block (in the block's stiffness scale).
@@ -177,6 +177,181 @@ pub fn blocks(c: &Csr) -> (Vec<usize>, usize) {
     (block, nb)
 }
 
+/// An eigenvalue of (BR)ᵀ(BR) at most this share of the largest is zero
+/// (B the contact and friction rows, R the unit-norm rigid motions).
+const FREE_TOL: f64 = 1e-12;
+
+/// The rigid motions along which the solution is not unique (docs/methods.md
+/// §1.7): an orthonormal basis of the r = Rα with Ar = 0 (every contact row
+/// slides without opening or closing), Tr = 0 (no slip on a friction row)
+/// and dᵀr = 0 (the loads do no work). Adding such an r to a solution gives
+/// another solution with the same λ: a ring pressed between two flat
+/// plates may sit anywhere along them. Each vector is checked row by row in
+/// the row's scale: |(Br)ᵢ| ≤ 10⁻⁹·Σⱼ|Bᵢⱼ|·‖r‖_∞.
+pub fn free_motions(qp: &QpProblem) -> Vec<Vec<f64>> {
+    let r = normalized(&qp.kernel);
+    let k = r.len();
+    if k == 0 {
+        return vec![];
+    }
+    let rows = |z: &[f64]| {
+        let mut v = qp.a.mul(z);
+        if let Some(f) = &qp.friction {
+            v.extend(f.t.mul(z));
+        }
+        v
+    };
+    let br: Vec<Vec<f64>> = r.iter().map(|z| rows(z)).collect();
+    let gram: Vec<Vec<f64>> = (0..k)
+        .map(|i| (0..k).map(|j| dot(&br[i], &br[j])).collect())
+        .collect();
+    let (vals, vecs) = crate::linalg::dense::sym_eigen(&gram);
+    let top = vals.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let w: Vec<f64> = r.iter().map(|z| dot(z, &qp.d)).collect();
+    let d1: f64 = qp.d.iter().map(|v| v.abs()).sum();
+    let mut free: Vec<Vec<f64>> = vec![];
+    for (lam, alpha) in vals.iter().zip(&vecs) {
+        if !(lam.abs() <= FREE_TOL * top) && top > 0.0 {
+            continue;
+        }
+        let mut z = vec![0.0; qp.n()];
+        for (a, rv) in alpha.iter().zip(&r) {
+            for (zi, ri) in z.iter_mut().zip(rv) {
+                *zi += a * ri;
+            }
+        }
+        if !slides_freely(qp, &z) {
+            continue;
+        }
+        // The loads must do no work (else the problem is unbounded, which
+        // `boundedness` decides; a borderline case is left to the method).
+        // Scale: ‖d‖₁‖z‖_∞, as the eigenvector carries rounding-sized
+        // components on every other motion.
+        let work: f64 = alpha.iter().zip(&w).map(|(a, b)| a * b).sum();
+        if work.abs() > SIGN_TOL * d1 * norm_inf(&z) {
+            continue;
+        }
+        // Orthonormalise against the ones kept.
+        for f in &free {
+            let p = dot(f, &z);
+            for (zi, fi) in z.iter_mut().zip(f) {
+                *zi -= p * fi;
+            }
+        }
+        let nz = norm(&z);
+        if nz > 0.5 {
+            free.push(z.iter().map(|v| v / nz).collect());
+        }
+    }
+    free
+}
+
+/// |(Br)ᵢ| ≤ 10⁻⁹·Σⱼ|Bᵢⱼ|·‖r‖_∞ on every contact and friction row (the
+/// row's own scale: a row that r does not move has only rounding in it).
+fn slides_freely(qp: &QpProblem, r: &[f64]) -> bool {
+    let rmax = norm_inf(r);
+    let ok = |b: &Csr| {
+        (0..b.nrows).all(|i| {
+            let (cols, vals) = b.row(i);
+            let (mut s, mut abs) = (0.0, 0.0);
+            for (&c, &a) in cols.iter().zip(vals) {
+                s += a * r[c];
+                abs += a.abs();
+            }
+            s.abs() <= SIGN_TOL * abs * rmax
+        })
+    };
+    ok(&qp.a) && qp.friction.as_ref().is_none_or(|f| ok(&f.t))
+}
+
+/// The problem with the `free` motions ([`free_motions`]) held: a spring
+/// c_ii on one DOF per free motion (DOFs on which the free motions are
+/// independent, [`fixing_dofs`](crate::linalg::cholesky::fixing_dofs)), and
+/// the kernel cut down to the rigid motions that leave those DOFs at rest.
+/// Its solution is a solution of `qp` (a free motion moves it to the pinned
+/// DOFs' rest at no cost in energy or feasibility), and unique where `qp`'s
+/// is unique up to the free motions.
+pub fn pinned(qp: &QpProblem, free: &[Vec<f64>]) -> QpProblem {
+    let n = qp.n();
+    let pins = crate::linalg::cholesky::fixing_dofs(free, n);
+    let diag = qp.c.diag();
+    // The spring: the DOF's own stiffness (its body's scale), 1 if none.
+    let springs: Vec<(usize, usize, f64)> = pins
+        .iter()
+        .map(|&i| (i, i, if diag[i] > 0.0 { diag[i] } else { 1.0 }))
+        .collect();
+    let slot = |c: &Csr, i: usize| {
+        let (a, b) = (c.indptr[i], c.indptr[i + 1]);
+        c.indices[a..b].binary_search(&i).ok().map(|p| a + p)
+    };
+    let mut c = qp.c.clone();
+    if pins.iter().all(|&i| slot(&c, i).is_some()) {
+        for &(i, _, v) in &springs {
+            let p = slot(&c, i).expect("checked");
+            c.data[p] += v;
+        }
+    } else {
+        let mut t: Vec<(usize, usize, f64)> = (0..n)
+            .flat_map(|row| {
+                let (cols, vals) = qp.c.row(row);
+                cols.iter().zip(vals).map(move |(&j, &v)| (row, j, v))
+            })
+            .collect();
+        t.extend(springs);
+        c = Csr::from_triplets(n, n, &t);
+    }
+    // ker of the pinned C: z = Rβ with z = 0 on the pins, β ∈ null(R_pins).
+    let k = qp.kernel.len();
+    let rp: Vec<Vec<f64>> = pins
+        .iter()
+        .map(|&i| qp.kernel.iter().map(|z| z[i]).collect())
+        .collect();
+    let gram: Vec<Vec<f64>> = (0..k)
+        .map(|a| {
+            (0..k)
+                .map(|b| rp.iter().map(|row| row[a] * row[b]).sum())
+                .collect()
+        })
+        .collect();
+    let (vals, vecs) = crate::linalg::dense::sym_eigen(&gram);
+    let top = vals.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let kernel: Vec<Vec<f64>> = vals
+        .iter()
+        .zip(&vecs)
+        .filter(|(l, _)| l.abs() <= FREE_TOL * top)
+        .map(|(_, beta)| {
+            let mut z = vec![0.0; n];
+            for (b, rv) in beta.iter().zip(&qp.kernel) {
+                if *b != 0.0 {
+                    for (zi, ri) in z.iter_mut().zip(rv) {
+                        *zi += b * ri;
+                    }
+                }
+            }
+            z
+        })
+        .collect();
+    QpProblem {
+        c,
+        d: qp.d.clone(),
+        a: qp.a.clone(),
+        g: qp.g.clone(),
+        kernel,
+        friction: qp.friction.clone(),
+    }
+}
+
+/// x with no component along the orthonormal `free` motions: the solution
+/// of least norm among those a free motion connects (same Cx, Ax, dᵀx).
+pub fn without_free(x: &mut [f64], free: &[Vec<f64>]) {
+    for f in free {
+        let p = dot(f, x);
+        for (xi, fi) in x.iter_mut().zip(f) {
+            *xi -= p * fi;
+        }
+    }
+}
+
 /// The kernel vectors scaled to unit norm. The NNLS argument needs no
 /// orthogonality (r = Rρ satisfies Ar ≤ 0 and dᵀr = ‖ρ‖² for any R), and
 /// keeping the FEM's modes (a translation, a rotation about a fixed point)
@@ -303,6 +478,80 @@ mod tests {
             kernel: vec![vec![1.0, 0.0, 0.0], vec![0.0, 1.0, 0.0]],
             friction: None,
         }
+    }
+
+    /// Two floating two-unknown "bodies", springs 1 and 2: (x0, x1) under
+    /// the rows x0 ≤ 0, x1 ≤ 0 and the loads d0, d1; (x2, x3) with the loads
+    /// d2, d3 and the rows given (numbered from 2).
+    fn two_bodies(d: [f64; 4], rows: &[(usize, usize, f64)]) -> QpProblem {
+        let m = 2.max(1 + rows.iter().map(|r| r.0).max().unwrap_or(0));
+        let mut a = vec![(0, 0, 1.0), (1, 1, 1.0)];
+        a.extend_from_slice(rows);
+        let spring =
+            |i: usize, k: f64| [(i, i, k), (i + 1, i + 1, k), (i, i + 1, -k), (i + 1, i, -k)];
+        let c: Vec<_> = spring(0, 1.0).into_iter().chain(spring(2, 2.0)).collect();
+        QpProblem {
+            c: Csr::from_triplets(4, 4, &c),
+            d: d.to_vec(),
+            a: Csr::from_triplets(m, 4, &a),
+            g: vec![0.0; m],
+            kernel: vec![vec![1.0, 1.0, 0.0, 0.0], vec![0.0, 0.0, 1.0, 1.0]],
+            friction: None,
+        }
+    }
+
+    #[test]
+    fn a_motion_no_row_sees_and_no_load_works_on_is_free_and_held() {
+        // The second body: no row, no net load: free.
+        let q = two_bodies([1.0, 0.5, 0.25, -0.25], &[]);
+        let free = free_motions(&q);
+        assert_eq!(free.len(), 1);
+        let h = 0.5f64.sqrt();
+        assert!(free[0][0] == 0.0 && free[0][1] == 0.0, "{free:?}");
+        assert!((free[0][2].abs() - h).abs() < 1e-15 && (free[0][3] - free[0][2]).abs() < 1e-15);
+        // Held: one spring on the second body, the first one's motion left
+        // in the kernel.
+        let p = pinned(&q, &free);
+        assert_eq!(p.kernel.len(), 1);
+        assert!(p.kernel[0][2].abs() < 1e-15 && p.kernel[0][0].abs() > 0.5);
+        // Every method returns the one solution whose second body has no
+        // mean displacement: x = (0, 0, 0.0625, −0.0625), λ = (1, 0.5),
+        // certified against the problem as given, and says so; a warm start
+        // far along the free motion changes nothing.
+        let x = [0.0, 0.0, 0.0625, -0.0625];
+        for method in ["ssn", "asm", "mprgp", "dual", "cgc", "uzawa"] {
+            let opts = crate::qp::SolveOptions {
+                x0: Some(vec![0.0, 0.0, 5.0, 5.0]),
+                ..Default::default()
+            };
+            let r = crate::qp::registry::solve(method, &q, &opts).expect(method);
+            assert!(
+                r.status.converged() && r.kkt.within(1e-6),
+                "{method}: {:?} {:?}",
+                r.status,
+                r.kkt
+            );
+            for (a, b) in r.x.iter().zip(&x) {
+                assert!((a - b).abs() <= 1e-8, "{method}: {:?}", r.x);
+            }
+            assert!(
+                (r.lambda[0] - 1.0).abs() <= 1e-8 && (r.lambda[1] - 0.5).abs() <= 1e-8,
+                "{method}: {:?}",
+                r.lambda
+            );
+            assert!(
+                r.notes
+                    .iter()
+                    .any(|n| n.contains("unique only up to 1 rigid motion")),
+                "{method}: {:?}",
+                r.notes
+            );
+        }
+        // A row on the second body (either sign) or a net load on it: not free.
+        let q = two_bodies([1.0, 0.5, 0.25, -0.25], &[(2, 2, 1.0), (3, 3, -1.0)]);
+        assert!(free_motions(&q).is_empty());
+        let q = two_bodies([1.0, 0.5, 0.25, 0.25], &[]);
+        assert!(free_motions(&q).is_empty());
     }
 
     #[test]

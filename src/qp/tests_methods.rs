@@ -507,7 +507,10 @@ fn bad_parameters_do_not_panic() {
 
 #[test]
 fn preelim_refuses_singular_c11() {
-    // A floating body whose contact DOFs do not fix it: only the y-DOF of one node constrained.
+    // A floating body whose contact DOFs do not fix it: only the y-DOF of one
+    // node constrained. Its motion is free (no row, no load on it): with the
+    // kernel known the driver holds it and preelim solves (x0 = x1 = 0);
+    // with the kernel unknown C₁₁ is singular and preelim refuses.
     let c = Csr::from_triplets(
         3,
         3,
@@ -528,12 +531,27 @@ fn preelim_refuses_singular_c11() {
         kernel: vec![vec![1.0, 1.0, 0.0]],
         friction: None,
     };
+    let r = registry::solve("preelim", &qp, &opts(1e-10)).unwrap();
+    assert!(r.status.converged() && r.kkt.within(1e-8), "{:?}", r.kkt);
+    assert!(
+        r.x[0] == 0.0 && r.x[1] == 0.0 && r.x[2].abs() < 1e-12,
+        "{:?}",
+        r.x
+    );
+    let qp = QpProblem {
+        kernel: vec![],
+        ..qp
+    };
     match registry::solve("preelim", &qp, &opts(1e-10)) {
         Err(QpError::Unsupported(msg)) => assert!(msg.contains("C11"), "{msg}"),
         Err(e) => panic!("unexpected error {e}"),
         Ok(r) => panic!("expected refusal, got {}", r.status.describe()),
     }
     // The reference copes (the energy is constant along the kernel).
+    let qp = QpProblem {
+        kernel: vec![vec![1.0, 1.0, 0.0]],
+        ..qp
+    };
     let r = crate::qp::run_direct(cgc::solve, &qp, &opts(1e-10)).unwrap();
     assert!(r.status.converged());
 }
