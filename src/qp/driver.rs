@@ -132,6 +132,10 @@ impl Observer for Forward {
     }
 }
 
+/// The certificate level a settled answer must keep
+/// ([`recession::settle_on_active`]) and a stalled one must meet.
+const CERTIFIED: f64 = 1e-6;
+
 /// The method a solve falls back to when `name` claims an unbounded
 /// direction that fails the certificate (docs/methods.md §8.2).
 fn fallback_for(name: &str) -> &'static str {
@@ -251,6 +255,26 @@ pub fn run(
         }
     }
     recession::without_free(&mut r.x, &free);
+    if qp.friction.is_none() {
+        let mut settled = r.x.clone();
+        let rolled = recession::settle_on_active(qp, &mut settled, &r.lambda, &free);
+        // The move keeps Cx, the rows with a force and dᵀx. It is taken only
+        // from a certified answer and only if it keeps the certificate (a gap
+        // it opens under a small λ).
+        let keeps = || {
+            kkt::residuals(qp, &r.x, &r.lambda).within(CERTIFIED)
+                && kkt::residuals(qp, &settled, &r.lambda).within(CERTIFIED)
+        };
+        if rolled > 0 && keeps() {
+            r.x = settled;
+            notes.push(format!(
+                "the solution is unique only up to {rolled} rigid motion{} that the rows carrying a force leave free (the others stop {} at their gaps); the answer returned has the least component along {} that they allow (docs/methods.md §1.7)",
+                if rolled > 1 { "s" } else { "" },
+                if rolled > 1 { "them" } else { "it" },
+                if rolled > 1 { "them" } else { "it" },
+            ));
+        }
+    }
     // A frictional method returns [λ_n; λ_t] in `lambda` (docs/methods.md §9).
     let mut lambda = r.lambda;
     let lambda_t = if qp.friction.is_some() && lambda.len() == 2 * qp.m() {
@@ -262,6 +286,17 @@ pub fn run(
     let energy = qp.energy_with_friction(&r.x, &lambda);
     if !energy.is_finite() {
         kkt = Kkt::not_finite();
+    }
+    // A method that stalls above its own tolerance may still have an answer
+    // the certificate proves (the dual family on a body free to roll): the
+    // certificate decides, and the note says how the method stopped.
+    if let Status::Failed(why) = &r.status {
+        if why.starts_with("stagnation") && kkt.within(CERTIFIED) {
+            notes.push(format!(
+                "{name} stopped on {why}; its answer meets the KKT certificate (≤ {CERTIFIED:e}, docs/methods.md §8.4), so it counts as converged"
+            ));
+            r.status = Status::Converged;
+        }
     }
     Ok(QpResult {
         x: r.x,

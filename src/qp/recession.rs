@@ -189,13 +189,27 @@ const FREE_TOL: f64 = 1e-12;
 /// plates may sit anywhere along them. Each vector is checked row by row in
 /// the row's scale: |(Br)ᵢ| ≤ 10⁻⁹·Σⱼ|Bᵢⱼ|·‖r‖_∞.
 pub fn free_motions(qp: &QpProblem) -> Vec<Vec<f64>> {
+    free_on(qp, None)
+}
+
+/// [`free_motions`] with only the contact rows of `rows` (all if None)
+/// required not to move (the friction rows always).
+fn free_on(qp: &QpProblem, rows: Option<&[bool]>) -> Vec<Vec<f64>> {
     let r = normalized(&qp.kernel);
     let k = r.len();
     if k == 0 {
         return vec![];
     }
+    let sel = rows;
     let rows = |z: &[f64]| {
         let mut v = qp.a.mul(z);
+        if let Some(mask) = sel {
+            for (vi, &keep) in v.iter_mut().zip(mask) {
+                if !keep {
+                    *vi = 0.0;
+                }
+            }
+        }
         if let Some(f) = &qp.friction {
             v.extend(f.t.mul(z));
         }
@@ -220,7 +234,7 @@ pub fn free_motions(qp: &QpProblem) -> Vec<Vec<f64>> {
                 *zi += a * ri;
             }
         }
-        if !slides_freely(qp, &z) {
+        if !slides_freely(qp, &z, sel) {
             continue;
         }
         // The loads must do no work (else the problem is unbounded, which
@@ -248,20 +262,85 @@ pub fn free_motions(qp: &QpProblem) -> Vec<Vec<f64>> {
 
 /// |(Br)ᵢ| ≤ 10⁻⁹·Σⱼ|Bᵢⱼ|·‖r‖_∞ on every contact and friction row (the
 /// row's own scale: a row that r does not move has only rounding in it).
-fn slides_freely(qp: &QpProblem, r: &[f64]) -> bool {
+fn slides_freely(qp: &QpProblem, r: &[f64], rows: Option<&[bool]>) -> bool {
     let rmax = norm_inf(r);
-    let ok = |b: &Csr| {
-        (0..b.nrows).all(|i| {
-            let (cols, vals) = b.row(i);
-            let (mut s, mut abs) = (0.0, 0.0);
-            for (&c, &a) in cols.iter().zip(vals) {
-                s += a * r[c];
-                abs += a.abs();
-            }
-            s.abs() <= SIGN_TOL * abs * rmax
-        })
+    let ok = |b: &Csr, mask: Option<&[bool]>| {
+        (0..b.nrows)
+            .filter(|&i| mask.is_none_or(|m| m[i]))
+            .all(|i| row_moves(b, i, r, rmax) == 0.0)
     };
-    ok(&qp.a) && qp.friction.as_ref().is_none_or(|f| ok(&f.t))
+    ok(&qp.a, rows) && qp.friction.as_ref().is_none_or(|f| ok(&f.t, None))
+}
+
+/// (Br)ᵢ, or 0 if it is within 10⁻⁹·Σⱼ|Bᵢⱼ|·‖r‖_∞ of 0 (`rmax` = ‖r‖_∞).
+fn row_moves(b: &Csr, i: usize, r: &[f64], rmax: f64) -> f64 {
+    let (cols, vals) = b.row(i);
+    let (mut s, mut abs) = (0.0, 0.0);
+    for (&c, &a) in cols.iter().zip(vals) {
+        s += a * r[c];
+        abs += a.abs();
+    }
+    if s.abs() <= SIGN_TOL * abs * rmax {
+        0.0
+    } else {
+        s
+    }
+}
+
+/// The rigid motions free on the rows that carry a force (λᵢ > 0) but not
+/// on all rows (docs/methods.md §1.7, "free on the active rows"): a ring
+/// touching each plate at one node may roll until a neighbouring node
+/// touches. Every point of that segment is a solution with the same λ;
+/// `x` is moved to the one with the least component along each such motion
+/// that keeps every other row closed (a clamp to its gaps), one motion
+/// after the other. Frictionless problems only (a rolling body slips on
+/// a friction row). Returns the number of such motions (the ones free on
+/// every row, `free`, are not counted: x has no component along them).
+pub fn settle_on_active(qp: &QpProblem, x: &mut [f64], lambda: &[f64], free: &[Vec<f64>]) -> usize {
+    if qp.friction.is_some() || qp.kernel.is_empty() || lambda.len() != qp.m() {
+        return 0;
+    }
+    // A row holds the motions if it carries a force and is closed (a
+    // small λ left on an open row by an inexact method does not hold).
+    let active: Vec<bool> = (0..qp.m())
+        .map(|i| {
+            let (cols, vals) = qp.a.row(i);
+            let (mut ax, mut abs) = (0.0, qp.g[i].abs());
+            for (&c, &a) in cols.iter().zip(vals) {
+                ax += a * x[c];
+                abs += (a * x[c]).abs();
+            }
+            lambda[i] > 0.0 && qp.g[i] - ax <= SIGN_TOL * abs
+        })
+        .collect();
+    let motions = free_on(qp, Some(&active));
+    if motions.len() <= free.len() {
+        return 0;
+    }
+    for f in &motions {
+        let fmax = norm_inf(f);
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        for i in (0..qp.m()).filter(|&i| !active[i]) {
+            let af = row_moves(&qp.a, i, f, fmax);
+            if af == 0.0 {
+                continue;
+            }
+            // A_i(x + t f) ≤ g_i, from a slack of at least 0.
+            let slack = (qp.g[i] - qp.a.row_dot(i, x)).max(0.0);
+            if af > 0.0 {
+                hi = hi.min(slack / af);
+            } else {
+                lo = lo.max(slack / af);
+            }
+        }
+        let t = (-dot(f, x)).clamp(lo.min(0.0), hi.max(0.0));
+        if t.is_finite() && t != 0.0 {
+            for (xi, fi) in x.iter_mut().zip(f) {
+                *xi += t * fi;
+            }
+        }
+    }
+    motions.len() - free.len()
 }
 
 /// The problem with the `free` motions ([`free_motions`]) held: a spring

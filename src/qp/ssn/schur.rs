@@ -197,10 +197,8 @@ impl Ssn<'_> {
                     f[b * k + a] = v;
                 }
             }
-            let Some(f) = SpdFactor::from_row_major(&f, k) else {
-                return Ok(None);
-            };
             // F α = e − G_J w
+            let mut scale = 0.0f64;
             for (l, al) in alpha.iter_mut().enumerate() {
                 let gw: f64 = jset
                     .iter()
@@ -208,8 +206,16 @@ impl Ssn<'_> {
                     .map(|(t, &j)| self.ar[j][l] * w[t])
                     .sum();
                 *al = e[l] - gw;
+                scale = scale.max(e[l].abs()).max(gw.abs());
             }
-            f.solve_in_place(&mut alpha);
+            match SpdFactor::from_row_major(&f, k) {
+                Some(f) => f.solve_in_place(&mut alpha),
+                None => {
+                    if !coarse_pseudo_solve(&f, k, &mut alpha, scale) {
+                        return Ok(None);
+                    }
+                }
+            }
             for (l, yl) in y.iter().enumerate() {
                 for (wt, yt) in w.iter_mut().zip(yl) {
                     *wt += alpha[l] * yt;
@@ -288,6 +294,39 @@ impl Ssn<'_> {
         }
         Some((lam, x))
     }
+}
+
+/// F α = b for the coarse matrix F (k×k, row-major, symmetric positive
+/// semidefinite) when F is singular: J leaves the rigid motions β of
+/// null F unrestrained (A_J Rβ = 0). The system is consistent iff the loads
+/// do no work on them (βᵀb = dᵀRβ = 0, to 10⁻⁹ of `scale`, the size of the
+/// terms of b); then α = F⁺b, which has no component along them: the KKT
+/// system of J is solved, its answer unique up to those motions, and the
+/// Newton loop's next working set decides whether an inactive row stops
+/// them (docs/methods.md §7). False (and `b` unchanged in meaning) if
+/// inconsistent: the caller enlarges J.
+fn coarse_pseudo_solve(f: &[f64], k: usize, b: &mut [f64], scale: f64) -> bool {
+    let rows: Vec<Vec<f64>> = (0..k).map(|i| f[i * k..(i + 1) * k].to_vec()).collect();
+    let (vals, vecs) = crate::linalg::dense::sym_eigen(&rows);
+    let top = vals.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if !(top > 0.0) || !top.is_finite() {
+        return false;
+    }
+    let mut out = vec![0.0; k];
+    for (lam, v) in vals.iter().zip(&vecs) {
+        let p: f64 = v.iter().zip(b.iter()).map(|(a, c)| a * c).sum();
+        if lam.abs() <= 1e-12 * top {
+            if p.abs() > 1e-9 * scale {
+                return false;
+            }
+            continue;
+        }
+        for (o, vi) in out.iter_mut().zip(v) {
+            *o += p / lam * vi;
+        }
+    }
+    b.copy_from_slice(&out);
+    true
 }
 
 /// How S_J⁻¹ is applied: its own factor, or from the factor of S over all
