@@ -7,7 +7,9 @@
 //! TFETI, x = K⁻¹(d − A_Jᵀλ_J) + Rα and the solvability condition
 //! Rᵀ(d − A_Jᵀλ_J) = 0 joins A_J x = g_J; the coarse matrix
 //! F = G_J S_J⁻¹ G_Jᵀ (G_J = RᵀA_Jᵀ) is singular iff J leaves a rigid
-//! motion free, and then the step returns None (the caller enlarges J).
+//! motion free. If the loads do no work on it the system is consistent and
+//! α = F⁺(e − G_J w) (docs/methods.md §1.7, "free on the active rows");
+//! otherwise the step returns None (the caller enlarges J).
 
 use super::{Ssn, BLOCK};
 use crate::linalg::dense::SpdFactor;
