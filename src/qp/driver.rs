@@ -255,17 +255,20 @@ pub fn run(
         }
     }
     recession::without_free(&mut r.x, &free);
-    if qp.friction.is_none() {
-        let mut settled = r.x.clone();
-        let rolled = recession::settle_on_active(qp, &mut settled, &r.lambda, &free);
-        // The move keeps Cx, the rows with a force and dᵀx. It is taken only
-        // from a certified answer and only if it keeps the certificate (a gap
-        // it opens under a small λ).
-        let keeps = || {
-            kkt::residuals(qp, &r.x, &r.lambda).within(CERTIFIED)
-                && kkt::residuals(qp, &settled, &r.lambda).within(CERTIFIED)
+    {
+        let m = qp.m();
+        let (ln, lt): (&[f64], &[f64]) = if qp.friction.is_some() && r.lambda.len() == 2 * m {
+            r.lambda.split_at(m)
+        } else {
+            (&r.lambda, &[])
         };
-        if rolled > 0 && keeps() {
+        let mut settled = r.x.clone();
+        let rolled = recession::settle_on_active(qp, &mut settled, ln, &free);
+        // The move keeps Cx, the rows with a force (and their slip) and dᵀx.
+        // It is taken only from a certified answer and only if it keeps the
+        // certificate (a gap it opens under a small λ).
+        let cert = |x: &[f64]| kkt::residuals_with_friction(qp, x, ln, lt).within(CERTIFIED);
+        if rolled > 0 && cert(&r.x) && cert(&settled) {
             r.x = settled;
             notes.push(format!(
                 "the solution is unique only up to {rolled} rigid motion{} that the rows carrying a force leave free (the others stop {} at their gaps); the answer returned has the least component along {} that they allow (docs/methods.md §1.7)",

@@ -211,7 +211,15 @@ fn free_on(qp: &QpProblem, rows: Option<&[bool]>) -> Vec<Vec<f64>> {
             }
         }
         if let Some(f) = &qp.friction {
-            v.extend(f.t.mul(z));
+            let mut t = f.t.mul(z);
+            if let Some(mask) = sel.filter(|m| m.len() == t.len()) {
+                for (ti, &keep) in t.iter_mut().zip(mask) {
+                    if !keep {
+                        *ti = 0.0;
+                    }
+                }
+            }
+            v.extend(t);
         }
         v
     };
@@ -269,7 +277,13 @@ fn slides_freely(qp: &QpProblem, r: &[f64], rows: Option<&[bool]>) -> bool {
             .filter(|&i| mask.is_none_or(|m| m[i]))
             .all(|i| row_moves(b, i, r, rmax) == 0.0)
     };
-    ok(&qp.a, rows) && qp.friction.as_ref().is_none_or(|f| ok(&f.t, None))
+    // A friction row goes with its contact row (one each, in order): a
+    // motion may slip where the contact is open.
+    ok(&qp.a, rows)
+        && qp
+            .friction
+            .as_ref()
+            .is_none_or(|f| ok(&f.t, rows.filter(|m| m.len() == f.t.nrows)))
 }
 
 /// (Br)ᵢ, or 0 if it is within 10⁻⁹·Σⱼ|Bᵢⱼ|·‖r‖_∞ of 0 (`rmax` = ‖r‖_∞).
@@ -293,11 +307,13 @@ fn row_moves(b: &Csr, i: usize, r: &[f64], rmax: f64) -> f64 {
 /// touches. Every point of that segment is a solution with the same λ;
 /// `x` is moved to the one with the least component along each such motion
 /// that keeps every other row closed (a clamp to its gaps), one motion
-/// after the other. Frictionless problems only (a rolling body slips on
-/// a friction row). Returns the number of such motions (the ones free on
-/// every row, `free`, are not counted: x has no component along them).
+/// after the other. With friction the motion must not slip on the
+/// friction rows of those contacts either (rolling about the contact
+/// point), so λ_t and the stick/slip state are unchanged too. `lambda` =
+/// λ of the contact rows. Returns the number of such motions (the ones free
+/// on every row, `free`, are not counted: x has no component along them).
 pub fn settle_on_active(qp: &QpProblem, x: &mut [f64], lambda: &[f64], free: &[Vec<f64>]) -> usize {
-    if qp.friction.is_some() || qp.kernel.is_empty() || lambda.len() != qp.m() {
+    if qp.kernel.is_empty() || lambda.len() != qp.m() {
         return 0;
     }
     // A row holds the motions if it carries a force and is closed (a
