@@ -192,8 +192,8 @@ pub fn free_motions(qp: &QpProblem) -> Vec<Vec<f64>> {
     free_on(qp, None)
 }
 
-/// [`free_motions`] with only the contact rows of `rows` (all if None)
-/// required not to move (the friction rows always).
+/// [`free_motions`] with only the contact rows of `rows` (all if None), and
+/// the friction rows that go with them, required not to move.
 fn free_on(qp: &QpProblem, rows: Option<&[bool]>) -> Vec<Vec<f64>> {
     let r = normalized(&qp.kernel);
     let k = r.len();
@@ -201,29 +201,15 @@ fn free_on(qp: &QpProblem, rows: Option<&[bool]>) -> Vec<Vec<f64>> {
         return vec![];
     }
     let sel = rows;
-    let rows = |z: &[f64]| {
-        let mut v = qp.a.mul(z);
-        if let Some(mask) = sel {
-            for (vi, &keep) in v.iter_mut().zip(mask) {
-                if !keep {
-                    *vi = 0.0;
-                }
-            }
-        }
+    // Br with the rows outside the selection zeroed.
+    let moved = |z: &[f64]| {
+        let mut v = masked(qp.a.mul(z), sel);
         if let Some(f) = &qp.friction {
-            let mut t = f.t.mul(z);
-            if let Some(mask) = sel.filter(|m| m.len() == t.len()) {
-                for (ti, &keep) in t.iter_mut().zip(mask) {
-                    if !keep {
-                        *ti = 0.0;
-                    }
-                }
-            }
-            v.extend(t);
+            v.extend(masked(f.t.mul(z), sel));
         }
         v
     };
-    let br: Vec<Vec<f64>> = r.iter().map(|z| rows(z)).collect();
+    let br: Vec<Vec<f64>> = r.iter().map(|z| moved(z)).collect();
     let gram: Vec<Vec<f64>> = (0..k)
         .map(|i| (0..k).map(|j| dot(&br[i], &br[j])).collect())
         .collect();
@@ -266,6 +252,19 @@ fn free_on(qp: &QpProblem, rows: Option<&[bool]>) -> Vec<Vec<f64>> {
         }
     }
     free
+}
+
+/// `v` with the entries outside `mask` zeroed (a mask of another length,
+/// or none, keeps every entry).
+fn masked(mut v: Vec<f64>, mask: Option<&[bool]>) -> Vec<f64> {
+    if let Some(m) = mask.filter(|m| m.len() == v.len()) {
+        for (vi, &keep) in v.iter_mut().zip(m) {
+            if !keep {
+                *vi = 0.0;
+            }
+        }
+    }
+    v
 }
 
 /// |(Br)ᵢ| ≤ 10⁻⁹·Σⱼ|Bᵢⱼ|·‖r‖_∞ on every contact and friction row (the
