@@ -348,7 +348,6 @@ fn a_gasket_under_a_sliding_plate_balances_at_any_contrast() {
 #[test]
 fn a_block_on_a_rubber_slope_is_certified_and_balanced_at_any_contrast() {
     use signorini::post;
-    use signorini::qp::SolverSection;
     use signorini::run;
     let dir = root().join("tests/data/slope");
     let tmp = tempfile::tempdir().expect("tempdir");
@@ -361,9 +360,8 @@ fn a_block_on_a_rubber_slope_is_certified_and_balanced_at_any_contrast() {
             &[("E = 1.0e6", &e), ("rho = 7850.0", &r)],
             &tmp.path().join(format!("slope_{e_pad:e}.toml")),
         );
-        let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
+        let (prep, opts) = prepared(&path);
         assert_eq!(prep.model.qp.kernel.len(), 3, "the block floats");
-        let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
         let w = rho * 9.81 * 1.2 * 0.6; // the block's weight per unit thickness
         let slope_force = [
             -w * theta.cos() * theta.sin(),
@@ -430,8 +428,6 @@ fn a_block_on_a_rubber_slope_is_certified_and_balanced_at_any_contrast() {
 #[test]
 fn a_block_held_on_a_rubber_slope_by_friction_alone_is_certified() {
     use signorini::post;
-    use signorini::qp::SolverSection;
-    use signorini::run;
     let dir = root().join("tests/data/slope");
     let tmp = tempfile::tempdir().expect("tempdir");
     let path = common::model_variant(
@@ -448,8 +444,7 @@ fn a_block_held_on_a_rubber_slope_by_friction_alone_is_certified() {
         ],
         &tmp.path().join("slope_friction.toml"),
     );
-    let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
-    let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
+    let (prep, opts) = prepared(&path);
     let w = 78.5 * 9.81 * 1.2 * 0.6;
     let mut xs = vec![];
     for method in ["ssn", "mprgp"] {
@@ -519,7 +514,6 @@ fn interface_resultant(
 #[test]
 fn an_arch_of_voussoirs_slides_without_friction_and_stands_with_it() {
     use signorini::post;
-    use signorini::qp::SolverSection;
     use signorini::run;
     let dir = root().join("tests/data/arch");
     let tmp = tempfile::tempdir().expect("tempdir");
@@ -538,8 +532,7 @@ fn an_arch_of_voussoirs_slides_without_friction_and_stands_with_it() {
         assert!(said.contains(&format!("body '{v}' (translation")), "{said}");
     }
 
-    let prep = run::prepare(&dir.join("arch.toml"), false).unwrap_or_else(|e| panic!("{e}"));
-    let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
+    let (prep, opts) = prepared(&dir.join("arch.toml"));
     let area = 28.0 / 360.0 * std::f64::consts::PI * (2.6f64.powi(2) - 2.0f64.powi(2));
     let (w_stone, w_crown) = (2400.0 * 9.81 * area, 1200.0 * 9.81 * area);
     let mut xs = vec![];
@@ -601,11 +594,7 @@ fn an_arch_of_voussoirs_slides_without_friction_and_stands_with_it() {
 #[test]
 fn a_ring_free_to_slide_between_two_plates_gets_one_answer() {
     use signorini::post;
-    use signorini::qp::SolverSection;
-    use signorini::run;
-    let prep = run::prepare(&root().join("tests/data/ring/ring.toml"), false)
-        .unwrap_or_else(|e| panic!("{e}"));
-    let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
+    let (prep, opts) = prepared(&root().join("tests/data/ring/ring.toml"));
     let load = 1e3 * 2.0;
     let methods = ["asm", "ssn", "mprgp", "dual", "preelim"];
     let runs = one_answer(&prep, &opts, &methods, "unique only up to 1 rigid motion");
@@ -633,8 +622,6 @@ fn a_ring_free_to_slide_between_two_plates_gets_one_answer() {
 /// with Coulomb friction, where rolling about a contact node does not slip.
 #[test]
 fn a_lightly_loaded_ring_free_to_roll_gets_one_answer() {
-    use signorini::qp::SolverSection;
-    use signorini::run;
     let dir = root().join("tests/data/ring");
     let tmp = tempfile::tempdir().expect("tempdir");
     let path = common::model_variant(
@@ -643,8 +630,7 @@ fn a_lightly_loaded_ring_free_to_roll_gets_one_answer() {
         &[("pn = -1.0e3", "pn = -10.0")],
         &tmp.path().join("ring_light.toml"),
     );
-    let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
-    let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
+    let (prep, opts) = prepared(&path);
     one_answer(
         &prep,
         &opts,
@@ -663,8 +649,7 @@ fn a_lightly_loaded_ring_free_to_roll_gets_one_answer() {
         ],
         &tmp.path().join("ring_light_friction.toml"),
     );
-    let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
-    let (_, opts) = run::options(&prep.problem, &SolverSection::default()).expect("options");
+    let (prep, opts) = prepared(&path);
     one_answer(
         &prep,
         &opts,
@@ -695,4 +680,14 @@ fn one_answer(
         assert!(d < 1e-6, "{m}: x {d:.2e} from {}", methods[0]);
     }
     runs
+}
+
+/// The model at `path` prepared, with the solver options of its file and
+/// no command-line flags.
+fn prepared(path: &std::path::Path) -> (signorini::run::Prepared, SolveOptions) {
+    let prep = signorini::run::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
+    let (_, opts) =
+        signorini::run::options(&prep.problem, &signorini::qp::SolverSection::default())
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    (prep, opts)
 }

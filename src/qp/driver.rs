@@ -136,6 +136,20 @@ impl Observer for Forward {
 /// ([`recession::settle_on_active`]) and a stalled one must meet.
 const CERTIFIED: f64 = 1e-6;
 
+/// "1 rigid motion", "2 rigid motions" (the notes).
+fn motions(n: usize) -> String {
+    format!("{n} rigid motion{}", if n > 1 { "s" } else { "" })
+}
+
+/// "it" or "them" for `n` motions (the notes).
+fn them(n: usize) -> &'static str {
+    if n > 1 {
+        "them"
+    } else {
+        "it"
+    }
+}
+
 /// The method a solve falls back to when `name` claims an unbounded
 /// direction that fails the certificate (docs/methods.md §8.2).
 fn fallback_for(name: &str) -> &'static str {
@@ -202,17 +216,22 @@ pub fn run(
     // Rigid motions along which the solution is not unique (a ring between
     // two flat plates): held by springs while the method runs, and the
     // answer returned without them (docs/methods.md §1.7).
+    let t_free = Instant::now();
     let free = recession::free_motions(qp);
+    log::debug!(
+        "driver: free motions {} in {:.3} s",
+        free.len(),
+        t_free.elapsed().as_secs_f64()
+    );
     let held;
     let qs = if free.is_empty() {
         qp
     } else {
         let note = format!(
-            "the solution is unique only up to {} rigid motion{} that slide{} along every contact without opening it and on which the loads do no work; the answer returned has no component along {} (docs/methods.md §1.7)",
-            free.len(),
-            if free.len() > 1 { "s" } else { "" },
+            "the solution is unique only up to {} that slide{} along every contact without opening it and on which the loads do no work; the answer returned has no component along {} (docs/methods.md §1.7)",
+            motions(free.len()),
             if free.len() > 1 { "" } else { "s" },
-            if free.len() > 1 { "them" } else { "it" },
+            them(free.len()),
         );
         log::info!("{note}");
         notes.push(note);
@@ -255,29 +274,6 @@ pub fn run(
         }
     }
     recession::without_free(&mut r.x, &free);
-    {
-        let m = qp.m();
-        let (ln, lt): (&[f64], &[f64]) = if qp.friction.is_some() && r.lambda.len() == 2 * m {
-            r.lambda.split_at(m)
-        } else {
-            (&r.lambda, &[])
-        };
-        let mut settled = r.x.clone();
-        let rolled = recession::settle_on_active(qp, &mut settled, ln, &free);
-        // The move keeps Cx, the rows with a force (and their slip) and dᵀx.
-        // It is taken only from a certified answer and only if it keeps the
-        // certificate (a gap it opens under a small λ).
-        let cert = |x: &[f64]| kkt::residuals_with_friction(qp, x, ln, lt).within(CERTIFIED);
-        if rolled > 0 && cert(&r.x) && cert(&settled) {
-            r.x = settled;
-            notes.push(format!(
-                "the solution is unique only up to {rolled} rigid motion{} that the rows carrying a force leave free (the others stop {} at their gaps); the answer returned has the least component along {} that they allow (docs/methods.md §1.7)",
-                if rolled > 1 { "s" } else { "" },
-                if rolled > 1 { "them" } else { "it" },
-                if rolled > 1 { "them" } else { "it" },
-            ));
-        }
-    }
     // A frictional method returns [λ_n; λ_t] in `lambda` (docs/methods.md §9).
     let mut lambda = r.lambda;
     let lambda_t = if qp.friction.is_some() && lambda.len() == 2 * qp.m() {
@@ -286,6 +282,32 @@ pub fn run(
         vec![]
     };
     let mut kkt = kkt::residuals_with_friction(qp, &r.x, &lambda, &lambda_t);
+    // Motions free on the rows carrying a force (docs/methods.md §1.7): the
+    // move keeps Cx, those rows (and their slip) and dᵀx. It is taken only
+    // from a certified answer and only if it keeps the certificate (a gap
+    // it opens under a small λ).
+    if kkt.within(CERTIFIED) {
+        let t_settle = Instant::now();
+        let mut settled = r.x.clone();
+        let rolled = recession::settle_on_active(qp, &mut settled, &lambda, &free);
+        log::debug!(
+            "driver: {rolled} motions free on the active rows in {:.3} s",
+            t_settle.elapsed().as_secs_f64()
+        );
+        if rolled > 0 {
+            let moved = kkt::residuals_with_friction(qp, &settled, &lambda, &lambda_t);
+            if moved.within(CERTIFIED) {
+                r.x = settled;
+                kkt = moved;
+                notes.push(format!(
+                    "the solution is unique only up to {} that the rows carrying a force leave free (the others stop {} at their gaps); the answer returned has the least component along {} that they allow (docs/methods.md §1.7)",
+                    motions(rolled),
+                    them(rolled),
+                    them(rolled),
+                ));
+            }
+        }
+    }
     let energy = qp.energy_with_friction(&r.x, &lambda);
     if !energy.is_finite() {
         kkt = Kkt::not_finite();
@@ -294,7 +316,7 @@ pub fn run(
     // the certificate proves (the dual family on a body free to roll): the
     // certificate decides, and the note says how the method stopped.
     if let Status::Failed(why) = &r.status {
-        if why.starts_with("stagnation") && kkt.within(CERTIFIED) {
+        if super::executor::stagnated(&r.status) && kkt.within(CERTIFIED) {
             notes.push(format!(
                 "{name} stopped on {why}; its answer meets the KKT certificate (≤ {CERTIFIED:e}, docs/methods.md §8.4), so it counts as converged"
             ));

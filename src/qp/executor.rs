@@ -74,6 +74,15 @@ impl Observer for Progress {
 /// methods here (CGC faces, MPRGP expansions), far shorter than MAXIT.
 pub const STALL_WINDOW: usize = 10_000;
 
+/// The start of the message of a run stopped by [`STALL_WINDOW`].
+const STAGNATION: &str = "stagnation";
+
+/// Whether `status` is the executor's stagnation stop (the driver lets the
+/// certificate judge such an answer, docs/methods.md §8.4).
+pub fn stagnated(status: &Status) -> bool {
+    matches!(status, Status::Failed(m) if m.starts_with(STAGNATION))
+}
+
 pub struct Executor {
     pub max_iter: usize,
     pub observers: Vec<Box<dyn Observer>>,
@@ -140,7 +149,7 @@ impl Executor {
             }
             if n - best_at >= STALL_WINDOW {
                 break Status::Failed(format!(
-                    "stagnation: the residual ({res:.3e}) has not gone below its best {best:.3e} \
+                    "{STAGNATION}: the residual ({res:.3e}) has not gone below its best {best:.3e} \
                      (iteration {best_at}) in {STALL_WINDOW} iterations"
                 ));
             }

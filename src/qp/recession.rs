@@ -374,26 +374,35 @@ pub fn pinned(qp: &QpProblem, free: &[Vec<f64>]) -> QpProblem {
         .iter()
         .map(|&i| (i, i, if diag[i] > 0.0 { diag[i] } else { 1.0 }))
         .collect();
-    let slot = |c: &Csr, i: usize| {
-        let (a, b) = (c.indptr[i], c.indptr[i + 1]);
-        c.indices[a..b].binary_search(&i).ok().map(|p| a + p)
+    // The springs go on the diagonal entries in place; a pattern without one
+    // (no FEM stiffness has that) is rebuilt with them.
+    let diag_at = |i: usize| {
+        let (a, b) = (qp.c.indptr[i], qp.c.indptr[i + 1]);
+        qp.c.indices[a..b].binary_search(&i).ok().map(|p| a + p)
     };
-    let mut c = qp.c.clone();
-    if pins.iter().all(|&i| slot(&c, i).is_some()) {
-        for &(i, _, v) in &springs {
-            let p = slot(&c, i).expect("checked");
-            c.data[p] += v;
+    let c = match pins
+        .iter()
+        .map(|&i| diag_at(i))
+        .collect::<Option<Vec<usize>>>()
+    {
+        Some(at) => {
+            let mut c = qp.c.clone();
+            for (p, &(_, _, v)) in at.into_iter().zip(&springs) {
+                c.data[p] += v;
+            }
+            c
         }
-    } else {
-        let mut t: Vec<(usize, usize, f64)> = (0..n)
-            .flat_map(|row| {
-                let (cols, vals) = qp.c.row(row);
-                cols.iter().zip(vals).map(move |(&j, &v)| (row, j, v))
-            })
-            .collect();
-        t.extend(springs);
-        c = Csr::from_triplets(n, n, &t);
-    }
+        None => {
+            let mut t: Vec<(usize, usize, f64)> = (0..n)
+                .flat_map(|row| {
+                    let (cols, vals) = qp.c.row(row);
+                    cols.iter().zip(vals).map(move |(&j, &v)| (row, j, v))
+                })
+                .collect();
+            t.extend(springs);
+            Csr::from_triplets(n, n, &t)
+        }
+    };
     // ker of the pinned C: z = Rβ with z = 0 on the pins, β ∈ null(R_pins).
     let k = qp.kernel.len();
     let rp: Vec<Vec<f64>> = pins
