@@ -6,7 +6,7 @@
 //! Prints one JSON line with the phase times.
 
 use super::solve::{bad_input, EXIT_BAD_INPUT};
-use crate::linalg::cholesky::Cholesky;
+use crate::linalg::cholesky::Workspace;
 use crate::run;
 use clap::Args;
 use serde_json::json;
@@ -26,6 +26,9 @@ pub struct LimitArgs {
     /// Factor and solve this many times; the JSON holds the median.
     #[arg(long, default_value_t = 1)]
     pub repeat: usize,
+    /// amd | nested-dissection; overrides [solver] ordering (docs/methods.md §3).
+    #[arg(long)]
+    pub ordering: Option<String>,
 }
 
 pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
@@ -33,12 +36,20 @@ pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };
+    let flags = crate::qp::SolverSection {
+        ordering: a.ordering.clone(),
+        ..Default::default()
+    };
+    let ordering = match run::options(&prep.problem, &flags) {
+        Ok((_, o)) => o.settings.ordering,
+        Err(e) => return bad_input(&e),
+    };
     let qp = &prep.model.qp;
     let (mut tf, mut ts) = (vec![], vec![]);
     let mut residual = f64::NAN;
     for _ in 0..a.repeat.max(1) {
         let t0 = Instant::now();
-        let ch = match Cholesky::new(&qp.c, &qp.kernel) {
+        let ch = match Workspace::with_ordering(ordering).cholesky(&qp.c, &qp.kernel) {
             Ok(c) => c,
             Err(e) => {
                 eprintln!("error: {}: {e}", a.problem.display());
@@ -68,7 +79,7 @@ pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32
             "n": qp.n(), "nnz_C": qp.c.nnz(), "kernel_dim": qp.kernel.len(),
             "t_read": prep.t_read, "t_assemble": prep.t_assemble,
             "t_factor": f, "t_solve": s, "t_factor_solve": f + s,
-            "repeat": a.repeat.max(1),
+            "repeat": a.repeat.max(1), "ordering": ordering.name(),
             "relative_residual": if residual.is_finite() { json!(residual) } else { json!(null) },
         })
     );

@@ -15,6 +15,7 @@
 //! pattern of C + AᵀA) reuses the symbolic analysis (AMD ordering,
 //! supernodes, elimination tree). [`Cholesky::new`] reuses nothing.
 
+use crate::linalg::ordering::{self, Ordering};
 use crate::linalg::rotation::{Rotation, RowBorder};
 use crate::linalg::sparse::Csr;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -212,6 +213,8 @@ impl Cholesky {
 /// single-threaded (interior mutability, not `Sync`).
 #[derive(Default)]
 pub struct Workspace {
+    /// The fill-reducing ordering of every factor made here.
+    ordering: Ordering,
     last: RefCell<Option<CacheEntry>>,
     /// The latest symbolic analyses (most recent first), by size and pattern.
     symbolic: RefCell<Vec<SymbolicEntry>>,
@@ -222,6 +225,18 @@ pub struct Workspace {
 impl Workspace {
     pub fn new() -> Workspace {
         Workspace::default()
+    }
+
+    /// A workspace whose factors use `ordering` (docs/methods.md §3).
+    pub fn with_ordering(ordering: Ordering) -> Workspace {
+        Workspace {
+            ordering,
+            ..Workspace::default()
+        }
+    }
+
+    pub fn ordering(&self) -> Ordering {
+        self.ordering
     }
 
     /// Forget the kept factorization and symbolic analyses (frees their memory).
@@ -236,8 +251,9 @@ impl Workspace {
     }
 
     /// The symbolic analysis of the lower pattern `sym` (key `hp`), kept or
-    /// made and kept; true if it was kept. The ordering is AMD, or with a
-    /// `border`, AMD on the other DOFs followed by the border DOFs in order.
+    /// made and kept; true if it was kept. The ordering is the workspace's
+    /// (AMD or nested dissection), or with a `border`, that ordering of the
+    /// other DOFs followed by the border DOFs in order.
     fn symbolic_of(
         &self,
         sym: &SymbolicSparseColMat<usize>,
@@ -253,18 +269,33 @@ impl Workspace {
             return Ok((s, true));
         }
         let fail = |e: faer::sparse::FaerError| FactorError(format!("symbolic analysis: {e:?}"));
-        let s = match border {
-            None => factorize_symbolic_cholesky(
+        let t0 = std::time::Instant::now();
+        let s = match (border, self.ordering) {
+            (None, Ordering::Amd) => factorize_symbolic_cholesky(
                 sym.as_ref(),
                 Side::Lower,
                 SymmetricOrdering::Amd,
                 Default::default(),
             ),
-            Some(b) => {
-                let t0 = std::time::Instant::now();
-                let (fwd, inv) = bordered_order(sym, b)?;
+            (None, o) => {
+                let (fwd, inv) = ordering::order(sym, o).map_err(FactorError)?;
                 log::debug!(
-                    "Cholesky: bordered ordering ({} border DOFs) {:.3} s",
+                    "Cholesky: {} ordering {:.3} s",
+                    o.name(),
+                    t0.elapsed().as_secs_f64()
+                );
+                factorize_symbolic_cholesky(
+                    sym.as_ref(),
+                    Side::Lower,
+                    SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(&fwd, &inv, n)),
+                    Default::default(),
+                )
+            }
+            (Some(b), o) => {
+                let (fwd, inv) = bordered_order(sym, b, o)?;
+                log::debug!(
+                    "Cholesky: bordered {} ordering ({} border DOFs) {:.3} s",
+                    o.name(),
                     b.len(),
                     t0.elapsed().as_secs_f64()
                 );
@@ -402,12 +433,19 @@ impl Workspace {
         }
         let t_sym = t0.elapsed().as_secs_f64() - t_prep;
         let mat = SparseColMatRef::new(sym.as_ref(), &vals);
-        let mut values = vec![0.0; symbolic.len_val()];
         let par = faer::get_global_parallelism();
-        let mut mem = MemBuffer::try_new(
-            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-        )
-        .map_err(|_| FactorError("out of memory for the numeric factorization".into()))?;
+        let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
+        // The values are allocated lazily (calloc) and touched as the
+        // factorization proceeds: without this check a factor that cannot
+        // fit ends in the kernel's OOM killer, with no message, minutes in.
+        fits_in_memory(
+            8 * symbolic.len_val() + scratch.size_bytes(),
+            symbolic.len_val(),
+            self.ordering,
+        )?;
+        let mut values = vec![0.0; symbolic.len_val()];
+        let mut mem = MemBuffer::try_new(scratch)
+            .map_err(|_| FactorError("out of memory for the numeric factorization".into()))?;
         symbolic
             .factorize_numeric_llt::<f64>(
                 &mut values,
@@ -850,14 +888,55 @@ fn border_gram(
     h
 }
 
-/// The ordering of a bordered factor: AMD on the DOFs outside `border`
-/// (their submatrix of the lower pattern `sym`), then `border` in order.
-/// Returns (new → old, old → new).
+/// Refuse a numeric factor of `bytes` (values and scratch; `nnz` entries of
+/// L) that exceeds the memory and swap the kernel reports available
+/// (`/proc/meminfo`: MemAvailable + SwapFree; no check where that file is
+/// missing). This decides only whether to start, never the bits of an
+/// answer: a factor that cannot fit would be killed midway.
+fn fits_in_memory(bytes: usize, nnz: usize, ordering: Ordering) -> Result<(), FactorError> {
+    let Some(avail) = available_memory() else {
+        return Ok(());
+    };
+    if (bytes as u64) <= avail {
+        return Ok(());
+    }
+    let gb = |b: f64| b / (1u64 << 30) as f64;
+    let hint = match ordering {
+        Ordering::Amd => "try [solver] ordering = \"nested-dissection\" (about a quarter less fill on 2D meshes, docs/methods.md §3), a coarser mesh or a larger machine",
+        Ordering::NestedDissection => "try a coarser mesh or a larger machine",
+    };
+    Err(FactorError(format!(
+        "the Cholesky factor ({} ordering, nnz(L) = {nnz}) needs {:.1} GiB, more than the {:.1} GiB of memory and swap available: {hint}",
+        ordering.name(),
+        gb(bytes as f64),
+        gb(avail as f64)
+    )))
+}
+
+/// MemAvailable + SwapFree of `/proc/meminfo`, in bytes.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let field = |name: &str| -> Option<u64> {
+        let line = text.lines().find(|l| l.starts_with(name))?;
+        let kb: u64 = line[name.len()..]
+            .trim()
+            .trim_end_matches("kB")
+            .trim()
+            .parse()
+            .ok()?;
+        Some(kb * 1024)
+    };
+    Some(field("MemAvailable:")? + field("SwapFree:").unwrap_or(0))
+}
+
+/// The ordering of a bordered factor: `ordering` of the DOFs outside
+/// `border` (their submatrix of the lower pattern `sym`), then `border` in
+/// order. Returns (new → old, old → new).
 fn bordered_order(
     sym: &SymbolicSparseColMat<usize>,
     border: &[usize],
+    ordering: Ordering,
 ) -> Result<(Vec<usize>, Vec<usize>), FactorError> {
-    use faer::sparse::linalg::amd;
     let n = sym.nrows();
     let mut in_b = vec![false; n];
     for &i in border {
@@ -886,19 +965,8 @@ fn bordered_order(
         }
         col_ptr.push(row_idx.len());
     }
-    let nnz = row_idx.len();
     let sub = SymbolicSparseColMat::new_checked(ni, ni, col_ptr, None, row_idx);
-    let (mut perm, mut perm_inv) = (vec![0usize; ni], vec![0usize; ni]);
-    let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(ni, nnz))
-        .map_err(|_| FactorError("out of memory for the ordering".into()))?;
-    amd::order_maybe_unsorted(
-        &mut perm,
-        &mut perm_inv,
-        sub.as_ref(),
-        amd::Control::default(),
-        MemStack::new(&mut mem),
-    )
-    .map_err(|e| FactorError(format!("ordering: {e:?}")))?;
+    let (perm, _) = ordering::order(&sub, ordering).map_err(FactorError)?;
     let fwd: Vec<usize> = perm
         .iter()
         .map(|&k| interior[k])
@@ -1216,13 +1284,37 @@ mod tests {
     /// from solves with the ordinary factor, for SPD and for semicoercive C
     /// (same springs), and the bordered factor solves as well as the other.
     #[test]
+    fn a_factor_larger_than_the_memory_is_refused_before_it_starts() {
+        let avail = available_memory().expect("/proc/meminfo on Linux");
+        assert!(avail > 0);
+        assert!(fits_in_memory(1 << 20, 1 << 17, Ordering::Amd).is_ok());
+        let huge = (avail as usize).saturating_mul(2);
+        let e = fits_in_memory(huge, huge / 8, Ordering::Amd).unwrap_err().0;
+        assert!(
+            e.contains("amd ordering") && e.contains("ordering = \"nested-dissection\""),
+            "{e}"
+        );
+        let e = fits_in_memory(huge, huge / 8, Ordering::NestedDissection)
+            .unwrap_err()
+            .0;
+        assert!(
+            e.contains("coarser mesh") && !e.contains("ordering ="),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn border_inverse_matches_solves() {
-        // The small grid factors simplicially, the large one in supernodes.
-        for (floating, (nx, ny)) in [
-            (false, (12, 9)),
-            (true, (12, 9)),
-            (false, (300, 60)),
-            (true, (300, 60)),
+        // The small grid factors simplicially, the large one in supernodes;
+        // the bordered factor under either ordering against AMD's plain one.
+        for (ordering, floating, (nx, ny)) in [
+            (Ordering::Amd, false, (12, 9)),
+            (Ordering::Amd, true, (12, 9)),
+            (Ordering::Amd, false, (300, 60)),
+            (Ordering::Amd, true, (300, 60)),
+            (Ordering::NestedDissection, false, (12, 9)),
+            (Ordering::NestedDissection, true, (300, 60)),
+            (Ordering::NestedDissection, false, (900, 150)),
         ] {
             let c = lap2d(nx, ny, floating);
             let n = nx * ny;
@@ -1237,11 +1329,17 @@ mod tests {
             let b = Csr::from_triplets(ny - 1, n, &tb);
             let mut border = right.clone();
             border.reverse(); // any order
-            let ws = Workspace::new();
+            let ws = Workspace::with_ordering(ordering);
             let fb = ws.cholesky_bordered(&c, &kernel, &border).unwrap();
             let fp = Cholesky::new(&c, &kernel).unwrap();
             let supernodal = matches!(fb.llt.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_));
-            assert_eq!(supernodal, nx > 20, "{nx}×{ny}");
+            // (nested dissection's fill makes faer pick simplicial storage
+            // on the 300×60 grid too)
+            assert_eq!(
+                supernodal,
+                nx > 20 && (ordering == Ordering::Amd || nx > 300),
+                "{nx}×{ny} {ordering:?}"
+            );
             assert_eq!(fb.fixing, fp.fixing);
             let h = fb.border_inverse(&b).unwrap();
             assert!(fp.border_inverse(&b).is_none(), "no border, no H");
@@ -1294,7 +1392,7 @@ mod tests {
             let inner = Csr::from_triplets(1, n, &[(0, 0, 1.0)]);
             assert!(fb.border_inverse(&inner).is_none());
             assert!(fb.border_product(&f, &inner).is_none());
-            // The bordered analysis is kept apart from the AMD one.
+            // The bordered analysis is kept apart from the plain one.
             let _ = ws.cholesky(&c, &kernel).unwrap();
             let again = ws.cholesky_bordered(&c, &kernel, &border).unwrap();
             assert!(again.border_inverse(&b).is_some());

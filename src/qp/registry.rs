@@ -46,9 +46,15 @@ pub fn certified(name: &str, kkt: &Kkt, target: f64, strict: bool) -> bool {
     kkt.within(target)
 }
 
-/// Solve `qp` by method `name` with a fresh [`Workspace`] ([`driver::run`]).
+/// Solve `qp` by method `name` with a fresh [`Workspace`] of the settings'
+/// ordering ([`driver::run`]).
 pub fn solve(name: &str, qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
-    solve_in(name, qp, opts, &Workspace::new())
+    solve_in(
+        name,
+        qp,
+        opts,
+        &Workspace::with_ordering(opts.settings.ordering),
+    )
 }
 
 /// Solve `qp` by method `name`, reusing factorizations kept in `ws`

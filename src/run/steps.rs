@@ -222,7 +222,7 @@ impl<'a> Run<'a> {
         let mut certified = true;
         let mut last = None;
         // One workspace for every step: C is the same, its factor is reused.
-        let ws = Workspace::new();
+        let ws = Workspace::with_ordering(self.opts.settings.ordering);
         for s in steps.clone() {
             let ts = Instant::now();
             // Without [[steps]] the prepared model is the problem; with steps

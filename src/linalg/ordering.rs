@@ -1,0 +1,268 @@
+//! Fill-reducing orderings for the sparse Cholesky factors (docs/methods.md §3).
+//!
+//! The factor of C costs what its fill costs: nnz(L) is the memory, Σcⱼ² the
+//! work. Two orderings are offered, chosen by the user (`[solver] ordering`),
+//! never by the size of the model, so the same input gives the same bits:
+//!
+//! - **AMD** (approximate minimum degree, faer's port of SuiteSparse AMD;
+//!   Amestoy, Davis & Duff 1996): the default, cheap to compute, the fastest
+//!   factor + solve on every benchmark mesh up to 2 M nodes.
+//! - **Nested dissection** (METIS 5 `NodeND`; Karypis & Kumar, SIAM J. Sci.
+//!   Comput. 20(1), 1998): recursive vertex separators. On the 2D meshes of
+//!   the benchmark it gives about a quarter less fill (nnz(L)) and 40 % fewer
+//!   flops than AMD, but the ordering itself takes two to three times as
+//!   long as AMD's: worth it when the factor would not otherwise fit in memory.
+//!
+//! Orderings are returned as (new → old, old → new).
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::SymbolicSparseColMat;
+use std::sync::Mutex;
+
+/// The fill-reducing ordering of a sparse Cholesky factor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Ordering {
+    /// Approximate minimum degree (faer).
+    #[default]
+    Amd,
+    /// Nested dissection (METIS).
+    NestedDissection,
+}
+
+impl Ordering {
+    /// The spellings of `[solver] ordering` and `--ordering`.
+    pub const NAMES: [&'static str; 2] = ["amd", "nested-dissection"];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Ordering::Amd => "amd",
+            Ordering::NestedDissection => "nested-dissection",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Ordering> {
+        match s {
+            "amd" => Some(Ordering::Amd),
+            "nested-dissection" => Some(Ordering::NestedDissection),
+            _ => None,
+        }
+    }
+}
+
+/// `ordering` of the symmetric pattern whose lower (or upper) triangle is
+/// `sym` (diagonal entries allowed and ignored; each off-diagonal pair once).
+pub fn order(
+    sym: &SymbolicSparseColMat<usize>,
+    ordering: Ordering,
+) -> Result<(Vec<usize>, Vec<usize>), String> {
+    match ordering {
+        Ordering::Amd => amd(sym),
+        Ordering::NestedDissection => nested_dissection(sym),
+    }
+}
+
+/// AMD (faer) of the pattern `sym`.
+pub fn amd(sym: &SymbolicSparseColMat<usize>) -> Result<(Vec<usize>, Vec<usize>), String> {
+    use faer::sparse::linalg::amd;
+    let n = sym.nrows();
+    let nnz = sym.row_idx().len();
+    let (mut perm, mut perm_inv) = (vec![0usize; n], vec![0usize; n]);
+    let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(n, nnz))
+        .map_err(|_| "out of memory for the ordering".to_string())?;
+    amd::order_maybe_unsorted(
+        &mut perm,
+        &mut perm_inv,
+        sym.as_ref(),
+        amd::Control::default(),
+        MemStack::new(&mut mem),
+    )
+    .map_err(|e| format!("AMD ordering: {e:?}"))?;
+    Ok((perm, perm_inv))
+}
+
+/// METIS keeps its random state in globals: one call at a time, so that
+/// concurrent solves (tests, a library user's threads) stay deterministic.
+static METIS: Mutex<()> = Mutex::new(());
+
+/// The seed of METIS's randomised coarsening: fixed, so an ordering is a
+/// function of the pattern alone.
+const METIS_SEED: i32 = 42;
+
+/// Nested dissection (METIS_NodeND, with its default compression of
+/// vertices of equal adjacency: the two DOFs of a node) of the pattern `sym`.
+pub fn nested_dissection(
+    sym: &SymbolicSparseColMat<usize>,
+) -> Result<(Vec<usize>, Vec<usize>), String> {
+    let n = sym.nrows();
+    if n <= 2 {
+        let id: Vec<usize> = (0..n).collect();
+        return Ok((id.clone(), id));
+    }
+    let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+    // The full adjacency (both triangles, no loops) in METIS's CSR.
+    let mut deg = vec![0usize; n];
+    for j in 0..n {
+        for &i in &ri[cp[j]..cp[j + 1]] {
+            if i != j {
+                deg[i] += 1;
+                deg[j] += 1;
+            }
+        }
+    }
+    let total: usize = deg.iter().sum();
+    if total > i32::MAX as usize || n > i32::MAX as usize {
+        return Err(format!(
+            "nested dissection: the graph has {total} adjacency entries, more than METIS's 32-bit indices hold; use ordering = \"amd\""
+        ));
+    }
+    let mut xadj = vec![0i32; n + 1];
+    for i in 0..n {
+        xadj[i + 1] = xadj[i] + deg[i] as i32;
+    }
+    let mut next: Vec<usize> = xadj[..n].iter().map(|&v| v as usize).collect();
+    let mut adjncy = vec![0i32; total];
+    for j in 0..n {
+        for &i in &ri[cp[j]..cp[j + 1]] {
+            if i != j {
+                adjncy[next[i]] = j as i32;
+                next[i] += 1;
+                adjncy[next[j]] = i as i32;
+                next[j] += 1;
+            }
+        }
+    }
+    drop(next);
+    drop(deg);
+    let mut nv = n as i32;
+    let mut options = [0i32; metis_sys::METIS_NOPTIONS as usize];
+    let (mut perm, mut iperm) = (vec![0i32; n], vec![0i32; n]);
+    let rc = {
+        let _one = METIS.lock().unwrap_or_else(|e| e.into_inner());
+        // SAFETY: every array has the length METIS_NodeND reads (nv + 1 for
+        // xadj, xadj[nv] for adjncy, nv for perm and iperm, METIS_NOPTIONS
+        // for options); vwgt may be null. METIS keeps no pointer after the call.
+        unsafe {
+            metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
+            options[metis_sys::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
+            options[metis_sys::moptions_et_METIS_OPTION_SEED as usize] = METIS_SEED;
+            metis_sys::METIS_NodeND(
+                &mut nv,
+                xadj.as_mut_ptr(),
+                adjncy.as_mut_ptr(),
+                std::ptr::null_mut(),
+                options.as_mut_ptr(),
+                perm.as_mut_ptr(),
+                iperm.as_mut_ptr(),
+            )
+        }
+    };
+    if rc != metis_sys::rstatus_et_METIS_OK {
+        return Err(match rc {
+            metis_sys::rstatus_et_METIS_ERROR_MEMORY => {
+                "nested dissection: METIS ran out of memory".to_string()
+            }
+            _ => format!("nested dissection: METIS_NodeND failed (status {rc})"),
+        });
+    }
+    // METIS: row i of the permuted matrix is row perm[i] of the original.
+    let fwd: Vec<usize> = perm.iter().map(|&v| v as usize).collect();
+    let inv: Vec<usize> = iperm.iter().map(|&v| v as usize).collect();
+    let mut seen = vec![false; n];
+    for (k, &i) in fwd.iter().enumerate() {
+        if i >= n || seen[i] || inv[i] != k {
+            return Err("nested dissection: METIS returned no permutation".into());
+        }
+        seen[i] = true;
+    }
+    Ok((fwd, inv))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Lower pattern (with diagonal) of the 5-point Laplacian on a k×k grid.
+    fn grid(k: usize) -> SymbolicSparseColMat<usize> {
+        let n = k * k;
+        let mut cp = vec![0usize];
+        let mut ri = vec![];
+        for j in 0..n {
+            let (x, y) = (j % k, j / k);
+            ri.push(j);
+            if x + 1 < k {
+                ri.push(j + 1);
+            }
+            if y + 1 < k {
+                ri.push(j + k);
+            }
+            cp.push(ri.len());
+        }
+        SymbolicSparseColMat::new_checked(n, n, cp, None, ri)
+    }
+
+    /// nnz(L) of `sym` permuted by `fwd` (symbolic analysis by faer).
+    fn fill(sym: &SymbolicSparseColMat<usize>, fwd: &[usize], inv: &[usize]) -> usize {
+        use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymmetricOrdering};
+        let n = sym.nrows();
+        let s = factorize_symbolic_cholesky(
+            sym.as_ref(),
+            faer::Side::Lower,
+            SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, inv, n)),
+            Default::default(),
+        )
+        .unwrap();
+        s.len_val()
+    }
+
+    #[test]
+    fn nested_dissection_is_a_permutation_with_less_fill_than_amd_on_a_large_grid() {
+        let g = grid(160);
+        let (f_nd, i_nd) = nested_dissection(&g).unwrap();
+        let (f_amd, i_amd) = amd(&g).unwrap();
+        for (k, &i) in f_nd.iter().enumerate() {
+            assert_eq!(i_nd[i], k);
+        }
+        let (nd, am) = (fill(&g, &f_nd, &i_nd), fill(&g, &f_amd, &i_amd));
+        let id: Vec<usize> = (0..g.nrows()).collect();
+        let natural = fill(&g, &id, &id);
+        // A banded (natural) order fills k per column; both orderings beat it,
+        // nested dissection by the most.
+        assert!(
+            nd < am && am < natural,
+            "nd {nd}, amd {am}, natural {natural}"
+        );
+    }
+
+    #[test]
+    fn nested_dissection_is_the_same_from_concurrent_threads() {
+        let g = grid(60);
+        let first = nested_dissection(&g).unwrap();
+        let others: Vec<_> = std::thread::scope(|s| {
+            let h: Vec<_> = (0..4)
+                .map(|_| s.spawn(|| nested_dissection(&g).unwrap()))
+                .collect();
+            h.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        for o in others {
+            assert_eq!(o, first);
+        }
+    }
+
+    #[test]
+    fn tiny_and_edgeless_patterns() {
+        for n in 0..3 {
+            let cp: Vec<usize> = (0..=n).collect();
+            let ri: Vec<usize> = (0..n).collect();
+            let s = SymbolicSparseColMat::new_checked(n, n, cp, None, ri);
+            let (f, i) = nested_dissection(&s).unwrap();
+            assert_eq!(f.len(), n);
+            assert_eq!(i.len(), n);
+        }
+        // Diagonal only, larger: METIS gets a graph with no edges.
+        let n = 50;
+        let s = SymbolicSparseColMat::new_checked(n, n, (0..=n).collect(), None, (0..n).collect());
+        let (mut f, _) = nested_dissection(&s).unwrap();
+        f.sort();
+        assert_eq!(f, (0..n).collect::<Vec<_>>());
+    }
+}
