@@ -54,8 +54,11 @@ const GROW_MIN: usize = BLOCK;
 const REFINE_MAX: usize = 3;
 /// A border of at most BORDER_RATIO·√n unknowns is eliminated last ([`small_border`]).
 const BORDER_RATIO: f64 = 12.0;
-/// And at most this many (the dense trailing block: 8·BORDER_MAX² bytes).
-const BORDER_MAX: usize = 10000;
+/// And at most this many (the dense trailing block: 8·BORDER_MAX² bytes,
+/// 2 GiB). 10 000 sent the three-body model at 5 M nodes (12 296 border
+/// unknowns) to the path of C + AᵀA: 7 Newton steps and 3 refactors, 316 s
+/// of solve; bordered, 1 step and 136 s (BENCHMARKS.md, Notes).
+const BORDER_MAX: usize = 16384;
 /// Dual-space steps at most in [`Ssn::dense_start`].
 const DENSE_STEPS_MAX: usize = 100;
 /// The certificate an answer must meet to be returned as converged.
