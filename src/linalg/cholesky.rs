@@ -1,5 +1,6 @@
-//! Sparse Cholesky factorization of C (faer, AMD ordering, supernodal), with
-//! the symbolic analysis kept for refactoring matrices of the same pattern.
+//! Sparse Cholesky factorization of C (faer, supernodal; AMD or nested
+//! dissection, [`crate::linalg::ordering`]), with the symbolic analysis kept
+//! for refactoring matrices of the same pattern.
 //!
 //! A semicoercive C (floating bodies) is singular. Given a basis R of ker C we
 //! pick k "fixing" DOFs S (pivoted QR on Rᵀ, so R_S is nonsingular) and factor
@@ -12,7 +13,7 @@
 //! the values of the (shifted) lower triangle. The same matrix again (load
 //! steps: C does not change between steps) reuses the numeric factor; the
 //! same pattern with other values (penalty's C + A_JᵀA_J/ε on the fixed
-//! pattern of C + AᵀA) reuses the symbolic analysis (AMD ordering,
+//! pattern of C + AᵀA) reuses the symbolic analysis (ordering,
 //! supernodes, elimination tree). [`Cholesky::new`] reuses nothing.
 
 use crate::linalg::ordering::{self, Ordering};
