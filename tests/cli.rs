@@ -291,6 +291,10 @@ fn bad_unknown_method_and_parameters() {
         &format!("{GOOD}[solver]\npreconditioner = \"amg\"\n"),
         &["amg", "preconditioner"],
     );
+    bad(
+        &format!("{GOOD}[solver]\nordering = \"metis\"\n"),
+        &["ordering = \"metis\"", "\"nested-dissection\""],
+    );
 }
 
 #[test]
