@@ -70,6 +70,7 @@ fn solve_writes_all_four_outputs_with_the_contract_arrays() {
         "problem",
         "method",
         "preconditioner",
+        "ordering",
         "converged",
         "iterations",
         "nodes",

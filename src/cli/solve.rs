@@ -179,8 +179,8 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
         s.dofs, s.constraints
     );
     println!(
-        "method      {} (preconditioner {})",
-        s.method, s.preconditioner
+        "method      {} (preconditioner {}, ordering {})",
+        s.method, s.preconditioner, s.ordering
     );
     println!(
         "status      {} after {} iterations ({} inner)",

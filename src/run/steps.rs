@@ -358,6 +358,7 @@ impl<'a> Run<'a> {
             prep,
             last.model(prep),
             method,
+            self.opts.settings.ordering,
             &last.result,
             &last.output,
             &last.forces,

@@ -16,6 +16,9 @@ pub struct Summary {
     pub problem: String,
     pub method: String,
     pub preconditioner: String,
+    /// The fill-reducing ordering of the sparse Cholesky factors
+    /// (`[solver] ordering`): it changes the bits of an answer.
+    pub ordering: String,
     pub converged: bool,
     pub status: String,
     pub iterations: usize,
@@ -140,6 +143,7 @@ impl Summary {
         prep: &Prepared,
         model: &Model,
         method: &str,
+        ordering: crate::linalg::ordering::Ordering,
         res: &QpResult,
         step: &StepOutput,
         forces: &Forces,
@@ -170,6 +174,7 @@ impl Summary {
             problem: prep.problem.name.clone(),
             method: method.to_string(),
             preconditioner: step.info.preconditioner.clone(),
+            ordering: ordering.name().to_string(),
             converged: res.status.converged(),
             status: res.status.describe(),
             iterations: res.iterations,
