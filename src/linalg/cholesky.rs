@@ -272,32 +272,22 @@ impl Workspace {
         let fail = |e: faer::sparse::FaerError| FactorError(format!("symbolic analysis: {e:?}"));
         let t0 = std::time::Instant::now();
         let s = match (border, self.ordering) {
+            // faer's own AMD on the whole pattern (the plain factor of old).
             (None, Ordering::Amd) => factorize_symbolic_cholesky(
                 sym.as_ref(),
                 Side::Lower,
                 SymmetricOrdering::Amd,
                 Default::default(),
             ),
-            (None, o) => {
-                let (fwd, inv) = ordering::order(sym, o).map_err(FactorError)?;
+            (border, o) => {
+                let (fwd, inv) = match border {
+                    None => ordering::order(sym, o).map_err(FactorError)?,
+                    Some(b) => bordered_order(sym, b, o)?,
+                };
                 log::debug!(
-                    "Cholesky: {} ordering {:.3} s",
+                    "Cholesky: {}{} ordering {:.3} s",
+                    if border.is_some() { "bordered " } else { "" },
                     o.name(),
-                    t0.elapsed().as_secs_f64()
-                );
-                factorize_symbolic_cholesky(
-                    sym.as_ref(),
-                    Side::Lower,
-                    SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(&fwd, &inv, n)),
-                    Default::default(),
-                )
-            }
-            (Some(b), o) => {
-                let (fwd, inv) = bordered_order(sym, b, o)?;
-                log::debug!(
-                    "Cholesky: bordered {} ordering ({} border DOFs) {:.3} s",
-                    o.name(),
-                    b.len(),
                     t0.elapsed().as_secs_f64()
                 );
                 factorize_symbolic_cholesky(

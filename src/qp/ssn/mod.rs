@@ -56,8 +56,9 @@ const REFINE_MAX: usize = 3;
 const BORDER_RATIO: f64 = 12.0;
 /// And at most this many (the dense trailing block: 8·BORDER_MAX² bytes,
 /// 2 GiB). 10 000 sent the three-body model at 5 M nodes (12 296 border
-/// unknowns) to the path of C + AᵀA: 7 Newton steps and 3 refactors, 316 s
-/// of solve; bordered, 1 step and 136 s (BENCHMARKS.md, Notes).
+/// unknowns) to the path of C + AᵀA: 7 Newton steps and 3 refactors (with
+/// AMD killed at 22.6 GiB; with nested dissection 316 s of solve); bordered,
+/// 1 step: 109 s with AMD (BENCHMARKS.md, Notes).
 const BORDER_MAX: usize = 16384;
 /// Dual-space steps at most in [`Ssn::dense_start`].
 const DENSE_STEPS_MAX: usize = 100;
