@@ -23,7 +23,7 @@ bench_setup() {
     fi
     if ! "$venv/bin/python" -c "import numpy, scipy.io, scipy.sparse, clarabel, osqp" >/dev/null 2>&1; then
         echo "bench_setup: pip install $pkgs into $venv" >&2
-        "$venv/bin/pip" install -q --disable-pip-version-check $pkgs \
+        "$venv/bin/pip" install -q --no-cache-dir --disable-pip-version-check $pkgs \
             || { echo "bench_setup: pip install failed" >&2; return 2; }
         "$venv/bin/python" -c "import numpy, scipy.io, scipy.sparse, clarabel, osqp" \
             || { echo "bench_setup: the peers still do not import" >&2; return 2; }

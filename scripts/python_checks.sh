@@ -59,7 +59,7 @@ if ! "$VENV/bin/python" -c "import pyvista, h5py, meshio, numpy" >/dev/null 2>&1
     stamp "creating $VENV: pip install $PY_VENV_PKGS"
     rm -rf "$VENV"
     python3 -m venv "$VENV" || { echo "python_checks: python3 -m venv failed" >&2; exit 2; }
-    "$VENV/bin/pip" install -q --disable-pip-version-check $PY_VENV_PKGS \
+    "$VENV/bin/pip" install -q --no-cache-dir --disable-pip-version-check $PY_VENV_PKGS \
         || { echo "python_checks: pip install into .venv failed" >&2; exit 2; }
     stamp "venv done"
 fi
@@ -71,7 +71,7 @@ if ! /usr/bin/python3 -c "import sys; sys.path.append('$PYDEPS'); import clarabe
     debver=$(/usr/bin/python3 -c 'import sys; print(f"{sys.version_info[0]}.{sys.version_info[1]}")')
     stamp "pip install --target .venv/debian-site $PY_QP_PKG (for /usr/bin/python3 $debver)"
     rm -rf "$PYDEPS"
-    "$VENV/bin/pip" install -q --disable-pip-version-check --no-deps --only-binary=:all: \
+    "$VENV/bin/pip" install -q --no-cache-dir --disable-pip-version-check --no-deps --only-binary=:all: \
         --python-version "$debver" --target "$PYDEPS" $PY_QP_PKG \
         || { echo "python_checks: pip install --target .venv/debian-site failed" >&2; exit 2; }
     /usr/bin/python3 -c "import sys; sys.path.append('$PYDEPS'); import clarabel" \

@@ -23,6 +23,9 @@ stage() {
     stage_name=$1
     stage_start=$SECONDS
     [ "$stage_name" = done ] || echo "test.sh: == $stage_name" >&2
+    # free disk at each stage: a CI disk that fills shows here, not only as
+    # a pip or linker error
+    df -h . 2>/dev/null | awk 'NR == 2 { print "test.sh: disk free " $4 " of " $2 }' >&2 || true
 }
 
 stage format
