@@ -27,10 +27,36 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, Mat, MatMut, Side};
 use std::cell::{Cell, RefCell};
 
-/// A factorization that failed (C not positive definite, a bad pattern).
+/// A factorization that failed: C not positive definite or a bad pattern,
+/// or (`memory`) a factor that does not fit in the memory available.
 #[derive(Debug, Clone, thiserror::Error)]
-#[error("{0}")]
-pub struct FactorError(pub String);
+#[error("{message}")]
+pub struct FactorError {
+    pub message: String,
+    /// The failure is one of resources, not of the matrix: a method must
+    /// not read it as "this matrix cannot be factored" and take another
+    /// path, or the bits of an answer would depend on the machine's free
+    /// memory. It ends the solve with the message.
+    pub memory: bool,
+}
+
+impl FactorError {
+    /// A failure of the matrix (not positive definite, a bad pattern).
+    pub fn new(message: impl Into<String>) -> FactorError {
+        FactorError {
+            message: message.into(),
+            memory: false,
+        }
+    }
+
+    /// A factor that does not fit in memory.
+    pub fn memory(message: impl Into<String>) -> FactorError {
+        FactorError {
+            message: message.into(),
+            memory: true,
+        }
+    }
+}
 use std::sync::Arc;
 
 pub struct Cholesky {
@@ -221,6 +247,9 @@ pub struct Workspace {
     symbolic: RefCell<Vec<SymbolicEntry>>,
     numeric_reused: Cell<usize>,
     symbolic_reused: Cell<usize>,
+    /// At most this many bytes for one numeric factor, below what the
+    /// machine reports (`None`: the machine's figure alone).
+    memory_limit: Option<u64>,
 }
 
 impl Workspace {
@@ -238,6 +267,14 @@ impl Workspace {
 
     pub fn ordering(&self) -> Ordering {
         self.ordering
+    }
+
+    /// The same workspace, its numeric factors limited to `bytes` (values
+    /// and scratch) besides the machine's free memory: for a machine
+    /// shared with other jobs, and for tests of the refusal.
+    pub fn with_memory_limit(mut self, bytes: u64) -> Workspace {
+        self.memory_limit = Some(bytes);
+        self
     }
 
     /// Forget the kept factorization and symbolic analyses (frees their memory).
@@ -269,7 +306,12 @@ impl Workspace {
             kept.insert(0, e);
             return Ok((s, true));
         }
-        let fail = |e: faer::sparse::FaerError| FactorError(format!("symbolic analysis: {e:?}"));
+        let fail = |e: faer::sparse::FaerError| match e {
+            faer::sparse::FaerError::OutOfMemory => {
+                FactorError::memory("out of memory for the symbolic analysis")
+            }
+            e => FactorError::new(format!("symbolic analysis: {e:?}")),
+        };
         let t0 = std::time::Instant::now();
         let s = match (border, self.ordering) {
             // faer's own AMD on the whole pattern (the plain factor of old).
@@ -281,7 +323,7 @@ impl Workspace {
             ),
             (border, o) => {
                 let (fwd, inv) = match border {
-                    None => ordering::order(sym, o).map_err(FactorError)?,
+                    None => ordering::order(sym, o).map_err(FactorError::new)?,
                     Some(b) => bordered_order(sym, b, o)?,
                 };
                 log::debug!(
@@ -433,10 +475,11 @@ impl Workspace {
             8 * symbolic.len_val() + scratch.size_bytes(),
             symbolic.len_val(),
             self.ordering,
+            self.memory_limit,
         )?;
         let mut values = vec![0.0; symbolic.len_val()];
         let mut mem = MemBuffer::try_new(scratch)
-            .map_err(|_| FactorError("out of memory for the numeric factorization".into()))?;
+            .map_err(|_| FactorError::memory("out of memory for the numeric factorization"))?;
         symbolic
             .factorize_numeric_llt::<f64>(
                 &mut values,
@@ -448,7 +491,7 @@ impl Workspace {
                 Default::default(),
             )
             .map_err(|e| {
-                FactorError(format!(
+                FactorError::new(format!(
                     "C is not positive definite ({e:?}); a body may be free to move without the kernel being known"
                 ))
             })?;
@@ -883,24 +926,42 @@ fn border_gram(
 /// L) that exceeds the memory and swap the kernel reports available
 /// (`/proc/meminfo`: MemAvailable + SwapFree; no check where that file is
 /// missing). This decides only whether to start, never the bits of an
-/// answer: a factor that cannot fit would be killed midway.
-fn fits_in_memory(bytes: usize, nnz: usize, ordering: Ordering) -> Result<(), FactorError> {
-    let Some(avail) = available_memory() else {
-        return Ok(());
+/// answer: a factor that cannot fit would be killed midway, and a refusal
+/// ends the solve ([`FactorError::memory`]). `limit`: the workspace's own.
+fn fits_in_memory(
+    bytes: usize,
+    nnz: usize,
+    ordering: Ordering,
+    limit: Option<u64>,
+) -> Result<(), FactorError> {
+    let machine = available_memory();
+    let (avail, what) = match (machine, limit) {
+        (Some(a), Some(l)) if l < a => (l, "the limit set for the factors"),
+        (Some(a), _) => (a, "the memory and swap available"),
+        (None, Some(l)) => (l, "the limit set for the factors"),
+        (None, None) => return Ok(()),
     };
     if (bytes as u64) <= avail {
         return Ok(());
     }
-    let gb = |b: f64| b / (1u64 << 30) as f64;
+    let size = |b: u64| {
+        let (v, unit) = match b {
+            b if b >= 1 << 30 => (b as f64 / (1u64 << 30) as f64, "GiB"),
+            b if b >= 1 << 20 => (b as f64 / (1u64 << 20) as f64, "MiB"),
+            b if b >= 1 << 10 => (b as f64 / 1024.0, "KiB"),
+            b => return format!("{b} bytes"),
+        };
+        format!("{v:.1} {unit}")
+    };
     let hint = match ordering {
         Ordering::Amd => "try [solver] ordering = \"nested-dissection\" (about a quarter less fill on 2D meshes, docs/methods.md §3), a coarser mesh or a larger machine",
         Ordering::NestedDissection => "try a coarser mesh or a larger machine",
     };
-    Err(FactorError(format!(
-        "the Cholesky factor ({} ordering, nnz(L) = {nnz}) needs {:.1} GiB, more than the {:.1} GiB of memory and swap available: {hint}",
+    Err(FactorError::memory(format!(
+        "the Cholesky factor ({} ordering, nnz(L) = {nnz}) needs {}, more than {what} ({}): {hint}",
         ordering.name(),
-        gb(bytes as f64),
-        gb(avail as f64)
+        size(bytes as u64),
+        size(avail)
     )))
 }
 
@@ -932,7 +993,7 @@ fn bordered_order(
     let mut in_b = vec![false; n];
     for &i in border {
         if i >= n || in_b[i] {
-            return Err(FactorError(format!(
+            return Err(FactorError::new(format!(
                 "bordered factor: border DOF {i} out of range or repeated"
             )));
         }
@@ -957,7 +1018,7 @@ fn bordered_order(
         col_ptr.push(row_idx.len());
     }
     let sub = SymbolicSparseColMat::new_checked(ni, ni, col_ptr, None, row_idx);
-    let (perm, _) = ordering::order(&sub, ordering).map_err(FactorError)?;
+    let (perm, _) = ordering::order(&sub, ordering).map_err(FactorError::new)?;
     let fwd: Vec<usize> = perm
         .iter()
         .map(|&k| interior[k])
@@ -1278,16 +1339,24 @@ mod tests {
     fn a_factor_larger_than_the_memory_is_refused_before_it_starts() {
         let avail = available_memory().expect("/proc/meminfo on Linux");
         assert!(avail > 0);
-        assert!(fits_in_memory(1 << 20, 1 << 17, Ordering::Amd).is_ok());
+        assert!(fits_in_memory(1 << 20, 1 << 17, Ordering::Amd, None).is_ok());
+        assert!(fits_in_memory(1 << 20, 1 << 17, Ordering::Amd, Some(1 << 20)).is_ok());
+        assert!(
+            fits_in_memory(1 << 20, 1 << 17, Ordering::Amd, Some(1 << 19))
+                .unwrap_err()
+                .memory
+        );
         let huge = (avail as usize).saturating_mul(2);
-        let e = fits_in_memory(huge, huge / 8, Ordering::Amd).unwrap_err().0;
+        let e = fits_in_memory(huge, huge / 8, Ordering::Amd, None).unwrap_err();
+        assert!(e.memory);
+        let e = e.message;
         assert!(
             e.contains("amd ordering") && e.contains("ordering = \"nested-dissection\""),
             "{e}"
         );
-        let e = fits_in_memory(huge, huge / 8, Ordering::NestedDissection)
+        let e = fits_in_memory(huge, huge / 8, Ordering::NestedDissection, None)
             .unwrap_err()
-            .0;
+            .message;
         assert!(
             e.contains("coarser mesh") && !e.contains("ordering ="),
             "{e}"

@@ -369,11 +369,19 @@ pub enum QpError {
     Unsupported(String),
     #[error("factorization failed: {0}")]
     Factor(String),
+    /// A factor that does not fit in memory: never a reason to try another
+    /// path (the bits of an answer must not depend on free memory).
+    #[error("{0}")]
+    Memory(String),
 }
 
 impl From<crate::linalg::cholesky::FactorError> for QpError {
     fn from(e: crate::linalg::cholesky::FactorError) -> QpError {
-        QpError::Factor(e.0)
+        if e.memory {
+            QpError::Memory(e.message)
+        } else {
+            QpError::Factor(e.message)
+        }
     }
 }
 

@@ -555,3 +555,60 @@ fn preelim_refuses_singular_c11() {
     let r = crate::qp::run_direct(cgc::solve, &qp, &opts(1e-10)).unwrap();
     assert!(r.status.converged());
 }
+
+/// A factor refused for memory ends the solve with `QpError::Memory`,
+/// whatever the method: it is never read as "this matrix cannot be
+/// factored" and answered by another path (ssn's Schur path after its
+/// augmented one, penalty going on without its correction), or the bits of
+/// an answer would depend on the machine's free memory.
+#[test]
+fn a_factor_refused_for_memory_ends_every_method_without_another_path() {
+    use crate::linalg::cholesky::Workspace;
+    use crate::qp::settings::SsnPath;
+    let qp = two_bodies(Variant::Coercive { gaps: true });
+    let memory = |r: Result<QpResult, QpError>| match r {
+        Err(QpError::Memory(msg)) => assert!(msg.contains("needs"), "{msg}"),
+        Err(e) => panic!("not a memory error: {e}"),
+        Ok(r) => panic!("solved ({}) under a refused factor", r.status.describe()),
+    };
+    // (asm-cgh factors nothing unless its CG with hyperbolic pairs fails)
+    for name in [
+        "cgc", "preelim", "penalty", "uzawa", "dual", "asm", "mprgp", "ssn",
+    ] {
+        let ws = Workspace::new().with_memory_limit(1);
+        memory(registry::solve_in(name, &qp, &opts(1e-12), &ws));
+    }
+    // The smallest limit under which ssn's Schur path (one factor of C)
+    // solves: the augmented path's factor of C + AᵀA is larger, so ssn
+    // forced onto it must fail there, not fall back to the Schur path.
+    let with_path = |path: SsnPath| {
+        let mut o = opts(1e-12);
+        o.settings.ssn.path = path;
+        o
+    };
+    let solves = |limit: u64| {
+        let ws = Workspace::new().with_memory_limit(limit);
+        registry::solve_in("ssn", &qp, &with_path(SsnPath::Schur), &ws).is_ok()
+    };
+    let (mut lo, mut hi) = (1u64, 1u64 << 30);
+    assert!(solves(hi) && !solves(lo));
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if solves(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let ws = Workspace::new().with_memory_limit(hi);
+    memory(registry::solve_in(
+        "ssn",
+        &qp,
+        &with_path(SsnPath::Augmented),
+        &ws,
+    ));
+    // With room for both, the augmented path solves.
+    let ws = Workspace::new().with_memory_limit(1 << 30);
+    let r = registry::solve_in("ssn", &qp, &with_path(SsnPath::Augmented), &ws).unwrap();
+    assert!(r.status.converged(), "{}", r.status.describe());
+}

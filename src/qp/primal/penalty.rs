@@ -48,6 +48,9 @@ pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
     let mut st = ctx.phase("setup", |ctx| setup(qp, ctx))?;
     let mut exec = ctx.executor("penalty");
     let (status, iters) = ctx.phase("iterate", |_| exec.run(&mut st));
+    if let Some(e) = st.error.take() {
+        return Err(e);
+    }
     let ax = qp.a.mul(&st.x);
     let viol: Vec<f64> = ax
         .iter()
@@ -140,6 +143,7 @@ fn setup<'a>(qp: &'a QpProblem, ctx: &Context<'a>) -> Result<Relax<'a>, QpError>
         factorizations: 0,
         ws: ctx.ws,
         aug: None,
+        error: None,
     })
 }
 
@@ -167,6 +171,8 @@ struct Relax<'a> {
     ws: &'a Workspace,
     /// The pattern of C + AᵀA, made at the first correction.
     aug: Option<AugPattern>,
+    /// A factor refused for memory: the solve ends with it.
+    error: Option<QpError>,
 }
 
 impl Relax<'_> {
@@ -184,7 +190,7 @@ impl Relax<'_> {
     fn subspace_correction(&mut self) {
         for _ in 0..NEWTON_STEPS {
             let before: Vec<bool> = self.s.iter().map(|&v| v > 0.0).collect();
-            if !self.newton_step() {
+            if !self.newton_step() || self.error.is_some() {
                 return;
             }
             if self.s.iter().map(|&v| v > 0.0).eq(before) {
@@ -216,11 +222,23 @@ impl Relax<'_> {
         // A floating body J does not hold yet makes K singular: then the
         // spring-regularised K + S (fixing DOFs, [`Cholesky::new`]) still
         // gives a descent direction −(K + S)⁻¹∇g_ε.
+        // A factor refused for memory ends the solve (QpError::Memory):
+        // going on without the correction would make the answer depend on
+        // the machine's free memory.
         let fac = match self.ws.cholesky(k, &[]) {
             Ok(f) => f,
+            Err(e) if e.memory => {
+                self.error = Some(e.into());
+                return false;
+            }
             Err(_) if !qp.kernel.is_empty() => match self.ws.cholesky(k, &qp.kernel) {
                 Ok(f) => f,
-                Err(_) => return false,
+                Err(e) => {
+                    if e.memory {
+                        self.error = Some(e.into());
+                    }
+                    return false;
+                }
             },
             Err(_) => return false,
         };
@@ -284,6 +302,9 @@ impl Iterative for Relax<'_> {
         self.sweeps += 1;
         if self.correct && self.sweeps.is_multiple_of(CORRECTION_EVERY) {
             self.subspace_correction();
+            if let Some(e) = &self.error {
+                return Step::Done(Status::Failed(e.to_string()), IterRecord::default());
+            }
         }
         self.x_old.copy_from_slice(&self.x);
         // Step 1: relaxation in x with the current s.

@@ -131,6 +131,9 @@ fn factor_c11(
         return Ok(None);
     }
     ctx.ws.cholesky(&c11, &[]).map(Some).map_err(|e| {
+        if e.memory {
+            return e.into();
+        }
         QpError::Unsupported(format!(
             "preelim: the stiffness block C11 of the non-contact DOFs is singular ({e}); a body can move \
              even with its contact DOFs fixed (use cgc)"

@@ -9,7 +9,8 @@
 //! Cx − d + A_Jᵀλ = 0 holds to the backward error of the K_J solve whatever
 //! gap error remains (taking λ = μ lost accuracy under stiffness contrast).
 //! None when K_J is not positive definite or CG stalls: the caller falls
-//! back to the Schur path.
+//! back to the Schur path. A factor refused for memory sets `error` instead
+//! and ends the solve.
 
 use super::lowrank::{LowRank, LOWRANK_BYTES, LOWRANK_MAX};
 use super::Ssn;
@@ -77,7 +78,16 @@ impl Ssn<'_> {
                 self.kfac_set = None;
                 self.zcache.clear();
                 let t = Instant::now();
-                let fac = self.ws.cholesky(k, &[]).ok();
+                let fac = match self.ws.cholesky(k, &[]) {
+                    Ok(f) => Some(f),
+                    // Memory is not a property of K_J: end the solve, do
+                    // not fall back (QpError::Memory).
+                    Err(e) if e.memory => {
+                        self.error = Some(e.into());
+                        None
+                    }
+                    Err(_) => None,
+                };
                 self.t_factor += t.elapsed().as_secs_f64();
                 self.kfac = Some(fac?);
                 self.kfac_set = Some(in_j.to_vec());

@@ -463,6 +463,9 @@ impl<'a> Ssn<'a> {
                 self.last_aug = true;
                 return Some(s);
             }
+            if self.error.is_some() {
+                return None;
+            }
         }
         self.kfac = None;
         self.kfac_set = None;
@@ -542,7 +545,11 @@ impl<'a> Ssn<'a> {
             }
             // Still far from tol on the augmented path: recompute on the
             // Schur path (one factor of C, exact elimination), once.
-            if cert <= CERT_TARGET.min(1e2 * self.tol) || !self.last_aug || fresh_schur {
+            if cert <= CERT_TARGET.min(1e2 * self.tol)
+                || !self.last_aug
+                || fresh_schur
+                || self.error.is_some()
+            {
                 return cert;
             }
             fresh_schur = true;
@@ -634,6 +641,11 @@ impl Iterative for Ssn<'_> {
             if let Some(s) = self.kkt_solve(&cand) {
                 solved = Some((cand, s));
                 break;
+            }
+            if let Some(e) = &self.error {
+                // a factor refused for memory (or C not factored): no
+                // other candidate can do better
+                return Step::Done(Status::Failed(e.to_string()), self.record(f64::NAN));
             }
         }
         let Some((jused, (lam, x))) = solved else {
