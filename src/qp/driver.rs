@@ -273,6 +273,29 @@ pub fn run(
             }
         }
     }
+    // Frictional ssn whose working sets cycle (a Tresca problem with
+    // friction on many open rows of a floating body): the dual method
+    // solves the same problem, so the run falls back to it, said in
+    // `notes` (docs/methods.md §9.2).
+    if name == "ssn" && qp.friction.is_some() {
+        if let Status::Failed(msg) = &r.status {
+            if msg.starts_with(super::ssn::CYCLING) {
+                let fb = "mprgp";
+                let note = format!("{msg}; solved by {fb} instead (docs/methods.md §9.2)");
+                log::warn!("{note}");
+                notes.push(note);
+                let fm =
+                    super::registry::find(fb).ok_or_else(|| QpError::BadParameter(fb.into()))?;
+                let t = std::mem::take(&mut r.timings);
+                r = solve_once(fm, qs, opts, ws)?;
+                r.timings = t
+                    .into_iter()
+                    .map(|(k, v)| (format!("{name}-{k}"), v))
+                    .chain(r.timings)
+                    .collect();
+            }
+        }
+    }
     recession::without_free(&mut r.x, &free);
     // A frictional method returns [λ_n; λ_t] in `lambda` (docs/methods.md §9).
     let mut lambda = r.lambda;

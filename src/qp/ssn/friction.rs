@@ -146,7 +146,21 @@ struct State<'a> {
     inner: usize,
     /// Working sets solved so far (anti-cycling; looked up, never iterated).
     visited: HashSet<(Vec<bool>, Vec<Tangential>)>,
+    /// The best KKT residual of the current Tresca problem and the steps
+    /// since it was reached ([`cycle_budget`]).
+    best: (f64, usize),
     error: Option<QpError>,
+}
+
+/// The start of the message of a frictional ssn stopped for cycling sets
+/// (the driver then solves by mprgp, docs/methods.md §9.2).
+pub(crate) const CYCLING: &str = "ssn: cycling";
+
+/// Newton steps without a better residual after which the sets of one
+/// Tresca problem are judged to cycle: two single-change walks over every
+/// row, and 100 more.
+fn cycle_budget(m: usize) -> usize {
+    2 * m + 100
 }
 
 impl<'a> State<'a> {
@@ -170,6 +184,7 @@ impl<'a> State<'a> {
             SlipBound::Tresca(s) => (s.clone(), false),
             SlipBound::Coulomb(_) => (vec![0.0; m], true),
         };
+        let s0 = s.clone();
         State {
             qp,
             fr,
@@ -187,8 +202,9 @@ impl<'a> State<'a> {
             relax: CoulombRelaxation::default(),
             tang: in_n
                 .iter()
-                .map(|&a| {
-                    if a {
+                .zip(&s0)
+                .map(|(&a, &si)| {
+                    if a || (!glued && si > 0.0) {
                         Tangential::Stick
                     } else {
                         Tangential::Slip(true)
@@ -200,6 +216,7 @@ impl<'a> State<'a> {
             outer: 0,
             inner: 0,
             visited: HashSet::new(),
+            best: (f64::INFINITY, 0),
             error: None,
         }
     }
@@ -544,6 +561,7 @@ impl Iterative for State<'_> {
                             );
                         }
                         self.s = self.relax.next(&self.s, s_new, self.glued);
+                        self.best = (f64::INFINITY, 0);
                         self.glued = false;
                         let (n_set, tang) = self.predict();
                         self.in_n = n_set;
@@ -566,7 +584,28 @@ impl Iterative for State<'_> {
         self.visited.insert((self.in_n.clone(), self.tang.clone()));
         self.last = Some((self.in_n.clone(), self.tang.clone()));
         match self.solve_set() {
-            Ok(None) => Step::Continue(self.record(it)),
+            Ok(None) => {
+                let rec = self.record(it);
+                // A Tresca problem whose sets cycle (single changes walking
+                // back and forth) never settles: stop after a budget of
+                // steps without a better residual, counted, never timed.
+                if rec.residual < self.best.0 * (1.0 - 1e-9) {
+                    self.best = (rec.residual, 0);
+                } else {
+                    self.best.1 += 1;
+                }
+                let budget = cycle_budget(self.qp.m());
+                if self.best.1 > budget {
+                    return Step::Done(
+                        Status::Failed(format!(
+                            "{CYCLING}: the working sets of the Tresca problem cycle: no KKT residual below {:.3e} in {budget} Newton steps",
+                            self.best.0
+                        )),
+                        rec,
+                    );
+                }
+                Step::Continue(rec)
+            }
             Ok(Some(status)) => Step::Done(status, self.record(it)),
             Err(e) => {
                 let msg = e.to_string();

@@ -38,6 +38,8 @@ use crate::linalg::sparse::{dot, norm_inf};
 use crate::qp::executor::{Iterative, Step};
 use crate::qp::settings::SsnPath;
 use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status};
+/// The message start of a frictional ssn stopped for cycling working sets.
+pub(crate) use friction::CYCLING;
 use path::{Costs, Path};
 use std::collections::{HashMap, HashSet};
 use std::rc::Rc;
