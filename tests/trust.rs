@@ -735,3 +735,53 @@ fn a_ring_under_tresca_friction_whose_ssn_sets_cycle_is_solved_by_the_dual() {
         );
     }
 }
+
+/// The ring with its lid held (ux = 0, uy = −1 nm) under a light load: each
+/// plate touches it at one node and it may roll until a neighbour touches,
+/// a segment of solutions. ssn and asm return the point of least rolling
+/// and agree. The dual family stops on stagnation with the ring rolled by
+/// 1.7 mm against a deformation of 1 nm, its gaps exact only at the scale
+/// of the roll, so moving it to the least roll would lose the certificate
+/// (a penetration of 10⁻³ of max|x|): it is returned as one point of the
+/// segment, and the notes say so (before, they said nothing of the roll).
+#[test]
+fn a_rolled_answer_that_cannot_be_moved_says_it_is_one_of_the_solutions() {
+    let dir = root().join("tests/data/ring");
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let path = common::model_variant(
+        &dir,
+        "ring.toml",
+        &[
+            ("pn = -1.0e3", "pn = -1.0e-3"),
+            (
+                "on = \"lid\"\nux = 0.0",
+                "on = \"lid\"\nux = 0.0\nuy = -1.0e-9",
+            ),
+        ],
+        &tmp.path().join("ring_held_light.toml"),
+    );
+    let (prep, opts) = prepared(&path);
+    let least = "has the least component along it";
+    let one_of = "is one of those solutions, not the one with the least component";
+    let ssn = solve_certified(&prep, "ssn", &opts, "ssn");
+    let asm = solve_certified(&prep, "asm", &opts, "asm");
+    for (m, r) in [("ssn", &ssn), ("asm", &asm)] {
+        assert!(
+            r.notes.iter().any(|n| n.contains(least)),
+            "{m}: {:?}",
+            r.notes
+        );
+    }
+    let d = rel(&asm.x, &ssn.x);
+    assert!(d < 1e-6, "asm x {d:.2e} from ssn");
+    let dual = solve_certified(&prep, "dual", &opts, "dual");
+    let says = |r: &signorini::qp::QpResult| {
+        r.notes.iter().any(|n| n.contains(least)) || r.notes.iter().any(|n| n.contains(one_of))
+    };
+    assert!(says(&dual), "dual: {:?}", dual.notes);
+    if dual.notes.iter().any(|n| n.contains(one_of)) {
+        // one point of the segment: the same forces, x moved by a roll
+        let dl = rel(&dual.lambda, &ssn.lambda);
+        assert!(dl < 1e-3, "dual λ {dl:.2e} from ssn");
+    }
+}

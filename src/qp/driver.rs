@@ -328,6 +328,17 @@ pub fn run(
                     them(rolled),
                     them(rolled),
                 ));
+            } else {
+                // The move would lose the certificate: the method's answer
+                // is exact only at the scale of its own rigid motion, not at
+                // that of the deformation. It is still a solution; say that
+                // it is one point of the set, not the least.
+                notes.push(format!(
+                    "the solution is unique only up to {} that the rows carrying a force leave free (the others stop {} at their gaps); the answer returned is one of those solutions, not the one with the least component along {}: moved there it would lose its certificate (its gaps are exact at the scale of that motion, not of the deformation; ssn or asm return the least one, docs/methods.md §1.7)",
+                    motions(rolled),
+                    them(rolled),
+                    them(rolled),
+                ));
             }
         }
     }
