@@ -191,12 +191,14 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
     }
     let k = &s.kkt;
     println!(
-        "KKT         primal {:.2e}  dual {:.2e}  complementarity {:.2e}  stationarity {:.2e}  contact balance {:.2e}  → {}",
+        "KKT         primal {:.2e}  dual {:.2e}  complementarity {:.2e}  stationarity {:.2e}  contact balance {:.2e}{}  → {}",
         k.primal,
         k.dual,
         k.complementarity,
         k.stationarity,
         k.contact_balance,
+        k.rigid_balance
+            .map_or(String::new(), |v| format!("  rigid balance {v:.2e}")),
         if k.certified && (k.stationarity > k.target || k.contact_balance > k.target) {
             format!(
                 "certified at the rounding floor (stationarity floor {:.1e}, balance floor {:.1e}; \

@@ -110,17 +110,13 @@ pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda
     let r_gamma = norm_on(&r, &on_gamma);
     let balance_scale = norm(&alam).max(CONTACT_FLOOR * scale);
     let contact_balance = ratio(r_gamma, balance_scale);
-    // e = ε(|C||x| + |d| + |A|ᵀ|λ| (+ |T|ᵀ|λ_t|)).
-    let mut e: Vec<f64> = c_abs_x
-        .iter()
-        .zip(&qp.d)
-        .map(|(a, d)| a + d.abs())
-        .collect();
+    // The gross external and contact forces |d| + |A|ᵀ|λ| (+ |T|ᵀ|λ_t|).
+    let mut gross: Vec<f64> = qp.d.iter().map(|d| d.abs()).collect();
     let mut abs_t_add = |m: &crate::linalg::sparse::Csr, v: &[f64]| {
         for (i, vi) in v.iter().enumerate() {
             let (cols, vals) = m.row(i);
             for (&j, a) in cols.iter().zip(vals) {
-                e[j] += (a * vi).abs();
+                gross[j] += (a * vi).abs();
             }
         }
     };
@@ -128,6 +124,32 @@ pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda
     if let Some(f) = &qp.friction {
         abs_t_add(&f.t, lambda_t);
     }
+    // Each rigid motion z of ker C in equilibrium: zᵀC = 0, so zᵀr =
+    // zᵀ(Aᵀλ (+ Tᵀλ_t) − d), against the gross forces |z|ᵀ(|d| + |A|ᵀ|λ|)
+    // acting along it: a floating body judged at its own force scale, not
+    // at the stiffest body's (S), and with no Cx in it, no rounding floor.
+    // A motion along which only rounding-sized forces act (a ring's slide
+    // along frictionless plates: λ_t ~ 10⁻²⁰) is measured against
+    // CONTACT_FLOOR × the largest gross force along any motion instead.
+    let along: Vec<(f64, f64)> = qp
+        .kernel
+        .iter()
+        .map(|z| {
+            let (mut net, mut den) = (0.0, 0.0);
+            for (((zi, ai), di), gi) in z.iter().zip(&alam).zip(&qp.d).zip(&gross) {
+                net += zi * (ai - di);
+                den += zi.abs() * gi;
+            }
+            (net.abs(), den)
+        })
+        .collect();
+    let den_max = along.iter().fold(0.0f64, |m, v| m.max(v.1));
+    let rigid_balance = along
+        .iter()
+        .map(|(net, den)| ratio(*net, den.max(CONTACT_FLOOR * den_max)))
+        .fold(0.0f64, |m, v| if v.is_nan() { v } else { m.max(v) });
+    // e = ε(|C||x| + |d| + |A|ᵀ|λ| (+ |T|ᵀ|λ_t|)).
+    let mut e: Vec<f64> = c_abs_x.iter().zip(&gross).map(|(a, g)| a + g).collect();
     e.iter_mut().for_each(|v| *v *= f64::EPSILON);
     let e_gamma = norm_on(&e, &on_gamma);
     // 0.6‖e‖: ssn and asm left 0.25–0.36‖e‖ (slope, stack_floating at 1e8),
@@ -171,6 +193,7 @@ pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda
         complementarity,
         stationarity,
         contact_balance,
+        rigid_balance,
         friction,
         stationarity_floor,
         balance_floor,
@@ -209,6 +232,7 @@ impl Kkt {
             complementarity: f64::INFINITY,
             stationarity: f64::INFINITY,
             contact_balance: f64::INFINITY,
+            rigid_balance: f64::INFINITY,
             friction: f64::INFINITY,
             stationarity_floor: 0.0,
             balance_floor: 0.0,
@@ -222,6 +246,7 @@ impl Kkt {
             self.complementarity,
             self.stationarity,
             self.contact_balance,
+            self.rigid_balance,
             self.friction,
         ];
         if all.iter().any(|v| v.is_nan()) {
@@ -252,6 +277,7 @@ impl Kkt {
             self.complementarity,
             resolved(self.stationarity, self.stationarity_floor),
             resolved(self.contact_balance, self.balance_floor),
+            self.rigid_balance,
             self.friction,
         ]
         .iter()
@@ -272,6 +298,40 @@ impl Kkt {
 mod tests {
     use super::*;
     use crate::qp::Csr;
+
+    /// The rigid balance of a floating block: ~ε for ssn's answer, the
+    /// size of a force error on one row when λ is perturbed (whatever the
+    /// stationarity says), and the same when loads, gaps, x and λ are
+    /// scaled by 10⁻⁷ (a lighter load on the same bodies).
+    #[test]
+    fn rigid_balance_measures_each_floating_body_at_its_own_force_scale() {
+        let qp = crate::qp::testing::two_blocks(9, 5, true);
+        assert_eq!(qp.kernel.len(), 1);
+        let r =
+            crate::qp::registry::solve("ssn", &qp, &crate::qp::SolveOptions::default()).unwrap();
+        let k = residuals(&qp, &r.x, &r.lambda);
+        assert!(k.within(1e-8) && k.rigid_balance < 1e-13, "{k:?}");
+        let (imax, lmax) =
+            r.lambda
+                .iter()
+                .enumerate()
+                .fold((0, 0.0f64), |m, (i, &l)| if l > m.1 { (i, l) } else { m });
+        let mut lam = r.lambda.clone();
+        lam[imax] += 1e-4 * lmax;
+        let k = residuals(&qp, &r.x, &lam);
+        assert!(k.rigid_balance > 1e-6 && !k.within(1e-6), "{k:?}");
+        let s = 1e-7;
+        let mut light = qp.clone();
+        light.d.iter_mut().for_each(|v| *v *= s);
+        light.g.iter_mut().for_each(|v| *v *= s);
+        let xs: Vec<f64> = r.x.iter().map(|v| v * s).collect();
+        let ls: Vec<f64> = lam.iter().map(|v| v * s).collect();
+        let k2 = residuals(&light, &xs, &ls);
+        assert!(
+            (k2.rigid_balance - k.rigid_balance).abs() <= 1e-9 * k.rigid_balance,
+            "{k2:?} vs {k:?}"
+        );
+    }
 
     /// Two springs: x0 free, x1 pressed against a wall x1 ≤ 0.
     fn qp(k_soft: f64, f: f64) -> QpProblem {

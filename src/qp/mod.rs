@@ -238,6 +238,12 @@ pub struct Kkt {
     /// ([`kkt::residuals`]).
     #[serde(default)]
     pub contact_balance: f64,
+    /// The equilibrium of each rigid motion of ker C (a floating body):
+    /// |zᵀ(Aᵀλ − d)| over the gross forces along z ([`kkt::residuals`],
+    /// docs/methods.md §8.4); 0 without a kernel (and then left out of
+    /// the JSON).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub rigid_balance: f64,
     /// The friction conditions (docs/methods.md §9.4): |λ_t| ≤ s and slip
     /// only where the bound is reached, along λ_t; 0 without friction (and
     /// then left out of the JSON, which stays as it was).

@@ -59,6 +59,10 @@ pub struct KktSummary {
     pub complementarity: f64,
     pub stationarity: f64,
     pub contact_balance: f64,
+    /// The equilibrium of each floating body's rigid motions against the
+    /// forces on it (docs/methods.md §8.4); only with a kernel.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rigid_balance: Option<f64>,
     /// The friction residual (docs/methods.md §9.4); only with friction.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<f64>,
@@ -196,6 +200,7 @@ impl Summary {
                 complementarity: k.complementarity,
                 stationarity: k.stationarity,
                 contact_balance: k.contact_balance,
+                rigid_balance: (!model.qp.kernel.is_empty()).then_some(k.rigid_balance),
                 friction: model.qp.friction.as_ref().map(|_| k.friction),
                 stationarity_floor: k.stationarity_floor,
                 balance_floor: k.balance_floor,
