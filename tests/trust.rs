@@ -806,3 +806,35 @@ fn a_ring_out_of_equilibrium_is_not_certified_and_the_least_roll_is_returned() {
     // what hid it: stationarity, on the scale of the steel lid's forces
     assert!(dual.kkt.stationarity < 1e-9, "{:?}", dual.kkt);
 }
+
+/// The ring between two steel plates at a contrast of 2·10⁸ (rubber
+/// E = 1 kPa, 0.1 Pa on the lid): ssn and asm were both certified at the
+/// rounding floor yet 1.4·10⁻³ apart in x. The rigid balance (docs/methods.md
+/// §8.4) tells them apart: ssn's forces hold the ring and the lid in
+/// equilibrium to 5·10⁻¹⁵, asm's only to 3·10⁻⁵, and asm is refused. ssn
+/// agrees with the dual method to 10⁻⁵ in x (which stops above its own
+/// tolerance there and is not certified either).
+#[test]
+fn at_a_contrast_of_2e8_the_rigid_balance_refuses_the_answer_that_disagrees() {
+    let dir = root().join("tests/data/ring");
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let path = common::model_variant(
+        &dir,
+        "ring.toml",
+        &[("E = 1.0e7", "E = 1.0e3"), ("pn = -1.0e3", "pn = -0.1")],
+        &tmp.path().join("ring_2e8.toml"),
+    );
+    let (prep, opts) = prepared(&path);
+    let ssn = solve_certified(&prep, "ssn", &opts, "ssn");
+    assert!(ssn.kkt.rigid_balance < 1e-12, "{:?}", ssn.kkt);
+    let asm = signorini::run::solve(&prep, "asm", &opts).expect("asm runs");
+    assert!(
+        asm.kkt.rigid_balance > 1e-5 && !asm.kkt.within(1e-6),
+        "asm: {:?}",
+        asm.kkt
+    );
+    assert!(rel(&asm.x, &ssn.x) > 1e-4, "they did differ");
+    let dual = signorini::run::solve(&prep, "dual", &opts).expect("dual runs");
+    let d = rel(&dual.x, &ssn.x);
+    assert!(d < 1e-5, "dual x {d:.2e} from ssn");
+}
