@@ -169,3 +169,30 @@ fn answers_at_the_rounding_floor_agree_within_it() {
         }
     }
 }
+
+/// A row solved by a fallback says so under it in the table: on the ring
+/// under Tresca friction ssn's sets cycle and mprgp solves it, so the ssn
+/// row holds mprgp's numbers and a line naming the fallback.
+#[test]
+fn a_fallback_is_named_under_its_row() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = common::model_variant(
+        &common::root().join("tests/data/ring"),
+        "ring.toml",
+        &[("max_gap = 0.05", "max_gap = 0.05\ntresca = 50.0")],
+        &tmp.path().join("ring_tresca.toml"),
+    );
+    let (code, stdout, stderr) = signorini(&["compare", toml.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    let lines: Vec<&str> = stdout.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| l.starts_with("ssn "))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    assert!(
+        lines
+            .get(at + 1)
+            .is_some_and(|l| l.contains("└ ssn: cycling") && l.contains("solved by mprgp instead")),
+        "{stdout}"
+    );
+}

@@ -482,6 +482,11 @@ fn print_table(prep: &Prepared, t: &Table) {
             }
         );
         println!("{line}");
+        // A row solved by another method (a fallback) says so under it:
+        // its numbers are that method's.
+        for note in s.notes.iter().filter(|n| n.contains(" instead")) {
+            println!("{:<8} └ {note}", "");
+        }
     }
 }
 
