@@ -296,6 +296,49 @@ fn bad_unknown_method_and_parameters() {
         &format!("{GOOD}[solver]\nordering = \"metis\"\n"),
         &["ordering = \"metis\"", "\"nested-dissection\""],
     );
+    bad(
+        &format!("{GOOD}[solver]\nmemory_limit = \"8 GB\"\n"),
+        &["memory_limit = \"8 GB\"", "GiB"],
+    );
+}
+
+/// `[solver] memory_limit`: a factor larger than it is refused before it
+/// starts (exit 2, nothing written, the message names the size, the limit
+/// and how to raise it); a limit it fits under changes nothing.
+#[test]
+fn memory_limit_refuses_a_larger_factor_and_changes_nothing_else() {
+    bad(
+        &format!("{GOOD}[solver]\nmethod = \"ssn\"\nmemory_limit = \"1 KiB\"\n"),
+        &[
+            "needs",
+            "the limit set for the factors (1.0 KiB)",
+            "raise [solver] memory_limit",
+        ],
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = root().join("tests/data/msh/square_ascii41.msh");
+    let mut jsons = vec![];
+    for (i, extra) in ["", "memory_limit = \"1 GiB\"\n"].iter().enumerate() {
+        let p = dir.path().join(format!("m{i}.toml"));
+        let text = format!("{GOOD}[solver]\nmethod = \"ssn\"\n{extra}")
+            .replace("MESH", &mesh.display().to_string());
+        std::fs::write(&p, text).unwrap();
+        let out = dir.path().join(format!("out{i}"));
+        let (code, _, stderr) = signorini(&[
+            "solve",
+            p.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert_eq!(code, 0, "{stderr}");
+        let j: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join(format!("m{i}.json"))).unwrap())
+                .unwrap();
+        jsons.push(j);
+    }
+    assert_eq!(jsons[0]["probes"], jsons[1]["probes"]);
+    assert_eq!(jsons[0]["kkt"], jsons[1]["kkt"]);
 }
 
 #[test]

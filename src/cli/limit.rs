@@ -6,7 +6,6 @@
 //! Prints one JSON line with the phase times.
 
 use super::solve::{bad_input, EXIT_BAD_INPUT};
-use crate::linalg::cholesky::Workspace;
 use crate::run;
 use clap::Args;
 use serde_json::json;
@@ -29,6 +28,9 @@ pub struct LimitArgs {
     /// amd | nested-dissection; overrides [solver] ordering (docs/methods.md §3).
     #[arg(long)]
     pub ordering: Option<String>,
+    /// Largest factor allowed, e.g. "8 GiB"; overrides [solver] memory_limit.
+    #[arg(long)]
+    pub memory_limit: Option<String>,
 }
 
 pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
@@ -38,18 +40,20 @@ pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32
     };
     let flags = crate::qp::SolverSection {
         ordering: a.ordering.clone(),
+        memory_limit: a.memory_limit.clone(),
         ..Default::default()
     };
-    let ordering = match run::options(&prep.problem, &flags) {
-        Ok((_, o)) => o.settings.ordering,
+    let settings = match run::options(&prep.problem, &flags) {
+        Ok((_, o)) => o.settings,
         Err(e) => return bad_input(&e),
     };
+    let ordering = settings.ordering;
     let qp = &prep.model.qp;
     let (mut tf, mut ts) = (vec![], vec![]);
     let mut residual = f64::NAN;
     for _ in 0..a.repeat.max(1) {
         let t0 = Instant::now();
-        let ch = match Workspace::with_ordering(ordering).cholesky(&qp.c, &qp.kernel) {
+        let ch = match settings.workspace().cholesky(&qp.c, &qp.kernel) {
             Ok(c) => c,
             Err(e) => {
                 eprintln!("error: {}: {e}", a.problem.display());

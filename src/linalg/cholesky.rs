@@ -957,6 +957,14 @@ fn fits_in_memory(
         Ordering::Amd => "try [solver] ordering = \"nested-dissection\" (about a quarter less fill on 2D meshes, docs/methods.md §3), a coarser mesh or a larger machine",
         Ordering::NestedDissection => "try a coarser mesh or a larger machine",
     };
+    let hint = if what.starts_with("the limit") {
+        format!(
+            "raise [solver] memory_limit, or {}",
+            hint.trim_start_matches("try ")
+        )
+    } else {
+        hint.to_string()
+    };
     Err(FactorError::memory(format!(
         "the Cholesky factor ({} ordering, nnz(L) = {nnz}) needs {}, more than {what} ({}): {hint}",
         ordering.name(),

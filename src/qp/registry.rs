@@ -49,12 +49,7 @@ pub fn certified(name: &str, kkt: &Kkt, target: f64, strict: bool) -> bool {
 /// Solve `qp` by method `name` with a fresh [`Workspace`] of the settings'
 /// ordering ([`driver::run`]).
 pub fn solve(name: &str, qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
-    solve_in(
-        name,
-        qp,
-        opts,
-        &Workspace::with_ordering(opts.settings.ordering),
-    )
+    solve_in(name, qp, opts, &opts.settings.workspace())
 }
 
 /// Solve `qp` by method `name`, reusing factorizations kept in `ws`

@@ -57,6 +57,12 @@ pub struct SolverSection {
     /// factor, a slower ordering; docs/methods.md §3).
     #[arg(long)]
     pub ordering: Option<String>,
+    /// Largest numeric Cholesky factor allowed, e.g. "8 GiB" (units B, KiB,
+    /// MiB, GiB, TiB): a larger one is refused before it starts, as one
+    /// beyond the machine's free memory is (docs/methods.md §3). For a
+    /// machine shared with other jobs.
+    #[arg(long)]
+    pub memory_limit: Option<String>,
 }
 
 impl SolverSection {
@@ -78,6 +84,7 @@ impl SolverSection {
             accelerate: pick(&self.accelerate, &over.accelerate),
             ssn_path: pick(&self.ssn_path, &over.ssn_path),
             ordering: pick(&self.ordering, &over.ordering),
+            memory_limit: pick(&self.memory_limit, &over.memory_limit),
         }
     }
 }
@@ -96,6 +103,9 @@ pub struct Settings {
     /// Fill-reducing ordering of the sparse Cholesky factors (the caller's
     /// [`Workspace`](crate::linalg::cholesky::Workspace) is made with it).
     pub ordering: Ordering,
+    /// `memory_limit` in bytes: the caller's workspace refuses a larger
+    /// numeric factor ([`Settings::workspace`]).
+    pub memory_limit: Option<u64>,
     pub cgc: CgcSettings,
     pub penalty: PenaltySettings,
     pub dual: DualSettings,
@@ -109,6 +119,7 @@ impl Default for Settings {
             tol: 1e-10,
             max_iter: 100_000,
             ordering: Ordering::Amd,
+            memory_limit: None,
             cgc: CgcSettings::default(),
             penalty: PenaltySettings::default(),
             dual: DualSettings::default(),
@@ -140,6 +151,7 @@ impl Settings {
                     )
                 })?,
             },
+            memory_limit: s.memory_limit.as_deref().map(parse_bytes).transpose()?,
             cgc: CgcSettings::from_section(s)?,
             penalty: PenaltySettings::from_section(s)?,
             dual: DualSettings::from_section(s)?,
@@ -163,6 +175,41 @@ impl Settings {
         self.cgc.validate()?;
         self.penalty.validate()?;
         self.uzawa.validate()
+    }
+}
+
+impl Settings {
+    /// The workspace of a solve: the factors' ordering and memory limit.
+    pub fn workspace(&self) -> crate::linalg::cholesky::Workspace {
+        let ws = crate::linalg::cholesky::Workspace::with_ordering(self.ordering);
+        match self.memory_limit {
+            Some(b) => ws.with_memory_limit(b),
+            None => ws,
+        }
+    }
+}
+
+/// `memory_limit = "8 GiB"`: a positive number and a binary unit (B, KiB,
+/// MiB, GiB, TiB; no unit = bytes), as a whole number of bytes.
+fn parse_bytes(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
+    let (num, unit) = (t[..split].trim(), t[split..].trim());
+    let scale: f64 = match unit {
+        "" | "B" => 1.0,
+        "KiB" => 1024.0,
+        "MiB" => 1024.0 * 1024.0,
+        "GiB" => 1024.0 * 1024.0 * 1024.0,
+        "TiB" => 1024.0 * 1024.0 * 1024.0 * 1024.0,
+        _ => f64::NAN,
+    };
+    let v: f64 = num.parse().unwrap_or(f64::NAN) * scale;
+    if v.is_finite() && v >= 1.0 && v < 2f64.powi(63) {
+        Ok(v as u64)
+    } else {
+        Err(format!(
+            "memory_limit = \"{text}\": expected a positive size such as \"8 GiB\" (units B, KiB, MiB, GiB, TiB)"
+        ))
     }
 }
 
@@ -436,6 +483,28 @@ mod tests {
         assert!(!t.uzawa.accelerate && !t.penalty.accelerate);
         assert_eq!(t.ssn.path, SsnPath::Schur);
         assert_eq!(t.ordering, Ordering::Amd);
+        assert_eq!(t.memory_limit, None);
+        for (text, bytes) in [
+            ("8 GiB", 8u64 << 30),
+            ("512MiB", 512 << 20),
+            ("1.5 KiB", 1536),
+            ("1000", 1000),
+            ("2 TiB", 2 << 40),
+        ] {
+            let s: SolverSection = toml::from_str(&format!("memory_limit = \"{text}\"")).unwrap();
+            let t = Settings::from_section(&s).unwrap();
+            assert_eq!(t.memory_limit, Some(bytes), "{text}");
+        }
+        for text in [
+            "8 GB", "-1 GiB", "0", "0.5", "GiB", "lots", "nan GiB", "1e30 TiB",
+        ] {
+            let s: SolverSection = toml::from_str(&format!("memory_limit = \"{text}\"")).unwrap();
+            let e = Settings::from_section(&s).unwrap_err();
+            assert!(
+                e.contains("memory_limit") && e.contains("GiB"),
+                "{text}: {e}"
+            );
+        }
         let s: SolverSection = toml::from_str("ordering = \"nested-dissection\"").unwrap();
         let t = Settings::from_section(&s).unwrap();
         assert_eq!(t.ordering, Ordering::NestedDissection);

@@ -262,13 +262,7 @@ pub fn solve_model(
     method: &str,
     opts: &SolveOptions,
 ) -> Result<QpResult, RunError> {
-    solve_model_in(
-        prep,
-        model,
-        method,
-        opts,
-        &Workspace::with_ordering(opts.settings.ordering),
-    )
+    solve_model_in(prep, model, method, opts, &opts.settings.workspace())
 }
 
 /// [`solve_model`] reusing the factorizations kept in `ws` (load steps:

@@ -13,7 +13,6 @@ use super::summary::{StepRow, Summary, Timings};
 use super::RunError;
 use crate::fem::Model;
 use crate::io::{Change, StepOutput};
-use crate::linalg::cholesky::Workspace;
 use crate::post::{self, forces::Forces};
 use crate::qp::{registry, QpResult, SolveOptions};
 use std::ops::Range;
@@ -222,7 +221,7 @@ impl<'a> Run<'a> {
         let mut certified = true;
         let mut last = None;
         // One workspace for every step: C is the same, its factor is reused.
-        let ws = Workspace::with_ordering(self.opts.settings.ordering);
+        let ws = self.opts.settings.workspace();
         for s in steps.clone() {
             let ts = Instant::now();
             // Without [[steps]] the prepared model is the problem; with steps
