@@ -130,6 +130,18 @@ fn not_converged_gives_exit_3_and_flagged_outputs() {
 
 /// A bad case: the TOML text (with MESH replaced by the square fixture's path)
 /// and words that the error line must contain.
+/// `signorini solve TOML --out OUT --quiet`: (exit code, stderr).
+fn solve_quiet(toml: &std::path::Path, out: &std::path::Path) -> (i32, String) {
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    (code, stderr)
+}
+
 fn bad(toml: &str, words: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
     let mesh = root()
@@ -139,13 +151,7 @@ fn bad(toml: &str, words: &[&str]) {
     let p = dir.path().join("bad.toml");
     std::fs::write(&p, toml.replace("MESH", &mesh)).unwrap();
     let out = dir.path().join("out");
-    let (code, _, stderr) = signorini(&[
-        "solve",
-        p.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let (code, stderr) = solve_quiet(&p, &out);
     assert_eq!(code, 2, "expected exit 2 for {words:?}, stderr: {stderr}");
     for w in words {
         assert!(stderr.contains(w), "message lacks {w:?}: {stderr}");
@@ -324,13 +330,7 @@ fn memory_limit_refuses_a_larger_factor_and_changes_nothing_else() {
             .replace("MESH", &mesh.display().to_string());
         std::fs::write(&p, text).unwrap();
         let out = dir.path().join(format!("out{i}"));
-        let (code, _, stderr) = signorini(&[
-            "solve",
-            p.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--quiet",
-        ]);
+        let (code, stderr) = solve_quiet(&p, &out);
         assert_eq!(code, 0, "{stderr}");
         let j: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join(format!("m{i}.json"))).unwrap())

@@ -935,11 +935,17 @@ fn fits_in_memory(
     limit: Option<u64>,
 ) -> Result<(), FactorError> {
     let machine = available_memory();
-    let (avail, what) = match (machine, limit) {
-        (Some(a), Some(l)) if l < a => (l, "the limit set for the factors"),
-        (Some(a), _) => (a, "the memory and swap available"),
-        (None, Some(l)) => (l, "the limit set for the factors"),
+    // (bytes available, whether the user's limit is the tighter bound)
+    let (avail, by_limit) = match (machine, limit) {
+        (Some(a), Some(l)) if l < a => (l, true),
+        (Some(a), _) => (a, false),
+        (None, Some(l)) => (l, true),
         (None, None) => return Ok(()),
+    };
+    let what = if by_limit {
+        "the limit set for the factors"
+    } else {
+        "the memory and swap available"
     };
     if (bytes as u64) <= avail {
         return Ok(());
@@ -957,7 +963,7 @@ fn fits_in_memory(
         Ordering::Amd => "try [solver] ordering = \"nested-dissection\" (about a quarter less fill on 2D meshes, docs/methods.md §3), a coarser mesh or a larger machine",
         Ordering::NestedDissection => "try a coarser mesh or a larger machine",
     };
-    let hint = if what.starts_with("the limit") {
+    let hint = if by_limit {
         format!(
             "raise [solver] memory_limit, or {}",
             hint.trim_start_matches("try ")

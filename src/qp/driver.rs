@@ -160,6 +160,34 @@ fn fallback_for(name: &str) -> &'static str {
     }
 }
 
+/// Solve `qs` by method `fb` instead of `name`, whose result `r` is not
+/// trusted (`why`): the note says so, and `name`'s phase timings are kept
+/// with its name as prefix.
+#[allow(clippy::too_many_arguments)]
+fn fall_back(
+    name: &str,
+    fb: &str,
+    why: &str,
+    mut r: Output,
+    qs: &QpProblem,
+    opts: &SolveOptions,
+    ws: &Workspace,
+    notes: &mut Vec<String>,
+) -> Result<Output, QpError> {
+    let note = format!("{why}; solved by {fb} instead");
+    log::warn!("{note}");
+    notes.push(note);
+    let fm = super::registry::find(fb).ok_or_else(|| QpError::BadParameter(fb.into()))?;
+    let t = std::mem::take(&mut r.timings);
+    let mut out = solve_once(fm, qs, opts, ws)?;
+    out.timings = t
+        .into_iter()
+        .map(|(k, v)| (format!("{name}-{k}"), v))
+        .chain(out.timings)
+        .collect();
+    Ok(out)
+}
+
 /// Run `method` on `qp`: check the problem and the settings, decide
 /// boundedness from the kernel ([`recession::boundedness`]), check the warm
 /// start, solve, check any unbounded claim ([`recession::certify`]; a claim
@@ -250,20 +278,10 @@ pub fn run(
             }
             Err(why) => {
                 let fb = fallback_for(name);
-                let note = format!(
-                    "{name} reported an unbounded direction that fails the certificate ({why}); solved by {fb} instead"
+                let why = format!(
+                    "{name} reported an unbounded direction that fails the certificate ({why})"
                 );
-                log::warn!("{note}");
-                notes.push(note);
-                let fm =
-                    super::registry::find(fb).ok_or_else(|| QpError::BadParameter(fb.into()))?;
-                let t = std::mem::take(&mut r.timings);
-                r = solve_once(fm, qs, opts, ws)?;
-                r.timings = t
-                    .into_iter()
-                    .map(|(k, v)| (format!("{name}-{k}"), v))
-                    .chain(r.timings)
-                    .collect();
+                r = fall_back(name, fb, &why, r, qs, opts, ws, &mut notes)?;
                 if let Status::Unbounded { direction } = &r.status {
                     let why = recession::certify(qp, direction).err().unwrap_or_default();
                     r.status = Status::Failed(format!(
@@ -280,19 +298,8 @@ pub fn run(
     if name == "ssn" && qp.friction.is_some() {
         if let Status::Failed(msg) = &r.status {
             if msg.starts_with(super::ssn::CYCLING) {
-                let fb = "mprgp";
-                let note = format!("{msg}; solved by {fb} instead (docs/methods.md §9.2)");
-                log::warn!("{note}");
-                notes.push(note);
-                let fm =
-                    super::registry::find(fb).ok_or_else(|| QpError::BadParameter(fb.into()))?;
-                let t = std::mem::take(&mut r.timings);
-                r = solve_once(fm, qs, opts, ws)?;
-                r.timings = t
-                    .into_iter()
-                    .map(|(k, v)| (format!("{name}-{k}"), v))
-                    .chain(r.timings)
-                    .collect();
+                let why = format!("{msg} (docs/methods.md §9.2)");
+                r = fall_back(name, "mprgp", &why, r, qs, opts, ws, &mut notes)?;
             }
         }
     }

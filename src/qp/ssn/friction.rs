@@ -184,7 +184,18 @@ impl<'a> State<'a> {
             SlipBound::Tresca(s) => (s.clone(), false),
             SlipBound::Coulomb(_) => (vec![0.0; m], true),
         };
-        let s0 = s.clone();
+        // Tresca starts glued: every row with a bound sticks (docs §9.2).
+        let tang = in_n
+            .iter()
+            .zip(&s)
+            .map(|(&a, &si)| {
+                if a || (!glued && si > 0.0) {
+                    Tangential::Stick
+                } else {
+                    Tangential::Slip(true)
+                }
+            })
+            .collect();
         State {
             qp,
             fr,
@@ -200,17 +211,7 @@ impl<'a> State<'a> {
             s,
             glued,
             relax: CoulombRelaxation::default(),
-            tang: in_n
-                .iter()
-                .zip(&s0)
-                .map(|(&a, &si)| {
-                    if a || (!glued && si > 0.0) {
-                        Tangential::Stick
-                    } else {
-                        Tangential::Slip(true)
-                    }
-                })
-                .collect(),
+            tang,
             in_n,
             last: None,
             outer: 0,
