@@ -153,6 +153,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let friction = friction::build(&topo, &dofs, n, problem, &qp_rows, t_eff)?;
     lap.lap("friction rows");
     let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n);
+    let near = rigid::near_kernel(&topo, &dofs, n);
     let f = &problem.file;
     let model = Model {
         topo,
@@ -164,6 +165,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
             g,
             kernel,
             friction,
+            near,
         },
         qp_rows,
         kernel_body,

@@ -112,6 +112,55 @@ pub(super) fn rigid_modes(
     (kernel, owner)
 }
 
+/// The near-null space of the iterative ssn path (docs/methods.md §7.2):
+/// the unknowns of each point as one block, and the rigid motions of every
+/// body — translations along x and y, a rotation about the body's box centre
+/// scaled by its size — in the reduced unknowns, whatever the conditions hold.
+pub(super) fn near_kernel(
+    topo: &Topology,
+    dofs: &[PointDofs],
+    n: usize,
+) -> Option<crate::qp::NearKernel> {
+    let nb = topo.nbodies;
+    let mut lo = vec![[f64::MAX; 2]; nb];
+    let mut hi = vec![[f64::MIN; 2]; nb];
+    for (p, x) in topo.points.iter().enumerate() {
+        let b = topo.point_body[p] as usize;
+        for k in 0..2 {
+            lo[b][k] = lo[b][k].min(x[k]);
+            hi[b][k] = hi[b][k].max(x[k]);
+        }
+    }
+    let mut modes = vec![vec![0.0; n]; 3];
+    let mut block_ptr = vec![0usize];
+    for (p, pd) in dofs.iter().enumerate() {
+        if pd.ndof == 0 {
+            continue;
+        }
+        // The unknowns of a point are contiguous and points come in order
+        // (`conditions::eliminate`); otherwise no blocks.
+        if pd.start != *block_ptr.last()? {
+            return None;
+        }
+        let b = topo.point_body[p] as usize;
+        let c = [(lo[b][0] + hi[b][0]) / 2.0, (lo[b][1] + hi[b][1]) / 2.0];
+        let l = ((hi[b][0] - lo[b][0]).max(hi[b][1] - lo[b][1])).max(1e-300);
+        let x = topo.points[p];
+        let u = [
+            [1.0, 0.0],
+            [0.0, 1.0],
+            [-(x[1] - c[1]) / l, (x[0] - c[0]) / l],
+        ];
+        for (mode, um) in modes.iter_mut().zip(&u) {
+            for j in 0..pd.ndof {
+                mode[pd.start + j] = pd.t[j][0] * um[0] + pd.t[j][1] * um[1];
+            }
+        }
+        block_ptr.push(pd.start + pd.ndof);
+    }
+    (*block_ptr.last()? == n).then_some(crate::qp::NearKernel { block_ptr, modes })
+}
+
 impl Model {
     /// The bodies that the point motions `u` move (by more than 10⁻³ of the
     /// largest motion), each with the rigid motion that fits it best:

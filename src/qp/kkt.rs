@@ -342,6 +342,7 @@ mod tests {
             g: vec![0.0],
             kernel: vec![],
             friction: None,
+            near: None,
         }
     }
 
@@ -379,6 +380,7 @@ mod tests {
             g: vec![0.0],
             kernel: vec![vec![1.0, 1.0, 0.0]],
             friction: None,
+            near: None,
         };
         let z = -1.0 / 0.7;
         (q, vec![z, z - shortening / k, z])

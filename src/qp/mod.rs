@@ -49,6 +49,22 @@ pub struct QpProblem {
     /// Tangential rows and slip bounds (docs/methods.md §9); `None` is
     /// frictionless contact, solved exactly as without this field.
     pub friction: Option<Friction>,
+    /// The unknowns grouped by mesh point and the rigid motions sampled on
+    /// them, for the algebraic multigrid of the iterative ssn path
+    /// (docs/methods.md §7.2); `None`: unknowns taken one by one.
+    pub near: Option<NearKernel>,
+}
+
+/// What an algebraic multigrid needs to know of the mesh and no more (PETSc's
+/// block size and near-null space): the unknowns of block b are
+/// `block_ptr[b]..block_ptr[b + 1]` (one mesh point), and `modes` are the
+/// rigid motions of every body (two translations and a rotation in 2D,
+/// Dirichlet conditions ignored) in the unknowns: the motions C barely
+/// resists, which coarse levels must represent (docs/methods.md §7.2).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct NearKernel {
+    pub block_ptr: Vec<usize>,
+    pub modes: Vec<Vec<f64>>,
 }
 
 /// The slip bound of each tangential row (docs/methods.md §9.1).

@@ -441,6 +441,7 @@ pub fn pinned(qp: &QpProblem, free: &[Vec<f64>]) -> QpProblem {
         g: qp.g.clone(),
         kernel,
         friction: qp.friction.clone(),
+        near: qp.near.clone(),
     }
 }
 
@@ -580,6 +581,7 @@ mod tests {
             g: vec![0.0; m],
             kernel: vec![vec![1.0, 0.0, 0.0], vec![0.0, 1.0, 0.0]],
             friction: None,
+            near: None,
         }
     }
 
@@ -600,6 +602,7 @@ mod tests {
             g: vec![0.0; m],
             kernel: vec![vec![1.0, 1.0, 0.0, 0.0], vec![0.0, 0.0, 1.0, 1.0]],
             friction: None,
+            near: None,
         }
     }
 
@@ -692,6 +695,7 @@ mod tests {
             g: vec![],
             kernel: vec![],
             friction: None,
+            near: None,
         };
         assert!(certify(&q, &[0.0, 1.0]).is_err());
         assert_eq!(blocks(&q.c).1, 2);

@@ -376,6 +376,8 @@ pub enum SsnPath {
     Augmented,
     Refactor,
     Schur,
+    /// No factor of C's size: multigrid-preconditioned CG (docs/methods.md §7.2).
+    Iterative,
 }
 
 /// Semismooth Newton / primal–dual active set (docs/methods.md §7).
@@ -391,9 +393,10 @@ impl SsnSettings {
             Some("augmented") => SsnPath::Augmented,
             Some("refactor") => SsnPath::Refactor,
             Some("schur") => SsnPath::Schur,
+            Some("iterative") => SsnPath::Iterative,
             Some(p) => {
                 return Err(format!(
-                "ssn_path = \"{p}\": expected \"auto\", \"augmented\", \"refactor\" or \"schur\""
+                "ssn_path = \"{p}\": expected \"auto\", \"augmented\", \"refactor\", \"schur\" or \"iterative\""
             ))
             }
         };

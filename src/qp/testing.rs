@@ -179,6 +179,7 @@ pub(crate) fn two_blocks(nx: usize, ny: usize, floating: bool) -> QpProblem {
         g,
         kernel,
         friction: None,
+        near: None,
     }
 }
 
@@ -248,5 +249,6 @@ pub(crate) fn friction_point(kx: f64, fx: f64, fy: f64, bound: crate::qp::SlipBo
             t0: vec![0.0],
             bound,
         }),
+        near: None,
     }
 }

@@ -154,6 +154,7 @@ fn two_bodies(v: Variant) -> QpProblem {
         g,
         kernel,
         friction: None,
+        near: None,
     }
 }
 
@@ -530,6 +531,7 @@ fn preelim_refuses_singular_c11() {
         g: vec![0.0],
         kernel: vec![vec![1.0, 1.0, 0.0]],
         friction: None,
+        near: None,
     };
     let r = registry::solve("preelim", &qp, &opts(1e-10)).unwrap();
     assert!(r.status.converged() && r.kkt.within(1e-8), "{:?}", r.kkt);

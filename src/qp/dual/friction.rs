@@ -71,6 +71,7 @@ pub(crate) fn solve_friction<S: BoundStep>(
         g,
         kernel: vec![],
         friction: None,
+        near: None,
     };
     // Slip bounds of the rows in force units (∞: glued).
     let mut s_bound: Vec<f64> = match &fr.bound {

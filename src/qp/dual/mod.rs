@@ -114,6 +114,7 @@ pub(crate) fn solve_with<S: BoundStep>(
         g: qp.g.iter().zip(&s).map(|(g, s)| g * s).collect(),
         kernel: vec![],
         friction: None,
+        near: None,
     };
     let op = DualOp::new(&sq, fac, r, name)?;
     let mut st = Smalbe::new(op, opts.tol, step, name, None)?;

@@ -162,6 +162,7 @@ pub(crate) fn keystone(hold: Hold, e_key: f64, e_rock: f64, fx: f64) -> QpProble
         g: vec![0.0; m],
         kernel,
         friction: None,
+        near: None,
     }
 }
 

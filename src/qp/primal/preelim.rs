@@ -232,6 +232,7 @@ fn schur(
         g: qp.g.clone(),
         kernel,
         friction: None,
+        near: None,
     };
     (red, np)
 }

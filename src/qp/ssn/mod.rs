@@ -22,6 +22,7 @@
 
 mod augmented;
 mod friction;
+mod iterative;
 mod lowrank;
 mod path;
 mod schur;
@@ -81,6 +82,9 @@ impl Method for SsnMethod {
         true
     }
     fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+        if ctx.settings.ssn.path == SsnPath::Iterative {
+            return iterative::solve(qp, ctx);
+        }
         if qp.friction.is_some() {
             return friction::solve(qp, ctx);
         }
@@ -95,6 +99,7 @@ pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
         SsnPath::Augmented => Path::Augmented,
         SsnPath::Refactor => Path::Refactor,
         SsnPath::Schur => Path::Schur,
+        SsnPath::Iterative => return iterative::solve(qp, ctx),
     };
     solve_traced(qp, ctx, path).map(|(r, _)| r)
 }

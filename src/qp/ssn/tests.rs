@@ -245,6 +245,7 @@ fn string_on_parabola(n: usize) -> QpProblem {
         g,
         kernel: vec![],
         friction: None,
+        near: None,
     }
 }
 
@@ -483,6 +484,7 @@ fn contrast_blocks_with(
         g,
         kernel: vec![tz, rot],
         friction: None,
+        near: None,
     }
 }
 

@@ -1,0 +1,476 @@
+//! The iterative path of ssn (`ssn_path = "iterative"`, docs/methods.md
+//! §7.2): the same primal–dual active-set loop, with no sparse factor of
+//! the size of C. The KKT system of a working set J is solved by the
+//! augmented Lagrangian on K_J = C + A_JᵀΡA_J — x = K_J⁻¹(d + A_Jᵀ(Ρg_J − μ)),
+//! μ ← μ + Ρ(A_J x − g_J) — each K_J solve by CG preconditioned with a
+//! smoothed-aggregation multigrid of K_J ([`crate::linalg::amg`]) whose
+//! coarse spaces carry the rigid motions of the bodies
+//! ([`crate::qp::NearKernel`]). Memory is O(nnz C); work per step is a few
+//! multigrid-preconditioned solves. Every tolerance is relative and every
+//! decision is from counts and values, so the same input gives the same
+//! bits. A J that leaves a rigid motion of a floating body free (A_J R rank
+//! deficient) is refused as singular and the loop enlarges J, as on the
+//! Schur path; a motion free on every row (a rolling body) is not solved
+//! here (the direct paths are).
+
+use super::{certificate, next_set, CERT_TARGET, GROW_MIN};
+use crate::linalg::amg::{pcg, Amg, AmgSettings, NearNull};
+use crate::linalg::augmented::AugPattern;
+use crate::linalg::dense::sym_eigen;
+use crate::linalg::kernel::orthonormal_kernel;
+use crate::linalg::sparse::{norm, norm_inf};
+use crate::qp::executor::{Iterative, Step};
+use crate::qp::kkt::CONTACT_FLOOR;
+use crate::qp::{Context, IterRecord, Output, QpError, QpProblem, Status};
+use std::collections::HashSet;
+use std::time::Instant;
+
+/// Relative residual of the K_J solves while J still moves (the set only
+/// needs the signs of λ and of the gaps); the settled J is solved to the
+/// settings' tolerance and certified.
+const LOOSE: f64 = 1e-6;
+/// ρ = RHO_ITERATIVE · max diag C. The direct paths take 100 (an exact
+/// factor does not mind); here Ρ A_JᵀA_J x cancels against Ρ A_Jᵀg_J in the
+/// residual of every CG step, and a larger ρ costs CG more steps than the
+/// augmented-Lagrangian rounds it saves (three-body, 178 k DOFs: 147 CG
+/// steps at 1, 220 at 10, 696 at 100; the rollers failed at 100).
+const RHO_ITERATIVE: f64 = 1.0;
+/// Augmented-Lagrangian updates of μ per KKT solve, at most.
+const AL_MAX: usize = 60;
+/// CG steps per K_J solve, at most (a multigrid-preconditioned CG on an
+/// elastic body takes tens).
+const PCG_MAX: usize = 2000;
+/// The multigrid of a set J' serves J when at most
+/// max(STALE_MIN, |J|/STALE_DIV) rows differ.
+const STALE_MIN: usize = 8;
+const STALE_DIV: usize = 8;
+/// A K_J solve that stalls (rounding floor) below this relative residual is
+/// used all the same.
+const FLOOR_ACCEPT: f64 = 1e-3;
+/// Certification rounds of a settled J (each tightens the solves ×100).
+const TIGHTEN_MAX: usize = 4;
+
+/// Solve `qp` by ssn on the iterative path (module doc).
+pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
+    if qp.friction.is_some() {
+        return Err(QpError::Unsupported(
+            "ssn_path = \"iterative\" solves frictionless contact only; \
+             use ssn_path = \"auto\" for friction (docs/methods.md §7.2)"
+                .into(),
+        ));
+    }
+    let t0 = Instant::now();
+    let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
+    let mut st = State::new(qp, &r, ctx.settings.tol, ctx.x0);
+    let mut exec = ctx.executor("ssn");
+    let (status, iters) = exec.run(&mut st);
+    if let Some(e) = st.error.take() {
+        return Err(e);
+    }
+    let t_all = t0.elapsed().as_secs_f64();
+    Ok(Output {
+        x: st.x,
+        lambda: st.lam,
+        active: st.in_j,
+        status,
+        iterations: iters,
+        inner_iterations: st.cg_steps,
+        log: exec.log,
+        timings: vec![
+            ("multigrid setup".into(), st.t_setup),
+            ("iterate".into(), t_all - st.t_setup),
+        ],
+    })
+}
+
+struct State<'a> {
+    qp: &'a QpProblem,
+    aug: AugPattern,
+    rho: Vec<f64>,
+    /// (A R)ᵢ for every row: J holds the floating bodies iff these rows of J
+    /// span ℝᵏ.
+    ar: Vec<Vec<f64>>,
+    tol: f64,
+    /// The stiffness scale c (mean positive diagonal of C).
+    cpar: f64,
+    x: Vec<f64>,
+    lam: Vec<f64>,
+    in_j: Vec<bool>,
+    last_ok: Option<Vec<bool>>,
+    history: HashSet<Vec<bool>>,
+    single: bool,
+    cg_steps: usize,
+    /// The multigrid of K_J for the working set it was built for.
+    amg: Option<(Vec<bool>, Amg)>,
+    /// The working set K_J was last assembled for (in `aug`).
+    assembled: Option<Vec<bool>>,
+    /// Multigrid hierarchies built.
+    builds: usize,
+    /// The most CG steps one loose K_J solve took.
+    pcg_max_seen: usize,
+    t_setup: f64,
+    error: Option<QpError>,
+}
+
+/// How one KKT solve ended.
+enum Kkt {
+    /// (λ, x) to the asked tolerance.
+    Solved(Vec<f64>, Vec<f64>),
+    /// J leaves a rigid motion free (or K_J is not positive definite).
+    Singular,
+    /// The solves did not reach the tolerance (message).
+    Stalled(String),
+}
+
+impl<'a> State<'a> {
+    fn new(qp: &'a QpProblem, r: &[Vec<f64>], tol: f64, x0: Option<&[f64]>) -> State<'a> {
+        let m = qp.m();
+        let cmax = norm_inf(&qp.c.diag());
+        let rho = vec![RHO_ITERATIVE * if cmax > 0.0 { cmax } else { 1.0 }; m];
+        let pos: Vec<f64> = qp.c.diag().into_iter().filter(|v| *v > 0.0).collect();
+        let cpar = if pos.is_empty() {
+            1.0
+        } else {
+            pos.iter().sum::<f64>() / pos.len() as f64
+        };
+        let ar = (0..m)
+            .map(|i| r.iter().map(|rl| qp.a.row_dot(i, rl)).collect())
+            .collect();
+        State {
+            qp,
+            aug: AugPattern::new(&qp.c, &qp.a),
+            rho,
+            ar,
+            tol,
+            cpar,
+            x: x0.map_or_else(|| vec![0.0; qp.n()], <[f64]>::to_vec),
+            lam: vec![0.0; m],
+            in_j: qp.g.iter().map(|&g| g <= 0.0).collect(),
+            last_ok: None,
+            history: HashSet::new(),
+            single: false,
+            cg_steps: 0,
+            pcg_max_seen: 0,
+            amg: None,
+            assembled: None,
+            builds: 0,
+            t_setup: 0.0,
+            error: None,
+        }
+    }
+
+    /// True when the rows of J restrain every rigid motion of ker C:
+    /// Σ_{j∈J} (AR)ⱼ(AR)ⱼᵀ has no eigenvalue below 1e-12 of its largest
+    /// (R orthonormal, so the test has no units).
+    fn holds_kernel(&self, in_j: &[bool]) -> bool {
+        let k = self.ar.first().map_or(0, Vec::len);
+        if k == 0 {
+            return true;
+        }
+        let mut gram = vec![vec![0.0; k]; k];
+        for (row, _) in self.ar.iter().zip(in_j).filter(|(_, b)| **b) {
+            for a in 0..k {
+                for b in 0..k {
+                    gram[a][b] += row[a] * row[b];
+                }
+            }
+        }
+        let (vals, _) = sym_eigen(&gram);
+        let top = vals.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        top > 0.0 && vals.iter().all(|v| *v > 1e-12 * top)
+    }
+
+    /// The KKT system of J (module doc) from the current (x, λ), the K_J
+    /// solves to relative residual `rtol`; the gaps of J to `rtol` of their
+    /// scale.
+    fn kkt(&mut self, in_j: &[bool], rtol: f64) -> Kkt {
+        // A tightened solve that needs more than this has met its rounding
+        // floor (counts only: the same on every run).
+        let max_iter = if rtol < LOOSE {
+            (4 * self.pcg_max_seen + 50).min(PCG_MAX)
+        } else {
+            PCG_MAX
+        };
+        if !self.holds_kernel(in_j) {
+            return Kkt::Singular;
+        }
+        let qp = self.qp;
+        let jset: Vec<usize> = (0..qp.m()).filter(|&i| in_j[i]).collect();
+        if self.assembled.as_deref() != Some(in_j) {
+            self.aug.assemble(jset.iter().copied(), &self.rho);
+            self.assembled = Some(in_j.to_vec());
+        }
+        // The multigrid is rebuilt only when J has moved by more than
+        // `stale_max` rows from the set it was built for: K_J then differs
+        // from that K by a low-rank term, which costs CG a few steps where
+        // a rebuild costs tens of V-cycles (counts only: same bits on every run).
+        let moved = self
+            .amg
+            .as_ref()
+            .map(|(set, _)| set.iter().zip(in_j).filter(|(a, b)| a != b).count());
+        let stale_max = STALE_MIN.max(jset.len() / STALE_DIV);
+        if moved.is_none_or(|c| c > stale_max) {
+            self.amg = None; // free the old hierarchy first
+            let t = Instant::now();
+            let near = qp.near.as_ref().map(|nk| NearNull {
+                block_ptr: &nk.block_ptr,
+                modes: &nk.modes,
+            });
+            let amg = match Amg::new(self.aug.matrix(), near, &AmgSettings::default()) {
+                Ok(a) => a,
+                Err(e) => {
+                    log::debug!("ssn iterative: multigrid of K_J: {e}");
+                    return Kkt::Singular;
+                }
+            };
+            self.t_setup += t.elapsed().as_secs_f64();
+            self.builds += 1;
+            log::debug!(
+                "ssn iterative: multigrid of K_J ({} rows in J): levels {:?}, operator complexity {:.2}, {:.3} s",
+                jset.len(),
+                amg.sizes(),
+                amg.operator_complexity(),
+                t.elapsed().as_secs_f64()
+            );
+            self.amg = Some((in_j.to_vec(), amg));
+        }
+        let amg = &self.amg.as_ref().expect("built above").1;
+        let k = self.aug.matrix();
+        let prec = |r: &[f64], z: &mut [f64]| amg.apply(r, z);
+        let mut mu: Vec<f64> = jset.iter().map(|&j| self.lam[j]).collect();
+        let mut x = self.x.clone();
+        // Scale of the gaps: max(|A_J x|, |g_J|) through |A|.
+        let gscale = |x: &[f64]| -> f64 {
+            jset.iter()
+                .map(|&j| {
+                    let (c, v) = qp.a.row(j);
+                    let ax: f64 = c.iter().zip(v).map(|(&kk, &a)| (a * x[kk]).abs()).sum();
+                    ax.max(qp.g[j].abs())
+                })
+                .fold(0.0, f64::max)
+        };
+        for round in 0..AL_MAX {
+            let mut b = qp.d.clone();
+            for (&j, &m) in jset.iter().zip(&mu) {
+                let (c, v) = qp.a.row(j);
+                for (&kk, &a) in c.iter().zip(v) {
+                    b[kk] += a * (self.rho[j] * qp.g[j] - m);
+                }
+            }
+            // The tolerance is on the contact forces, the scale of the
+            // certificate's contact balance (max(‖A_Jᵀμ‖, 10⁻⁴‖d‖), §8.4),
+            // not on b, whose A_JᵀΡg_J part cancels against Ρ A_JᵀA_J x and
+            // whose loads spread over every unknown.
+            let mut atmu = vec![0.0; qp.n()];
+            for (&j, &m) in jset.iter().zip(&mu) {
+                let (c, v) = qp.a.row(j);
+                for (&kk, &a) in c.iter().zip(v) {
+                    atmu[kk] += a * m;
+                }
+            }
+            let (fscale, bn) = (norm(&atmu).max(CONTACT_FLOOR * norm(&qp.d)), norm(&b));
+            let rt = if fscale > 0.0 && bn > 0.0 {
+                (rtol * fscale / bn).min(rtol).max(rtol.min(1e-13))
+            } else {
+                rtol
+            };
+            let rep = pcg(k, &b, &mut x, &prec, rt, max_iter);
+            self.cg_steps += rep.iterations;
+            if rtol >= LOOSE {
+                self.pcg_max_seen = self.pcg_max_seen.max(rep.iterations);
+            }
+            // A solve stopped at its rounding floor still decides signs
+            // (the certificate judges the end); anything else is a failure.
+            let floor_ok = rep.stalled && rep.rel_residual <= FLOOR_ACCEPT;
+            if !(rep.converged || floor_ok) || !rep.rel_residual.is_finite() {
+                return Kkt::Stalled(format!(
+                    "ssn iterative: CG on K_J stopped at relative residual {:.2e} after {} steps",
+                    rep.rel_residual, rep.iterations
+                ));
+            }
+            let gap: Vec<f64> = jset
+                .iter()
+                .map(|&j| qp.a.row_dot(j, &x) - qp.g[j])
+                .collect();
+            for ((m, &j), gj) in mu.iter_mut().zip(&jset).zip(&gap) {
+                *m += self.rho[j] * gj;
+            }
+            let worst = norm_inf(&gap);
+            let scale = gscale(&x).max(f64::MIN_POSITIVE);
+            log::trace!(
+                "ssn iterative: AL round {round}: {} CG steps, gap {:.2e} of {:.2e}",
+                rep.iterations,
+                worst,
+                scale
+            );
+            if worst <= rtol * scale || jset.is_empty() || floor_ok {
+                let mut lam = vec![0.0; qp.m()];
+                for (&j, &m) in jset.iter().zip(&mu) {
+                    lam[j] = m;
+                }
+                if lam.iter().chain(&x).any(|v| !v.is_finite()) {
+                    return Kkt::Stalled("ssn iterative: the KKT solve is not finite".into());
+                }
+                return Kkt::Solved(lam, x);
+            }
+        }
+        Kkt::Stalled(format!(
+            "ssn iterative: the gaps of J did not close in {AL_MAX} augmented-Lagrangian rounds"
+        ))
+    }
+
+    fn record(&self, residual: f64) -> IterRecord {
+        IterRecord {
+            iter: 0,
+            residual,
+            active: self.in_j.iter().filter(|b| **b).count(),
+            inner: self.cg_steps,
+        }
+    }
+
+    /// Solve J tighter until (x, λ) is certified or the solves stop gaining.
+    fn certify(&mut self) -> Result<f64, String> {
+        let mut cert = certificate(self.qp, &self.x, &self.lam);
+        let mut rtol = LOOSE;
+        for _ in 0..TIGHTEN_MAX {
+            if cert <= self.tol {
+                break;
+            }
+            rtol = (rtol * 1e-2).max(1e-15);
+            let in_j = self.in_j.clone();
+            match self.kkt(&in_j, rtol) {
+                Kkt::Solved(lam, x) => {
+                    let c = certificate(self.qp, &x, &lam);
+                    log::debug!(
+                        "ssn iterative: tightened to {rtol:.0e}: KKT residual {cert:.2e} → {c:.2e} ({:?})",
+                        crate::qp::kkt::residuals(self.qp, &x, &lam)
+                    );
+                    if c.is_nan() || c >= cert {
+                        break;
+                    }
+                    (self.x, self.lam, cert) = (x, lam, c);
+                }
+                Kkt::Singular => return Err("ssn iterative: K_J became singular".into()),
+                // The rounding floor of K_J's solves (a soft body under a
+                // stiff one): keep the last answer, the certificate judges.
+                Kkt::Stalled(msg) => {
+                    log::debug!("{msg}; keeping the answer of {:.0e}", rtol * 1e2);
+                    break;
+                }
+            }
+        }
+        Ok(cert)
+    }
+}
+
+impl Iterative for State<'_> {
+    fn step(&mut self) -> Step {
+        let m = self.qp.m();
+        let mut cands = vec![self.in_j.clone()];
+        if let Some(prev) = &self.last_ok {
+            cands.push(self.in_j.iter().zip(prev).map(|(a, b)| *a || *b).collect());
+        }
+        cands.push(vec![true; m]);
+        cands.dedup();
+        let mut solved = None;
+        for cand in cands {
+            match self.kkt(&cand, LOOSE) {
+                Kkt::Solved(lam, x) => {
+                    solved = Some((cand, lam, x));
+                    break;
+                }
+                Kkt::Singular => continue,
+                Kkt::Stalled(msg) => {
+                    return Step::Done(Status::Failed(msg), self.record(f64::NAN));
+                }
+            }
+        }
+        let Some((jused, lam, x)) = solved else {
+            return Step::Done(
+                Status::Failed(
+                    "ssn iterative: even with every contact row active, a rigid motion of a floating body \
+                     is free (A·R rank deficient) or K_J is not positive definite; the direct paths \
+                     (ssn_path = \"auto\") solve models whose bodies may roll"
+                        .into(),
+                ),
+                self.record(f64::NAN),
+            );
+        };
+        self.in_j = jused.clone();
+        self.last_ok = Some(jused.clone());
+        self.history.insert(jused);
+        self.lam = lam;
+        self.x = x;
+        let qp = self.qp;
+        let mut ax: Vec<f64> = (0..m).map(|i| qp.a.row_dot(i, &self.x)).collect();
+        let mut new_j = next_set(&self.in_j, &self.lam, &ax, &qp.g, self.tol);
+        let changed = new_j.iter().zip(&self.in_j).filter(|(a, b)| a != b).count();
+        let residual = changed as f64 / m.max(1) as f64;
+        log::debug!(
+            "ssn iterative: step {}: |J| = {}, {changed} rows change, {} CG steps so far",
+            self.history.len(),
+            self.in_j.iter().filter(|b| **b).count(),
+            self.cg_steps
+        );
+        if new_j == self.in_j {
+            let cert = match self.certify() {
+                Ok(c) => c,
+                Err(msg) => return Step::Done(Status::Failed(msg), self.record(f64::NAN)),
+            };
+            ax = (0..m).map(|i| qp.a.row_dot(i, &self.x)).collect();
+            new_j = next_set(&self.in_j, &self.lam, &ax, &qp.g, self.tol);
+            if new_j != self.in_j {
+                // The loose solve misjudged a row's sign: go on from the
+                // tightened answer.
+                log::debug!("ssn iterative: the tightened solution moves J; continuing");
+            } else if cert.is_nan() || cert > CERT_TARGET.max(self.tol) {
+                return Step::Done(
+                    Status::Failed(format!(
+                        "ssn iterative: KKT residual {cert:.2e} after tightening (target {CERT_TARGET:e})"
+                    )),
+                    self.record(cert),
+                );
+            } else {
+                return Step::Done(Status::Converged, self.record(cert));
+            }
+        }
+        // The growth limit and the anti-cycling rule of the direct paths,
+        // on F = λ + c(Ax − g), c the mean stiffness.
+        let fval: Vec<f64> = (0..m)
+            .map(|i| self.lam[i] + self.cpar * (ax[i] - qp.g[i]))
+            .collect();
+        let size = self.in_j.iter().filter(|&&b| b).count();
+        let mut entering: Vec<usize> = (0..m).filter(|&i| new_j[i] && !self.in_j[i]).collect();
+        let cap = GROW_MIN.max(size);
+        if entering.len() > cap {
+            entering.sort_unstable_by(|&a, &b| fval[b].total_cmp(&fval[a]).then(a.cmp(&b)));
+            for &i in &entering[cap..] {
+                new_j[i] = false;
+            }
+        }
+        if !self.single && self.history.contains(&new_j) {
+            log::debug!("ssn iterative: a working set repeats; switching to single changes");
+            self.single = true;
+        }
+        if self.single {
+            let mut drop = (0.0f64, usize::MAX);
+            let mut add = (0.0f64, usize::MAX);
+            for (i, (&f, &inj)) in fval.iter().zip(&self.in_j).enumerate() {
+                if inj && !new_j[i] && -f >= drop.0 {
+                    drop = (-f, i);
+                }
+                if !inj && new_j[i] && f > add.0 {
+                    add = (f, i);
+                }
+            }
+            new_j = self.in_j.clone();
+            if drop.1 != usize::MAX && (add.1 == usize::MAX || drop.0 >= add.0) {
+                new_j[drop.1] = false;
+            } else if add.1 != usize::MAX {
+                new_j[add.1] = true;
+            }
+        }
+        self.in_j = new_j;
+        Step::Continue(self.record(residual))
+    }
+}
