@@ -341,6 +341,62 @@ fn memory_limit_refuses_a_larger_factor_and_changes_nothing_else() {
     assert_eq!(jsons[0]["kkt"], jsons[1]["kkt"]);
 }
 
+/// `ssn_path = "iterative"` factors nothing of C's size: under a memory
+/// limit of 1 KiB, which refuses the direct path, it solves the model and
+/// its probes are the direct path's (to 1e-5 of the largest: both are
+/// certified to 1e-10 in residual, not in error), same active set.
+#[test]
+fn the_iterative_path_solves_under_a_limit_no_factor_fits() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = root().join("tests/data/msh/square_ascii41.msh");
+    let mut jsons = vec![];
+    for (i, extra) in ["", "ssn_path = \"iterative\"\nmemory_limit = \"1 KiB\"\n"]
+        .iter()
+        .enumerate()
+    {
+        let p = dir.path().join(format!("m{i}.toml"));
+        let text = format!(
+            "{GOOD}[output]\nprobes = {{ top = [0.5, 1.0], mid = [0.5, 0.5], low = [0.2, 0.3] }}\n[solver]\nmethod = \"ssn\"\n{extra}"
+        )
+        .replace("MESH", &mesh.display().to_string());
+        std::fs::write(&p, text).unwrap();
+        let out = dir.path().join(format!("out{i}"));
+        let (code, stderr) = solve_quiet(&p, &out);
+        assert_eq!(code, 0, "{extra}: {stderr}");
+        let j: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join(format!("m{i}.json"))).unwrap())
+                .unwrap();
+        jsons.push(j);
+    }
+    assert!(
+        jsons[1]["timings_s"]
+            .to_string()
+            .contains("multigrid setup"),
+        "{}",
+        jsons[1]["timings_s"]
+    );
+    let probes = |j: &serde_json::Value| -> Vec<f64> {
+        let mut v = vec![];
+        for (_, p) in j["probes"].as_object().unwrap() {
+            v.extend(
+                p["u"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|x| x.as_f64().unwrap()),
+            );
+        }
+        v
+    };
+    let (a, b) = (probes(&jsons[0]), probes(&jsons[1]));
+    assert!(!a.is_empty());
+    let big = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() <= 1e-5 * big, "{a:?} vs {b:?}");
+    }
+    assert_eq!(jsons[0]["active"], jsons[1]["active"]);
+}
+
 #[test]
 fn bad_body_without_support() {
     // No Dirichlet at all and no contact: both halves are free.

@@ -748,18 +748,16 @@ pub struct PcgReport {
     /// ‖b − Kx‖₂ / ‖b‖₂ of the returned x (recomputed, not the recursion's).
     pub rel_residual: f64,
     pub converged: bool,
-    /// Stopped because [`PCG_STALL`] steps did not halve the residual: the
-    /// rounding floor of K x − b (a soft body beside a stiff one) is above rtol.
+    /// Stopped because the stall window of [`pcg_stall`] passed without
+    /// halving the residual: the rounding floor of b − Kx is above rtol.
     pub stalled: bool,
 }
 
-/// Steps without halving the best residual after which [`pcg`] stops.
+/// A stall window for [`pcg_stall`] with a multigrid preconditioner.
 pub const PCG_STALL: usize = 50;
 
 /// Preconditioned CG for K x = b from the given x (warm start), stop when
-/// ‖b − Kx‖₂ ≤ rtol·‖b‖₂ (or b = 0, then x = 0), after max_iter, or when
-/// [`PCG_STALL`] steps have not halved the best residual once it is below
-/// √rtol·‖b‖₂ (counts only; a CG residual may grow for a while before).
+/// ‖b − Kx‖₂ ≤ rtol·‖b‖₂ (or b = 0, then x = 0) or after max_iter.
 /// Deterministic. The stop is confirmed on the true residual: if the
 /// recursive one has drifted, CG restarts from the true one.
 pub fn pcg(
@@ -769,6 +767,23 @@ pub fn pcg(
     m: &dyn Fn(&[f64], &mut [f64]),
     rtol: f64,
     max_iter: usize,
+) -> PcgReport {
+    pcg_stall(k, b, x, m, rtol, max_iter, usize::MAX)
+}
+
+/// [`pcg`] that also stops when `stall` steps have not halved the best
+/// residual once it is below √rtol·‖b‖₂ (counts only; a CG residual may
+/// grow for a while before): the rounding floor of b − Kx (a soft body
+/// beside a stiff one) lies above rtol. [`PCG_STALL`] suits a multigrid
+/// preconditioner, not a weak one, whose CG may crawl that long.
+pub fn pcg_stall(
+    k: &Csr,
+    b: &[f64],
+    x: &mut [f64],
+    m: &dyn Fn(&[f64], &mut [f64]),
+    rtol: f64,
+    max_iter: usize,
+    stall: usize,
 ) -> PcgReport {
     let n = b.len();
     let bn = norm(b);
@@ -811,7 +826,7 @@ pub fn pcg(
             let rn = norm(&r);
             if rn <= 0.5 * best {
                 (best, best_at) = (rn, it);
-            } else if it - best_at >= PCG_STALL && best <= rtol.sqrt() * bn {
+            } else if it - best_at >= stall && best <= rtol.sqrt() * bn {
                 stalled = true;
                 break;
             }

@@ -960,8 +960,8 @@ fn fits_in_memory(
         format!("{v:.1} {unit}")
     };
     let hint = match ordering {
-        Ordering::Amd => "try [solver] ordering = \"nested-dissection\" (about a quarter less fill on 2D meshes, docs/methods.md §3), a coarser mesh or a larger machine",
-        Ordering::NestedDissection => "try a coarser mesh or a larger machine",
+        Ordering::Amd => "try [solver] ordering = \"nested-dissection\" (about a quarter less fill on 2D meshes, docs/methods.md §3), method ssn with [solver] ssn_path = \"iterative\" (no factor, docs/methods.md §7.2), a coarser mesh or a larger machine",
+        Ordering::NestedDissection => "try method ssn with [solver] ssn_path = \"iterative\" (no factor, docs/methods.md §7.2), a coarser mesh or a larger machine",
     };
     let hint = if by_limit {
         format!(

@@ -14,7 +14,7 @@
 //! here (the direct paths are).
 
 use super::{certificate, next_set, CERT_TARGET, GROW_MIN};
-use crate::linalg::amg::{pcg, Amg, AmgSettings, NearNull};
+use crate::linalg::amg::{pcg_stall, Amg, AmgSettings, NearNull, PCG_STALL};
 use crate::linalg::augmented::AugPattern;
 use crate::linalg::dense::sym_eigen;
 use crate::linalg::kernel::orthonormal_kernel;
@@ -274,7 +274,7 @@ impl<'a> State<'a> {
             } else {
                 rtol
             };
-            let rep = pcg(k, &b, &mut x, &prec, rt, max_iter);
+            let rep = pcg_stall(k, &b, &mut x, &prec, rt, max_iter, PCG_STALL);
             self.cg_steps += rep.iterations;
             if rtol >= LOOSE {
                 self.pcg_max_seen = self.pcg_max_seen.max(rep.iterations);
