@@ -353,11 +353,19 @@ impl<'a> Run<'a> {
         let Some((last, verdict, timings)) = last else {
             return Err(RunError::Settings("no load step was solved".into()));
         };
+        // The iterative ssn path orders nothing (docs/methods.md §7.2).
+        let iterative = method == "ssn"
+            && self.opts.settings.ssn.path == crate::qp::settings::SsnPath::Iterative;
+        let ordering = if iterative {
+            "none (ssn_path = iterative)"
+        } else {
+            self.opts.settings.ordering.name()
+        };
         let summary = Summary::new(
             prep,
             last.model(prep),
             method,
-            self.opts.settings.ordering,
+            ordering,
             &last.result,
             &last.output,
             &last.forces,
