@@ -18,10 +18,12 @@ use crate::linalg::amg::{pcg_stall, Amg, AmgSettings, NearNull, PCG_STALL};
 use crate::linalg::augmented::AugPattern;
 use crate::linalg::dense::sym_eigen;
 use crate::linalg::kernel::orthonormal_kernel;
+use crate::linalg::ordering::block_rcm;
+use crate::linalg::sparse::Csr;
 use crate::linalg::sparse::{norm, norm_inf};
 use crate::qp::executor::{Iterative, Step};
 use crate::qp::kkt::CONTACT_FLOOR;
-use crate::qp::{Context, IterRecord, Output, QpError, QpProblem, Status};
+use crate::qp::{Context, IterRecord, NearKernel, Output, QpError, QpProblem, Status};
 use std::collections::HashSet;
 use std::time::Instant;
 
@@ -60,18 +62,39 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
         ));
     }
     let t0 = Instant::now();
+    // Everything below runs on the unknowns in a bandwidth-reducing order
+    // (memory-bound sweeps; a mesh generator's numbering scatters
+    // neighbours), and x is put back in the caller's order at the end.
+    let unit: Vec<usize>;
+    let blocks = match &qp.near {
+        Some(nk) => nk.block_ptr.as_slice(),
+        None => {
+            unit = (0..=qp.n()).collect();
+            &unit
+        }
+    };
+    let perm = block_rcm(&qp.c, blocks);
+    let qpp = permuted(qp, &perm);
+    let x0 = ctx
+        .x0
+        .map(|x| perm.iter().map(|&o| x[o]).collect::<Vec<f64>>());
+    let qp = &qpp;
     let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
-    let mut st = State::new(qp, &r, ctx.settings.tol, ctx.x0);
+    let mut st = State::new(qp, &r, ctx.settings.tol, x0.as_deref());
     let mut exec = ctx.executor("ssn");
     let (status, iters) = exec.run(&mut st);
     if let Some(e) = st.error.take() {
         return Err(e);
     }
     let t_all = t0.elapsed().as_secs_f64();
+    let mut x = vec![0.0; st.x.len()];
+    for (&o, &v) in perm.iter().zip(&st.x) {
+        x[o] = v;
+    }
     Ok(Output {
-        x: st.x,
-        lambda: st.lam,
-        active: st.in_j,
+        x,
+        lambda: std::mem::take(&mut st.lam),
+        active: std::mem::take(&mut st.in_j),
         status,
         iterations: iters,
         inner_iterations: st.cg_steps,
@@ -472,5 +495,65 @@ impl Iterative for State<'_> {
         }
         self.in_j = new_j;
         Step::Continue(self.record(residual))
+    }
+}
+
+/// `qp` on the unknowns in the order `perm` (new → old): C ↦ PCPᵀ, A ↦ APᵀ,
+/// d, ker C and the near-null space permuted alike; rows and g unchanged.
+/// Blocks of `near` must be whole in `perm` ([`block_rcm`] keeps them).
+fn permuted(qp: &QpProblem, perm: &[usize]) -> QpProblem {
+    let n = qp.n();
+    let mut inv = vec![0usize; n];
+    for (new, &old) in perm.iter().enumerate() {
+        inv[old] = new;
+    }
+    let remap = |m: &Csr, rows: &mut dyn Iterator<Item = usize>| -> Csr {
+        let mut indptr = vec![0usize];
+        let mut indices = Vec::with_capacity(m.nnz());
+        let mut data = Vec::with_capacity(m.nnz());
+        let mut row: Vec<(usize, f64)> = Vec::new();
+        for i in rows {
+            let (c, v) = m.row(i);
+            row.clear();
+            row.extend(c.iter().map(|&j| inv[j]).zip(v.iter().copied()));
+            row.sort_unstable_by_key(|e| e.0);
+            for &(j, x) in &row {
+                indices.push(j);
+                data.push(x);
+            }
+            indptr.push(indices.len());
+        }
+        Csr {
+            nrows: indptr.len() - 1,
+            ncols: m.ncols,
+            indptr,
+            indices,
+            data,
+        }
+    };
+    let gather = |v: &[f64]| -> Vec<f64> { perm.iter().map(|&o| v[o]).collect() };
+    let near = qp.near.as_ref().map(|nk| {
+        let mut block_ptr = vec![0usize];
+        let mut i = 0;
+        while i < n {
+            // the block of unknown perm[i] in the caller's blocks, whole
+            let old = perm[i];
+            let b = nk.block_ptr.partition_point(|&s| s <= old) - 1;
+            i += nk.block_ptr[b + 1] - nk.block_ptr[b];
+            block_ptr.push(i);
+        }
+        NearKernel {
+            block_ptr,
+            modes: nk.modes.iter().map(|z| gather(z)).collect(),
+        }
+    });
+    QpProblem {
+        c: remap(&qp.c, &mut perm.iter().copied()),
+        d: gather(&qp.d),
+        a: remap(&qp.a, &mut (0..qp.m())),
+        g: qp.g.clone(),
+        kernel: qp.kernel.iter().map(|z| gather(z)).collect(),
+        friction: None,
+        near,
     }
 }
