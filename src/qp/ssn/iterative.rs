@@ -83,9 +83,12 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
     let mut st = State::new(qp, &r, ctx.settings.tol, x0.as_deref());
     let mut exec = ctx.executor("ssn");
     let (status, iters) = exec.run(&mut st);
-    if let Some(e) = st.error.take() {
-        return Err(e);
-    }
+    log::debug!(
+        "ssn iterative: {} multigrid hierarchies, {} CG steps, {:.3} s of setup",
+        st.builds,
+        st.cg_steps,
+        st.t_setup
+    );
     let t_all = t0.elapsed().as_secs_f64();
     let mut x = vec![0.0; st.x.len()];
     for (&o, &v) in perm.iter().zip(&st.x) {
@@ -132,7 +135,6 @@ struct State<'a> {
     /// The most CG steps one loose K_J solve took.
     pcg_max_seen: usize,
     t_setup: f64,
-    error: Option<QpError>,
 }
 
 /// How one KKT solve ended.
@@ -178,7 +180,6 @@ impl<'a> State<'a> {
             assembled: None,
             builds: 0,
             t_setup: 0.0,
-            error: None,
         }
     }
 
