@@ -49,7 +49,7 @@ pub struct SolverSection {
     /// sweeps. `false` gives the report's plain iterations.
     #[arg(long)]
     pub accelerate: Option<bool>,
-    /// ssn's linear algebra: auto (by counts) | augmented | refactor | schur.
+    /// ssn's linear algebra: auto (by counts) | augmented | refactor | schur | iterative (no factor of C's size, docs/methods.md §7.2).
     #[arg(long)]
     pub ssn_path: Option<String>,
     /// Fill-reducing ordering of every sparse Cholesky factor: amd (default)

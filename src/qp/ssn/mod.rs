@@ -19,6 +19,8 @@
 //! every row when the glued set does not hold the floating bodies), and the
 //! Newton loop only confirms it. Counts: `iterations` = KKT solves (the
 //! dual-space steps are not counted), `inner_iterations` = sparse solves.
+//! `ssn_path = "iterative"` runs the same loop in `iterative` with no factor
+//! of C's size: multigrid-preconditioned CG (docs/methods.md §7.2).
 
 mod augmented;
 mod friction;

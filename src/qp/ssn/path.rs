@@ -10,7 +10,8 @@
 //! min(fac(K), (changed rows)·col(K)) + 6·solve(K), and Schur is taken when it
 //! is at most k times that, k = 1 in the second step and 3 later (J still
 //! moving: more steps follow, and Schur's columns are paid once).
-//! the setting `ssn_path` forces a path.
+//! the setting `ssn_path` forces a path; `iterative` leaves this module for
+//! `iterative` (no factor at all).
 
 use super::lowrank::LOWRANK_MAX;
 use super::Ssn;
