@@ -13,7 +13,7 @@
 //! Schur path; a motion free on every row (a rolling body) is not solved
 //! here (the direct paths are).
 
-use super::{certificate, next_set, CERT_TARGET, GROW_MIN};
+use super::{next_set, CERT_TARGET, GROW_MIN};
 use crate::linalg::amg::{pcg_stall, Amg, AmgSettings, NearNull, PCG_STALL};
 use crate::linalg::augmented::AugPattern;
 use crate::linalg::dense::sym_eigen;
@@ -74,13 +74,19 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
         }
     };
     let perm = block_rcm(&qp.c, blocks);
-    let qpp = permuted(qp, &perm);
+    let r: Vec<Vec<f64>> = orthonormal_kernel(&qp.c, &qp.kernel)?
+        .iter()
+        .map(|z| perm.iter().map(|&o| z[o]).collect())
+        .collect();
+    // The permuted C lives only in the pattern of K_J (AugPattern); the
+    // certificate reads the caller's C (one copy of C less: 2 GiB at 5 M nodes).
+    let (qpp, aug) = permuted(qp, &perm);
     let x0 = ctx
         .x0
         .map(|x| perm.iter().map(|&o| x[o]).collect::<Vec<f64>>());
-    let qp = &qpp;
-    let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
-    let mut st = State::new(qp, &r, ctx.settings.tol, x0.as_deref());
+    let diag = qp.c.diag();
+    let mut st = State::new(&qpp, aug, &diag, &r, ctx.settings.tol, x0.as_deref());
+    st.orig = Some((qp, &perm));
     let mut exec = ctx.executor("ssn");
     let (status, iters) = exec.run(&mut st);
     log::debug!(
@@ -110,7 +116,11 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
 }
 
 struct State<'a> {
+    /// The permuted problem; its C is empty (see `aug`).
     qp: &'a QpProblem,
+    /// The caller's problem and the order (new → old) `qp` is in: the
+    /// certificate is measured on it.
+    orig: Option<(&'a QpProblem, &'a [usize])>,
     aug: AugPattern,
     rho: Vec<f64>,
     /// (A R)ᵢ for every row: J holds the floating bodies iff these rows of J
@@ -148,11 +158,19 @@ enum Kkt {
 }
 
 impl<'a> State<'a> {
-    fn new(qp: &'a QpProblem, r: &[Vec<f64>], tol: f64, x0: Option<&[f64]>) -> State<'a> {
+    /// `qp` without C (it lives in `aug`), `diag` = diag C (any order).
+    fn new(
+        qp: &'a QpProblem,
+        aug: AugPattern,
+        diag: &[f64],
+        r: &[Vec<f64>],
+        tol: f64,
+        x0: Option<&[f64]>,
+    ) -> State<'a> {
         let m = qp.m();
-        let cmax = norm_inf(&qp.c.diag());
+        let cmax = norm_inf(diag);
         let rho = vec![RHO_ITERATIVE * if cmax > 0.0 { cmax } else { 1.0 }; m];
-        let pos: Vec<f64> = qp.c.diag().into_iter().filter(|v| *v > 0.0).collect();
+        let pos: Vec<f64> = diag.iter().copied().filter(|v| *v > 0.0).collect();
         let cpar = if pos.is_empty() {
             1.0
         } else {
@@ -163,7 +181,8 @@ impl<'a> State<'a> {
             .collect();
         State {
             qp,
-            aug: AugPattern::new(&qp.c, &qp.a),
+            aug,
+            orig: None,
             rho,
             ar,
             tol,
@@ -352,9 +371,19 @@ impl<'a> State<'a> {
         }
     }
 
+    /// The KKT residuals of (x, λ) on the caller's problem (x put back).
+    fn residuals(&self, x: &[f64], lam: &[f64]) -> crate::qp::Kkt {
+        let (qp, perm) = self.orig.expect("set by solve");
+        let mut xo = vec![0.0; x.len()];
+        for (&o, &v) in perm.iter().zip(x) {
+            xo[o] = v;
+        }
+        crate::qp::kkt::residuals(qp, &xo, lam)
+    }
+
     /// Solve J tighter until (x, λ) is certified or the solves stop gaining.
     fn certify(&mut self) -> Result<f64, String> {
-        let mut cert = certificate(self.qp, &self.x, &self.lam);
+        let mut cert = self.residuals(&self.x, &self.lam).judged();
         let mut rtol = LOOSE;
         for _ in 0..TIGHTEN_MAX {
             if cert <= self.tol {
@@ -364,10 +393,10 @@ impl<'a> State<'a> {
             let in_j = self.in_j.clone();
             match self.kkt(&in_j, rtol) {
                 Kkt::Solved(lam, x) => {
-                    let c = certificate(self.qp, &x, &lam);
+                    let k = self.residuals(&x, &lam);
+                    let c = k.judged();
                     log::debug!(
-                        "ssn iterative: tightened to {rtol:.0e}: KKT residual {cert:.2e} → {c:.2e} ({:?})",
-                        crate::qp::kkt::residuals(self.qp, &x, &lam)
+                        "ssn iterative: tightened to {rtol:.0e}: KKT residual {cert:.2e} → {c:.2e} ({k:?})"
                     );
                     if c.is_nan() || c >= cert {
                         break;
@@ -499,10 +528,11 @@ impl Iterative for State<'_> {
     }
 }
 
-/// `qp` on the unknowns in the order `perm` (new → old): C ↦ PCPᵀ, A ↦ APᵀ,
-/// d, ker C and the near-null space permuted alike; rows and g unchanged.
+/// `qp` on the unknowns in the order `perm` (new → old): A ↦ APᵀ, d, ker C
+/// and the near-null space permuted alike, rows and g unchanged; PCPᵀ only
+/// as the pattern of K_J = PCPᵀ + AᵀΡA (the returned QP's C is empty, n×n).
 /// Blocks of `near` must be whole in `perm` ([`block_rcm`] keeps them).
-fn permuted(qp: &QpProblem, perm: &[usize]) -> QpProblem {
+fn permuted(qp: &QpProblem, perm: &[usize]) -> (QpProblem, AugPattern) {
     let n = qp.n();
     let mut inv = vec![0usize; n];
     for (new, &old) in perm.iter().enumerate() {
@@ -548,13 +578,23 @@ fn permuted(qp: &QpProblem, perm: &[usize]) -> QpProblem {
             modes: nk.modes.iter().map(|z| gather(z)).collect(),
         }
     });
-    QpProblem {
-        c: remap(&qp.c, &mut perm.iter().copied()),
+    let a = remap(&qp.a, &mut (0..qp.m()));
+    let aug = AugPattern::new(&remap(&qp.c, &mut perm.iter().copied()), &a);
+    let empty = Csr {
+        nrows: n,
+        ncols: n,
+        indptr: vec![0; n + 1],
+        indices: vec![],
+        data: vec![],
+    };
+    let qpp = QpProblem {
+        c: empty,
         d: gather(&qp.d),
-        a: remap(&qp.a, &mut (0..qp.m())),
+        a,
         g: qp.g.clone(),
         kernel: qp.kernel.iter().map(|z| gather(z)).collect(),
         friction: None,
         near,
-    }
+    };
+    (qpp, aug)
 }
