@@ -23,8 +23,10 @@
 //! coarsest level, so it is a symmetric positive definite operator, as CG
 //! requires.
 
-use crate::linalg::dense::SpdFactor;
+use crate::linalg::dense::PIVOT_REL;
 use crate::linalg::sparse::{axpy, dot, norm, Csr};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::{Mat, Par};
 use rayon::prelude::*;
 use std::sync::Mutex;
 
@@ -252,7 +254,7 @@ struct Work {
 /// The SA-AMG hierarchy; [`Amg::apply`] is one V-cycle.
 pub struct Amg {
     levels: Vec<Level>,
-    coarse: SpdFactor,
+    coarse: SeqChol,
     coarse_n: usize,
     coarse_nnz: usize,
     sweeps: usize,
@@ -346,12 +348,7 @@ impl Amg {
                 dense[i * nc + j] = x;
             }
         }
-        let coarse = if nc == 0 {
-            SpdFactor::from_row_major(&[], 0)
-        } else {
-            SpdFactor::from_row_major(&dense, nc)
-        }
-        .ok_or(AmgError::CoarseSingular { n: nc })?;
+        let coarse = SeqChol::new(&dense, nc).ok_or(AmgError::CoarseSingular { n: nc })?;
         Ok(Amg {
             levels,
             coarse,
@@ -1030,6 +1027,58 @@ pub fn pcg_stall(
         rel_residual: rel,
         converged: rel <= rtol,
         stalled: stalled && rel > rtol,
+    }
+}
+
+/// The coarsest level's dense Cholesky factor, computed and applied on the
+/// calling thread (`Par::Seq`): faer's global parallelism splits blocked
+/// kernels by the thread count, and the bits of the answer must not depend
+/// on it (`qp::ssn` tests it on 1 and 2 threads).
+struct SeqChol {
+    l: Mat<f64>,
+}
+
+impl SeqChol {
+    /// Factor the row-major n×n SPD `a`; None if a pivot fails the
+    /// [`PIVOT_REL`] test of [`crate::linalg::dense::SpdFactor`] or anything
+    /// is not finite.
+    fn new(a: &[f64], n: usize) -> Option<SeqChol> {
+        use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch};
+        let mut l = Mat::from_fn(n, n, |i, j| if j <= i { a[i * n + j] } else { 0.0 });
+        let mut mem = MemBuffer::try_new(cholesky_in_place_scratch::<f64>(
+            n,
+            Par::Seq,
+            Default::default(),
+        ))
+        .ok()?;
+        cholesky_in_place(
+            l.as_mut(),
+            Default::default(),
+            Par::Seq,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .ok()?;
+        for j in 0..n {
+            let d = l[(j, j)] * l[(j, j)];
+            if !(d.is_finite() && d > PIVOT_REL * a[j * n + j].abs()) {
+                return None;
+            }
+            for i in 0..j {
+                l[(i, j)] = 0.0; // the strict upper part is not L
+            }
+        }
+        l.is_all_finite().then_some(SeqChol { l })
+    }
+
+    /// b ← (LLᵀ)⁻¹ b.
+    fn solve_in_place(&self, b: &mut [f64]) {
+        use faer::linalg::triangular_solve::{
+            solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+        };
+        let mut col = faer::MatMut::from_column_major_slice_mut(b, self.l.nrows(), 1);
+        solve_lower_triangular_in_place(self.l.as_ref(), col.as_mut(), Par::Seq);
+        solve_upper_triangular_in_place(self.l.transpose(), col.as_mut(), Par::Seq);
     }
 }
 

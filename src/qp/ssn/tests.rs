@@ -865,3 +865,30 @@ fn iterative_path_under_a_contrast_of_1e8() {
         it.inner_iterations
     );
 }
+
+/// Same input, same bits, whatever the number of threads: the iterative
+/// path's products and sums run on rayon's threads above 20 000 rows, and
+/// must not let the thread count reach the answer (24 000 unknowns here).
+#[test]
+fn iterative_path_bits_do_not_depend_on_the_thread_count() {
+    let qp = two_blocks(100, 60, true);
+    assert!(qp.n() > 20_000);
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut o = opts();
+                o.settings.tol = 1e-10;
+                o.settings.ssn.path = crate::qp::settings::SsnPath::Iterative;
+                let r = crate::qp::registry::solve("ssn", &qp, &o).unwrap();
+                (r.status.converged(), r.inner_iterations, r.x, r.lambda)
+            })
+    };
+    let (one, two) = (run(1), run(2));
+    assert!(one.0, "not converged");
+    assert_eq!(one.1, two.1, "CG steps differ");
+    assert_eq!(one.2, two.2, "x differs between 1 and 2 threads");
+    assert_eq!(one.3, two.3, "λ differs between 1 and 2 threads");
+}
