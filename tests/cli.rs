@@ -142,6 +142,28 @@ fn solve_quiet(toml: &std::path::Path, out: &std::path::Path) -> (i32, String) {
     (code, stderr)
 }
 
+/// Solve `base` + each of `extras` (a problem file on the square mesh; MESH
+/// stands for its path) and return each run's JSON; every run must exit 0.
+fn solve_square_variants(base: &str, extras: &[&str]) -> Vec<serde_json::Value> {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = root().join("tests/data/msh/square_ascii41.msh");
+    let mut jsons = vec![];
+    for (i, extra) in extras.iter().enumerate() {
+        let p = dir.path().join(format!("m{i}.toml"));
+        std::fs::write(
+            &p,
+            format!("{base}{extra}").replace("MESH", &mesh.display().to_string()),
+        )
+        .unwrap();
+        let out = dir.path().join(format!("out{i}"));
+        let (code, stderr) = solve_quiet(&p, &out);
+        assert_eq!(code, 0, "{extra}: {stderr}");
+        let text = std::fs::read_to_string(out.join(format!("m{i}.json"))).unwrap();
+        jsons.push(serde_json::from_str(&text).unwrap());
+    }
+    jsons
+}
+
 fn bad(toml: &str, words: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
     let mesh = root()
@@ -321,22 +343,10 @@ fn memory_limit_refuses_a_larger_factor_and_changes_nothing_else() {
             "raise [solver] memory_limit",
         ],
     );
-    let dir = tempfile::tempdir().unwrap();
-    let mesh = root().join("tests/data/msh/square_ascii41.msh");
-    let mut jsons = vec![];
-    for (i, extra) in ["", "memory_limit = \"1 GiB\"\n"].iter().enumerate() {
-        let p = dir.path().join(format!("m{i}.toml"));
-        let text = format!("{GOOD}[solver]\nmethod = \"ssn\"\n{extra}")
-            .replace("MESH", &mesh.display().to_string());
-        std::fs::write(&p, text).unwrap();
-        let out = dir.path().join(format!("out{i}"));
-        let (code, stderr) = solve_quiet(&p, &out);
-        assert_eq!(code, 0, "{stderr}");
-        let j: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join(format!("m{i}.json"))).unwrap())
-                .unwrap();
-        jsons.push(j);
-    }
+    let jsons = solve_square_variants(
+        &format!("{GOOD}[solver]\nmethod = \"ssn\"\n"),
+        &["", "memory_limit = \"1 GiB\"\n"],
+    );
     assert_eq!(jsons[0]["probes"], jsons[1]["probes"]);
     assert_eq!(jsons[0]["kkt"], jsons[1]["kkt"]);
 }
@@ -347,27 +357,12 @@ fn memory_limit_refuses_a_larger_factor_and_changes_nothing_else() {
 /// certified to 1e-10 in residual, not in error), same active set.
 #[test]
 fn the_iterative_path_solves_under_a_limit_no_factor_fits() {
-    let dir = tempfile::tempdir().unwrap();
-    let mesh = root().join("tests/data/msh/square_ascii41.msh");
-    let mut jsons = vec![];
-    for (i, extra) in ["", "ssn_path = \"iterative\"\nmemory_limit = \"1 KiB\"\n"]
-        .iter()
-        .enumerate()
-    {
-        let p = dir.path().join(format!("m{i}.toml"));
-        let text = format!(
-            "{GOOD}[output]\nprobes = {{ top = [0.5, 1.0], mid = [0.5, 0.5], low = [0.2, 0.3] }}\n[solver]\nmethod = \"ssn\"\n{extra}"
-        )
-        .replace("MESH", &mesh.display().to_string());
-        std::fs::write(&p, text).unwrap();
-        let out = dir.path().join(format!("out{i}"));
-        let (code, stderr) = solve_quiet(&p, &out);
-        assert_eq!(code, 0, "{extra}: {stderr}");
-        let j: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join(format!("m{i}.json"))).unwrap())
-                .unwrap();
-        jsons.push(j);
-    }
+    let jsons = solve_square_variants(
+        &format!(
+            "{GOOD}[output]\nprobes = {{ top = [0.5, 1.0], mid = [0.5, 0.5], low = [0.2, 0.3] }}\n[solver]\nmethod = \"ssn\"\n"
+        ),
+        &["", "ssn_path = \"iterative\"\nmemory_limit = \"1 KiB\"\n"],
+    );
     assert!(
         jsons[1]["timings_s"]
             .to_string()

@@ -14,6 +14,42 @@ use super::{FemError, Model};
 use crate::linalg::dense::sym_eigen;
 use crate::problem::Problem;
 
+/// The rigid motions of each body at a point: translations along x and y
+/// and a rotation about the centre of the body's bounding box, scaled by its
+/// size so that the three are of one magnitude.
+struct RigidBasis {
+    lo: Vec<[f64; 2]>,
+    hi: Vec<[f64; 2]>,
+}
+
+impl RigidBasis {
+    fn new(topo: &Topology) -> RigidBasis {
+        let nb = topo.nbodies;
+        let mut lo = vec![[f64::MAX; 2]; nb];
+        let mut hi = vec![[f64::MIN; 2]; nb];
+        for (p, x) in topo.points.iter().enumerate() {
+            let b = topo.point_body[p] as usize;
+            for k in 0..2 {
+                lo[b][k] = lo[b][k].min(x[k]);
+                hi[b][k] = hi[b][k].max(x[k]);
+            }
+        }
+        RigidBasis { lo, hi }
+    }
+
+    /// The three motions of body `b` at the point `x`.
+    fn at(&self, b: usize, x: [f64; 2]) -> [[f64; 2]; 3] {
+        let (lo, hi) = (self.lo[b], self.hi[b]);
+        let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+        let l = ((hi[0] - lo[0]).max(hi[1] - lo[1])).max(1e-300);
+        [
+            [1.0, 0.0],
+            [0.0, 1.0],
+            [-(x[1] - c[1]) / l, (x[0] - c[0]) / l],
+        ]
+    }
+}
+
 /// Rigid motions z = (a1 − b·ȳ, a2 + b·x̄) of each body that satisfy the
 /// homogeneous conditions (docs/methods.md §1.7), in reduced DOFs, orthonormalised.
 pub(super) fn rigid_modes(
@@ -23,29 +59,12 @@ pub(super) fn rigid_modes(
     n: usize,
 ) -> (Vec<Vec<f64>>, Vec<u32>) {
     let nb = topo.nbodies;
-    let mut lo = vec![[f64::MAX; 2]; nb];
-    let mut hi = vec![[f64::MIN; 2]; nb];
-    for (p, x) in topo.points.iter().enumerate() {
-        let b = topo.point_body[p] as usize;
-        for k in 0..2 {
-            lo[b][k] = lo[b][k].min(x[k]);
-            hi[b][k] = hi[b][k].max(x[k]);
-        }
-    }
+    let basis = RigidBasis::new(topo);
     // GᵀG per body (3×3) from every condition row.
     let mut gtg = vec![[[0.0f64; 3]; 3]; nb];
-    let basis = |b: usize, x: [f64; 2]| -> [[f64; 2]; 3] {
-        let c = [(lo[b][0] + hi[b][0]) / 2.0, (lo[b][1] + hi[b][1]) / 2.0];
-        let l = ((hi[b][0] - lo[b][0]).max(hi[b][1] - lo[b][1])).max(1e-300);
-        [
-            [1.0, 0.0],
-            [0.0, 1.0],
-            [-(x[1] - c[1]) / l, (x[0] - c[0]) / l],
-        ]
-    };
     for (p, cs) in conds.iter().enumerate() {
         let b = topo.point_body[p] as usize;
-        let z = basis(b, topo.points[p]);
+        let z = basis.at(b, topo.points[p]);
         for c in cs {
             let r = normalize(c.r);
             let row: [f64; 3] = z.map(|zi| r[0] * zi[0] + r[1] * zi[1]);
@@ -85,7 +104,7 @@ pub(super) fn rigid_modes(
             let mut v = vec![0.0; n];
             for &p in &bpts[bptr[b]..bptr[b + 1]] {
                 let pd = &dofs[p];
-                let z = basis(b, topo.points[p]);
+                let z = basis.at(b, topo.points[p]);
                 let u = [
                     c[0] * z[0][0] + c[1] * z[1][0] + c[2] * z[2][0],
                     c[0] * z[0][1] + c[1] * z[1][1] + c[2] * z[2][1],
@@ -121,16 +140,7 @@ pub(super) fn near_kernel(
     dofs: &[PointDofs],
     n: usize,
 ) -> Option<crate::qp::NearKernel> {
-    let nb = topo.nbodies;
-    let mut lo = vec![[f64::MAX; 2]; nb];
-    let mut hi = vec![[f64::MIN; 2]; nb];
-    for (p, x) in topo.points.iter().enumerate() {
-        let b = topo.point_body[p] as usize;
-        for k in 0..2 {
-            lo[b][k] = lo[b][k].min(x[k]);
-            hi[b][k] = hi[b][k].max(x[k]);
-        }
-    }
+    let basis = RigidBasis::new(topo);
     let mut modes = vec![vec![0.0; n]; 3];
     let mut block_ptr = vec![0usize];
     for (p, pd) in dofs.iter().enumerate() {
@@ -142,15 +152,7 @@ pub(super) fn near_kernel(
         if pd.start != *block_ptr.last()? {
             return None;
         }
-        let b = topo.point_body[p] as usize;
-        let c = [(lo[b][0] + hi[b][0]) / 2.0, (lo[b][1] + hi[b][1]) / 2.0];
-        let l = ((hi[b][0] - lo[b][0]).max(hi[b][1] - lo[b][1])).max(1e-300);
-        let x = topo.points[p];
-        let u = [
-            [1.0, 0.0],
-            [0.0, 1.0],
-            [-(x[1] - c[1]) / l, (x[0] - c[0]) / l],
-        ];
+        let u = basis.at(topo.point_body[p] as usize, topo.points[p]);
         for (mode, um) in modes.iter_mut().zip(&u) {
             for j in 0..pd.ndof {
                 mode[pd.start + j] = pd.t[j][0] * um[0] + pd.t[j][1] * um[1];

@@ -13,7 +13,7 @@
 //! Schur path; a motion free on every row (a rolling body) is not solved
 //! here (the direct paths are).
 
-use super::{next_set, CERT_TARGET, GROW_MIN};
+use super::{limit_changes, next_set, stiffness_scale, CERT_TARGET};
 use crate::linalg::amg::{pcg_stall, Amg, AmgSettings, NearNull, PCG_STALL};
 use crate::linalg::augmented::AugPattern;
 use crate::linalg::dense::sym_eigen;
@@ -82,8 +82,14 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
         .x0
         .map(|x| perm.iter().map(|&o| x[o]).collect::<Vec<f64>>());
     let diag = qp.c.diag();
-    let mut st = State::new(&qpp, aug, &diag, &r, ctx.settings.tol, x0.as_deref());
-    st.orig = Some((qp, &perm));
+    let mut st = State::new(
+        (&qpp, qp, &perm),
+        aug,
+        &diag,
+        &r,
+        ctx.settings.tol,
+        x0.as_deref(),
+    );
     let mut exec = ctx.executor("ssn");
     let (status, iters) = exec.run(&mut st);
     log::debug!(
@@ -93,12 +99,8 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
         st.t_setup
     );
     let t_all = t0.elapsed().as_secs_f64();
-    let mut x = vec![0.0; st.x.len()];
-    for (&o, &v) in perm.iter().zip(&st.x) {
-        x[o] = v;
-    }
     Ok(Output {
-        x,
+        x: unpermute(&perm, &st.x),
         lambda: std::mem::take(&mut st.lam),
         active: std::mem::take(&mut st.in_j),
         status,
@@ -115,9 +117,10 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
 struct State<'a> {
     /// The permuted problem; its C is empty (see `aug`).
     qp: &'a QpProblem,
-    /// The caller's problem and the order (new → old) `qp` is in: the
-    /// certificate is measured on it.
-    orig: Option<(&'a QpProblem, &'a [usize])>,
+    /// The caller's problem, on which the certificate is measured, and the
+    /// order (new → old) `qp` is in.
+    orig: &'a QpProblem,
+    perm: &'a [usize],
     aug: AugPattern,
     rho: Vec<f64>,
     /// (A R)ᵢ for every row: J holds the floating bodies iff these rows of J
@@ -155,9 +158,10 @@ enum Kkt {
 }
 
 impl<'a> State<'a> {
-    /// `qp` without C (it lives in `aug`), `diag` = diag C (any order).
+    /// The first argument: (the permuted QP without C, which lives in `aug`; the
+    /// caller's QP; the order new → old), `diag` = diag C (any order).
     fn new(
-        qp: &'a QpProblem,
+        (qp, orig, perm): (&'a QpProblem, &'a QpProblem, &'a [usize]),
         aug: AugPattern,
         diag: &[f64],
         r: &[Vec<f64>],
@@ -167,19 +171,15 @@ impl<'a> State<'a> {
         let m = qp.m();
         let cmax = norm_inf(diag);
         let rho = vec![RHO_ITERATIVE * if cmax > 0.0 { cmax } else { 1.0 }; m];
-        let pos: Vec<f64> = diag.iter().copied().filter(|v| *v > 0.0).collect();
-        let cpar = if pos.is_empty() {
-            1.0
-        } else {
-            pos.iter().sum::<f64>() / pos.len() as f64
-        };
+        let cpar = stiffness_scale(diag);
         let ar = (0..m)
             .map(|i| r.iter().map(|rl| qp.a.row_dot(i, rl)).collect())
             .collect();
         State {
             qp,
             aug,
-            orig: None,
+            orig,
+            perm,
             rho,
             ar,
             tol,
@@ -289,26 +289,25 @@ impl<'a> State<'a> {
                 })
                 .fold(0.0, f64::max)
         };
+        // b = d + A_Jᵀ(Ρg_J − μ): the part without μ once, A_Jᵀμ per round.
+        let mut row_w = vec![0.0; qp.m()];
+        for &j in &jset {
+            row_w[j] = self.rho[j] * qp.g[j];
+        }
+        let mut b0 = qp.d.clone();
+        qp.a.mul_t_add(&row_w, &mut b0);
+        let dnorm = norm(&qp.d);
         for round in 0..AL_MAX {
-            let mut b = qp.d.clone();
             for (&j, &m) in jset.iter().zip(&mu) {
-                let (c, v) = qp.a.row(j);
-                for (&kk, &a) in c.iter().zip(v) {
-                    b[kk] += a * (self.rho[j] * qp.g[j] - m);
-                }
+                row_w[j] = m;
             }
+            let atmu = qp.a.mul_t(&row_w);
+            let b: Vec<f64> = b0.iter().zip(&atmu).map(|(b, t)| b - t).collect();
             // The tolerance is on the contact forces, the scale of the
             // certificate's contact balance (max(‖A_Jᵀμ‖, 10⁻⁴‖d‖), §8.4),
             // not on b, whose A_JᵀΡg_J part cancels against Ρ A_JᵀA_J x and
             // whose loads spread over every unknown.
-            let mut atmu = vec![0.0; qp.n()];
-            for (&j, &m) in jset.iter().zip(&mu) {
-                let (c, v) = qp.a.row(j);
-                for (&kk, &a) in c.iter().zip(v) {
-                    atmu[kk] += a * m;
-                }
-            }
-            let (fscale, bn) = (norm(&atmu).max(CONTACT_FLOOR * norm(&qp.d)), norm(&b));
+            let (fscale, bn) = (norm(&atmu).max(CONTACT_FLOOR * dnorm), norm(&b));
             let rt = if fscale > 0.0 && bn > 0.0 {
                 (rtol * fscale / bn).min(rtol).max(rtol.min(1e-13))
             } else {
@@ -371,12 +370,7 @@ impl<'a> State<'a> {
 
     /// The KKT residuals of (x, λ) on the caller's problem (x put back).
     fn residuals(&self, x: &[f64], lam: &[f64]) -> crate::qp::Kkt {
-        let (qp, perm) = self.orig.expect("set by solve");
-        let mut xo = vec![0.0; x.len()];
-        for (&o, &v) in perm.iter().zip(x) {
-            xo[o] = v;
-        }
-        crate::qp::kkt::residuals(qp, &xo, lam)
+        crate::qp::kkt::residuals(self.orig, &unpermute(self.perm, x), lam)
     }
 
     /// Solve J tighter until (x, λ) is certified or the solves stop gaining.
@@ -490,37 +484,7 @@ impl Iterative for State<'_> {
         let fval: Vec<f64> = (0..m)
             .map(|i| self.lam[i] + self.cpar * (ax[i] - qp.g[i]))
             .collect();
-        let size = self.in_j.iter().filter(|&&b| b).count();
-        let mut entering: Vec<usize> = (0..m).filter(|&i| new_j[i] && !self.in_j[i]).collect();
-        let cap = GROW_MIN.max(size);
-        if entering.len() > cap {
-            entering.sort_unstable_by(|&a, &b| fval[b].total_cmp(&fval[a]).then(a.cmp(&b)));
-            for &i in &entering[cap..] {
-                new_j[i] = false;
-            }
-        }
-        if !self.single && self.history.contains(&new_j) {
-            log::debug!("ssn iterative: a working set repeats; switching to single changes");
-            self.single = true;
-        }
-        if self.single {
-            let mut drop = (0.0f64, usize::MAX);
-            let mut add = (0.0f64, usize::MAX);
-            for (i, (&f, &inj)) in fval.iter().zip(&self.in_j).enumerate() {
-                if inj && !new_j[i] && -f >= drop.0 {
-                    drop = (-f, i);
-                }
-                if !inj && new_j[i] && f > add.0 {
-                    add = (f, i);
-                }
-            }
-            new_j = self.in_j.clone();
-            if drop.1 != usize::MAX && (add.1 == usize::MAX || drop.0 >= add.0) {
-                new_j[drop.1] = false;
-            } else if add.1 != usize::MAX {
-                new_j[add.1] = true;
-            }
-        }
+        let new_j = limit_changes(&self.in_j, new_j, &fval, &self.history, &mut self.single);
         self.in_j = new_j;
         Step::Continue(self.record(residual))
     }
@@ -595,4 +559,13 @@ fn permuted(qp: &QpProblem, perm: &[usize]) -> (QpProblem, AugPattern) {
         near,
     };
     (qpp, aug)
+}
+
+/// x in the caller's order from x in the order `perm` (new → old).
+fn unpermute(perm: &[usize], x: &[f64]) -> Vec<f64> {
+    let mut xo = vec![0.0; x.len()];
+    for (&o, &v) in perm.iter().zip(x) {
+        xo[o] = v;
+    }
+    xo
 }

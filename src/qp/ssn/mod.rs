@@ -278,6 +278,64 @@ fn next_set(in_j: &[bool], lam: &[f64], ax: &[f64], g: &[f64], tol: f64) -> Vec<
         .collect()
 }
 
+/// From the predicted working set `new_j`, the next one: at most
+/// max(GROW_MIN, |J|) rows enter, the most violated by F = `fval`; once a set
+/// repeats (`history`), `single` is set and from then on one row changes per
+/// step — the most negative λ in J or the most violated row outside it
+/// (anti-cycling). Shared by the direct and the iterative paths.
+pub(super) fn limit_changes(
+    in_j: &[bool],
+    mut new_j: Vec<bool>,
+    fval: &[f64],
+    history: &HashSet<Vec<bool>>,
+    single: &mut bool,
+) -> Vec<bool> {
+    let m = in_j.len();
+    let size = in_j.iter().filter(|&&b| b).count();
+    let mut entering: Vec<usize> = (0..m).filter(|&i| new_j[i] && !in_j[i]).collect();
+    let cap = GROW_MIN.max(size);
+    if entering.len() > cap {
+        entering.sort_unstable_by(|&a, &b| fval[b].total_cmp(&fval[a]).then(a.cmp(&b)));
+        for &i in &entering[cap..] {
+            new_j[i] = false;
+        }
+    }
+    if !*single && history.contains(&new_j) {
+        log::debug!("ssn: a working set repeats; switching to single changes");
+        *single = true;
+    }
+    if *single {
+        let mut drop = (0.0f64, usize::MAX);
+        let mut add = (0.0f64, usize::MAX);
+        for (i, (&f, &inj)) in fval.iter().zip(in_j).enumerate() {
+            if inj && !new_j[i] && -f >= drop.0 {
+                drop = (-f, i);
+            }
+            if !inj && new_j[i] && f > add.0 {
+                add = (f, i);
+            }
+        }
+        new_j = in_j.to_vec();
+        if drop.1 != usize::MAX && (add.1 == usize::MAX || drop.0 >= add.0) {
+            new_j[drop.1] = false;
+        } else if add.1 != usize::MAX {
+            new_j[add.1] = true;
+        }
+    }
+    new_j
+}
+
+/// c = the mean of C's positive diagonal entries (1 if none): the stiffness
+/// that turns gaps into forces in F = λ + c(Ax − g).
+pub(super) fn stiffness_scale(diag: &[f64]) -> f64 {
+    let pos: Vec<f64> = diag.iter().copied().filter(|v| *v > 0.0).collect();
+    if pos.is_empty() {
+        1.0
+    } else {
+        pos.iter().sum::<f64>() / pos.len() as f64
+    }
+}
+
 impl<'a> Ssn<'a> {
     fn new(
         qp: &'a QpProblem,
@@ -292,12 +350,7 @@ impl<'a> Ssn<'a> {
             .collect();
         let e: Vec<f64> = r.iter().map(|rl| dot(rl, &qp.d)).collect();
         let diag = qp.c.diag();
-        let pos: Vec<f64> = diag.iter().copied().filter(|v| *v > 0.0).collect();
-        let cpar = if pos.is_empty() {
-            1.0
-        } else {
-            pos.iter().sum::<f64>() / pos.len() as f64
-        };
+        let cpar = stiffness_scale(&diag);
         let aug = (augmented && m > 0).then(|| {
             let t = Instant::now();
             let p = AugPattern::new(&qp.c, &qp.a);
@@ -692,39 +745,7 @@ impl Iterative for Ssn<'_> {
             }
             log::debug!("ssn: the refined solution moves J; continuing");
         }
-        // Growth limit: at most max(BLOCK, |J|) rows enter, the most violated.
-        let size = self.in_j.iter().filter(|&&b| b).count();
-        let mut entering: Vec<usize> = (0..m).filter(|&i| new_j[i] && !self.in_j[i]).collect();
-        let cap = GROW_MIN.max(size);
-        if entering.len() > cap {
-            entering.sort_unstable_by(|&a, &b| fval[b].total_cmp(&fval[a]).then(a.cmp(&b)));
-            for &i in &entering[cap..] {
-                new_j[i] = false;
-            }
-        }
-        if !self.single && self.history.contains(&new_j) {
-            log::debug!("ssn: a working set repeats; switching to single changes");
-            self.single = true;
-        }
-        if self.single {
-            // One change: the most negative λ in J or the most violated row outside J.
-            let mut drop = (0.0f64, usize::MAX);
-            let mut add = (0.0f64, usize::MAX);
-            for (i, (&f, &inj)) in fval.iter().zip(&self.in_j).enumerate() {
-                if inj && !new_j[i] && -f >= drop.0 {
-                    drop = (-f, i);
-                }
-                if !inj && new_j[i] && f > add.0 {
-                    add = (f, i);
-                }
-            }
-            new_j = self.in_j.clone();
-            if drop.1 != usize::MAX && (add.1 == usize::MAX || drop.0 >= add.0) {
-                new_j[drop.1] = false;
-            } else if add.1 != usize::MAX {
-                new_j[add.1] = true;
-            }
-        }
+        let new_j = limit_changes(&self.in_j, new_j, &fval, &self.history, &mut self.single);
         log::debug!(
             "ssn: step {}: |J| = {}, next |J| = {} ({} enter, {} leave), residual {:.2e}",
             self.history.len(),
