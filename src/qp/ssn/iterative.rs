@@ -13,10 +13,9 @@
 //! Schur path; a motion free on every row (a rolling body) is not solved
 //! here (the direct paths are).
 
-use super::{limit_changes, next_set, stiffness_scale, CERT_TARGET};
+use super::{free_modes, hold_free_modes, limit_changes, next_set, stiffness_scale, CERT_TARGET};
 use crate::linalg::amg::{pcg_stall, Amg, AmgSettings, NearNull, PCG_STALL};
 use crate::linalg::augmented::AugPattern;
-use crate::linalg::dense::sym_eigen;
 use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::ordering::block_rcm;
 use crate::linalg::sparse::Csr;
@@ -199,25 +198,10 @@ impl<'a> State<'a> {
         }
     }
 
-    /// True when the rows of J restrain every rigid motion of ker C:
-    /// Σ_{j∈J} (AR)ⱼ(AR)ⱼᵀ has no eigenvalue below 1e-12 of its largest
-    /// (R orthonormal, so the test has no units).
+    /// True when the rows of J restrain every rigid motion of ker C
+    /// ([`free_modes`] finds none free).
     fn holds_kernel(&self, in_j: &[bool]) -> bool {
-        let k = self.ar.first().map_or(0, Vec::len);
-        if k == 0 {
-            return true;
-        }
-        let mut gram = vec![vec![0.0; k]; k];
-        for (row, _) in self.ar.iter().zip(in_j).filter(|(_, b)| **b) {
-            for a in 0..k {
-                for b in 0..k {
-                    gram[a][b] += row[a] * row[b];
-                }
-            }
-        }
-        let (vals, _) = sym_eigen(&gram);
-        let top = vals.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        top > 0.0 && vals.iter().all(|v| *v > 1e-12 * top)
+        free_modes(&self.ar, in_j).is_empty()
     }
 
     /// The KKT system of J (module doc) from the current (x, λ), the K_J
@@ -485,7 +469,7 @@ impl Iterative for State<'_> {
             .map(|i| self.lam[i] + self.cpar * (ax[i] - qp.g[i]))
             .collect();
         let new_j = limit_changes(&self.in_j, new_j, &fval, &self.history, &mut self.single);
-        self.in_j = new_j;
+        self.in_j = hold_free_modes(new_j, &self.in_j, &self.ar, &self.lam, &ax, &qp.g);
         Step::Continue(self.record(residual))
     }
 }

@@ -325,6 +325,111 @@ pub(super) fn limit_changes(
     new_j
 }
 
+/// The rigid motions of ker C (coordinates β of Rβ, unit rows) that the
+/// rows of `in_j` leave free: the null space of (AR)_J, `ar` = AR by rows.
+/// Zero is judged against max ‖(AR)ᵢ‖² over every row, so the test does
+/// not depend on the units of A or on the bodies' sizes.
+pub(super) fn free_modes(ar: &[Vec<f64>], in_j: &[bool]) -> Vec<Vec<f64>> {
+    let k = ar.first().map_or(0, Vec::len);
+    if k == 0 {
+        return vec![];
+    }
+    let scale = ar
+        .iter()
+        .map(|row| row.iter().map(|v| v * v).sum::<f64>())
+        .fold(0.0f64, f64::max);
+    let mut gram = vec![vec![0.0; k]; k];
+    for (row, _) in ar.iter().zip(in_j).filter(|(_, b)| **b) {
+        for a in 0..k {
+            for b in 0..k {
+                gram[a][b] += row[a] * row[b];
+            }
+        }
+    }
+    let (vals, vecs) = crate::linalg::dense::sym_eigen(&gram);
+    vals.iter()
+        .zip(vecs)
+        .filter(|(v, _)| !(**v > FREE_REL * scale))
+        .map(|(_, u)| u)
+        .collect()
+}
+
+/// Zero of a Gram eigenvalue relative to the largest row of AR ([`free_modes`]).
+const FREE_REL: f64 = 1e-12;
+
+/// A working set `new_j` that leaves a rigid motion free (its KKT system is
+/// singular) made one that holds every body, the way a primal active-set
+/// step would (docs/methods.md §7): from (x, λ) solved on `solved_j`, move
+/// along the free motion s = Rβ on which the energy falls fastest
+/// (β the free part of Rᵀ(d − Cx) = (AR)ᵀλ), until a row outside `new_j`
+/// closes (the least (g − Ax)ᵢ / (As)ᵢ over (As)ᵢ > 0), and add that row;
+/// again until nothing is free. With no descent along a free motion, both
+/// of its directions are tried. PDAS alone dropped the rows with λ < 0,
+/// found the rest singular, fell back to the last set and repeated it
+/// forever (a tilting block under a nearly horizontal load,
+/// tests/agreement.rs `two_blocks_eccentric_ci_case`). Returns `new_j`
+/// unchanged if no row blocks (the fallbacks of the step then decide).
+pub(super) fn hold_free_modes(
+    mut new_j: Vec<bool>,
+    solved_j: &[bool],
+    ar: &[Vec<f64>],
+    lam: &[f64],
+    ax: &[f64],
+    g: &[f64],
+) -> Vec<bool> {
+    let k = ar.first().map_or(0, Vec::len);
+    let m = new_j.len();
+    // e = (AR)_Jᵀλ_J: the load the dropped rows carried, in kernel coordinates.
+    let mut e = vec![0.0; k];
+    for i in (0..m).filter(|&i| solved_j[i]) {
+        for (el, a) in e.iter_mut().zip(&ar[i]) {
+            *el += a * lam[i];
+        }
+    }
+    for _ in 0..=k {
+        let free = free_modes(ar, &new_j);
+        if free.is_empty() {
+            break;
+        }
+        // The free part of e, and the directions to search.
+        let mut beta = vec![0.0; k];
+        for u in &free {
+            let c = dot(u, &e);
+            for (b, ul) in beta.iter_mut().zip(u) {
+                *b += c * ul;
+            }
+        }
+        let e_norm = norm_inf(&e);
+        let dirs: Vec<Vec<f64>> = if norm_inf(&beta) > 1e-10 * e_norm && e_norm > 0.0 {
+            vec![beta]
+        } else {
+            free.iter()
+                .flat_map(|u| [u.clone(), u.iter().map(|v| -v).collect()])
+                .collect()
+        };
+        let mut added = false;
+        for dir in dirs {
+            let a_s: Vec<f64> = ar.iter().map(|row| dot(row, &dir)).collect();
+            let s_max = norm_inf(&a_s);
+            let mut best: Option<(f64, usize)> = None;
+            for i in (0..m).filter(|&i| !new_j[i] && a_s[i] > 1e-10 * s_max) {
+                let t = ((g[i] - ax[i]) / a_s[i]).max(0.0);
+                if best.is_none_or(|(bt, _)| t < bt) {
+                    best = Some((t, i));
+                }
+            }
+            if let Some((_, i)) = best {
+                new_j[i] = true;
+                added = true;
+            }
+        }
+        if !added {
+            break;
+        }
+    }
+    new_j
+}
+
 /// c = the mean of C's positive diagonal entries (1 if none): the stiffness
 /// that turns gaps into forces in F = λ + c(Ax − g).
 pub(super) fn stiffness_scale(diag: &[f64]) -> f64 {
@@ -746,6 +851,8 @@ impl Iterative for Ssn<'_> {
             log::debug!("ssn: the refined solution moves J; continuing");
         }
         let new_j = limit_changes(&self.in_j, new_j, &fval, &self.history, &mut self.single);
+        let ax: Vec<f64> = (0..m).map(|i| self.qp.a.row_dot(i, &self.x)).collect();
+        let new_j = hold_free_modes(new_j, &self.in_j, &self.ar, &self.lam, &ax, &self.qp.g);
         log::debug!(
             "ssn: step {}: |J| = {}, next |J| = {} ({} enter, {} leave), residual {:.2e}",
             self.history.len(),
