@@ -75,10 +75,23 @@ unsafe impl GlobalAlloc for ExitOnOom {
 static ALLOC: ExitOnOom = ExitOnOom;
 
 fn main() {
+    // SIGNORINI_THREADS=t: rayon's worker threads (faer's kernels, the
+    // assembly, the multigrid); t = 1 also makes the assembly sequential
+    // (read here only, passed down). The bits do not depend on it: faer's
+    // kernels split their work the same way on any count
+    // (`signorini::linalg::PAR_SPLITS`).
+    let threads = std::env::var("SIGNORINI_THREADS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok());
     // Start rayon's worker threads now, where a failure (thread stacks beyond
     // `ulimit -v`) can be reported: rayon would panic at first use. One
     // thread is tried when the default count cannot be started.
-    if rayon::ThreadPoolBuilder::new().build_global().is_err() {
+    let count = threads.unwrap_or(0);
+    if rayon::ThreadPoolBuilder::new()
+        .num_threads(count)
+        .build_global()
+        .is_err()
+    {
         if let Err(e) = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build_global()
@@ -89,19 +102,7 @@ fn main() {
             std::process::exit(2);
         }
     }
-    // Threads for faer's dense/supernodal kernels: SIGNORINI_THREADS=1 runs
-    // sequentially (the default is faer's: all cores, via rayon).
-    // It also makes the assembly sequential (read here only, passed down).
-    let threads = std::env::var("SIGNORINI_THREADS")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok());
-    if let Some(t) = threads {
-        faer::set_global_parallelism(if t <= 1 {
-            faer::Par::Seq
-        } else {
-            faer::Par::rayon(t)
-        });
-    }
+    signorini::linalg::fix_parallelism();
     let mut cli = signorini::cli::Cli::parse();
     cli.build.parallel = threads.is_none_or(|t| t > 1);
     std::process::exit(signorini::cli::run(cli));

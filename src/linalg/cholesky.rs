@@ -238,7 +238,6 @@ impl Cholesky {
 /// analysis (see the module doc). Owned by the caller — one per load-step
 /// sequence, a fresh one per method in `compare` — and shared by reference;
 /// single-threaded (interior mutability, not `Sync`).
-#[derive(Default)]
 pub struct Workspace {
     /// The fill-reducing ordering of every factor made here.
     ordering: Ordering,
@@ -252,16 +251,29 @@ pub struct Workspace {
     memory_limit: Option<u64>,
 }
 
+impl Default for Workspace {
+    fn default() -> Workspace {
+        Workspace::new()
+    }
+}
+
 impl Workspace {
     pub fn new() -> Workspace {
-        Workspace::default()
+        Workspace::with_ordering(Ordering::default())
     }
 
     /// A workspace whose factors use `ordering` (docs/methods.md §3).
+    /// Fixes faer's parallelism ([`super::fix_parallelism`]): the bits of
+    /// every factor and solve are then the same on any number of cores.
     pub fn with_ordering(ordering: Ordering) -> Workspace {
+        super::fix_parallelism();
         Workspace {
             ordering,
-            ..Workspace::default()
+            last: RefCell::new(None),
+            symbolic: RefCell::new(vec![]),
+            numeric_reused: Cell::new(0),
+            symbolic_reused: Cell::new(0),
+            memory_limit: None,
         }
     }
 
@@ -466,7 +478,7 @@ impl Workspace {
         }
         let t_sym = t0.elapsed().as_secs_f64() - t_prep;
         let mat = SparseColMatRef::new(sym.as_ref(), &vals);
-        let par = faer::get_global_parallelism();
+        let par = super::par();
         let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
         // The values are allocated lazily (calloc) and touched as the
         // factorization proceeds: without this check a factor that cannot
@@ -545,7 +557,7 @@ impl Cholesky {
             }
         }
         let m = MatMut::from_column_major_slice_mut(x, self.n, k);
-        let par = faer::get_global_parallelism();
+        let par = super::par();
         let mut mem = MemBuffer::new(f.symbolic.solve_in_place_scratch::<f64>(k, par));
         LltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
             Conj::No,
@@ -622,7 +634,7 @@ impl Cholesky {
         let values = &self.llt.values;
         match s.raw() {
             SymbolicCholeskyRaw::Supernodal(t) => {
-                let par = faer::get_global_parallelism();
+                let par = super::par();
                 let mut mem = MemBuffer::new(s.solve_in_place_scratch::<f64>(1, par));
                 faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef::new(t, values)
                     .l_solve_with_conj(
@@ -678,7 +690,7 @@ impl Cholesky {
                 }
             }
         }
-        let par = faer::get_global_parallelism();
+        let par = super::par();
         trailing_forward(&self.llt.symbolic, &self.llt.values, &mut v, par);
         let mut y = f.y.clone();
         for (i, yi) in y[off..].iter_mut().enumerate() {
@@ -734,7 +746,7 @@ impl Cholesky {
     pub fn border_inverse(&self, b: &Csr) -> Option<Mat<f64>> {
         let nb = self.llt.border.as_ref()?.nb;
         let cols = self.border_columns(b)?;
-        let par = faer::get_global_parallelism();
+        let par = super::par();
         let s = &self.llt.symbolic;
         let values = &self.llt.values;
         Some(match s.raw() {
