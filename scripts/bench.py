@@ -311,7 +311,7 @@ def write_report(path: Path, res: dict, args, cmdline: str) -> None:
     w(f"- machine: {mach['cpu']}, {mach['cores']} cores, {mach['memory']}, {mach['os']}")
     w(f"- command: `{cmdline}`")
     w(f"- repeats: {args.repeats} (median reported; runs over {args.long:.0f} s once), "
-      f"skip budget {args.budget:.0f} s per run, SIGNORINI_THREADS={os.environ.get('SIGNORINI_THREADS', 'unset (faer default)')}")
+      f"skip budget {args.budget:.0f} s per run, SIGNORINI_THREADS={os.environ.get('SIGNORINI_THREADS', 'unset (all cores)')}")
     w("- times are wall-clock seconds inside the process (signorini's own phase timers; "
       "peers: perf_counter around their calls); peak RSS from `/usr/bin/time -v`.\n")
     w("Phases: read = TOML + mesh; assemble = topology, elimination, C, d, A, g; "
