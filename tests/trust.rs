@@ -810,6 +810,21 @@ fn a_steel_deck_on_rubber_bearings_is_certified_at_any_contrast() {
                 "{what}: {m}: bearings carry {total:e}, load {load:e}"
             );
         }
+        // cgc's zero-curvature test: at 1e8 its CG went on below its
+        // rounding floor until pᵀCp came out −2e-38 off ker C, and it
+        // claimed the deck unbounded (the driver refused the claim and
+        // solved by ssn). Now it never claims that; whether its answer is
+        // certified is the certificate's call.
+        let mut o = opts.clone();
+        o.settings.cgc.preconditioner = signorini::qp::precond::PrecondKind::Cholesky;
+        let r = signorini::run::solve(&prep, "cgc", &o).expect("cgc runs");
+        assert!(
+            !matches!(r.status, Status::Unbounded { .. })
+                && !r.notes.iter().any(|n| n.contains("unbounded")),
+            "{what}: cgc: {} {:?}",
+            r.status.describe(),
+            r.notes
+        );
     }
 }
 

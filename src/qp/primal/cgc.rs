@@ -305,8 +305,22 @@ impl<'a> Cgc<'a> {
             let a2 = dot(&p, &w);
             let ap = qp.a.mul(&p);
             let pp = dot(&p, &p);
+            if a2.is_nan() {
+                return FaceEnd::Unbounded(vec![f64::NAN]);
+            }
+            let zero = self.zero_curvature(&p, a2, pp);
+            if !zero && !(a2 > 0.0) {
+                // pᵀCp ≤ 0 off ker C: rounding, C being semidefinite. The
+                // face is resolved as far as f64 goes; the certificate
+                // judges. (A steel deck on rubber at a contrast of 1e8: CG
+                // went on below its floor to ‖p‖ = 2e-16, pᵀCp came out
+                // −2e-38, and the step was taken for a rigid motion:
+                // a false unbounded claim.)
+                (self.stalled, self.resolved) = (true, true);
+                return FaceEnd::Min;
+            }
             // (g,p) = −r; a step of length r/a2 is the exact line search.
-            let alpha = if !self.zero_curvature(&p, a2, pp) && r < a2 * MAXVAL {
+            let alpha = if !zero && r < a2 * MAXVAL {
                 r / a2
             } else {
                 MAXVAL
@@ -479,16 +493,17 @@ impl Cgc<'_> {
 
     /// Is pᵀCp = `a2` a zero curvature? Scale-invariant (methods.md §4.1):
     /// with a kernel basis R, only a direction in span R (‖p − RRᵀp‖ ≤ 10⁻⁸‖p‖,
-    /// pure geometry) or a non-positive rounding of a2 counts; without one,
-    /// a2 is compared with pᵀdiag(C)p, each entry in its own body's scale.
+    /// pure geometry) counts (a non-positive a2 off span R is rounding, and
+    /// `face_cg` ends the face there); without one, a non-positive a2 counts
+    /// and a2 is compared with pᵀdiag(C)p, each entry in its own body's scale.
     /// A stiff body on a soft one gives small but positive curvatures that
     /// must be stepped along, not taken for a rigid motion. Any unbounded
     /// claim is checked again by the driver (recession::certify).
     fn zero_curvature(&self, p: &[f64], a2: f64, pp: f64) -> bool {
-        if !(a2 > 0.0) {
-            return true;
-        }
         if self.kernel.is_empty() {
+            if !(a2 > 0.0) {
+                return true;
+            }
             let pdp: f64 = p.iter().zip(&self.cdiag).map(|(v, c)| v * v * c).sum();
             return a2 <= 1e-14 * pdp;
         }
