@@ -367,7 +367,8 @@ const FREE_REL: f64 = 1e-12;
 /// of its directions are tried. PDAS alone dropped the rows with λ < 0,
 /// found the rest singular, fell back to the last set and repeated it
 /// forever (a tilting block under a nearly horizontal load,
-/// tests/agreement.rs `two_blocks_eccentric_ci_case`). Returns `new_j`
+/// tests/agreement.rs `two_blocks_eccentric_ci_case`). Motions that every
+/// row leaves free are not held (the driver reports them). Returns `new_j`
 /// unchanged if no row blocks (the fallbacks of the step then decide).
 pub(super) fn hold_free_modes(
     mut new_j: Vec<bool>,
@@ -379,6 +380,15 @@ pub(super) fn hold_free_modes(
 ) -> Vec<bool> {
     let k = ar.first().map_or(0, Vec::len);
     let m = new_j.len();
+    // Motions that every row leaves free (a ring sliding along flat plates)
+    // are the driver's to report (docs/methods.md §1.7), not to hold; a
+    // direction whose rows move by less than this is one of them.
+    let genuinely_free = free_modes(ar, &vec![true; m]).len();
+    let row_max = ar
+        .iter()
+        .map(|row| row.iter().map(|v| v * v).sum::<f64>())
+        .fold(0.0f64, f64::max)
+        .sqrt();
     // e = (AR)_Jᵀλ_J: the load the dropped rows carried, in kernel coordinates.
     let mut e = vec![0.0; k];
     for i in (0..m).filter(|&i| solved_j[i]) {
@@ -388,7 +398,7 @@ pub(super) fn hold_free_modes(
     }
     for _ in 0..=k {
         let free = free_modes(ar, &new_j);
-        if free.is_empty() {
+        if free.len() <= genuinely_free {
             break;
         }
         // The free part of e, and the directions to search.
@@ -411,6 +421,9 @@ pub(super) fn hold_free_modes(
         for dir in dirs {
             let a_s: Vec<f64> = ar.iter().map(|row| dot(row, &dir)).collect();
             let s_max = norm_inf(&a_s);
+            if s_max <= 1e-8 * row_max {
+                continue;
+            }
             let mut best: Option<(f64, usize)> = None;
             for i in (0..m).filter(|&i| !new_j[i] && a_s[i] > 1e-10 * s_max) {
                 let t = ((g[i] - ax[i]) / a_s[i]).max(0.0);

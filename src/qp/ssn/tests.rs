@@ -892,3 +892,23 @@ fn iterative_path_bits_do_not_depend_on_the_thread_count() {
     assert_eq!(one.2, two.2, "x differs between 1 and 2 threads");
     assert_eq!(one.3, two.3, "λ differs between 1 and 2 threads");
 }
+
+/// `hold_free_modes`: the dropped row (λ < 0) opens, the body turns until
+/// the row on the other side closes, and that row joins J; a motion every
+/// row leaves free (its column of AR rounding noise, as a ring sliding
+/// along flat plates) is not held by a row picked from the noise.
+#[test]
+fn a_set_that_frees_a_body_is_completed_by_the_row_that_closes() {
+    let ar = vec![vec![1.0, 1e-18], vec![0.5, -1e-18], vec![-1.0, 2e-18]];
+    let (g, ax) = (vec![0.0, 0.3, 0.2], vec![0.0, 0.0, 0.0]);
+    let solved = vec![true, false, false];
+    let lam = vec![-1.0, 0.0, 0.0];
+    let next = super::hold_free_modes(vec![false; 3], &solved, &ar, &lam, &ax, &g);
+    assert_eq!(next, vec![false, false, true]);
+    // Nothing to hold: unchanged.
+    let held = vec![true, false, true];
+    assert_eq!(
+        super::hold_free_modes(held.clone(), &held, &ar, &[1.0, 0.0, 1.0], &ax, &g),
+        held
+    );
+}
