@@ -113,6 +113,87 @@ fn with_gaps(mut qp: QpProblem, frac: f64, seed: u64) -> Result<QpProblem, TestC
     Ok(qp)
 }
 
+/// two_blocks.toml's model with traction `t` on the top, gravity `g`,
+/// density `rho` and the bottom moved by (0, `uy`): the upper block floats
+/// (vertical translation, held by contact).
+fn two_blocks_toml(t: [f64; 2], g: [f64; 2], rho: f64, uy: f64) -> String {
+    format!(
+        r#"
+[mesh]
+file = "{}"
+[model]
+gravity = [{}, {}]
+[materials.lower]
+E = 2.0e9
+nu = 0.25
+rho = {rho}
+[materials.upper]
+E = 2.0e9
+nu = 0.25
+rho = {rho}
+[[dirichlet]]
+on = "bottom"
+u = [0.0, {uy}]
+[[slip]]
+on = "left_lower"
+[[slip]]
+on = "right_lower"
+[[slip]]
+on = "left_upper"
+[[slip]]
+on = "right_upper"
+[[traction]]
+on = "top"
+p = [{}, {}]
+[[contact]]
+on = "interface"
+"#,
+        mesh("two_blocks"),
+        g[0],
+        g[1],
+        t[0],
+        t[1]
+    )
+}
+
+/// two_blocks_eccentric.toml's model with traction `t` on the right half
+/// of the top, gravity `g`, density `rho` and the bottom moved by
+/// (`ux`, `uy`): the upper block may tilt (held at one point in x).
+fn eccentric_toml(t: [f64; 2], g: [f64; 2], rho: f64, ux: f64, uy: f64) -> String {
+    format!(
+        r#"
+[mesh]
+file = "{}"
+[model]
+gravity = [{}, {}]
+[materials.lower]
+E = 2.0e9
+nu = 0.25
+rho = {rho}
+[materials.upper]
+E = 2.0e9
+nu = 0.25
+rho = {rho}
+[[dirichlet]]
+on = "bottom"
+u = [{ux}, {uy}]
+[[dirichlet]]
+on = "top_mid"
+ux = 0.0
+[[traction]]
+on = "top_right"
+p = [{}, {}]
+[[contact]]
+on = "interface"
+"#,
+        mesh("two_blocks_eccentric"),
+        g[0],
+        g[1],
+        t[0],
+        t[1]
+    )
+}
+
 /// Every exact method against CGC + Cholesky (the reference itself is not
 /// repeated); `ic0` adds CGC with the incomplete factor (its diagonal-shift
 /// restarts), slow on the larger mesh.
@@ -175,36 +256,7 @@ proptest! {
     ) {
         let t = down(p, p_deg);
         let g = down(9.81, g_deg);
-        let toml = format!(r#"
-[mesh]
-file = "{}"
-[model]
-gravity = [{}, {}]
-[materials.lower]
-E = 2.0e9
-nu = 0.25
-rho = {rho}
-[materials.upper]
-E = 2.0e9
-nu = 0.25
-rho = {rho}
-[[dirichlet]]
-on = "bottom"
-u = [0.0, {uy}]
-[[slip]]
-on = "left_lower"
-[[slip]]
-on = "right_lower"
-[[slip]]
-on = "left_upper"
-[[slip]]
-on = "right_upper"
-[[traction]]
-on = "top"
-p = [{}, {}]
-[[contact]]
-on = "interface"
-"#, mesh("two_blocks"), g[0], g[1], t[0], t[1]);
+        let toml = two_blocks_toml(t, g, rho, uy);
         agree(&with_gaps(build(&toml), gap, seed)?, true)?;
     }
 
@@ -218,31 +270,7 @@ on = "interface"
     ) {
         let t = down(p, p_deg);
         let g = down(9.81, g_deg);
-        let toml = format!(r#"
-[mesh]
-file = "{}"
-[model]
-gravity = [{}, {}]
-[materials.lower]
-E = 2.0e9
-nu = 0.25
-rho = {rho}
-[materials.upper]
-E = 2.0e9
-nu = 0.25
-rho = {rho}
-[[dirichlet]]
-on = "bottom"
-u = [{ux}, {uy}]
-[[dirichlet]]
-on = "top_mid"
-ux = 0.0
-[[traction]]
-on = "top_right"
-p = [{}, {}]
-[[contact]]
-on = "interface"
-"#, mesh("two_blocks_eccentric"), g[0], g[1], t[0], t[1]);
+        let toml = eccentric_toml(t, g, rho, ux, uy);
         agree(&with_gaps(build(&toml), gap, seed)?, true)?;
     }
 
@@ -354,37 +382,7 @@ fn two_blocks_eccentric_ci_case() {
         15495622681602840434u64,
     );
     let t = down(p, p_deg);
-    let toml = format!(
-        r#"
-[mesh]
-file = "{}"
-[model]
-gravity = [0.0, -9.81]
-[materials.lower]
-E = 2.0e9
-nu = 0.25
-rho = 0.0
-[materials.upper]
-E = 2.0e9
-nu = 0.25
-rho = 0.0
-[[dirichlet]]
-on = "bottom"
-u = [0.0, 0.0]
-[[dirichlet]]
-on = "top_mid"
-ux = 0.0
-[[traction]]
-on = "top_right"
-p = [{}, {}]
-[[contact]]
-on = "interface"
-"#,
-        mesh("two_blocks_eccentric"),
-        t[0],
-        t[1]
-    );
-    let _ = env_logger::builder().is_test(true).try_init();
+    let toml = eccentric_toml(t, [0.0, -9.81], 0.0, 0.0, 0.0);
     let qp = with_gaps(build(&toml), gap, seed).unwrap();
     agree(&qp, true).unwrap();
 }
@@ -403,41 +401,7 @@ fn two_blocks_wide_gaps_seed_case() {
         4906879679384458270u64,
     );
     let t = down(p, p_deg);
-    let toml = format!(
-        r#"
-[mesh]
-file = "{}"
-[model]
-gravity = [0.0, -9.81]
-[materials.lower]
-E = 2.0e9
-nu = 0.25
-rho = 0.0
-[materials.upper]
-E = 2.0e9
-nu = 0.25
-rho = 0.0
-[[dirichlet]]
-on = "bottom"
-u = [0.0, 0.0]
-[[slip]]
-on = "left_lower"
-[[slip]]
-on = "right_lower"
-[[slip]]
-on = "left_upper"
-[[slip]]
-on = "right_upper"
-[[traction]]
-on = "top"
-p = [{}, {}]
-[[contact]]
-on = "interface"
-"#,
-        mesh("two_blocks"),
-        t[0],
-        t[1]
-    );
+    let toml = two_blocks_toml(t, [0.0, -9.81], 0.0, 0.0);
     let qp = with_gaps(build(&toml), gap, seed).unwrap();
     agree(&qp, true).unwrap();
 }

@@ -451,6 +451,9 @@ struct Smalbe<'a, S> {
     judge: Option<(&'a QpProblem, &'a [f64])>,
     /// Tightenings of `tol` so far ([`TIGHTEN`]).
     tightened: usize,
+    /// (λ, x) of the current λ̂ as [`Smalbe::certified`] recovered them
+    /// (rows scaled), for `into_result` not to recover them again.
+    recovered: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 /// The box of a frictional dual (docs/methods.md §9.2): rows `0..m_n` of
@@ -572,6 +575,7 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
             upper: boxed.map_or(vec![], |b| b.upper.clone()),
             judge: None,
             tightened: 0,
+            recovered: None,
         })
     }
 
@@ -727,7 +731,11 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
                 self.s.op.rho
             );
         }
-        let (lambda, x) = self.primal();
+        // λ̂ has not moved since `certified` recovered (λ, x) if it did.
+        let (lambda, x) = match self.recovered.take() {
+            Some(r) => r,
+            None => self.primal(),
+        };
         // The guard's scale is the one it had before the stopping scale
         // left the open gaps out: on two_blocks with gaps of 0.7 × the
         // deformation the new scale failed uzawa's certified answer
@@ -785,12 +793,14 @@ impl<S: BoundStep> Smalbe<'_, S> {
         if self.tightened >= TIGHTEN || self.s.tol < TOL_MIN {
             return true;
         }
-        let (mut lam, x) = self.primal();
-        for (l, si) in lam.iter_mut().zip(scale) {
-            *l *= si;
+        let (lam, x) = self.primal();
+        let unscaled: Vec<f64> = lam.iter().zip(scale).map(|(l, si)| l * si).collect();
+        let cert = crate::qp::kkt::residuals(qp, &x, &unscaled).judged();
+        let ok = cert <= CERT_TARGET.max(self.s.tol);
+        if ok {
+            self.recovered = Some((lam, x));
         }
-        let cert = crate::qp::kkt::residuals(qp, &x, &lam).judged();
-        cert <= CERT_TARGET.max(self.s.tol)
+        ok
     }
 }
 

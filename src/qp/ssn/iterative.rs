@@ -13,7 +13,9 @@
 //! Schur path; a motion free on every row (a rolling body) is not solved
 //! here (the direct paths are).
 
-use super::{free_modes, hold_free_modes, limit_changes, next_set, stiffness_scale, CERT_TARGET};
+use super::{
+    candidates, free_modes, hold_free_modes, limit_changes, next_set, stiffness_scale, CERT_TARGET,
+};
 use crate::linalg::amg::{pcg_stall, Amg, AmgSettings, NearNull, PCG_STALL};
 use crate::linalg::augmented::AugPattern;
 use crate::linalg::kernel::orthonormal_kernel;
@@ -258,7 +260,9 @@ impl<'a> State<'a> {
             );
             self.amg = Some((in_j.to_vec(), amg));
         }
-        let amg = &self.amg.as_ref().expect("built above").1;
+        let Some((_, amg)) = self.amg.as_ref() else {
+            return Kkt::Singular; // not reached: built above
+        };
         let k = self.aug.matrix();
         let prec = |r: &[f64], z: &mut [f64]| amg.apply(r, z);
         let mut mu: Vec<f64> = jset.iter().map(|&j| self.lam[j]).collect();
@@ -395,14 +399,8 @@ impl<'a> State<'a> {
 impl Iterative for State<'_> {
     fn step(&mut self) -> Step {
         let m = self.qp.m();
-        let mut cands = vec![self.in_j.clone()];
-        if let Some(prev) = &self.last_ok {
-            cands.push(self.in_j.iter().zip(prev).map(|(a, b)| *a || *b).collect());
-        }
-        cands.push(vec![true; m]);
-        cands.dedup();
         let mut solved = None;
-        for cand in cands {
+        for cand in candidates(&self.in_j, self.last_ok.as_deref()) {
             match self.kkt(&cand, LOOSE) {
                 Kkt::Solved(lam, x) => {
                     solved = Some((cand, lam, x));

@@ -278,6 +278,19 @@ fn next_set(in_j: &[bool], lam: &[f64], ax: &[f64], g: &[f64], tol: f64) -> Vec<
         .collect()
 }
 
+/// The working sets a step tries, in order: J, J ∪ J_prev (the last set
+/// that was solved), every row; the first whose KKT system is not singular
+/// is taken. Shared by the direct and the iterative paths.
+pub(super) fn candidates(in_j: &[bool], last_ok: Option<&[bool]>) -> Vec<Vec<bool>> {
+    let mut cands = vec![in_j.to_vec()];
+    if let Some(prev) = last_ok {
+        cands.push(in_j.iter().zip(prev).map(|(a, b)| *a || *b).collect());
+    }
+    cands.push(vec![true; in_j.len()]);
+    cands.dedup();
+    cands
+}
+
 /// From the predicted working set `new_j`, the next one: at most
 /// max(GROW_MIN, |J|) rows enter, the most violated by F = `fval`; once a set
 /// repeats (`history`), `single` is set and from then on one row changes per
@@ -753,9 +766,10 @@ impl<'a> Ssn<'a> {
     }
 
     /// The next working set ([`next_set`]), the complementarity function
-    /// F = λ + c(Ax − g) (which orders the rows that change) and the
-    /// relative residual of the complementarity equation (reported only).
-    fn predict(&self) -> (Vec<bool>, Vec<f64>, f64) {
+    /// F = λ + c(Ax − g) (which orders the rows that change), the
+    /// relative residual of the complementarity equation (reported only)
+    /// and Ax.
+    fn predict(&self) -> (Vec<bool>, Vec<f64>, f64, Vec<f64>) {
         let qp = self.qp;
         let m = qp.m();
         let c = self.cpar;
@@ -770,7 +784,7 @@ impl<'a> Ssn<'a> {
             .map(|i| (self.lam[i] - fval[i].max(0.0)).abs())
             .fold(0.0f64, f64::max)
             / scale;
-        (next, fval, residual)
+        (next, fval, residual, ax)
     }
 
     fn n_active(&self) -> usize {
@@ -808,16 +822,8 @@ impl<'a> Ssn<'a> {
 
 impl Iterative for Ssn<'_> {
     fn step(&mut self) -> Step {
-        let m = self.qp.m();
-        // Candidate working sets: J, J ∪ J_prev, all rows.
-        let mut cands = vec![self.in_j.clone()];
-        if let Some(prev) = &self.last_ok {
-            cands.push(self.in_j.iter().zip(prev).map(|(a, b)| *a || *b).collect());
-        }
-        cands.push(vec![true; m]);
-        cands.dedup();
         let mut solved = None;
-        for cand in cands {
+        for cand in candidates(&self.in_j, self.last_ok.as_deref()) {
             if let Some(s) = self.kkt_solve(&cand) {
                 solved = Some((cand, s));
                 break;
@@ -845,7 +851,7 @@ impl Iterative for Ssn<'_> {
         self.lam = lam;
         self.x = x;
 
-        let (mut new_j, mut fval, mut residual) = self.predict();
+        let (mut new_j, mut fval, mut residual, mut ax) = self.predict();
         if new_j == self.in_j {
             // J has settled: certify (x, λ), refining the solve if needed.
             let cert = self.refine();
@@ -857,14 +863,13 @@ impl Iterative for Ssn<'_> {
                     self.record(residual),
                 );
             }
-            (new_j, fval, residual) = self.predict();
+            (new_j, fval, residual, ax) = self.predict();
             if new_j == self.in_j {
                 return Step::Done(Status::Converged, self.record(residual));
             }
             log::debug!("ssn: the refined solution moves J; continuing");
         }
         let new_j = limit_changes(&self.in_j, new_j, &fval, &self.history, &mut self.single);
-        let ax: Vec<f64> = (0..m).map(|i| self.qp.a.row_dot(i, &self.x)).collect();
         let new_j = hold_free_modes(new_j, &self.in_j, &self.ar, &self.lam, &ax, &self.qp.g);
         log::debug!(
             "ssn: step {}: |J| = {}, next |J| = {} ({} enter, {} leave), residual {:.2e}",
