@@ -200,7 +200,7 @@ on = "interface"
 fn agree(qp: &QpProblem, ic0: bool) -> Result<(), TestCaseError> {
     let r0 = reference(qp)?;
     let scale = norm(&r0.x).max(f64::MIN_POSITIVE);
-    let mut variants: Vec<(String, &str, SolveOptions)> = registry::METHODS
+    let mut variants: Vec<(String, &str, SolveOptions)> = signorini::qp::MethodId::ALL
         .iter()
         .filter(|m| m.name() != "penalty" && m.name() != "cgc")
         .map(|m| {

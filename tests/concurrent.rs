@@ -9,7 +9,11 @@ use signorini::run::{
 };
 use std::path::{Path, PathBuf};
 
-fn prepared() -> (Prepared, String, signorini::qp::SolveOptions) {
+fn prepared() -> (
+    Prepared,
+    signorini::qp::MethodId,
+    signorini::qp::SolveOptions,
+) {
     let toml = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes/three_bodies_steps.toml");
     let prep = run::prepare(&toml, false).unwrap_or_else(|e| panic!("{e}"));
     let (method, opts) =
@@ -63,7 +67,7 @@ fn names_come_back_first_then_second_on_every_step() {
         Concurrent(Named::new("a", None), Named::new("b", None)),
         vec![],
     );
-    Run::new(&prep, &method, &opts)
+    Run::new(&prep, method, &opts)
         .solve(&mut [&mut spy], None)
         .unwrap_or_else(|e| panic!("{e}"));
     let want: Vec<Vec<String>> = (1..=nsteps)
@@ -76,14 +80,14 @@ fn names_come_back_first_then_second_on_every_step() {
 fn of_two_errors_the_first_is_returned_and_one_error_stops_the_run() {
     let (prep, method, opts) = prepared();
     let mut both = Concurrent(Named::new("a", Some(1)), Named::new("b", Some(1)));
-    let err = match Run::new(&prep, &method, &opts).solve(&mut [&mut both], None) {
+    let err = match Run::new(&prep, method, &opts).solve(&mut [&mut both], None) {
         Ok(_) => panic!("the run went on after both observers failed"),
         Err(e) => e,
     };
     assert_eq!(err.to_string(), "a refused");
 
     let mut second = Concurrent(Named::new("a", None), Named::new("b", Some(0)));
-    let err = match Run::new(&prep, &method, &opts).solve(&mut [&mut second], None) {
+    let err = match Run::new(&prep, method, &opts).solve(&mut [&mut second], None) {
         Ok(_) => panic!("the run went on after the second observer failed"),
         Err(e) => e,
     };
@@ -96,7 +100,7 @@ fn solve_into(dir: &Path, concurrent: bool) {
     let om = post::out_mesh(&prep.model, &prep.mesh);
     let vtu = VtuWriter::new(&prep, &om, dir, dir, false);
     let ck = CheckpointWriter::new(&prep, &om, dir, dir, None);
-    let run = Run::new(&prep, &method, &opts);
+    let run = Run::new(&prep, method, &opts);
     let out = if concurrent {
         run.solve(&mut [&mut Concurrent(vtu, ck)], None)
     } else {

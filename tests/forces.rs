@@ -18,7 +18,7 @@ fn solved(name: &str) -> (run::Prepared, forces::Forces) {
     let path = root().join("meshes").join(format!("{name}.toml"));
     let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
     let (method, opts) = run::options(&prep.problem, &SolverSection::default()).unwrap();
-    let res = run::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let res = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{e}"));
     assert!(res.status.converged(), "{name}: {:?}", res.status);
     let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
     let f = forces::compute(
@@ -189,7 +189,7 @@ fn vtu_names_components_and_writes_reactions() {
     let (prep, _) = solved("column");
     let path = root().join("meshes/column.toml");
     let (method, opts) = run::options(&prep.problem, &SolverSection::default()).unwrap();
-    let res = run::solve(&prep, &method, &opts).unwrap();
+    let res = run::solve(&prep, method, &opts).unwrap();
     let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
     let om = post::out_mesh(&prep.model, &prep.mesh);
     let dir = tempfile::tempdir().unwrap();
@@ -224,7 +224,7 @@ fn a_slave_curve_over_two_bodies_names_both() {
     let path = root().join("tests/data/two_on_one/two_on_one.toml");
     let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
     let (method, opts) = run::options(&prep.problem, &SolverSection::default()).unwrap();
-    let res = run::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let res = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{e}"));
     assert!(res.status.converged() && res.kkt.within(1e-6));
     let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
     let f = forces::compute(

@@ -30,7 +30,7 @@ fn solve(path: &Path, method: &str) -> (Prepared, Option<Model>, QpResult) {
         ..Default::default()
     };
     let (m, opts) = run::options(&prep.problem, &flags).unwrap();
-    let out = run::Run::new(&prep, &m, &opts)
+    let out = run::Run::new(&prep, m, &opts)
         .solve(&mut [], None)
         .unwrap_or_else(|e| panic!("{e}"));
     assert!(out.certified, "{}: not certified", path.display());
@@ -455,7 +455,7 @@ fn solve_tol(path: &Path, method: &str, tol: f64) -> (Prepared, QpResult) {
         ..Default::default()
     };
     let (m, opts) = run::options(&prep.problem, &flags).unwrap();
-    let out = run::Run::new(&prep, &m, &opts)
+    let out = run::Run::new(&prep, m, &opts)
         .solve(&mut [], None)
         .unwrap_or_else(|e| panic!("{method}: {e}"));
     assert!(out.certified, "{}: not certified", path.display());

@@ -105,7 +105,7 @@ fn solve(mesh: &Mesh, e: f64, nu: f64, method: &str, label: &str) -> Result<Solv
     }
     Ok(Solved {
         u: model.displacements(&r.x),
-        active: r.active,
+        active: r.solution.active,
     })
 }
 

@@ -17,7 +17,12 @@ fn solve(method: &str) -> (Prepared, QpResult) {
     };
     let (prep, res) = common::solve_file(&common::root().join("meshes/rollers.toml"), &choice);
     assert!(
-        signorini::qp::registry::certified(method, &res.kkt, 1e-6, true),
+        signorini::qp::registry::certified(
+            signorini::qp::MethodId::parse(method).unwrap(),
+            &res.kkt,
+            1e-6,
+            true
+        ),
         "{method}: {:?}",
         res.kkt
     );

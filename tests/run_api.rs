@@ -12,7 +12,11 @@ fn example() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("meshes/three_bodies_steps.toml")
 }
 
-fn prepared() -> (Prepared, String, signorini::qp::SolveOptions) {
+fn prepared() -> (
+    Prepared,
+    signorini::qp::MethodId,
+    signorini::qp::SolveOptions,
+) {
     let prep = run::prepare(&example(), false).unwrap_or_else(|e| panic!("{e}"));
     let (method, opts) =
         run::options(&prep.problem, &signorini::qp::SolverSection::default()).unwrap();
@@ -61,7 +65,7 @@ fn restart_from_the_checkpoint_equals_the_uninterrupted_run() {
     let nsteps = prep.problem.file.nsteps();
     assert!(nsteps >= 3, "{nsteps} steps");
     let mut all = Count::default();
-    let full = Run::new(&prep, &method, &opts)
+    let full = Run::new(&prep, method, &opts)
         .solve(&mut [&mut all], None)
         .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(all.steps, (0..nsteps).collect::<Vec<_>>());
@@ -78,7 +82,7 @@ fn restart_from_the_checkpoint_equals_the_uninterrupted_run() {
     let om = post::out_mesh(&prep.model, &prep.mesh);
     let mut ck = CheckpointWriter::new(&prep, &om, dir.path(), dir.path(), None);
     let mut first = Count::default();
-    let part = Run::new(&prep, &method, &opts)
+    let part = Run::new(&prep, method, &opts)
         .max_steps(Some(k))
         .solve(&mut [&mut ck, &mut first], None)
         .unwrap_or_else(|e| panic!("{e}"));
@@ -89,7 +93,7 @@ fn restart_from_the_checkpoint_equals_the_uninterrupted_run() {
     let restart = Restart::read(&h5, &prep).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(restart.steps_done, k);
     let mut rest = Count::default();
-    let second = Run::new(&prep, &method, &opts)
+    let second = Run::new(&prep, method, &opts)
         .restart(Some(restart))
         .solve(&mut [&mut rest], None)
         .unwrap_or_else(|e| panic!("{e}"));
@@ -135,14 +139,14 @@ fn a_restart_past_max_steps_has_nothing_to_do() {
     let dir = tempfile::tempdir().unwrap();
     let om = post::out_mesh(&prep.model, &prep.mesh);
     let mut ck = CheckpointWriter::new(&prep, &om, dir.path(), dir.path(), None);
-    Run::new(&prep, &method, &opts)
+    Run::new(&prep, method, &opts)
         .max_steps(Some(2))
         .solve(&mut [&mut ck], None)
         .unwrap_or_else(|e| panic!("{e}"));
     let h5 = dir.path().join(format!("{}.h5", prep.problem.name));
     let restart = Restart::read(&h5, &prep).unwrap_or_else(|e| panic!("{e}"));
     let mut count = Count::default();
-    let out = Run::new(&prep, &method, &opts)
+    let out = Run::new(&prep, method, &opts)
         .restart(Some(restart))
         .max_steps(Some(1))
         .solve(&mut [&mut count], None)
@@ -160,7 +164,7 @@ fn an_observer_error_stops_the_run() {
         fail_at: Some(1),
         ..Default::default()
     };
-    let err = match Run::new(&prep, &method, &opts).solve(&mut [&mut count], None) {
+    let err = match Run::new(&prep, method, &opts).solve(&mut [&mut count], None) {
         Ok(_) => panic!("the run went on after the observer failed"),
         Err(e) => e,
     };
@@ -176,14 +180,15 @@ fn an_observer_error_stops_the_run() {
 fn bad_run_settings_are_bad_input() {
     let (prep, method, opts) = prepared();
     for t in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-        let e = Run::new(&prep, &method, &opts)
-            .certify(t, false)
+        let mut o = opts.clone();
+        o.settings.kkt_target = t;
+        let e = Run::new(&prep, method, &o)
             .solve(&mut [], None)
             .err()
             .unwrap_or_else(|| panic!("kkt_target {t} accepted"));
         assert!(e.to_string().contains("KKT target"), "{e}");
     }
-    let e = Run::new(&prep, &method, &opts)
+    let e = Run::new(&prep, method, &opts)
         .max_steps(Some(0))
         .solve(&mut [], None)
         .err()
@@ -200,7 +205,7 @@ fn bad_run_settings_are_bad_input() {
     let om = post::out_mesh(&other.model, &other.mesh);
     let mut ck = CheckpointWriter::new(&other, &om, dir.path(), dir.path(), None);
     let (m2, o2) = run::options(&other.problem, &signorini::qp::SolverSection::default()).unwrap();
-    Run::new(&other, &m2, &o2)
+    Run::new(&other, m2, &o2)
         .solve(&mut [&mut ck], None)
         .unwrap_or_else(|e| panic!("{e}"));
     let e = Restart::read(&dir.path().join("two_blocks.h5"), &prep).expect_err("accepted");
@@ -226,7 +231,7 @@ fn the_writers_and_a_transaction_leave_every_output() {
     let mut vtu = VtuWriter::new(&prep, &om, &sdir, &fdir, false);
     let mut ck = CheckpointWriter::new(&prep, &om, &sdir, &fdir, None);
     let mut json = SummaryWriter::new(&prep, &sdir);
-    let outcome = Run::new(&prep, &method, &opts)
+    let outcome = Run::new(&prep, method, &opts)
         .solve(&mut [&mut vtu, &mut ck, &mut json], Some(&mut tx))
         .unwrap_or_else(|e| panic!("{e}"));
     tx.finish();
@@ -279,9 +284,9 @@ fn the_nested_dissection_ordering_changes_the_factor_not_the_answer() {
                     ..Default::default()
                 };
                 let (method, opts) = run::options(&prep.problem, &flags).unwrap();
-                let res = run::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
+                let res = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{e}"));
                 assert!(
-                    Verdict::of(&method, &res, 1e-6, false).certified(),
+                    Verdict::of(method, &res, 1e-6, false).certified(),
                     "{model} {m} {ordering}: {:?} {:?}",
                     res.status,
                     res.kkt

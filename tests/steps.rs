@@ -161,7 +161,7 @@ fn load_steps_reuse_the_factorization() {
         let model = run::step_model(&prep, s).unwrap();
         let r = registry::solve_in("mprgp", &model.qp, &opts, &ws).unwrap();
         assert!(r.status.converged());
-        xs.push((model, r.x));
+        xs.push((model, r.solution.x));
     }
     let (n1, _) = ws.reuse_counts();
     assert!(

@@ -64,7 +64,7 @@ pub fn variants(spec: Option<&str>) -> Result<Vec<(String, Option<PrecondKind>)>
         };
         let m = registry::find(&name)
             .ok_or_else(|| format!("unknown method \"{name}\"; known: {}", all.join(", ")))?;
-        if m.preconditioned() {
+        if m.capabilities().preconditioned {
             match pc {
                 Some(p) => out.push((
                     name,
@@ -128,7 +128,7 @@ pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i3
     let list: Vec<_> = if model.qp.friction.is_some() && a.methods.is_none() {
         let kept: Vec<_> = list
             .into_iter()
-            .filter(|(m, _)| registry::find(m).is_some_and(|m| m.friction()))
+            .filter(|(m, _)| registry::find(m).is_some_and(|m| m.capabilities().friction))
             .collect();
         if !quiet {
             let names: Vec<&str> = kept.iter().map(|(m, _)| m.as_str()).collect();
@@ -167,7 +167,7 @@ pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i3
                 opts.deadline = a
                     .time_limit
                     .map(|s| t + std::time::Duration::from_secs_f64(s));
-                run::solve_model(&prep, model, &m, &opts)
+                run::solve_model(&prep, model, m, &opts)
                     .map(|r| (r, t.elapsed().as_secs_f64()))
                     .map_err(|e| e.to_string())
             }
@@ -193,7 +193,11 @@ pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i3
     let penalty_eps = run::options(&prep.problem, &base)
         .ok()
         .and_then(|(_, o)| o.settings.penalty.eps);
-    let mut table = table_json(&prep, model, &rows, a.solver.kkt_target, penalty_eps);
+    let kkt_target = run::options(&prep.problem, &base)
+        .map_or(crate::qp::settings::DEFAULT_KKT_TARGET, |(_, o)| {
+            o.settings.kkt_target
+        });
+    let mut table = table_json(&prep, model, &rows, kkt_target, penalty_eps);
     table.steps = TableSteps {
         count: nsteps,
         compared: nsteps,
@@ -261,7 +265,9 @@ pub fn table_json(
         None => 100.0 / crate::qp::primal::penalty::PENALTY_FACTOR,
     };
     let certified = |r: &Row, q: &QpResult| {
-        q.status.converged() && registry::certified(&r.method, &q.kkt, kkt_target, false)
+        q.status.converged()
+            && crate::qp::MethodId::parse(&r.method)
+                .is_some_and(|m| registry::certified(m, &q.kkt, kkt_target, false))
     };
     let best = rows
         .iter()
@@ -347,7 +353,7 @@ pub fn table_json(
                         rel_diff_lambda: rel_l,
                         agree_tol,
                         agree_tol_lambda,
-                        notes: q.notes.clone(),
+                        notes: q.notes.iter().map(ToString::to_string).collect(),
                     }),
                 }
             }

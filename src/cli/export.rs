@@ -44,7 +44,7 @@ pub fn run(a: &ExportArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32
     let mut solved = None;
     if a.solution {
         let res = run::options(&prep.problem, &a.solver.section)
-            .and_then(|(method, opts)| run::solve(&prep, &method, &opts).map(|r| (method, r)));
+            .and_then(|(method, opts)| run::solve(&prep, method, &opts).map(|r| (method, r)));
         match res {
             Ok(r) => solved = Some(r),
             Err(e) => {
@@ -124,7 +124,7 @@ pub fn run(a: &ExportArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32
             "nodes": prep.mesh.nodes.len(),
             "triangles": prep.model.topo.triangles.len(),
             "energy": solved.as_ref().map(|(_, r)| qp.energy(&r.x)),
-            "method": solved.as_ref().map(|(m, _)| m.clone()),
+            "method": solved.as_ref().map(|(m, _)| m.name()),
             "converged": solved.as_ref().map(|(_, r)| r.status.converged()),
             "kkt": solved.as_ref().map(|(_, r)| json!({
                 "primal": r.kkt.primal, "dual": r.kkt.dual,

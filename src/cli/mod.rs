@@ -17,7 +17,7 @@ use std::path::PathBuf;
 #[command(
     name = "signorini",
     version,
-    about = "Frictionless multibody contact in 2D elasticity (P1 FEM) with a choice of QP methods"
+    about = "Multibody contact in 2D elasticity (P1 FEM; frictionless, Tresca or Coulomb) with a choice of QP methods"
 )]
 pub struct Cli {
     /// Diagnostics level: error, warn, info, debug, trace.
@@ -57,9 +57,6 @@ pub enum Command {
 pub struct SolverFlags {
     #[command(flatten)]
     pub section: crate::qp::SolverSection,
-    /// Largest KKT residual accepted as a certificate.
-    #[arg(long, default_value_t = 1e-6)]
-    pub kkt_target: f64,
     /// Exit 3 when the KKT certificate fails its target (or any warning).
     #[arg(long)]
     pub strict: bool,
@@ -111,8 +108,28 @@ pub fn run(cli: Cli) -> i32 {
         Command::Export(a) => export::run(&a, cli.quiet, &cli.build),
         Command::Limit(a) => limit::run(&a, cli.quiet, &cli.build),
         Command::Methods => {
-            for m in crate::qp::registry::METHODS {
-                println!("{:<10} {}", m.name(), m.summary());
+            println!("method     friction floating factor    summary");
+            println!(
+                "{:<10} {:<8} {:<8} {:<9} ssn for every problem (the default)",
+                "auto", "yes", "yes", "-"
+            );
+            for id in crate::qp::MethodId::ALL {
+                let m = id.method();
+                let c = m.capabilities();
+                let yes = |b: bool| if b { "yes" } else { "no" };
+                let factor = match c.factor {
+                    crate::qp::method::Factor::Always => "always",
+                    crate::qp::method::Factor::Never => "never",
+                    crate::qp::method::Factor::BySettings => "settings",
+                };
+                println!(
+                    "{:<10} {:<8} {:<8} {:<9} {}",
+                    id.name(),
+                    yes(c.friction),
+                    yes(c.semicoercive),
+                    factor,
+                    m.summary()
+                );
             }
             let pcs: Vec<&str> = crate::qp::precond::PrecondKind::ALL
                 .iter()

@@ -4,7 +4,7 @@
 
 use super::SolveArgs;
 use crate::post;
-use crate::qp::SolveOptions;
+use crate::qp::{MethodId, SolveOptions};
 use crate::run::{
     self, CheckpointWriter, Concurrent, Outcome, Prepared, Progress, Restart, Run, RunError,
     SummaryWriter, Transaction, VtuWriter,
@@ -16,11 +16,12 @@ pub use crate::run::{EXIT_BAD_INPUT, EXIT_NOT_CONVERGED};
 
 pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
     let t0 = Instant::now();
-    let target = a.solver.kkt_target;
-    if !(target > 0.0 && target.is_finite()) {
-        return bad_input(&format!(
-            "--kkt-target {target}: the KKT target must be a positive number"
-        ));
+    if let Some(target) = a.solver.section.kkt_target {
+        if !(target > 0.0 && target.is_finite()) {
+            return bad_input(&format!(
+                "--kkt-target {target}: the KKT target must be a positive number"
+            ));
+        }
     }
     if a.max_steps == Some(0) {
         return bad_input(&"--max-steps 0: load steps count from 1");
@@ -34,7 +35,7 @@ pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 
         Err(e) => return bad_input(&e),
     };
     opts.progress = !quiet;
-    match solve(a, quiet, t0, &prep, &method, &opts) {
+    match solve(a, quiet, t0, &prep, method, &opts) {
         Ok(code) => code,
         Err(e) => bad_input(&e),
     }
@@ -47,7 +48,7 @@ fn solve(
     quiet: bool,
     t0: Instant,
     prep: &Prepared,
-    method: &str,
+    method: MethodId,
     opts: &SolveOptions,
 ) -> Result<i32, RunError> {
     let file = &prep.problem.file;
@@ -84,7 +85,7 @@ fn solve(
     let mut json = SummaryWriter::new(prep, &sdir);
     let mut progress = Progress { quiet };
     let outcome = Run::new(prep, method, opts)
-        .certify(a.solver.kkt_target, a.solver.strict)
+        .strict(a.solver.strict)
         .max_steps(a.max_steps)
         .restart(restart)
         .started(t0)
@@ -197,8 +198,11 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
         k.complementarity,
         k.stationarity,
         k.contact_balance,
-        k.rigid_balance
-            .map_or(String::new(), |v| format!("  rigid balance {v:.2e}")),
+        if k.rigid_balance != 0.0 {
+            format!("  rigid balance {:.2e}", k.rigid_balance)
+        } else {
+            String::new()
+        },
         if k.certified && (k.stationarity > k.target || k.contact_balance > k.target) {
             format!(
                 "certified at the rounding floor (stationarity floor {:.1e}, balance floor {:.1e}; \
@@ -222,7 +226,7 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
     if let (Some(stick), Some(slip)) = (s.contact.stick, s.contact.slip) {
         println!(
             "friction    {stick} rows stick, {slip} slip; friction residual {:.2e}",
-            k.friction.unwrap_or(0.0)
+            k.friction
         );
     }
     // Global balance: loads + reactions = 0 (contact forces are internal).

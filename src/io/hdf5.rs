@@ -44,7 +44,7 @@ use super::{Change, ContactGeometry, OutMesh, StepInfo, StepOutput};
 ///     displacement f64 [n, 2], stress f64 [m, 4], von_mises f64 [m],
 ///     principal_stress f64 [m, 2], multipliers f64 [rows],
 ///     contact_pressure f64 [rows], gap f64 [rows], active u8 [rows]
-///     attrs: time, energy, kkt_*, time_* (f64); iterations (u64);
+///     attrs: time, energy, kkt_* (every residual of `qp::Kkt`), time_* (f64); iterations (u64);
 ///            converged (u8 0/1); method, preconditioner (strings)
 ///     with `[output] reference_step` (that step and later ones):
 ///     displacement_change f64 [n, 2], stress_change f64 [m, 4],
@@ -479,12 +479,11 @@ fn write_step(ctx: &Ctx, g: &Group, s: &StepOutput) -> Result<(), IoError> {
     set_attr_str(ctx, g, "preconditioner", &i.preconditioner)?;
     set_attr_scalar(ctx, g, "converged", &u8::from(i.converged))?;
     set_attr_scalar(ctx, g, "iterations", &(i.iterations as u64))?;
+    for (name, v) in i.kkt.named() {
+        set_attr_scalar(ctx, g, &format!("kkt_{name}"), &v)?;
+    }
     for (name, v) in [
         ("energy", i.energy),
-        ("kkt_primal", i.kkt_primal),
-        ("kkt_dual", i.kkt_dual),
-        ("kkt_complementarity", i.kkt_complementarity),
-        ("kkt_stationarity", i.kkt_stationarity),
         ("time_assemble", i.time_assemble),
         ("time_solve", i.time_solve),
         ("time_total", i.time_total),
@@ -770,6 +769,15 @@ fn read_step(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<StepOutput, IoError
     };
 
     let iterations = get_attr::<u64>(ctx, g, "iterations")?;
+    // Every residual of the certificate; checkpoints written before all
+    // were kept have the first four only (the others read as 0).
+    let mut kkt = crate::qp::Kkt::default();
+    for (k, (name, _)) in kkt.named().into_iter().enumerate() {
+        let attr = format!("kkt_{name}");
+        if k < 4 || has_attr(ctx, g, &attr)? {
+            kkt.set(name, get_attr(ctx, g, &attr)?);
+        }
+    }
     let info = StepInfo {
         method: get_attr_str(ctx, g, "method")?,
         preconditioner: get_attr_str(ctx, g, "preconditioner")?,
@@ -777,10 +785,7 @@ fn read_step(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<StepOutput, IoError
         iterations: usize::try_from(iterations)
             .map_err(|_| ctx.format(format!("{}@iterations: {iterations} too large", g.name())))?,
         energy: get_attr(ctx, g, "energy")?,
-        kkt_primal: get_attr(ctx, g, "kkt_primal")?,
-        kkt_dual: get_attr(ctx, g, "kkt_dual")?,
-        kkt_complementarity: get_attr(ctx, g, "kkt_complementarity")?,
-        kkt_stationarity: get_attr(ctx, g, "kkt_stationarity")?,
+        kkt,
         time_assemble: get_attr(ctx, g, "time_assemble")?,
         time_solve: get_attr(ctx, g, "time_solve")?,
         time_total: get_attr(ctx, g, "time_total")?,

@@ -134,10 +134,8 @@ pub struct StepInfo {
     pub converged: bool,
     pub iterations: usize,
     pub energy: f64,
-    pub kkt_primal: f64,
-    pub kkt_dual: f64,
-    pub kkt_complementarity: f64,
-    pub kkt_stationarity: f64,
+    /// Every residual of the step's KKT certificate (docs/methods.md §8.4).
+    pub kkt: crate::qp::Kkt,
     pub time_assemble: f64,
     pub time_solve: f64,
     pub time_total: f64,

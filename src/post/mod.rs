@@ -146,10 +146,7 @@ pub fn step_output_with_forces(
             converged: res.status.converged(),
             iterations: res.iterations,
             energy: res.energy,
-            kkt_primal: res.kkt.primal,
-            kkt_dual: res.kkt.dual,
-            kkt_complementarity: res.kkt.complementarity,
-            kkt_stationarity: res.kkt.stationarity,
+            kkt: res.kkt,
             ..Default::default()
         },
     };

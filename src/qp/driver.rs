@@ -14,35 +14,23 @@
 //! sub-solver's result (preelim's inner CGC) never carries a blank one.
 
 use super::executor::{Executor, Observer};
+use super::method::{Certificate, FallbackCause, Method, MethodId};
 use super::recession::{self, Boundedness};
 use super::settings::Settings;
-use super::{kkt, IterRecord, Kkt, QpError, QpProblem, QpResult, SolveOptions, Status};
+use super::{kkt, Failure, IterRecord, Kkt, QpError, QpProblem, QpResult, SolveOptions, Status};
 use crate::linalg::cholesky::Workspace;
+use std::borrow::Cow;
 use std::time::Instant;
-
-/// A QP method (one type per method; a family is one folder).
-pub trait Method: Sync {
-    /// The CLI name (part of the contract).
-    fn name(&self) -> &'static str;
-    /// One line for `signorini methods`.
-    fn summary(&self) -> &'static str;
-    /// Whether `--preconditioner` applies.
-    fn preconditioned(&self) -> bool {
-        false
-    }
-    /// Whether the method solves frictional problems (`QpProblem::friction`,
-    /// docs/methods.md §9); the driver refuses the others.
-    fn friction(&self) -> bool {
-        false
-    }
-    fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError>;
-}
 
 /// What a method returns: the iterate and how it got there, no certificate.
 #[derive(Debug, Clone)]
 pub struct Output {
     pub x: Vec<f64>,
+    /// The normal contact forces λ (λ_n with friction), one per row of A.
     pub lambda: Vec<f64>,
+    /// The tangential forces λ_t, one per contact row (empty without
+    /// friction, docs/methods.md §9).
+    pub lambda_t: Vec<f64>,
     pub active: Vec<bool>,
     pub status: Status,
     /// Outer iterations (faces, active-set changes, Uzawa steps, …).
@@ -50,7 +38,8 @@ pub struct Output {
     /// Inner iterations (CG steps, inner solves).
     pub inner_iterations: usize,
     pub log: Vec<IterRecord>,
-    /// Phases the method timed itself (in addition to [`Context::phase`]).
+    /// Wall time per phase in seconds, e.g. ("factor", 0.1), ("iterate", 0.5):
+    /// the phases the method timed itself and those of [`Context::phase`].
     pub timings: Vec<(String, f64)>,
 }
 
@@ -132,9 +121,39 @@ impl Observer for Forward {
     }
 }
 
-/// The certificate level a settled answer must keep
-/// ([`recession::settle_on_active`]) and a stalled one must meet.
-const CERTIFIED: f64 = 1e-6;
+/// What the driver did beyond the method, kept in [`QpResult::notes`]:
+/// printed as warnings and written to the JSON as text
+/// ([`std::fmt::Display`]); tests and rules match on the variant.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Note {
+    /// `from`'s answer was not kept (`cause`, detailed in `failure`);
+    /// `to` solved the problem instead (docs/methods.md §8.2, §9.2).
+    Fallback {
+        from: MethodId,
+        to: MethodId,
+        cause: FallbackCause,
+        failure: Failure,
+    },
+    /// The warm start was refused (the reason, docs/methods.md §8.3).
+    WarmStartUnused(String),
+    /// `count` rigid motions slide along every contact without opening it
+    /// and the loads do no work on them: held while the method ran, the
+    /// answer has no component along them (docs/methods.md §1.7).
+    FreeMotions { count: usize },
+    /// `count` motions are free on the rows carrying a force; the answer
+    /// has the least component along them that the other rows allow.
+    SettledOnActive { count: usize },
+    /// As [`Note::SettledOnActive`], but moving the answer would have lost
+    /// its certificate: it is one point of the set of solutions.
+    NotSettled { count: usize },
+    /// `method` stopped on `failure`, but its answer meets the certificate
+    /// at `target`, so it counts as converged (docs/methods.md §8.4).
+    StalledButCertified {
+        method: MethodId,
+        failure: Failure,
+        target: f64,
+    },
+}
 
 /// "1 rigid motion", "2 rigid motions" (the notes).
 fn motions(n: usize) -> String {
@@ -150,49 +169,157 @@ fn them(n: usize) -> &'static str {
     }
 }
 
-/// The method a solve falls back to when `name` claims an unbounded
-/// direction that fails the certificate (docs/methods.md §8.2).
-fn fallback_for(name: &str) -> &'static str {
-    if name == "ssn" {
-        "asm"
-    } else {
-        "ssn"
+impl std::fmt::Display for Note {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Note::Fallback {
+                from, to, failure, ..
+            } => {
+                let cite = match failure {
+                    Failure::Cycling { .. } => " (docs/methods.md §9.2)",
+                    _ => "",
+                };
+                match failure {
+                    Failure::RefusedClaim { .. } => write!(f, "{failure}; solved by {to} instead"),
+                    _ => write!(f, "{from}: {failure}{cite}; solved by {to} instead"),
+                }
+            }
+            Note::WarmStartUnused(why) => write!(f, "warm start not used: {why}"),
+            Note::FreeMotions { count } => write!(
+                f,
+                "the solution is unique only up to {} that slide{} along every contact without opening it and on which the loads do no work; the answer returned has no component along {} (docs/methods.md §1.7)",
+                motions(*count),
+                if *count > 1 { "" } else { "s" },
+                them(*count),
+            ),
+            Note::SettledOnActive { count } => write!(
+                f,
+                "the solution is unique only up to {} that the rows carrying a force leave free (the others stop {} at their gaps); the answer returned has the least component along {} that they allow (docs/methods.md §1.7)",
+                motions(*count),
+                them(*count),
+                them(*count),
+            ),
+            Note::NotSettled { count } => write!(
+                f,
+                "the solution is unique only up to {} that the rows carrying a force leave free (the others stop {} at their gaps); the answer returned is one of those solutions, not the one with the least component along {}: moved there it would lose its certificate (its gaps are exact at the scale of that motion, not of the deformation; ssn or asm return the least one, docs/methods.md §1.7)",
+                motions(*count),
+                them(*count),
+                them(*count),
+            ),
+            Note::StalledButCertified {
+                method,
+                failure,
+                target,
+            } => write!(
+                f,
+                "{method} stopped on {failure}; its answer meets the KKT certificate (≤ {target:e}, docs/methods.md §8.4), so it counts as converged"
+            ),
+        }
     }
 }
 
-/// Solve `qs` by method `fb` instead of `name`, whose result `r` is not
-/// trusted (`why`): the note says so, and `name`'s phase timings are kept
-/// with its name as prefix.
-#[allow(clippy::too_many_arguments)]
-fn fall_back(
-    name: &str,
-    fb: &str,
-    why: &str,
-    mut r: Output,
-    qs: &QpProblem,
-    opts: &SolveOptions,
-    ws: &Workspace,
-    notes: &mut Vec<String>,
-) -> Result<Output, QpError> {
-    let note = format!("{why}; solved by {fb} instead");
-    log::warn!("{note}");
-    notes.push(note);
-    let fm = super::registry::find(fb).ok_or_else(|| QpError::BadParameter(fb.into()))?;
-    let t = std::mem::take(&mut r.timings);
-    let mut out = solve_once(fm, qs, opts, ws)?;
-    out.timings = t
-        .into_iter()
-        .map(|(k, v)| (format!("{name}-{k}"), v))
-        .chain(out.timings)
-        .collect();
-    Ok(out)
+/// Whether a result of `method` with residuals `kkt` is certified at
+/// `target`: by its [`Certificate`] kind. A penalised certificate (unless
+/// `strict`) leaves out the O(ε_p) violation of Ax ≤ g and the
+/// complementarity it implies (docs/methods.md §4.4); NaN anywhere fails.
+pub fn certified(method: MethodId, kkt: &Kkt, target: f64, strict: bool) -> bool {
+    match method.capabilities().certificate {
+        Certificate::Penalised if !strict => {
+            let own = Kkt {
+                primal: 0.0,
+                complementarity: 0.0,
+                ..*kkt
+            };
+            own.within(target) && !kkt.max().is_nan() && kkt.max().is_finite()
+        }
+        _ => kkt.within(target),
+    }
+}
+
+/// Solve `qp` by `fb` instead of `r`'s method (`from`), whose answer is
+/// not kept (`cause`, `failure`): the note says so, and `from`'s phase
+/// timings are kept with its name as prefix.
+struct Fallback<'a> {
+    qs: &'a QpProblem,
+    opts: &'a SolveOptions,
+    ws: &'a Workspace,
+}
+
+impl Fallback<'_> {
+    fn run(
+        &self,
+        from: MethodId,
+        to: MethodId,
+        cause: FallbackCause,
+        failure: Failure,
+        mut r: Output,
+        notes: &mut Vec<Note>,
+    ) -> Result<Output, QpError> {
+        let note = Note::Fallback {
+            from,
+            to,
+            cause,
+            failure,
+        };
+        log::warn!("{note}");
+        notes.push(note);
+        let t = std::mem::take(&mut r.timings);
+        let mut out = solve_once(to.method(), self.qs, self.opts, self.ws)?;
+        out.timings = t
+            .into_iter()
+            .map(|(k, v)| (format!("{from}-{k}"), v))
+            .chain(out.timings)
+            .collect();
+        Ok(out)
+    }
+}
+
+/// Refuse a problem the method does not solve, naming those that do.
+fn check_capabilities(method: &dyn Method, qp: &QpProblem) -> Result<(), QpError> {
+    if qp.friction.is_some() && !method.capabilities().friction {
+        let able: Vec<&str> = MethodId::ALL
+            .into_iter()
+            .filter(|m| m.capabilities().friction)
+            .map(MethodId::name)
+            .collect();
+        return Err(QpError::Unsupported(format!(
+            "method \"{}\" does not solve contact with friction; the problem has friction ([[contact]] friction or tresca): use {} (or method = \"auto\")",
+            method.id(),
+            able.join(" or ")
+        )));
+    }
+    Ok(())
+}
+
+/// The warm start if it passes [`check_warm_start`]; else the options
+/// without it, said in `notes`.
+fn checked_start<'a>(
+    qp: &QpProblem,
+    opts: &'a SolveOptions,
+    notes: &mut Vec<Note>,
+) -> Cow<'a, SolveOptions> {
+    let Some(x0) = &opts.x0 else {
+        return Cow::Borrowed(opts);
+    };
+    match check_warm_start(qp, x0) {
+        Ok(()) => Cow::Borrowed(opts),
+        Err(why) => {
+            let note = Note::WarmStartUnused(why);
+            log::warn!("{note}");
+            notes.push(note);
+            let mut o = opts.clone();
+            o.x0 = None;
+            Cow::Owned(o)
+        }
+    }
 }
 
 /// Run `method` on `qp`: check the problem and the settings, decide
 /// boundedness from the kernel ([`recession::boundedness`]), check the warm
-/// start, solve, check any unbounded claim ([`recession::certify`]; a claim
-/// that fails is not trusted and the solve falls back to another method, said
-/// in `notes`), and attach the KKT certificate and the energy.
+/// start, solve with the free motions held, check any unbounded claim
+/// ([`recession::certify`]; a claim that fails is not trusted and the solve
+/// falls back, said in `notes`), and attach the KKT certificate and the
+/// energy ([`certify`]).
 pub fn run(
     method: &dyn Method,
     qp: &QpProblem,
@@ -201,46 +328,21 @@ pub fn run(
 ) -> Result<QpResult, QpError> {
     opts.settings.validate().map_err(QpError::BadParameter)?;
     check_problem(qp)?;
-    if qp.friction.is_some() && !method.friction() {
-        let able: Vec<&str> = super::registry::METHODS
-            .iter()
-            .filter(|m| m.friction())
-            .map(|m| m.name())
-            .collect();
-        return Err(QpError::Unsupported(format!(
-            "method \"{}\" solves frictionless contact only; the problem has friction ([[contact]] friction or tresca): use {}",
-            method.name(),
-            able.join(" or ")
-        )));
-    }
-    let mut notes = vec![];
+    check_capabilities(method, qp)?;
     // With friction the tangential loads a floating body carries may be held
     // by friction: the frictionless decision does not apply, the method
     // decides (docs/methods.md §9.3).
-    let bounded = if qp.friction.is_some() {
-        Boundedness::Undecided("friction".into())
-    } else {
-        recession::boundedness(qp)
-    };
-    match bounded {
-        Boundedness::Unbounded(c) => return Ok(unbounded_result(qp, c.direction)),
-        Boundedness::Undecided(why) => {
-            log::debug!("boundedness undecided ({why}); the method decides, its claim is checked")
-        }
-        Boundedness::Bounded => {}
-    }
-    let mut checked;
-    let mut opts = opts;
-    if let Some(x0) = &opts.x0 {
-        if let Err(why) = check_warm_start(qp, x0) {
-            let note = format!("warm start not used: {why}");
-            log::warn!("{note}");
-            notes.push(note);
-            checked = opts.clone();
-            checked.x0 = None;
-            opts = &checked;
+    if qp.friction.is_none() {
+        match recession::boundedness(qp) {
+            Boundedness::Unbounded(c) => return Ok(unbounded_result(qp, c.direction)),
+            Boundedness::Undecided(why) => log::debug!(
+                "boundedness undecided ({why}); the method decides, its claim is checked"
+            ),
+            Boundedness::Bounded => {}
         }
     }
+    let mut notes = vec![];
+    let opts = checked_start(qp, opts, &mut notes);
     // Rigid motions along which the solution is not unique (a ring between
     // two flat plates): held by springs while the method runs, and the
     // answer returned without them (docs/methods.md §1.7).
@@ -255,129 +357,144 @@ pub fn run(
     let qs = if free.is_empty() {
         qp
     } else {
-        let note = format!(
-            "the solution is unique only up to {} that slide{} along every contact without opening it and on which the loads do no work; the answer returned has no component along {} (docs/methods.md §1.7)",
-            motions(free.len()),
-            if free.len() > 1 { "" } else { "s" },
-            them(free.len()),
-        );
+        let note = Note::FreeMotions { count: free.len() };
         log::info!("{note}");
         notes.push(note);
         held = recession::pinned(qp, &free);
         &held
     };
-    let name = method.name();
-    let mut r = solve_once(method, qs, opts, ws)?;
-    if let Status::Unbounded { direction } = &r.status {
-        match recession::certify(qp, direction) {
-            Ok(c) => return Ok(unbounded_result(qp, c.direction)),
-            Err(why) if qp.friction.is_some() => {
-                r.status = Status::Failed(format!(
-                    "{name} reported an unbounded direction that fails the certificate ({why})"
-                ));
-            }
-            Err(why) => {
-                let fb = fallback_for(name);
-                let why = format!(
-                    "{name} reported an unbounded direction that fails the certificate ({why})"
-                );
-                r = fall_back(name, fb, &why, r, qs, opts, ws, &mut notes)?;
-                if let Status::Unbounded { direction } = &r.status {
-                    let why = recession::certify(qp, direction).err().unwrap_or_default();
-                    r.status = Status::Failed(format!(
-                        "{fb} also reported an unbounded direction that fails the certificate ({why})"
-                    ));
-                }
-            }
-        }
-    }
-    // Frictional ssn whose working sets cycle (a Tresca problem with
-    // friction on many open rows of a floating body): the dual method
-    // solves the same problem, so the run falls back to it, said in
-    // `notes` (docs/methods.md §9.2).
-    if name == "ssn" && qp.friction.is_some() {
-        if let Status::Failed(msg) = &r.status {
-            if msg.starts_with(super::ssn::CYCLING) {
-                let why = format!("{msg} (docs/methods.md §9.2)");
-                r = fall_back(name, "mprgp", &why, r, qs, opts, ws, &mut notes)?;
-            }
+    let fallback = Fallback {
+        qs,
+        opts: &opts,
+        ws,
+    };
+    let r = solve_once(method, qs, &opts, ws)?;
+    let mut r = match judge_claim(method, qp, r, &fallback, &mut notes)? {
+        Claim::Unbounded(res) => return Ok(res),
+        Claim::Answer(r) => r,
+    };
+    if let Status::Failed(failure @ Failure::Cycling { .. }) = &r.status {
+        if let Some(to) = method.fallback(FallbackCause::Cycling) {
+            let failure = failure.clone();
+            r = fallback.run(
+                method.id(),
+                to,
+                FallbackCause::Cycling,
+                failure,
+                r,
+                &mut notes,
+            )?;
         }
     }
     recession::without_free(&mut r.x, &free);
-    // A frictional method returns [λ_n; λ_t] in `lambda` (docs/methods.md §9).
-    let mut lambda = r.lambda;
-    let lambda_t = if qp.friction.is_some() && lambda.len() == 2 * qp.m() {
-        lambda.split_off(qp.m())
-    } else {
-        vec![]
+    Ok(certify(method.id(), qp, r, &free, &opts.settings, notes))
+}
+
+/// What [`judge_claim`] makes of a method's answer.
+enum Claim {
+    /// A verified recession direction: the problem is unbounded.
+    Unbounded(QpResult),
+    /// An answer to certify (the method's, or its fallback's).
+    Answer(Output),
+}
+
+/// Check an unbounded claim of `r` ([`recession::certify`]). A claim that
+/// fails the certificate is not trusted: the method's fallback solves the
+/// problem ([`Method::fallback`]); with friction, or without a fallback,
+/// the failure stands (docs/methods.md §8.2).
+fn judge_claim(
+    method: &dyn Method,
+    qp: &QpProblem,
+    mut r: Output,
+    fallback: &Fallback,
+    notes: &mut Vec<Note>,
+) -> Result<Claim, QpError> {
+    let Status::Unbounded { direction } = &r.status else {
+        return Ok(Claim::Answer(r));
     };
-    let mut kkt = kkt::residuals_with_friction(qp, &r.x, &lambda, &lambda_t);
+    let why = match recession::certify(qp, direction) {
+        Ok(c) => return Ok(Claim::Unbounded(unbounded_result(qp, c.direction))),
+        Err(why) => why,
+    };
+    let id = method.id();
+    let failure = Failure::RefusedClaim { method: id, why };
+    let to = method.fallback(FallbackCause::RefusedClaim);
+    let (Some(to), None) = (to, &qp.friction) else {
+        r.status = Status::Failed(failure);
+        return Ok(Claim::Answer(r));
+    };
+    r = fallback.run(id, to, FallbackCause::RefusedClaim, failure, r, notes)?;
+    if let Status::Unbounded { direction } = &r.status {
+        let why = recession::certify(qp, direction).err().unwrap_or_default();
+        r.status = Status::Failed(Failure::RefusedClaim { method: to, why });
+    }
+    Ok(Claim::Answer(r))
+}
+
+/// Attach the KKT certificate (docs/methods.md §8.4) and the energy to `r`,
+/// after moving it along the motions free on the rows carrying a force
+/// (§1.7) when that keeps the certificate; a stalled answer that meets the
+/// certificate counts as converged.
+fn certify(
+    id: MethodId,
+    qp: &QpProblem,
+    mut r: Output,
+    free: &[Vec<f64>],
+    settings: &Settings,
+    mut notes: Vec<Note>,
+) -> QpResult {
+    let target = settings.kkt_target;
+    let mut kkt = kkt::residuals_with_friction(qp, &r.x, &r.lambda, &r.lambda_t);
     // Motions free on the rows carrying a force (docs/methods.md §1.7): the
     // move keeps Cx, those rows (and their slip) and dᵀx. It is taken only
     // from a certified answer and only if it keeps the certificate (a gap
     // it opens under a small λ).
-    if kkt.within(CERTIFIED) {
+    if kkt.within(target) {
         let t_settle = Instant::now();
         let mut settled = r.x.clone();
-        let rolled = recession::settle_on_active(qp, &mut settled, &lambda, &free);
+        let rolled = recession::settle_on_active(qp, &mut settled, &r.lambda, free);
         log::debug!(
             "driver: {rolled} motions free on the active rows in {:.3} s",
             t_settle.elapsed().as_secs_f64()
         );
         if rolled > 0 {
-            let moved = kkt::residuals_with_friction(qp, &settled, &lambda, &lambda_t);
-            if moved.within(CERTIFIED) {
+            let moved = kkt::residuals_with_friction(qp, &settled, &r.lambda, &r.lambda_t);
+            if moved.within(target) {
                 r.x = settled;
                 kkt = moved;
-                notes.push(format!(
-                    "the solution is unique only up to {} that the rows carrying a force leave free (the others stop {} at their gaps); the answer returned has the least component along {} that they allow (docs/methods.md §1.7)",
-                    motions(rolled),
-                    them(rolled),
-                    them(rolled),
-                ));
+                notes.push(Note::SettledOnActive { count: rolled });
             } else {
                 // The move would lose the certificate: the method's answer
                 // is exact only at the scale of its own rigid motion, not at
                 // that of the deformation. It is still a solution; say that
                 // it is one point of the set, not the least.
-                notes.push(format!(
-                    "the solution is unique only up to {} that the rows carrying a force leave free (the others stop {} at their gaps); the answer returned is one of those solutions, not the one with the least component along {}: moved there it would lose its certificate (its gaps are exact at the scale of that motion, not of the deformation; ssn or asm return the least one, docs/methods.md §1.7)",
-                    motions(rolled),
-                    them(rolled),
-                    them(rolled),
-                ));
+                notes.push(Note::NotSettled { count: rolled });
             }
         }
     }
-    let energy = qp.energy_with_friction(&r.x, &lambda);
+    let energy = qp.energy_with_friction(&r.x, &r.lambda);
     if !energy.is_finite() {
         kkt = Kkt::not_finite();
     }
     // A method that stalls above its own tolerance may still have an answer
     // the certificate proves (the dual family on a body free to roll): the
     // certificate decides, and the note says how the method stopped.
-    if let Status::Failed(why) = &r.status {
-        if super::executor::stagnated(&r.status) && kkt.within(CERTIFIED) {
-            notes.push(format!(
-                "{name} stopped on {why}; its answer meets the KKT certificate (≤ {CERTIFIED:e}, docs/methods.md §8.4), so it counts as converged"
-            ));
+    if let Status::Failed(failure @ Failure::Stagnation { .. }) = &r.status {
+        if kkt.within(target) {
+            notes.push(Note::StalledButCertified {
+                method: id,
+                failure: failure.clone(),
+                target,
+            });
             r.status = Status::Converged;
         }
     }
-    Ok(QpResult {
-        x: r.x,
-        lambda,
-        lambda_t,
-        active: r.active,
-        status: r.status,
-        iterations: r.iterations,
-        inner_iterations: r.inner_iterations,
-        log: r.log,
-        timings: r.timings,
+    QpResult {
+        solution: r,
         kkt,
         energy,
         notes,
-    })
+    }
 }
 
 /// One call of `method` with its own context; the phases it timed through
@@ -399,17 +516,19 @@ fn solve_once(
 /// A result that carries a verified recession direction and no solution.
 fn unbounded_result(qp: &QpProblem, direction: Vec<f64>) -> QpResult {
     QpResult {
-        x: vec![0.0; qp.n()],
-        lambda: vec![0.0; qp.m()],
-        active: vec![false; qp.m()],
-        status: Status::Unbounded { direction },
-        iterations: 0,
-        inner_iterations: 0,
-        log: vec![],
-        timings: vec![],
+        solution: Output {
+            x: vec![0.0; qp.n()],
+            lambda: vec![0.0; qp.m()],
+            lambda_t: vec![],
+            active: vec![false; qp.m()],
+            status: Status::Unbounded { direction },
+            iterations: 0,
+            inner_iterations: 0,
+            log: vec![],
+            timings: vec![],
+        },
         kkt: Kkt::not_finite(),
         energy: f64::NEG_INFINITY,
-        lambda_t: vec![],
         notes: vec![],
     }
 }
@@ -531,7 +650,13 @@ mod tests {
     #[test]
     fn the_callers_observer_sees_every_iteration() {
         let qp = two_blocks(8, 4, true);
-        for name in ["cgc", "asm", "mprgp", "ssn", "penalty"] {
+        for name in [
+            MethodId::Cgc,
+            MethodId::Asm,
+            MethodId::Mprgp,
+            MethodId::Ssn,
+            MethodId::Penalty,
+        ] {
             let count = Rc::new(RefCell::new(Count::default()));
             let opts = SolveOptions {
                 observers: vec![count.clone()],

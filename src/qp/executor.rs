@@ -2,7 +2,7 @@
 //! implements one iteration ([`Iterative::step`]); the [`Executor`] owns the
 //! MAXIT test, NaN/stagnation guards, the iteration log and progress output.
 
-use crate::qp::{IterRecord, Status};
+use crate::qp::{Failure, IterRecord, Status};
 use std::time::{Duration, Instant};
 
 /// What one iteration reports.
@@ -74,15 +74,6 @@ impl Observer for Progress {
 /// methods here (CGC faces, MPRGP expansions), far shorter than MAXIT.
 pub const STALL_WINDOW: usize = 10_000;
 
-/// The start of the message of a run stopped by [`STALL_WINDOW`].
-const STAGNATION: &str = "stagnation";
-
-/// Whether `status` is the executor's stagnation stop (the driver lets the
-/// certificate judge such an answer, docs/methods.md §8.4).
-pub fn stagnated(status: &Status) -> bool {
-    matches!(status, Status::Failed(m) if m.starts_with(STAGNATION))
-}
-
 pub struct Executor {
     pub max_iter: usize,
     pub observers: Vec<Box<dyn Observer>>,
@@ -121,7 +112,7 @@ impl Executor {
             if let Some(d) = self.deadline {
                 let now = Instant::now();
                 if now >= d {
-                    break Status::Failed(format!("time limit reached after {n} iterations"));
+                    break Status::Failed(Failure::TimeLimit { iterations: n });
                 }
             }
             n += 1;
@@ -133,7 +124,7 @@ impl Executor {
             rec.iter = n;
             if !rec.residual.is_finite() && done.is_none() {
                 self.push(rec);
-                break Status::Failed(format!("NaN or Inf in iteration {n}"));
+                break Status::Failed(Failure::NotFinite { iteration: n });
             }
             if rec.residual < best * (1.0 - 1e-9) {
                 best = rec.residual;
@@ -148,10 +139,12 @@ impl Executor {
                 break s;
             }
             if n - best_at >= STALL_WINDOW {
-                break Status::Failed(format!(
-                    "{STAGNATION}: the residual ({res:.3e}) has not gone below its best {best:.3e} \
-                     (iteration {best_at}) in {STALL_WINDOW} iterations"
-                ));
+                break Status::Failed(Failure::Stagnation {
+                    residual: res,
+                    best,
+                    best_at,
+                    window: STALL_WINDOW,
+                });
             }
         };
         for o in self.observers.iter_mut() {
@@ -201,7 +194,7 @@ mod tests {
     fn stagnation_and_nan_are_failures_maxit_is_maxit() {
         let (s, n) = Executor::new(1_000_000, None).run(&mut Flat(0));
         assert!(
-            matches!(&s, Status::Failed(m) if m.contains("stagnation")),
+            matches!(&s, Status::Failed(Failure::Stagnation { best_at: 2, .. })),
             "{s:?}"
         );
         // The best (1.0) is reached at iteration 2.
@@ -210,7 +203,7 @@ mod tests {
         assert!(matches!(s, Status::MaxIter) && n == 100, "{s:?}");
         let (s, n) = Executor::new(100, None).run(&mut Nan);
         assert!(
-            matches!(&s, Status::Failed(m) if m.contains("NaN")) && n == 1,
+            matches!(&s, Status::Failed(Failure::NotFinite { iteration: 1 })) && n == 1,
             "{s:?}"
         );
     }

@@ -224,6 +224,41 @@ fn ratio(num: f64, den: f64) -> f64 {
 }
 
 impl Kkt {
+    /// Every residual by its name in the JSON (`kkt.NAME`) and the
+    /// checkpoint (`kkt_NAME` attributes, docs/problem-format.md §6).
+    pub fn named(&self) -> [(&'static str, f64); 9] {
+        [
+            ("primal", self.primal),
+            ("dual", self.dual),
+            ("complementarity", self.complementarity),
+            ("stationarity", self.stationarity),
+            ("contact_balance", self.contact_balance),
+            ("rigid_balance", self.rigid_balance),
+            ("friction", self.friction),
+            ("stationarity_floor", self.stationarity_floor),
+            ("balance_floor", self.balance_floor),
+        ]
+    }
+
+    /// The residual named `name` ([`Kkt::named`]) set to `v`; false for
+    /// an unknown name.
+    pub fn set(&mut self, name: &str, v: f64) -> bool {
+        let slot = match name {
+            "primal" => &mut self.primal,
+            "dual" => &mut self.dual,
+            "complementarity" => &mut self.complementarity,
+            "stationarity" => &mut self.stationarity,
+            "contact_balance" => &mut self.contact_balance,
+            "rigid_balance" => &mut self.rigid_balance,
+            "friction" => &mut self.friction,
+            "stationarity_floor" => &mut self.stationarity_floor,
+            "balance_floor" => &mut self.balance_floor,
+            _ => return false,
+        };
+        *slot = v;
+        true
+    }
+
     /// Every residual infinite: NaN or Inf in the answer.
     pub fn not_finite() -> Kkt {
         Kkt {

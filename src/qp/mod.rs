@@ -1,4 +1,4 @@
-//! The quadratic programme of frictionless contact and the methods that solve it.
+//! The quadratic programme of contact (with or without friction) and the methods that solve it.
 //!
 //! Names (docs/methods.md §0, §2.8), used everywhere in this module tree:
 //!
@@ -14,13 +14,14 @@
 //!
 //! This layer knows nothing of meshes: `fem` builds a [`QpProblem`], every method
 //! returns an [`Output`] that the [`driver`] certifies into a [`QpResult`]. A
-//! method is one type implementing [`Method`] and one line in [`registry`].
+//! method is one type implementing [`Method`], named by one [`MethodId`].
 
 pub mod active_set;
 pub mod driver;
 pub mod dual;
 pub mod executor;
 pub mod kkt;
+pub mod method;
 pub mod precond;
 pub mod primal;
 pub mod recession;
@@ -33,7 +34,8 @@ pub(crate) mod testing;
 mod tests_methods;
 
 pub use crate::linalg::sparse::{self, Csr};
-pub use driver::{Context, Method, Output};
+pub use driver::{Context, Note, Output};
+pub use method::{Capabilities, FallbackCause, Method, MethodChoice, MethodId};
 pub use settings::{Settings, SolverSection};
 
 /// min ½xᵀCx − xᵀd subject to Ax ≤ g  (methods.md §2.8 with b = g).
@@ -213,8 +215,83 @@ pub enum Status {
     Unbounded {
         direction: Vec<f64>,
     },
-    /// NaN/Inf, stagnation or a failed factorization.
-    Failed(String),
+    /// The method stopped without an answer it stands by.
+    Failed(Failure),
+}
+
+/// Why a method stopped without converging. The driver's rules match on
+/// the variant (a stagnated answer is judged by the certificate, a cycling
+/// one falls back, docs/methods.md §8); the text is made only at the edge
+/// ([`std::fmt::Display`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Failure {
+    /// The residual has not gone below its best (`best`, at iteration
+    /// `best_at`) in `window` iterations; the last was `residual`
+    /// ([`executor::STALL_WINDOW`]).
+    Stagnation {
+        residual: f64,
+        best: f64,
+        best_at: usize,
+        window: usize,
+    },
+    /// A NaN or Inf residual in iteration `iteration`.
+    NotFinite { iteration: usize },
+    /// The caller's time budget ran out after `iterations` iterations
+    /// (`compare --time-limit`; never a decision of a method).
+    TimeLimit { iterations: usize },
+    /// The working sets cycle: no KKT residual below `best` in `steps`
+    /// Newton steps (frictional ssn, docs/methods.md §9.2).
+    Cycling { best: f64, steps: usize },
+    /// The Coulomb fixed point s = μλ_n did not settle in `outer` updates
+    /// (last relative change `change`, docs/methods.md §9.1).
+    CoulombUnsettled { outer: usize, change: f64 },
+    /// The method's own check of its settled answer missed the
+    /// certificate's target.
+    Uncertified { residual: f64, target: f64 },
+    /// An unbounded direction that fails the certificate, where no other
+    /// method can take over (`why`: the failed test, docs/methods.md §8.2).
+    RefusedClaim { method: MethodId, why: String },
+    /// The method cannot go on: a singular system, a failed factor, a
+    /// breakdown; the text says what, in the method's words.
+    Breakdown(String),
+}
+
+impl std::fmt::Display for Failure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Failure::Stagnation {
+                residual,
+                best,
+                best_at,
+                window,
+            } => write!(
+                f,
+                "stagnation: the residual ({residual:.3e}) has not gone below its best {best:.3e} \
+                 (iteration {best_at}) in {window} iterations"
+            ),
+            Failure::NotFinite { iteration } => write!(f, "NaN or Inf in iteration {iteration}"),
+            Failure::TimeLimit { iterations } => {
+                write!(f, "time limit reached after {iterations} iterations")
+            }
+            Failure::Cycling { best, steps } => write!(
+                f,
+                "cycling: the working sets of the Tresca problem cycle: no KKT residual below {best:.3e} in {steps} Newton steps"
+            ),
+            Failure::CoulombUnsettled { outer, change } => write!(
+                f,
+                "the Coulomb fixed point (s = μλ_n) did not settle in {outer} updates (last change {change:.3e} of max s)"
+            ),
+            Failure::Uncertified { residual, target } => write!(
+                f,
+                "KKT residual {residual:.2e} after refinement (target {target:e})"
+            ),
+            Failure::RefusedClaim { method, why } => write!(
+                f,
+                "{method} reported an unbounded direction that fails the certificate ({why})"
+            ),
+            Failure::Breakdown(m) => f.write_str(m),
+        }
+    }
 }
 
 impl Status {
@@ -279,45 +356,29 @@ fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
 
-/// What the driver returns: a method's [`Output`] (the same fields) with
-/// the certificate, the energy and the driver's notes.
+/// What the driver returns: a method's [`Output`] (its solution, read
+/// through `Deref`: `r.x`, `r.lambda`, …) with the certificate, the energy
+/// and the driver's notes.
 #[derive(Debug, Clone)]
 pub struct QpResult {
-    pub x: Vec<f64>,
-    pub lambda: Vec<f64>,
-    pub active: Vec<bool>,
-    pub status: Status,
-    /// Outer iterations (faces, active-set changes, Uzawa steps, …).
-    pub iterations: usize,
-    /// Inner iterations (CG steps, inner solves).
-    pub inner_iterations: usize,
-    pub log: Vec<IterRecord>,
-    /// Wall time per phase in seconds, e.g. ("factor", 0.1), ("iterate", 0.5).
-    pub timings: Vec<(String, f64)>,
+    pub solution: Output,
     pub kkt: Kkt,
     pub energy: f64,
-    /// The tangential forces λ_t, one per contact row (empty without friction).
-    pub lambda_t: Vec<f64>,
     /// What the driver did beyond the method: a fallback, a refused claim
-    /// (registry::solve). Printed as warnings and written to the JSON.
-    pub notes: Vec<String>,
+    /// ([`driver::run`]). Printed as warnings and written to the JSON.
+    pub notes: Vec<driver::Note>,
 }
 
-impl From<QpResult> for Output {
-    /// The solution without its certificate (tests compare both kinds).
-    fn from(r: QpResult) -> Output {
-        let mut lambda = r.lambda;
-        lambda.extend(r.lambda_t);
-        Output {
-            x: r.x,
-            lambda,
-            active: r.active,
-            status: r.status,
-            iterations: r.iterations,
-            inner_iterations: r.inner_iterations,
-            log: r.log,
-            timings: r.timings,
-        }
+impl std::ops::Deref for QpResult {
+    type Target = Output;
+    fn deref(&self) -> &Output {
+        &self.solution
+    }
+}
+
+impl std::ops::DerefMut for QpResult {
+    fn deref_mut(&mut self) -> &mut Output {
+        &mut self.solution
     }
 }
 
@@ -348,7 +409,7 @@ pub struct SolveOptions {
     pub progress: bool,
     /// Prefix of the progress line (e.g. the variant in `compare`).
     pub label: Option<String>,
-    /// Stop with `Status::Failed("time limit …")` after this instant
+    /// Stop with [`Failure::TimeLimit`] after this instant
     /// (`compare --time-limit`; a budget the user sets, never a decision
     /// of a method).
     pub deadline: Option<std::time::Instant>,

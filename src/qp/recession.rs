@@ -648,7 +648,7 @@ mod tests {
             assert!(
                 r.notes
                     .iter()
-                    .any(|n| n.contains("unique only up to 1 rigid motion")),
+                    .any(|n| n.to_string().contains("unique only up to 1 rigid motion")),
                 "{method}: {:?}",
                 r.notes
             );

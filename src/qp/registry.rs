@@ -1,70 +1,76 @@
-//! The list of methods. Adding a method = one type implementing
-//! [`Method`] in its family's folder + one line here.
+//! The list of methods and the entry points that solve by method. Adding a
+//! method = one type implementing [`Method`] in its family's folder + one
+//! variant of [`MethodId`].
 
-use super::driver::{self, Method};
-use super::{Kkt, QpError, QpProblem, QpResult, SolveOptions};
+use super::driver;
+use super::method::{Method, MethodId};
+use super::{QpError, QpProblem, QpResult, SolveOptions};
 use crate::linalg::cholesky::Workspace;
 
-pub use super::driver::{check_problem, check_warm_start};
+pub use super::driver::{certified, check_problem, check_warm_start};
 
-/// Every method, in the order of `signorini methods` and `compare`.
-pub const METHODS: &[&dyn Method] = &[
-    &super::primal::cgc::CgcMethod,
-    &super::primal::preelim::PreelimMethod,
-    &super::primal::penalty::PenaltyMethod,
-    &super::dual::uzawa::UzawaMethod,
-    &super::dual::polyak::DualMethod,
-    &super::active_set::AsmMethod,
-    &super::active_set::cgh::AsmCghMethod,
-    &super::dual::mprgp::MprgpMethod,
-    &super::ssn::SsnMethod,
-];
-
+/// The method named `name` (a CLI name), if any.
 pub fn find(name: &str) -> Option<&'static dyn Method> {
-    METHODS.iter().copied().find(|m| m.name() == name)
+    MethodId::parse(name).map(MethodId::method)
 }
 
+/// Every method's name, in the order of `signorini methods` and `compare`.
 pub fn names() -> Vec<&'static str> {
-    METHODS.iter().map(|m| m.name()).collect()
+    MethodId::ALL.map(MethodId::name).to_vec()
 }
 
-/// Whether a result of method `name` with residuals `kkt` is certified at
-/// `target`. Penalty solves its own penalised problem: unless `strict`, it is
-/// certified by the stationarity of that problem (its λ = (Ax − g)⁺/ε_p), and
-/// its O(ε_p) violation of Ax ≤ g is reported, not certified.
-pub fn certified(name: &str, kkt: &Kkt, target: f64, strict: bool) -> bool {
-    if name == "penalty" && !strict {
-        let own = Kkt {
-            primal: 0.0,
-            dual: kkt.dual,
-            complementarity: 0.0,
-            ..*kkt
-        };
-        // NaN anywhere still fails.
-        return own.within(target) && !kkt.max().is_nan() && kkt.max().is_finite();
+/// A method given by identity or by its CLI name (a library user's
+/// configuration, a test's table); a name is parsed once, here.
+pub trait MethodRef {
+    fn to_id(&self) -> Result<MethodId, QpError>;
+}
+
+impl MethodRef for MethodId {
+    fn to_id(&self) -> Result<MethodId, QpError> {
+        Ok(*self)
     }
-    kkt.within(target)
 }
 
-/// Solve `qp` by method `name` with a fresh [`Workspace`] of the settings'
+impl MethodRef for str {
+    fn to_id(&self) -> Result<MethodId, QpError> {
+        MethodId::parse(self).ok_or_else(|| {
+            QpError::BadParameter(format!(
+                "unknown method \"{self}\"; known: {}",
+                MethodId::known()
+            ))
+        })
+    }
+}
+
+impl MethodRef for String {
+    fn to_id(&self) -> Result<MethodId, QpError> {
+        self.as_str().to_id()
+    }
+}
+
+impl<T: MethodRef + ?Sized> MethodRef for &T {
+    fn to_id(&self) -> Result<MethodId, QpError> {
+        (**self).to_id()
+    }
+}
+
+/// Solve `qp` by `method` with a fresh [`Workspace`] of the settings'
 /// ordering ([`driver::run`]).
-pub fn solve(name: &str, qp: &QpProblem, opts: &SolveOptions) -> Result<QpResult, QpError> {
-    solve_in(name, qp, opts, &opts.settings.workspace())
+pub fn solve(
+    method: impl MethodRef,
+    qp: &QpProblem,
+    opts: &SolveOptions,
+) -> Result<QpResult, QpError> {
+    solve_in(method, qp, opts, &opts.settings.workspace())
 }
 
-/// Solve `qp` by method `name`, reusing factorizations kept in `ws`
-/// (load steps: C is the same in every step).
+/// Solve `qp` by `method`, reusing factorizations kept in `ws` (load steps:
+/// C is the same in every step).
 pub fn solve_in(
-    name: &str,
+    method: impl MethodRef,
     qp: &QpProblem,
     opts: &SolveOptions,
     ws: &Workspace,
 ) -> Result<QpResult, QpError> {
-    let m = find(name).ok_or_else(|| {
-        QpError::BadParameter(format!(
-            "unknown method \"{name}\"; known: {}",
-            names().join(", ")
-        ))
-    })?;
-    driver::run(m, qp, opts, ws)
+    driver::run(method.to_id()?.method(), qp, opts, ws)
 }

@@ -11,6 +11,7 @@
 //! All of them are checked whatever the method, so a bad value in the file is
 //! reported even when another method is chosen on the command line.
 
+use super::method::MethodId;
 use super::precond::PrecondKind;
 use crate::linalg::ordering::Ordering;
 
@@ -20,7 +21,8 @@ use crate::linalg::ordering::Ordering;
 #[derive(Debug, Clone, Default, PartialEq, serde::Deserialize, clap::Args)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSection {
-    /// QP method (see `signorini methods`); overrides [solver] method.
+    /// QP method: auto (default: ssn for every problem) or a name from
+    /// `signorini methods`; overrides [solver] method.
     #[arg(long)]
     pub method: Option<String>,
     /// none | jacobi | ssor | ic0 | mic0 | cholesky; overrides [solver] preconditioner.
@@ -63,9 +65,32 @@ pub struct SolverSection {
     /// machine shared with other jobs.
     #[arg(long)]
     pub memory_limit: Option<String>,
+    /// Largest KKT residual accepted as a certificate (default 1e-6,
+    /// docs/methods.md §8.4): the driver's rules and the run's verdict.
+    #[arg(long)]
+    pub kkt_target: Option<f64>,
 }
 
 impl SolverSection {
+    /// The method-specific keys set here that `method` does not read (a
+    /// user who set `rho` for uzawa and then chose ssn is told so).
+    pub fn unused_by(&self, method: MethodId) -> Vec<&'static str> {
+        use MethodId::*;
+        let keys: [(&str, bool, &[MethodId]); 7] = [
+            ("preconditioner", self.preconditioner.is_some(), &[Cgc]),
+            ("omega", self.omega.is_some(), &[Cgc, Penalty]),
+            ("release", self.release.is_some(), &[Cgc, Preelim, Dual]),
+            ("penalty", self.penalty.is_some(), &[Penalty]),
+            ("rho", self.rho.is_some(), &[Uzawa]),
+            ("accelerate", self.accelerate.is_some(), &[Uzawa, Penalty]),
+            ("ssn_path", self.ssn_path.is_some(), &[Ssn]),
+        ];
+        keys.iter()
+            .filter(|(_, set, users)| *set && !users.contains(&method))
+            .map(|(k, _, _)| *k)
+            .collect()
+    }
+
     /// `self` with every entry that `over` sets replaced (the command line
     /// over the file).
     pub fn overlay(&self, over: &SolverSection) -> SolverSection {
@@ -85,12 +110,14 @@ impl SolverSection {
             ssn_path: pick(&self.ssn_path, &over.ssn_path),
             ordering: pick(&self.ordering, &over.ordering),
             memory_limit: pick(&self.memory_limit, &over.memory_limit),
+            kkt_target: pick(&self.kkt_target, &over.kkt_target),
         }
     }
 }
 
-/// Default method when neither the file nor the command line names one.
-pub const DEFAULT_METHOD: &str = "cgc";
+/// The certificate's target when none is set: the largest relative KKT
+/// residual an answer may have (docs/methods.md §8.4).
+pub const DEFAULT_KKT_TARGET: f64 = 1e-6;
 
 /// The validated settings of every method (what [`Settings::from_section`]
 /// makes of a [`SolverSection`]).
@@ -106,6 +133,9 @@ pub struct Settings {
     /// `memory_limit` in bytes: the caller's workspace refuses a larger
     /// numeric factor ([`Settings::workspace`]).
     pub memory_limit: Option<u64>,
+    /// The certificate's target: every rule that judges an answer (the
+    /// driver's, the methods' own checks, the run's verdict) reads it.
+    pub kkt_target: f64,
     pub cgc: CgcSettings,
     pub penalty: PenaltySettings,
     pub dual: DualSettings,
@@ -120,6 +150,7 @@ impl Default for Settings {
             max_iter: 100_000,
             ordering: Ordering::Amd,
             memory_limit: None,
+            kkt_target: DEFAULT_KKT_TARGET,
             cgc: CgcSettings::default(),
             penalty: PenaltySettings::default(),
             dual: DualSettings::default(),
@@ -152,6 +183,7 @@ impl Settings {
                 })?,
             },
             memory_limit: s.memory_limit.as_deref().map(parse_bytes).transpose()?,
+            kkt_target: s.kkt_target.unwrap_or(d.kkt_target),
             cgc: CgcSettings::from_section(s)?,
             penalty: PenaltySettings::from_section(s)?,
             dual: DualSettings::from_section(s)?,
@@ -172,6 +204,12 @@ impl Settings {
         if self.max_iter == 0 {
             return Err("max_iter must be positive".into());
         }
+        let k = self.kkt_target;
+        if !(k > 0.0 && k.is_finite()) {
+            return Err(format!(
+                "kkt_target = {k}: the KKT target must be a positive number"
+            ));
+        }
         self.cgc.validate()?;
         self.penalty.validate()?;
         self.uzawa.validate()
@@ -179,6 +217,20 @@ impl Settings {
 }
 
 impl Settings {
+    /// Why `method` factors no matrix at these settings, for the report's
+    /// ordering line (None: its factors use [`Settings::ordering`]).
+    pub fn factor_free(&self, method: MethodId) -> Option<&'static str> {
+        match method.capabilities().factor {
+            crate::qp::method::Factor::Never => Some("the method factors nothing"),
+            crate::qp::method::Factor::BySettings
+                if method == MethodId::Ssn && self.ssn.path == SsnPath::Iterative =>
+            {
+                Some("ssn_path = iterative")
+            }
+            _ => None,
+        }
+    }
+
     /// The workspace of a solve: the factors' ordering and memory limit.
     pub fn workspace(&self) -> crate::linalg::cholesky::Workspace {
         let ws = crate::linalg::cholesky::Workspace::with_ordering(self.ordering);
@@ -192,17 +244,19 @@ impl Settings {
 /// `memory_limit = "8 GiB"`: a positive number and a binary unit (B, KiB,
 /// MiB, GiB, TiB; no unit = bytes), as a whole number of bytes.
 fn parse_bytes(text: &str) -> Result<u64, String> {
+    const UNITS: [(&str, f64); 5] = [
+        ("TiB", 1099511627776.0),
+        ("GiB", 1073741824.0),
+        ("MiB", 1048576.0),
+        ("KiB", 1024.0),
+        ("B", 1.0),
+    ];
+    // The unit is a suffix, so the number may have an exponent ("1e3 KiB").
     let t = text.trim();
-    let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
-    let (num, unit) = (t[..split].trim(), t[split..].trim());
-    let scale: f64 = match unit {
-        "" | "B" => 1.0,
-        "KiB" => 1024.0,
-        "MiB" => 1024.0 * 1024.0,
-        "GiB" => 1024.0 * 1024.0 * 1024.0,
-        "TiB" => 1024.0 * 1024.0 * 1024.0 * 1024.0,
-        _ => f64::NAN,
-    };
+    let (num, scale) = UNITS
+        .iter()
+        .find_map(|(u, k)| t.strip_suffix(u).map(|n| (n.trim(), *k)))
+        .unwrap_or((t, 1.0));
     let v: f64 = num.parse().unwrap_or(f64::NAN) * scale;
     if v.is_finite() && v >= 1.0 && v < 2f64.powi(63) {
         Ok(v as u64)
@@ -233,7 +287,9 @@ fn release(s: &SolverSection) -> Result<bool, String> {
 
 fn check_positive(key: &str, v: Option<f64>) -> Result<(), String> {
     match v {
-        Some(p) if p.is_nan() || p <= 0.0 => Err(format!("{key} = {p} must be positive")),
+        Some(p) if !(p > 0.0 && p.is_finite()) => {
+            Err(format!("{key} = {p} must be a positive finite number"))
+        }
         _ => Ok(()),
     }
 }
@@ -458,6 +514,22 @@ mod tests {
                 ..Default::default()
             },
             SolverSection {
+                penalty: Some(f64::INFINITY),
+                ..Default::default()
+            },
+            SolverSection {
+                rho: Some(f64::INFINITY),
+                ..Default::default()
+            },
+            SolverSection {
+                kkt_target: Some(0.0),
+                ..Default::default()
+            },
+            SolverSection {
+                kkt_target: Some(f64::NAN),
+                ..Default::default()
+            },
+            SolverSection {
                 ssn_path: Some("fast".into()),
                 ..Default::default()
             },
@@ -478,6 +550,25 @@ mod tests {
     }
 
     #[test]
+    fn keys_of_another_method_are_named() {
+        let s = SolverSection {
+            rho: Some(1.0),
+            ssn_path: Some("schur".into()),
+            preconditioner: Some("ic0".into()),
+            ..Default::default()
+        };
+        assert_eq!(s.unused_by(MethodId::Ssn), vec!["preconditioner", "rho"]);
+        assert_eq!(
+            s.unused_by(MethodId::Uzawa),
+            vec!["preconditioner", "ssn_path"]
+        );
+        assert_eq!(s.unused_by(MethodId::Cgc), vec!["rho", "ssn_path"]);
+        assert!(SolverSection::default()
+            .unused_by(MethodId::Penalty)
+            .is_empty());
+    }
+
+    #[test]
     fn the_section_refuses_unknown_keys() {
         let e = toml::from_str::<SolverSection>("tol = 1e-8\ntolerance = 1e-8\n").unwrap_err();
         assert!(e.to_string().contains("tolerance"), "{e}");
@@ -493,6 +584,8 @@ mod tests {
             ("1.5 KiB", 1536),
             ("1000", 1000),
             ("2 TiB", 2 << 40),
+            ("1e3 KiB", 1_024_000),
+            ("2E1MiB", 20 << 20),
         ] {
             let s: SolverSection = toml::from_str(&format!("memory_limit = \"{text}\"")).unwrap();
             let t = Settings::from_section(&s).unwrap();

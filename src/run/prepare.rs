@@ -11,7 +11,8 @@ use crate::linalg::cholesky::Workspace;
 use crate::mesh::{self, Mesh};
 use crate::post;
 use crate::problem::Problem;
-use crate::qp::{registry, settings, QpResult, Settings, SolveOptions, SolverSection, Status};
+use crate::qp::registry::{self, MethodRef};
+use crate::qp::{MethodChoice, MethodId, QpResult, Settings, SolveOptions, SolverSection, Status};
 use std::path::Path;
 use std::time::Instant;
 
@@ -230,28 +231,33 @@ pub fn reduce(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
 pub fn options(
     problem: &Problem,
     flags: &SolverSection,
-) -> Result<(String, SolveOptions), RunError> {
+) -> Result<(MethodId, SolveOptions), RunError> {
     let bad = |msg: String| RunError::Solver {
         path: problem.path.clone(),
         msg,
     };
     let s = problem.file.solver.overlay(flags);
-    let method = s
-        .method
-        .clone()
-        .unwrap_or_else(|| settings::DEFAULT_METHOD.into());
-    if registry::find(&method).is_none() {
-        return Err(bad(format!(
-            "unknown method \"{method}\"; known: {}",
-            registry::names().join(", ")
-        )));
+    let method = match s.method.as_deref() {
+        None => MethodChoice::Auto,
+        Some(name) => MethodChoice::parse(name).map_err(bad)?,
     }
+    .resolve();
     let settings = Settings::from_section(&s).map_err(bad)?;
+    for key in s.unused_by(method) {
+        log::warn!(
+            "{}: [solver] {key} does not apply to method {method}; it is ignored",
+            problem.path.display()
+        );
+    }
     Ok((method, SolveOptions::new(settings)))
 }
 
 /// Run the method; an unbounded problem is bad input naming the bodies.
-pub fn solve(prep: &Prepared, method: &str, opts: &SolveOptions) -> Result<QpResult, RunError> {
+pub fn solve(
+    prep: &Prepared,
+    method: impl MethodRef,
+    opts: &SolveOptions,
+) -> Result<QpResult, RunError> {
     solve_model(prep, &prep.model, method, opts)
 }
 
@@ -259,7 +265,7 @@ pub fn solve(prep: &Prepared, method: &str, opts: &SolveOptions) -> Result<QpRes
 pub fn solve_model(
     prep: &Prepared,
     model: &Model,
-    method: &str,
+    method: impl MethodRef,
     opts: &SolveOptions,
 ) -> Result<QpResult, RunError> {
     solve_model_in(prep, model, method, opts, &opts.settings.workspace())
@@ -270,7 +276,7 @@ pub fn solve_model(
 pub fn solve_model_in(
     prep: &Prepared,
     model: &Model,
-    method: &str,
+    method: impl MethodRef,
     opts: &SolveOptions,
     ws: &Workspace,
 ) -> Result<QpResult, RunError> {
@@ -278,6 +284,7 @@ pub fn solve_model_in(
         path: prep.problem.path.clone(),
         msg,
     };
+    let method = method.to_id().map_err(|e| bad(e.to_string()))?;
     let res = registry::solve_in(method, &model.qp, opts, ws)
         .map_err(|e| bad(format!("{method}: {e}")))?;
     if let Status::Unbounded { direction } = &res.status {

@@ -14,7 +14,7 @@ use super::RunError;
 use crate::fem::Model;
 use crate::io::{Change, StepOutput};
 use crate::post::{self, forces::Forces};
-use crate::qp::{registry, QpResult, SolveOptions};
+use crate::qp::{registry, MethodId, QpResult, SolveOptions};
 use std::ops::Range;
 use std::time::Instant;
 
@@ -33,7 +33,7 @@ pub enum Verdict {
 }
 
 impl Verdict {
-    pub fn of(method: &str, res: &QpResult, kkt_target: f64, strict: bool) -> Verdict {
+    pub fn of(method: MethodId, res: &QpResult, kkt_target: f64, strict: bool) -> Verdict {
         if !res.status.converged() {
             Verdict::NotConverged
         } else if !registry::certified(method, &res.kkt, kkt_target, strict) {
@@ -60,7 +60,7 @@ pub struct Step<'a> {
     pub multi: bool,
     /// Pseudo-time of the step.
     pub time: f64,
-    pub method: &'a str,
+    pub method: MethodId,
     pub kkt_target: f64,
     pub model: &'a Model,
     pub result: &'a QpResult,
@@ -103,9 +103,8 @@ pub struct Outcome {
 /// A solve of the load steps of a prepared problem by one method.
 pub struct Run<'a> {
     prep: &'a Prepared,
-    method: &'a str,
+    method: MethodId,
     opts: &'a SolveOptions,
-    kkt_target: f64,
     strict: bool,
     max_steps: Option<usize>,
     restart: Option<Restart>,
@@ -114,13 +113,12 @@ pub struct Run<'a> {
 
 impl<'a> Run<'a> {
     /// Every load step of `prep` by `method` (see [`super::options`]),
-    /// certified against the default KKT target 10⁻⁶.
-    pub fn new(prep: &'a Prepared, method: &'a str, opts: &'a SolveOptions) -> Self {
+    /// certified against the settings' KKT target (`opts.settings.kkt_target`).
+    pub fn new(prep: &'a Prepared, method: MethodId, opts: &'a SolveOptions) -> Self {
         Run {
             prep,
             method,
             opts,
-            kkt_target: 1e-6,
             strict: false,
             max_steps: None,
             restart: None,
@@ -128,10 +126,9 @@ impl<'a> Run<'a> {
         }
     }
 
-    /// The largest KKT residual accepted; `strict` certifies penalty against
-    /// the unpenalised problem.
-    pub fn certify(mut self, kkt_target: f64, strict: bool) -> Self {
-        self.kkt_target = kkt_target;
+    /// `strict` certifies a penalised method against the unpenalised
+    /// problem ([`crate::qp::method::Certificate::Penalised`]).
+    pub fn strict(mut self, strict: bool) -> Self {
         self.strict = strict;
         self
     }
@@ -170,12 +167,8 @@ impl<'a> Run<'a> {
         observers: &mut [&mut dyn StepObserver],
         mut tx: Option<&mut Transaction>,
     ) -> Result<Outcome, RunError> {
-        if !(self.kkt_target > 0.0 && self.kkt_target.is_finite()) {
-            return Err(RunError::Settings(format!(
-                "kkt_target = {}: the KKT target must be a positive number",
-                self.kkt_target
-            )));
-        }
+        self.opts.settings.validate().map_err(RunError::Settings)?;
+        let kkt_target = self.opts.settings.kkt_target;
         if self.max_steps == Some(0) {
             return Err(RunError::Settings(
                 "max_steps = 0: load steps count from 1".into(),
@@ -256,7 +249,7 @@ impl<'a> Run<'a> {
                 s + 1,
                 t_w.elapsed().as_secs_f64()
             );
-            output.info.method = method.to_string();
+            output.info.method = method.name().to_string();
             output.info.preconditioner = preconditioner_label(method, self.opts);
             output.info.time_assemble = t_assemble;
             output.info.time_solve = t_solve;
@@ -269,14 +262,14 @@ impl<'a> Run<'a> {
                     output.change = Some(Change::between(&output, r, k));
                 }
             }
-            let verdict = Verdict::of(method, &res, self.kkt_target, self.strict);
+            let verdict = Verdict::of(method, &res, kkt_target, self.strict);
             let step = Step {
                 index: s,
                 nsteps,
                 multi,
                 time: file.step_time(s),
                 method,
-                kkt_target: self.kkt_target,
+                kkt_target,
                 model: model_ref,
                 result: &res,
                 output: &output,
@@ -354,22 +347,19 @@ impl<'a> Run<'a> {
             return Err(RunError::Settings("no load step was solved".into()));
         };
         // The iterative ssn path orders nothing (docs/methods.md §7.2).
-        let iterative = method == "ssn"
-            && self.opts.settings.ssn.path == crate::qp::settings::SsnPath::Iterative;
-        let ordering = if iterative {
-            "none (ssn_path = iterative)"
-        } else {
-            self.opts.settings.ordering.name()
+        let ordering = match self.opts.settings.factor_free(method) {
+            Some(why) => format!("none ({why})"),
+            None => self.opts.settings.ordering.name().to_string(),
         };
         let summary = Summary::new(
             prep,
             last.model(prep),
             method,
-            ordering,
+            &ordering,
             &last.result,
             &last.output,
             &last.forces,
-            self.kkt_target,
+            kkt_target,
             verdict.certified(),
             Timings {
                 total: self.started.elapsed().as_secs_f64(),
@@ -402,9 +392,10 @@ impl<'a> Run<'a> {
 
 /// The preconditioner column of a method: its name, or `-` for a method
 /// that takes none.
-pub fn preconditioner_label(method: &str, opts: &SolveOptions) -> String {
-    match registry::find(method) {
-        Some(m) if m.preconditioned() => opts.settings.cgc.preconditioner.name().to_string(),
-        _ => "-".to_string(),
+pub fn preconditioner_label(method: MethodId, opts: &SolveOptions) -> String {
+    if method.capabilities().preconditioned {
+        opts.settings.cgc.preconditioner.name().to_string()
+    } else {
+        "-".to_string()
     }
 }

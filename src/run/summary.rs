@@ -6,7 +6,7 @@ use super::prepare::{probes, Prepared};
 use crate::fem::Model;
 use crate::io::StepOutput;
 use crate::post::forces::{Forces, GroupReaction, InterfaceForce, Resultant};
-use crate::qp::QpResult;
+use crate::qp::{Kkt, QpResult};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -51,27 +51,21 @@ pub struct Summary {
     pub reference_step: Option<usize>,
 }
 
-/// The KKT residuals of the last step and the verdict (docs/methods.md §8.4).
+/// The KKT residuals of the last step (the one [`Kkt`] type, its keys
+/// flattened) and the verdict (docs/methods.md §8.4).
 #[derive(Debug, Clone, Serialize)]
 pub struct KktSummary {
-    pub primal: f64,
-    pub dual: f64,
-    pub complementarity: f64,
-    pub stationarity: f64,
-    pub contact_balance: f64,
-    /// The equilibrium of each floating body's rigid motions against the
-    /// forces on it (docs/methods.md §8.4); only with a kernel.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub rigid_balance: Option<f64>,
-    /// The friction residual (docs/methods.md §9.4); only with friction.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub friction: Option<f64>,
-    /// Rounding levels of stationarity and contact balance (docs/methods.md
-    /// §8.4): a residual at or below its floor (≤ 1e-4) counts as resolved.
-    pub stationarity_floor: f64,
-    pub balance_floor: f64,
+    #[serde(flatten)]
+    pub residuals: Kkt,
     pub target: f64,
     pub certified: bool,
+}
+
+impl std::ops::Deref for KktSummary {
+    type Target = Kkt;
+    fn deref(&self) -> &Kkt {
+        &self.residuals
+    }
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -146,7 +140,7 @@ impl Summary {
     pub(crate) fn new(
         prep: &Prepared,
         model: &Model,
-        method: &str,
+        method: crate::qp::MethodId,
         ordering: &str,
         res: &QpResult,
         step: &StepOutput,
@@ -176,7 +170,7 @@ impl Summary {
         let fo = crate::post::friction::friction_output(model, res);
         Summary {
             problem: prep.problem.name.clone(),
-            method: method.to_string(),
+            method: method.name().to_string(),
             preconditioner: step.info.preconditioner.clone(),
             ordering: ordering.to_string(),
             converged: res.status.converged(),
@@ -195,15 +189,7 @@ impl Summary {
             strain_energy: forces.strain_energy,
             load_work: forces.load_work,
             kkt: KktSummary {
-                primal: k.primal,
-                dual: k.dual,
-                complementarity: k.complementarity,
-                stationarity: k.stationarity,
-                contact_balance: k.contact_balance,
-                rigid_balance: (!model.qp.kernel.is_empty()).then_some(k.rigid_balance),
-                friction: model.qp.friction.as_ref().map(|_| k.friction),
-                stationarity_floor: k.stationarity_floor,
-                balance_floor: k.balance_floor,
+                residuals: *k,
                 target,
                 certified,
             },
@@ -224,7 +210,7 @@ impl Summary {
                 .iter()
                 .map(|g| (g.on.clone(), g.clone()))
                 .collect(),
-            notes: res.notes.clone(),
+            notes: res.notes.iter().map(ToString::to_string).collect(),
             probes,
             timings: Timings {
                 phases: res.timings.iter().cloned().collect(),

@@ -18,7 +18,7 @@ pub fn solve_file(
     use signorini::run;
     let prep = run::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
     let (method, opts) = run::options(&prep.problem, choice).unwrap();
-    let res = run::solve(&prep, &method, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let res = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{e}"));
     assert!(
         res.status.converged(),
         "{}: {:?}",

@@ -15,6 +15,7 @@
 use crate::linalg::cholesky::Workspace;
 use crate::linalg::sparse::{axpy, dot, norm};
 use crate::qp::active_set::{ActiveSet, FaceKernel, FaceSolver, SchurSolver};
+use crate::qp::method::{Capabilities, MethodId};
 use crate::qp::{Context, Method, Output, QpError, QpProblem};
 use std::time::Instant;
 
@@ -23,8 +24,13 @@ use std::time::Instant;
 pub struct AsmCghMethod;
 
 impl Method for AsmCghMethod {
-    fn name(&self) -> &'static str {
-        "asm-cgh"
+    fn id(&self) -> MethodId {
+        MethodId::AsmCgh
+    }
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            ..Default::default()
+        }
     }
     fn summary(&self) -> &'static str {
         "active set method, KKT systems by CG with hyperbolic pairs (§4.8)"

@@ -20,6 +20,8 @@ use crate::linalg::dense::sym_eigen;
 use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::sparse::{axpy, dot, norm, norm_inf};
 use crate::qp::executor::{Iterative, Step};
+use crate::qp::method::{Capabilities, MethodId};
+use crate::qp::Failure;
 use crate::qp::{
     primal::cgc, Context, IterRecord, Method, Output, QpError, QpProblem, Settings, Status,
 };
@@ -33,8 +35,13 @@ pub const MAX_DENSE_ROWS: usize = 10_000;
 pub struct AsmMethod;
 
 impl Method for AsmMethod {
-    fn name(&self) -> &'static str {
-        "asm"
+    fn id(&self) -> MethodId {
+        MethodId::Asm
+    }
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            ..Default::default()
+        }
     }
     fn summary(&self) -> &'static str {
         "active set method, KKT systems by Schur-complement elimination (ASM-E, §4.7)"
@@ -264,7 +271,7 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
         let m = self.qp.m();
         let status = match (status, self.failed) {
             (Status::Converged, _) => Status::Converged,
-            (_, Some(msg)) => Status::Failed(msg),
+            (_, Some(msg)) => Status::Failed(Failure::Breakdown(msg)),
             (s, None) => s,
         };
         // Multipliers within the release tolerance of 0 are reported as 0.
@@ -281,6 +288,7 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
             active: self.in_j,
             x: self.x,
             lambda,
+            lambda_t: vec![],
             status,
             iterations,
             inner_iterations: self.solver.inner(),
@@ -291,7 +299,10 @@ impl<'a, S: FaceSolver> ActiveSet<'a, S> {
 
     fn fail(&mut self, msg: String) -> Step {
         self.failed = Some(msg.clone());
-        Step::Done(Status::Failed(msg), self.record(f64::NAN))
+        Step::Done(
+            Status::Failed(Failure::Breakdown(msg)),
+            self.record(f64::NAN),
+        )
     }
 }
 

@@ -15,6 +15,7 @@
 use super::{row_scaling_of, BoundStep, BoxBounds, DualOp, Smalbe};
 use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::sparse::{norm_inf, Csr};
+use crate::qp::Failure;
 use crate::qp::{
     Context, CoulombRelaxation, IterRecord, Output, QpError, QpProblem, SlipBound, Status,
 };
@@ -96,6 +97,7 @@ pub(crate) fn solve_friction<S: BoundStep>(
             lam0: lam0.take(),
         };
         let mut st = Smalbe::new(op, ctx.settings.tol, make(), name, Some(&boxed))?;
+        st.s.target = ctx.settings.kkt_target;
         let mut exec = ctx.executor(name);
         let (status, iters) = exec.run(&mut st);
         let out = st.into_result(status, iters, exec.log, vec![]);
@@ -126,10 +128,10 @@ pub(crate) fn solve_friction<S: BoundStep>(
                 if change <= COULOMB_TOL_FACTOR * ctx.settings.tol * smax {
                     true
                 } else if outer >= OUTER_MAX {
-                    status = Status::Failed(format!(
-                        "{name}: the Coulomb fixed point (s = μλ_n) did not settle in {OUTER_MAX} Tresca solves (last change {:.3e} of max s)",
-                        change / smax
-                    ));
+                    status = Status::Failed(Failure::CoulombUnsettled {
+                        outer: OUTER_MAX,
+                        change: change / smax,
+                    });
                     true
                 } else {
                     s_bound = relax.next(&s_bound, s_new, outer == 1);
@@ -139,9 +141,13 @@ pub(crate) fn solve_friction<S: BoundStep>(
             }
         };
         if done {
+            // The host solved the stacked rows [A; T] (docs/methods.md §9.2).
+            let mut lambda = lambda;
+            let lambda_t = lambda.split_off(m);
             return Ok(Output {
                 x: out.x,
                 lambda,
+                lambda_t,
                 active: out.active,
                 status,
                 iterations,

@@ -30,7 +30,7 @@ use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::power;
 use crate::linalg::sparse::{dot, norm, norm_inf};
 use crate::qp::executor::{Iterative, Step};
-use crate::qp::ssn::CERT_TARGET;
+use crate::qp::Failure;
 use crate::qp::{Context, IterRecord, Output, QpError, QpProblem, Status};
 use std::time::Instant;
 
@@ -127,6 +127,7 @@ pub(crate) fn solve_with<S: BoundStep>(
     };
     let op = DualOp::new(&sq, fac, r, name)?;
     let mut st = Smalbe::new(op, opts.tol, step, name, None)?;
+    st.s.target = opts.kkt_target;
     st.judge = Some((qp, &s));
     let t_setup = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
@@ -347,6 +348,8 @@ pub(crate) struct DualState<'a> {
     pub(crate) fresh: bool,
     /// Relative tolerance: the loop stops at ‖gᴾ‖ ≤ tol·ref_g.
     pub(crate) tol: f64,
+    /// The certificate's target (`Settings::kkt_target`).
+    pub(crate) target: f64,
     /// The scale of the gradient: the loads' response at the rows
     /// ([`Smalbe::new`]).
     pub(crate) ref_g: f64,
@@ -553,6 +556,7 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
             b: bhat,
             fresh: false,
             tol,
+            target: crate::qp::settings::DEFAULT_KKT_TARGET,
             ref_g,
             ref_h,
             smalbe_tol: 0.0,
@@ -758,16 +762,17 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
         let rounding = 1e-13 * (norm_inf(&x) + norm_inf(&qp.g));
         let limit = 100.0 * tol * ref_g + rounding;
         let status = if status.converged() && !(viol <= limit && compl <= limit) {
-            Status::Failed(format!(
+            Status::Failed(Failure::Breakdown(format!(
                 "{name}: the dual converged but the recovered x violates Ax ≤ g by {viol:e} or complementarity \
                  by {compl:e} (limit 100·tol·‖h‖ = {limit:e})"
-            ))
+            )))
         } else {
             status
         };
         Output {
             x,
             lambda,
+            lambda_t: vec![],
             active,
             status,
             iterations,
@@ -796,7 +801,7 @@ impl<S: BoundStep> Smalbe<'_, S> {
         let (lam, x) = self.primal();
         let unscaled: Vec<f64> = lam.iter().zip(scale).map(|(l, si)| l * si).collect();
         let cert = crate::qp::kkt::residuals(qp, &x, &unscaled).judged();
-        let ok = cert <= CERT_TARGET.max(self.s.tol);
+        let ok = cert <= self.s.target.max(self.s.tol);
         if ok {
             self.recovered = Some((lam, x));
         }
@@ -851,7 +856,7 @@ impl<S: BoundStep> Iterative for Smalbe<'_, S> {
                 }
                 Step::Continue(self.record(r))
             }
-            Err(msg) => Step::Done(Status::Failed(msg), self.record(r)),
+            Err(msg) => Step::Done(Status::Failed(Failure::Breakdown(msg)), self.record(r)),
         }
     }
 }

@@ -15,6 +15,7 @@
 
 use crate::linalg::sparse::{axpy, dot};
 use crate::qp::dual::{solve_friction, solve_with, BoundStep, DualState, StepKind};
+use crate::qp::method::{Capabilities, MethodId};
 use crate::qp::{Context, Method, Output, QpError, QpProblem};
 
 /// Proportioning parameter Γ.
@@ -26,18 +27,21 @@ pub const STEP_FACTOR: f64 = 1.9;
 pub struct MprgpMethod;
 
 impl Method for MprgpMethod {
-    fn name(&self) -> &'static str {
-        "mprgp"
+    fn id(&self) -> MethodId {
+        MethodId::Mprgp
+    }
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            // Tresca and Coulomb on the dual with box constraints (docs/methods.md §9.2).
+            friction: true,
+            ..Default::default()
+        }
     }
     fn summary(&self) -> &'static str {
         "MPRGP on the dual, H through one Cholesky factor; SMALBE for floating bodies (§7)"
     }
     fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
         solve(qp, ctx)
-    }
-    /// Tresca and Coulomb on the dual with box constraints (docs/methods.md §9.2).
-    fn friction(&self) -> bool {
-        true
     }
 }
 

@@ -16,6 +16,8 @@
 use crate::linalg::sparse::{axpy, dot, norm};
 use crate::qp::dual::{solve_with, BoundStep, DualOp, DualState, StepKind};
 use crate::qp::executor::{Iterative, Step};
+use crate::qp::method::{Capabilities, MethodId};
+use crate::qp::Failure;
 use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status};
 use std::time::Instant;
 
@@ -23,8 +25,13 @@ use std::time::Instant;
 pub struct DualMethod;
 
 impl Method for DualMethod {
-    fn name(&self) -> &'static str {
-        "dual"
+    fn id(&self) -> MethodId {
+        MethodId::Dual
+    }
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            ..Default::default()
+        }
     }
     fn summary(&self) -> &'static str {
         "CGC on the dual functional, H applied through a Cholesky factor (§4.6)"
@@ -80,6 +87,7 @@ pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
     Ok(Output {
         x,
         lambda: st.lam,
+        lambda_t: vec![],
         active,
         status,
         iterations: iters,
@@ -245,7 +253,9 @@ impl Iterative for DualCgc<'_> {
             }
         }
         match self.face_cg() {
-            Face::Failed(msg) => Step::Done(Status::Failed(msg), self.record(res)),
+            Face::Failed(msg) => {
+                Step::Done(Status::Failed(Failure::Breakdown(msg)), self.record(res))
+            }
             Face::Min | Face::Blocked | Face::Kmax => {
                 self.refresh();
                 Step::Continue(self.record(res))

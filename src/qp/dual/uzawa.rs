@@ -17,6 +17,7 @@ use crate::linalg::sparse::norm;
 use crate::linalg::sparse::norm_inf;
 use crate::qp::dual::{solve_with, BoundStep, DualOp, DualState, StepKind};
 use crate::qp::executor::{Iterative, Step};
+use crate::qp::method::{Capabilities, MethodId};
 use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Settings, Status};
 use std::time::Instant;
 
@@ -27,8 +28,13 @@ pub const UZAWA_MARGIN: f64 = 0.1;
 pub struct UzawaMethod;
 
 impl Method for UzawaMethod {
-    fn name(&self) -> &'static str {
-        "uzawa"
+    fn id(&self) -> MethodId {
+        MethodId::Uzawa
+    }
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            ..Default::default()
+        }
     }
     fn summary(&self) -> &'static str {
         "Uzawa's method with Cholesky inner solves (§4.5)"
@@ -91,6 +97,7 @@ pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
     Ok(Output {
         x: st.x,
         lambda: st.lam_x,
+        lambda_t: vec![],
         active,
         status,
         iterations: iters,

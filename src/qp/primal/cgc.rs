@@ -15,6 +15,7 @@
 
 use crate::linalg::sparse::{axpy, dot, norm, norm_inf};
 use crate::qp::executor::{Iterative, Step};
+use crate::qp::method::{Capabilities, Factor, MethodId};
 use crate::qp::precond::{self, Preconditioner};
 use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status, MAXVAL};
 
@@ -23,14 +24,18 @@ use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status,
 pub struct CgcMethod;
 
 impl Method for CgcMethod {
-    fn name(&self) -> &'static str {
-        "cgc"
+    fn id(&self) -> MethodId {
+        MethodId::Cgc
+    }
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            preconditioned: true,
+            factor: Factor::BySettings,
+            ..Default::default()
+        }
     }
     fn summary(&self) -> &'static str {
         "conjugate gradients with constraints (§4.1), preconditioned (§4.2)"
-    }
-    fn preconditioned(&self) -> bool {
-        true
     }
     fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
         solve(qp, ctx)
@@ -379,6 +384,7 @@ impl<'a> Cgc<'a> {
             active: self.in_j.clone(),
             x: self.x,
             lambda,
+            lambda_t: vec![],
             status,
             iterations,
             inner_iterations: self.inner,

@@ -19,6 +19,8 @@ use crate::linalg::augmented::AugPattern;
 use crate::linalg::cholesky::Workspace;
 use crate::linalg::sparse::{norm, Csr};
 use crate::qp::executor::{Iterative, Step};
+use crate::qp::method::{Capabilities, Certificate, Factor, MethodId};
+use crate::qp::Failure;
 use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status};
 
 /// Default ε_p = 1/(PENALTY_FACTOR · max diag C).
@@ -32,8 +34,15 @@ pub const NEWTON_STEPS: usize = 30;
 pub struct PenaltyMethod;
 
 impl Method for PenaltyMethod {
-    fn name(&self) -> &'static str {
-        "penalty"
+    fn id(&self) -> MethodId {
+        MethodId::Penalty
+    }
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            factor: Factor::BySettings,
+            certificate: Certificate::Penalised,
+            ..Default::default()
+        }
     }
     fn summary(&self) -> &'static str {
         "exterior penalty with Gauss–Seidel/SOR relaxation (§4.4)"
@@ -74,6 +83,7 @@ pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
     Ok(Output {
         x: st.x,
         lambda,
+        lambda_t: vec![],
         active,
         status,
         iterations: iters,
@@ -303,7 +313,10 @@ impl Iterative for Relax<'_> {
         if self.correct && self.sweeps.is_multiple_of(CORRECTION_EVERY) {
             self.subspace_correction();
             if let Some(e) = &self.error {
-                return Step::Done(Status::Failed(e.to_string()), IterRecord::default());
+                return Step::Done(
+                    Status::Failed(Failure::Breakdown(e.to_string())),
+                    IterRecord::default(),
+                );
             }
         }
         self.x_old.copy_from_slice(&self.x);

@@ -21,6 +21,7 @@
 //! More than [`MAX_P`] constrained DOFs are refused (dense P² storage).
 
 use crate::linalg::sparse::Csr;
+use crate::qp::method::{Capabilities, MethodId};
 use crate::qp::precond::PrecondKind;
 use crate::qp::{primal::cgc, Context, Method, Output, QpError, QpProblem, Settings, Status};
 
@@ -32,8 +33,14 @@ pub const MAX_P: usize = 5000;
 pub struct PreelimMethod;
 
 impl Method for PreelimMethod {
-    fn name(&self) -> &'static str {
-        "preelim"
+    fn id(&self) -> MethodId {
+        MethodId::Preelim
+    }
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            semicoercive: false,
+            ..Default::default()
+        }
     }
     fn summary(&self) -> &'static str {
         "pre-elimination: dense Schur complement onto the contact DOFs, then CGC (§4.3)"
@@ -98,6 +105,7 @@ pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
     Ok(Output {
         x,
         lambda: r.lambda,
+        lambda_t: vec![],
         active: r.active,
         status,
         iterations: r.iterations,

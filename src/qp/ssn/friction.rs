@@ -35,6 +35,7 @@ use crate::linalg::dense::sym_eigen;
 use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::sparse::{dot, norm_inf, Csr};
 use crate::qp::executor::{Iterative, Step};
+use crate::qp::Failure;
 use std::collections::HashSet;
 
 use crate::qp::{
@@ -67,11 +68,10 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
     if let Some(e) = st.error.take() {
         return Err(e);
     }
-    let mut lambda = st.ln;
-    lambda.extend(st.lt);
     Ok(Output {
         x: st.x,
-        lambda,
+        lambda: st.ln,
+        lambda_t: st.lt,
         active: st.in_n,
         status,
         iterations: iters,
@@ -151,10 +151,6 @@ struct State<'a> {
     best: (f64, usize),
     error: Option<QpError>,
 }
-
-/// The start of the message of a frictional ssn stopped for cycling sets
-/// (the driver then solves by mprgp, docs/methods.md §9.2).
-pub(crate) const CYCLING: &str = "ssn: cycling";
 
 /// Newton steps without a better residual after which the sets of one
 /// Tresca problem are judged to cycle: two single-change walks over every
@@ -403,9 +399,9 @@ impl<'a> State<'a> {
             }
         }
         if !x.iter().all(|v| v.is_finite()) {
-            return Ok(Some(Status::Failed(
+            return Ok(Some(Status::Failed(Failure::Breakdown(
                 "the KKT solve of a working set gave a non-finite iterate".into(),
-            )));
+            ))));
         }
         self.x = x;
         self.ln = vec![0.0; m];
@@ -554,10 +550,10 @@ impl Iterative for State<'_> {
                         }
                         if self.outer > OUTER_MAX {
                             return Step::Done(
-                                Status::Failed(format!(
-                                    "the Coulomb fixed point (s = μλ_n) did not settle in {OUTER_MAX} Newton steps (last change {:.3e} of max s)",
-                                    change / smax
-                                )),
+                                Status::Failed(Failure::CoulombUnsettled {
+                                    outer: OUTER_MAX,
+                                    change: change / smax,
+                                }),
                                 self.record(it),
                             );
                         }
@@ -598,10 +594,10 @@ impl Iterative for State<'_> {
                 let budget = cycle_budget(self.qp.m());
                 if self.best.1 > budget {
                     return Step::Done(
-                        Status::Failed(format!(
-                            "{CYCLING}: the working sets of the Tresca problem cycle: no KKT residual below {:.3e} in {budget} Newton steps",
-                            self.best.0
-                        )),
+                        Status::Failed(Failure::Cycling {
+                            best: self.best.0,
+                            steps: budget,
+                        }),
                         rec,
                     );
                 }
@@ -611,7 +607,10 @@ impl Iterative for State<'_> {
             Err(e) => {
                 let msg = e.to_string();
                 self.error = Some(e);
-                Step::Done(Status::Failed(msg), IterRecord::default())
+                Step::Done(
+                    Status::Failed(Failure::Breakdown(msg)),
+                    IterRecord::default(),
+                )
             }
         }
     }

@@ -13,9 +13,7 @@
 //! Schur path; a motion free on every row (a rolling body) is not solved
 //! here (the direct paths are).
 
-use super::{
-    candidates, free_modes, hold_free_modes, limit_changes, next_set, stiffness_scale, CERT_TARGET,
-};
+use super::{candidates, free_modes, hold_free_modes, limit_changes, next_set, stiffness_scale};
 use crate::linalg::amg::{pcg_stall, Amg, AmgSettings, NearNull, PCG_STALL};
 use crate::linalg::augmented::AugPattern;
 use crate::linalg::kernel::orthonormal_kernel;
@@ -24,6 +22,7 @@ use crate::linalg::sparse::Csr;
 use crate::linalg::sparse::{norm, norm_inf};
 use crate::qp::executor::{Iterative, Step};
 use crate::qp::kkt::CONTACT_FLOOR;
+use crate::qp::Failure;
 use crate::qp::{Context, IterRecord, NearKernel, Output, QpError, QpProblem, Status};
 use std::collections::HashSet;
 use std::time::Instant;
@@ -91,6 +90,7 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
         ctx.settings.tol,
         x0.as_deref(),
     );
+    st.target = ctx.settings.kkt_target;
     let mut exec = ctx.executor("ssn");
     let (status, iters) = exec.run(&mut st);
     log::debug!(
@@ -103,6 +103,7 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
     Ok(Output {
         x: unpermute(&perm, &st.x),
         lambda: std::mem::take(&mut st.lam),
+        lambda_t: vec![],
         active: std::mem::take(&mut st.in_j),
         status,
         iterations: iters,
@@ -128,6 +129,8 @@ struct State<'a> {
     /// span ℝᵏ.
     ar: Vec<Vec<f64>>,
     tol: f64,
+    /// The certificate's target (`Settings::kkt_target`).
+    target: f64,
     /// The stiffness scale c (mean positive diagonal of C).
     cpar: f64,
     x: Vec<f64>,
@@ -184,6 +187,7 @@ impl<'a> State<'a> {
             rho,
             ar,
             tol,
+            target: crate::qp::settings::DEFAULT_KKT_TARGET,
             cpar,
             x: x0.map_or_else(|| vec![0.0; qp.n()], <[f64]>::to_vec),
             lam: vec![0.0; m],
@@ -408,18 +412,21 @@ impl Iterative for State<'_> {
                 }
                 Kkt::Singular => continue,
                 Kkt::Stalled(msg) => {
-                    return Step::Done(Status::Failed(msg), self.record(f64::NAN));
+                    return Step::Done(
+                        Status::Failed(Failure::Breakdown(msg)),
+                        self.record(f64::NAN),
+                    );
                 }
             }
         }
         let Some((jused, lam, x)) = solved else {
             return Step::Done(
-                Status::Failed(
+                Status::Failed(Failure::Breakdown(
                     "ssn iterative: even with every contact row active, a rigid motion of a floating body \
                      is free (A·R rank deficient) or K_J is not positive definite; the direct paths \
                      (ssn_path = \"auto\") solve models whose bodies may roll"
                         .into(),
-                ),
+                )),
                 self.record(f64::NAN),
             );
         };
@@ -442,7 +449,12 @@ impl Iterative for State<'_> {
         if new_j == self.in_j {
             let cert = match self.certify() {
                 Ok(c) => c,
-                Err(msg) => return Step::Done(Status::Failed(msg), self.record(f64::NAN)),
+                Err(msg) => {
+                    return Step::Done(
+                        Status::Failed(Failure::Breakdown(msg)),
+                        self.record(f64::NAN),
+                    )
+                }
             };
             ax = (0..m).map(|i| qp.a.row_dot(i, &self.x)).collect();
             new_j = next_set(&self.in_j, &self.lam, &ax, &qp.g, self.tol);
@@ -450,11 +462,12 @@ impl Iterative for State<'_> {
                 // The loose solve misjudged a row's sign: go on from the
                 // tightened answer.
                 log::debug!("ssn iterative: the tightened solution moves J; continuing");
-            } else if cert.is_nan() || cert > CERT_TARGET.max(self.tol) {
+            } else if cert.is_nan() || cert > self.target.max(self.tol) {
                 return Step::Done(
-                    Status::Failed(format!(
-                        "ssn iterative: KKT residual {cert:.2e} after tightening (target {CERT_TARGET:e})"
-                    )),
+                    Status::Failed(Failure::Uncertified {
+                        residual: cert,
+                        target: self.target,
+                    }),
                     self.record(cert),
                 );
             } else {

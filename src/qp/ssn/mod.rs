@@ -39,10 +39,11 @@ pub(crate) use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::rotation::RowBorder;
 use crate::linalg::sparse::{dot, norm_inf};
 use crate::qp::executor::{Iterative, Step};
+use crate::qp::method::{Capabilities, Factor, FallbackCause, MethodId};
 use crate::qp::settings::SsnPath;
+use crate::qp::Failure;
 use crate::qp::{Context, IterRecord, Method, Output, QpError, QpProblem, Status};
 /// The message start of a frictional ssn stopped for cycling working sets.
-pub(crate) use friction::CYCLING;
 use path::{Costs, Path};
 use std::collections::{HashMap, HashSet};
 use std::rc::Rc;
@@ -67,21 +68,32 @@ const BORDER_RATIO: f64 = 12.0;
 const BORDER_MAX: usize = 16384;
 /// Dual-space steps at most in [`Ssn::dense_start`].
 const DENSE_STEPS_MAX: usize = 100;
-/// The certificate an answer must meet to be returned as converged.
-pub(crate) const CERT_TARGET: f64 = 1e-6;
-
 /// Semismooth Newton / primal–dual active set (docs/methods.md §7).
 pub struct SsnMethod;
 
 impl Method for SsnMethod {
-    fn name(&self) -> &'static str {
-        "ssn"
+    fn id(&self) -> MethodId {
+        MethodId::Ssn
+    }
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            friction: true,
+            factor: Factor::BySettings,
+            ..Default::default()
+        }
     }
     fn summary(&self) -> &'static str {
         "semismooth Newton / primal–dual active set, Schur complement with one Cholesky factor (§7)"
     }
-    fn friction(&self) -> bool {
-        true
+    /// A refused unbounded claim is solved by asm (ssn is every other
+    /// method's fallback); frictional working sets that cycle by mprgp,
+    /// which solves the same Tresca problem on the dual (docs/methods.md
+    /// §8.2, §9.2).
+    fn fallback(&self, cause: FallbackCause) -> Option<MethodId> {
+        match cause {
+            FallbackCause::RefusedClaim => Some(MethodId::Asm),
+            FallbackCause::Cycling => Some(MethodId::Mprgp),
+        }
     }
     fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
         if ctx.settings.ssn.path == SsnPath::Iterative {
@@ -133,6 +145,7 @@ pub(crate) fn solve_traced(
     let t0 = Instant::now();
     let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
     let mut st = Ssn::new(qp, r, ctx.settings.tol, augmented, ctx.ws);
+    st.target = ctx.settings.kkt_target;
     st.border = border;
     st.auto = path == Path::Auto;
     st.lowrank = path != Path::Refactor;
@@ -241,6 +254,8 @@ struct Ssn<'a> {
     /// (`schur::SjSolver`).
     s_full: std::cell::RefCell<Option<Rc<SpdFactor>>>,
     tol: f64,
+    /// The certificate's target (`Settings::kkt_target`).
+    target: f64,
     /// The stiffness scale c.
     cpar: f64,
     in_j: Vec<bool>,
@@ -528,6 +543,7 @@ impl<'a> Ssn<'a> {
             dense_memo: Default::default(),
             s_full: Default::default(),
             tol,
+            target: crate::qp::settings::DEFAULT_KKT_TARGET,
             cpar,
             in_j: qp.g.iter().map(|&g| g <= 0.0).collect(),
             last_ok: None,
@@ -738,7 +754,7 @@ impl<'a> Ssn<'a> {
             }
             // Still far from tol on the augmented path: recompute on the
             // Schur path (one factor of C, exact elimination), once.
-            if cert <= CERT_TARGET.min(1e2 * self.tol)
+            if cert <= self.target.min(1e2 * self.tol)
                 || !self.last_aug
                 || fresh_schur
                 || self.error.is_some()
@@ -810,6 +826,7 @@ impl<'a> Ssn<'a> {
         Output {
             x: self.x,
             lambda: self.lam,
+            lambda_t: vec![],
             active: self.in_j,
             status,
             iterations,
@@ -831,17 +848,20 @@ impl Iterative for Ssn<'_> {
             if let Some(e) = &self.error {
                 // a factor refused for memory (or C not factored): no
                 // other candidate can do better
-                return Step::Done(Status::Failed(e.to_string()), self.record(f64::NAN));
+                return Step::Done(
+                    Status::Failed(Failure::Breakdown(e.to_string())),
+                    self.record(f64::NAN),
+                );
             }
         }
         let Some((jused, (lam, x))) = solved else {
             return Step::Done(
-                Status::Failed(
+                Status::Failed(Failure::Breakdown(
                     "ssn: the KKT system is singular even with every contact row active: a rigid motion of a \
                      floating body is not restrained by the contact rows (A·R rank deficient) or the contact \
                      rows are linearly dependent"
                         .into(),
-                ),
+                )),
                 self.record(f64::NAN),
             );
         };
@@ -855,11 +875,12 @@ impl Iterative for Ssn<'_> {
         if new_j == self.in_j {
             // J has settled: certify (x, λ), refining the solve if needed.
             let cert = self.refine();
-            if cert.is_nan() || cert > CERT_TARGET.max(self.tol) {
+            if cert.is_nan() || cert > self.target.max(self.tol) {
                 return Step::Done(
-                    Status::Failed(format!(
-                        "ssn: KKT residual {cert:.2e} after refinement (target {CERT_TARGET:e})"
-                    )),
+                    Status::Failed(Failure::Uncertified {
+                        residual: cert,
+                        target: self.target,
+                    }),
                     self.record(residual),
                 );
             }
