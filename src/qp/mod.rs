@@ -1,4 +1,4 @@
-//! The quadratic programme of frictionless contact and the methods that solve it.
+//! The quadratic programme of contact (with or without friction) and the methods that solve it.
 //!
 //! Names (docs/methods.md §0, §2.8), used everywhere in this module tree:
 //!
