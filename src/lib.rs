@@ -1,9 +1,14 @@
-//! signorini: frictionless multibody contact of elastic bodies in 2D by P1
-//! finite elements, with a choice of quadratic-programming methods.
+//! signorini: contact of several elastic bodies in 2D (Signorini conditions,
+//! optionally with Tresca or Coulomb friction) by P1 finite elements, with a
+//! choice of quadratic-programming methods (the default, `auto`, runs `ssn`).
 //!
 //! Two layers with one seam: `mesh`/`problem`/`fem`/`post` turn a Gmsh mesh and
 //! a TOML problem into a [`qp::QpProblem`] (plus maps back to the nodes);
-//! `qp` solves it without knowing about meshes.
+//! `qp` solves it without knowing about meshes, every method through one
+//! driver that certifies the answer ([`qp::registry::solve`]). [`run`] is the
+//! whole pipeline as a library call (load steps, restart, observers, the
+//! output transaction); the `signorini` binary is [`cli`] on top of it.
+//! The mathematics: docs/methods.md; the file formats: docs/problem-format.md.
 
 // Numerical code: `!(x > 0.0)` is how a NaN takes the refusing branch (the
 // lint's `partial_cmp` rewrite hides that), and index loops over several

@@ -1,4 +1,4 @@
-//! Friction (docs/methods.md §10): a block on an inclined plane sticks below
+//! Friction (docs/methods.md §9): a block on an inclined plane sticks below
 //! the friction angle and is refused as sliding above it; Cattaneo–Mindlin
 //! partial slip; μ = 0 is the frictionless model bit for bit and a huge μ is
 //! the tangentially glued interface.

@@ -17,7 +17,7 @@ use std::path::PathBuf;
 #[command(
     name = "signorini",
     version,
-    about = "Multibody contact in 2D elasticity (P1 FEM; frictionless, Tresca or Coulomb) with a choice of QP methods"
+    about = "Multibody contact in 2D elasticity (Signorini, optional Tresca/Coulomb friction) by P1 FEM, with a choice of QP methods"
 )]
 pub struct Cli {
     /// Diagnostics level: error, warn, info, debug, trace.

@@ -1,7 +1,7 @@
 //! ker C of a semicoercive stiffness (floating bodies): the basis R that the
 //! FEM layer hands over in `QpProblem::kernel`, checked and orthonormalised
 //! once for every method that eliminates rigid motions (ASM and ASM-CGH
-//! docs/methods.md §4.7–4.8, the dual methods §6, SSN §7).
+//! docs/methods.md §4.7–4.8, the dual methods §4.6, SSN §7).
 //!
 //! The check is in C's own scale: ‖C z‖ ≤ [`KERNEL_TOL`]·max diag C·‖z‖ (a
 //! vector that is not a rigid motion would make every FETI-type elimination
