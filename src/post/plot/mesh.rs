@@ -181,7 +181,7 @@ fn check_extent(lo: [f64; 2], hi: [f64; 2], scale: f64) -> Result<(), PlotError>
         let big = lo[k].abs().max(hi[k].abs());
         if !(span * 16.0).is_finite() {
             return Err(err(format!(
-                "mesh nodes (with the displacement × {}): the {axis} coordinates run from {} to {}, a span too large to draw",
+                "/mesh/nodes displaced by {} × the displacement: the {axis} coordinates run from {} to {}, a span too large to draw",
                 fmt_num(scale),
                 fmt_num(lo[k]),
                 fmt_num(hi[k])
@@ -189,7 +189,7 @@ fn check_extent(lo: [f64; 2], hi: [f64; 2], scale: f64) -> Result<(), PlotError>
         }
         if span > 0.0 && span < 1e-12 * big {
             return Err(err(format!(
-                "mesh nodes (with the displacement × {}): the {axis} coordinates run from {} to {}, a span too small against their size to draw",
+                "/mesh/nodes displaced by {} × the displacement: the {axis} coordinates run from {} to {}, a span too small against their size to draw",
                 fmt_num(scale),
                 fmt_num(lo[k]),
                 fmt_num(hi[k])
@@ -416,6 +416,27 @@ fn fill_triangle(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn extents_a_double_cannot_draw_are_refused() {
+        assert!(check_extent([0.0, -1.0], [1000.0, 2.0], 1.0).is_ok());
+        // A collapsed axis is drawn (as before): nothing to resolve.
+        assert!(check_extent([5.0, 5.0], [5.0, 6.0], 1.0).is_ok());
+        let e = check_extent([-1e308, 0.0], [1e308, 1.0], 1.0)
+            .unwrap_err()
+            .0;
+        assert!(
+            e.contains("x coordinates") && e.contains("too large"),
+            "{e}"
+        );
+        let e = check_extent([0.0, 1e20], [1.0, 1e20 + 1e5], 1.0)
+            .unwrap_err()
+            .0;
+        assert!(
+            e.contains("y coordinates") && e.contains("too small"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn subdivision_covers_the_triangle() {

@@ -204,7 +204,9 @@ pub struct PlotOptions {
     /// Draw the change since the reference step (displacement_change,
     /// stress_change, contact_pressure_change) instead of the fields.
     pub change: bool,
-    /// With `contact`: one curve per step, every step of the checkpoint.
+    /// With `contact`: one curve per step, every step of the checkpoint
+    /// (with `change`: from the reference step on, the steps before it
+    /// having no change fields).
     pub all_steps: bool,
 }
 
@@ -287,7 +289,9 @@ fn check_options(opts: &PlotOptions) -> Result<(), PlotError> {
         // a double: an infinite axis never ended that search (issue 34).
         if !((hi - lo) * 16.0).is_finite() {
             return Err(err(format!(
-                "--range {lo},{hi}: the span MAX − MIN is too large to draw (more than a double holds with the figure's margins)"
+                "--range {},{}: the span MAX − MIN is too large to draw (more than a double holds with the figure's margins)",
+                fmt_num(lo),
+                fmt_num(hi)
             )));
         }
         if opts.log && lo <= 0.0 {
