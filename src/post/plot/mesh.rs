@@ -168,28 +168,16 @@ pub(super) fn draw_mesh<DB: DrawingBackend>(
     Ok(range)
 }
 
-/// Refuses deformed coordinates whose extent f64 cannot hold with the
-/// figure's margins: the axis span (up to 1.06 times the extent, and the
-/// plotting library's tick search works on ten times that) must stay
-/// finite, and the extent must not vanish against the coordinates
-/// themselves (ticks a step apart that adding cannot tell apart would
-/// never end). Either drew nothing sensible, and the tick search of an
-/// infinite axis never returned (issue 34).
+/// Refuses deformed coordinates whose extent a double cannot hold with
+/// the figure's margins: the axis span (up to 1.06 times the extent, and
+/// the plotting library's tick search works on multiples of it, hence the
+/// factor 16) must stay finite. An infinite axis drew nothing sensible,
+/// and its tick search never returned (issue 34).
 fn check_extent(lo: [f64; 2], hi: [f64; 2], scale: f64) -> Result<(), PlotError> {
     for (k, axis) in ["x", "y"].iter().enumerate() {
-        let span = hi[k] - lo[k];
-        let big = lo[k].abs().max(hi[k].abs());
-        if !(span * 16.0).is_finite() {
+        if !((hi[k] - lo[k]) * 16.0).is_finite() {
             return Err(err(format!(
                 "/mesh/nodes displaced by {} × the displacement: the {axis} coordinates run from {} to {}, a span too large to draw",
-                fmt_num(scale),
-                fmt_num(lo[k]),
-                fmt_num(hi[k])
-            )));
-        }
-        if span > 0.0 && span < 1e-12 * big {
-            return Err(err(format!(
-                "/mesh/nodes displaced by {} × the displacement: the {axis} coordinates run from {} to {}, a span too small against their size to draw",
                 fmt_num(scale),
                 fmt_num(lo[k]),
                 fmt_num(hi[k])
@@ -420,7 +408,7 @@ mod tests {
     #[test]
     fn extents_a_double_cannot_draw_are_refused() {
         assert!(check_extent([0.0, -1.0], [1000.0, 2.0], 1.0).is_ok());
-        // A collapsed axis is drawn (as before): nothing to resolve.
+        // A collapsed axis is drawn (as before).
         assert!(check_extent([5.0, 5.0], [5.0, 6.0], 1.0).is_ok());
         let e = check_extent([-1e308, 0.0], [1e308, 1.0], 1.0)
             .unwrap_err()
@@ -429,13 +417,10 @@ mod tests {
             e.contains("x coordinates") && e.contains("too large"),
             "{e}"
         );
-        let e = check_extent([0.0, 1e20], [1.0, 1e20 + 1e5], 1.0)
+        let e = check_extent([0.0, -1e307], [1.0, 1e307], 1.0)
             .unwrap_err()
             .0;
-        assert!(
-            e.contains("y coordinates") && e.contains("too small"),
-            "{e}"
-        );
+        assert!(e.contains("y coordinates") && e.contains("-1e307"), "{e}");
     }
 
     #[test]
