@@ -5,10 +5,11 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
+use std::time::Duration;
 
 mod common;
 
-use common::{root, signorini};
+use common::{root, run_with_deadline, signorini};
 
 /// One solve of two_blocks_eccentric shared by every test: (dir, NAME.h5).
 fn checkpoint() -> &'static (tempfile::TempDir, PathBuf) {
@@ -274,4 +275,204 @@ fn unreadable_checkpoint_and_unwritable_output_are_exit_2() {
     let (code, _, stderr) = signorini(&["plot", h5(), "-o", bad.to_str().unwrap()]);
     assert_eq!(code, 2, "{stderr}");
     assert!(!fig.exists());
+}
+
+// ------------------------------------------------------------ issue 34
+
+/// How long a plot may run before the test calls it a hang (a plot of
+/// this model takes well under a second).
+const HANG: Duration = Duration::from_secs(60);
+
+/// A copy of the shared checkpoint in `dir`, with the f64 dataset `path`
+/// passed through `edit` (written with the `hdf5` crate, same shape).
+fn edited_checkpoint(dir: &Path, path: &str, edit: impl FnOnce(&mut [f64])) -> PathBuf {
+    let copy = dir.join("edited.h5");
+    std::fs::copy(h5(), &copy).unwrap();
+    {
+        let f = hdf5::File::open_rw(&copy).unwrap();
+        let ds = f.dataset(path).unwrap();
+        let mut v: Vec<f64> = ds.read_raw().unwrap();
+        edit(&mut v);
+        ds.write_raw(&v).unwrap();
+    }
+    copy
+}
+
+/// Runs `signorini plot CHECKPOINT ARGS -o DIR/FILE` with the hang
+/// deadline: (exit code, output, whether the file was written).
+fn plot_bounded(dir: &Path, checkpoint: &Path, extra: &[&str], file: &str) -> (i32, String, bool) {
+    let fig = dir.join(file);
+    let mut args = vec!["plot", checkpoint.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["-o", fig.to_str().unwrap()]);
+    let (code, log) = run_with_deadline(&args, HANG);
+    (code, log, fig.exists())
+}
+
+/// A range whose span is beyond a double made the pressure axis infinite,
+/// and the tick search never ended; now exit 2 naming the option.
+#[test]
+fn a_range_whose_span_overflows_is_exit_2_not_a_hang() {
+    let dir = out_dir();
+    let ck = checkpoint().1.clone();
+    for extra in [
+        &["--contact", "--range=-1e308,1e308"][..],
+        &["--range=-1e308,1e308"][..],
+    ] {
+        let (code, log, written) = plot_bounded(dir.path(), &ck, extra, "fig.png");
+        assert_eq!(code, 2, "{extra:?}: {log}");
+        assert!(
+            log.contains("--range -1e308,1e308") && log.contains("too large"),
+            "{log}"
+        );
+        assert!(!written);
+    }
+}
+
+/// A contact pressure of 1.7e308: the padded axis overflowed to infinity
+/// (a hang); now exit 2 naming the file, the field and the step. The mesh
+/// figure of the same file, which does not draw the pressure, still works.
+#[test]
+fn a_contact_pressure_near_the_largest_double_is_exit_2_not_a_hang() {
+    let dir = out_dir();
+    let ck = edited_checkpoint(dir.path(), "steps/0001/contact_pressure", |p| {
+        p[p.len() / 2] = 1.7e308
+    });
+    let (code, log, written) = plot_bounded(dir.path(), &ck, &["--contact"], "fig.png");
+    assert_eq!(code, 2, "{log}");
+    assert!(
+        log.contains("edited.h5")
+            && log.contains("contact_pressure of step 1")
+            && log.contains("--range"),
+        "{log}"
+    );
+    assert!(!written);
+    // Within what the axis can hold, the plot is drawn.
+    let (code, log, written) = plot_bounded(
+        dir.path(),
+        &ck,
+        &["--contact", "--range", "0,1e6"],
+        "fig.svg",
+    );
+    assert_eq!(code, 0, "{log}");
+    assert!(written);
+    let (code, log, written) = plot_bounded(dir.path(), &ck, &[], "mesh.png");
+    assert_eq!(code, 0, "{log}");
+    assert!(written);
+}
+
+/// Node coordinates at ±1e308: the bounding box's span overflowed and the
+/// axes became infinite (a hang); now exit 2 naming the file and the
+/// dataset. The contact figure, which does not use the nodes, still works.
+#[test]
+fn node_coordinates_at_the_ends_of_the_doubles_are_exit_2_not_a_hang() {
+    let dir = out_dir();
+    let ck = edited_checkpoint(dir.path(), "mesh/nodes", |xy| {
+        let n = xy.len();
+        xy[0] = -1e308;
+        xy[n - 2] = 1e308;
+    });
+    for (extra, file) in [(&[][..], "fig.png"), (&["--field", "uy"][..], "fig.svg")] {
+        let (code, log, written) = plot_bounded(dir.path(), &ck, extra, file);
+        assert_eq!(code, 2, "{extra:?}: {log}");
+        assert!(
+            log.contains("edited.h5")
+                && log.contains("/mesh/nodes")
+                && log.contains("x coordinates"),
+            "{log}"
+        );
+        assert!(!written);
+    }
+    let (code, log, written) = plot_bounded(dir.path(), &ck, &["--contact"], "contact.png");
+    assert_eq!(code, 0, "{log}");
+    assert!(written);
+}
+
+/// `--contact --all-steps --change` with `[output] reference_step = 2`:
+/// step 1 has no change fields, and the figure failed; now it draws steps
+/// 2 to 4 (one curve each, step 2's being zero) and says that step 1 is
+/// left out.
+#[test]
+fn all_steps_change_starts_at_a_later_reference_step() {
+    let dir = out_dir();
+    let text = std::fs::read_to_string(root().join("meshes/three_bodies_steps.toml")).unwrap();
+    let mesh = root().join("meshes/three_bodies.msh");
+    assert!(text.contains("file = \"three_bodies.msh\"") && text.contains("\n[output]\n"));
+    let text = text
+        .replace(
+            "file = \"three_bodies.msh\"",
+            &format!("file = {:?}", mesh.to_str().unwrap()),
+        )
+        .replace("\n[output]\n", "\n[output]\nreference_step = 2\n");
+    let toml = dir.path().join("steps.toml");
+    std::fs::write(&toml, text).unwrap();
+    let out = dir.path().join("out");
+    let (code, stdout, stderr) = signorini(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    let ck = out.join("steps.h5");
+    let (code, log, written) = plot_bounded(
+        dir.path(),
+        &ck,
+        &["--contact", "--all-steps", "--change"],
+        "change.svg",
+    );
+    assert_eq!(code, 0, "{log}");
+    assert!(written);
+    assert!(
+        log.contains("steps 2 to 4, contact pressure change since the reference step")
+            && log.contains("step 1 precedes the reference step 2"),
+        "{log}"
+    );
+    let svg = std::fs::read_to_string(dir.path().join("change.svg")).unwrap();
+    assert!(svg.contains("steps 2–4, change since step 2"), "title");
+    for k in 2..=4 {
+        assert!(
+            svg.contains(&format!("step {k} (t = {k})")),
+            "legend of step {k}"
+        );
+    }
+    assert!(
+        !svg.contains("step 1 (t = 1)"),
+        "step 1 has no change to draw"
+    );
+    // Without --change every step is drawn, as before.
+    let (code, log, _) = plot_bounded(dir.path(), &ck, &["--contact", "--all-steps"], "all.png");
+    assert_eq!(code, 0, "{log}");
+    assert!(
+        log.contains("steps 1 to 4, contact pressure") && !log.contains("precede"),
+        "{log}"
+    );
+}
+
+/// A stress component spanning ±1.7e308 has no finite colour scale:
+/// exit 2 naming the field (other fields of the file still draw).
+#[test]
+fn a_field_whose_span_overflows_is_exit_2() {
+    let dir = out_dir();
+    let ck = edited_checkpoint(dir.path(), "steps/0001/stress", |s| {
+        s[0] = -1.7e308;
+        s[4] = 1.7e308;
+    });
+    let (code, log, written) = plot_bounded(dir.path(), &ck, &["--field", "sxx"], "fig.png");
+    assert_eq!(code, 2, "{log}");
+    assert!(
+        log.contains("edited.h5") && log.contains("field sxx") && log.contains("--range"),
+        "{log}"
+    );
+    assert!(!written);
+    let (code, log, _) = plot_bounded(
+        dir.path(),
+        &ck,
+        &["--field", "sxx", "--range", "-1e6,1e6"],
+        "fig.png",
+    );
+    assert_eq!(code, 0, "{log}");
+    let (code, log, _) = plot_bounded(dir.path(), &ck, &["--field", "uy"], "uy.png");
+    assert_eq!(code, 0, "{log}");
 }

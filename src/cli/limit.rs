@@ -56,6 +56,7 @@ pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32
         let ch = match settings.workspace().cholesky(&qp.c, &qp.kernel) {
             Ok(c) => c,
             Err(e) => {
+                let e = crate::qp::QpError::from(e);
                 eprintln!("error: {}: {e}", a.problem.display());
                 return EXIT_BAD_INPUT;
             }

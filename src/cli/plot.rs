@@ -56,7 +56,8 @@ pub struct PlotArgs {
     #[arg(long)]
     pub change: bool,
     /// With --contact: every step of the checkpoint in one figure, one
-    /// curve per step (a load-step sequence).
+    /// curve per step (a load-step sequence). With --change: the steps from
+    /// the reference step on (the earlier ones have no change to draw).
     #[arg(long, conflicts_with = "step")]
     pub all_steps: bool,
 }
@@ -125,7 +126,16 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                     }
                 };
                 if a.all_steps {
-                    println!("steps 1 to {}, {what}", s.steps);
+                    println!("steps {} to {}, {what}", s.first_step, s.steps);
+                    // With --change the figure starts at the reference step.
+                    match s.first_step {
+                        1 => {}
+                        2 => println!("step 1 precedes the reference step 2: no change to draw, left out"),
+                        f => println!(
+                            "steps 1 to {} precede the reference step {f}: no change to draw, left out",
+                            f - 1
+                        ),
+                    }
                 } else {
                     println!("step {} of {}, {what}", s.step, s.steps);
                 }

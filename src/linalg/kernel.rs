@@ -7,8 +7,8 @@
 //! vector that is not a rigid motion would make every FETI-type elimination
 //! silently wrong), and zero or non-finite vectors are errors, not skipped.
 
+use crate::linalg::error::{KernelDefect, LinalgError};
 use crate::linalg::sparse::{dot, norm, norm_inf, Csr};
-use crate::qp::QpError;
 
 /// Relative test ‖C z‖ / (max diag C · ‖z‖) a kernel vector must pass.
 pub const KERNEL_TOL: f64 = 1e-8;
@@ -19,29 +19,34 @@ const DEPENDENT: f64 = 1e-10;
 
 /// An orthonormal basis of span(kernel) (modified Gram–Schmidt, twice;
 /// dependent vectors dropped), after checking that every vector is in ker C.
-pub fn orthonormal_kernel(c: &Csr, kernel: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, QpError> {
+pub fn orthonormal_kernel(c: &Csr, kernel: &[Vec<f64>]) -> Result<Vec<Vec<f64>>, LinalgError> {
     let cmax = norm_inf(&c.diag()).max(f64::MIN_POSITIVE);
     let mut out: Vec<Vec<f64>> = vec![];
     for (i, z) in kernel.iter().enumerate() {
         if z.len() != c.ncols {
-            return Err(QpError::BadParameter(format!(
-                "kernel vector {i} has length {}, C has {} columns",
-                z.len(),
-                c.ncols
-            )));
+            return Err(LinalgError::Kernel {
+                index: i,
+                defect: KernelDefect::Length {
+                    len: z.len(),
+                    ncols: c.ncols,
+                },
+            });
         }
         let nz = norm(z);
         if !nz.is_finite() || nz <= 0.0 {
-            return Err(QpError::BadParameter(format!(
-                "kernel vector {i} is zero or not finite"
-            )));
+            return Err(LinalgError::Kernel {
+                index: i,
+                defect: KernelDefect::ZeroOrNotFinite,
+            });
         }
         let cz = c.mul(z);
         if norm(&cz) > KERNEL_TOL * cmax * nz {
-            return Err(QpError::BadParameter(format!(
-                "kernel vector {i} is not in ker C (‖Cz‖/(max diag C·‖z‖) = {:.3e})",
-                norm(&cz) / (cmax * nz)
-            )));
+            return Err(LinalgError::Kernel {
+                index: i,
+                defect: KernelDefect::NotInKernel {
+                    ratio: norm(&cz) / (cmax * nz),
+                },
+            });
         }
         let mut v: Vec<f64> = z.iter().map(|a| a / nz).collect();
         for _ in 0..2 {
@@ -98,18 +103,20 @@ mod tests {
 
     #[test]
     fn bad_vectors_are_errors() {
-        for bad in [
-            vec![1.0, 0.0, 0.0],      // not in ker C
-            vec![0.0, 0.0, 0.0],      // zero
-            vec![f64::NAN, 1.0, 0.0], // not finite
-            vec![1.0, 1.0],           // wrong length
+        for (bad, want) in [
+            (vec![1.0, 0.0, 0.0], "is not in ker C"),
+            (vec![0.0, 0.0, 0.0], "is zero or not finite"),
+            (vec![f64::NAN, 1.0, 0.0], "is zero or not finite"),
+            (vec![1.0, 1.0], "has length 2, C has 3 columns"),
         ] {
+            let e = orthonormal_kernel(&c(), &[vec![1.0, 1.0, 0.0], bad.clone()]).unwrap_err();
             assert!(
-                matches!(
-                    orthonormal_kernel(&c(), std::slice::from_ref(&bad)),
-                    Err(QpError::BadParameter(_))
-                ),
-                "{bad:?}"
+                matches!(e, LinalgError::Kernel { index: 1, .. }) && !e.is_memory(),
+                "{bad:?}: {e:?}"
+            );
+            assert!(
+                e.to_string().starts_with("kernel vector 1 ") && e.to_string().contains(want),
+                "{e}"
             );
         }
     }

@@ -4,17 +4,22 @@
 //! kernels ([`dense`]), the checked basis of ker C ([`kernel`]) and
 //! C + Aᵀdiag(w)A on one pattern ([`augmented`]), and a smoothed-aggregation
 //! AMG preconditioner with its PCG ([`amg`]). Algorithms live in `qp`; the
-//! kernels they share live here, once.
+//! kernels they share live here, once. Failures are [`LinalgError`]s, which
+//! know nothing of the solver settings: the QP layer converts them and adds
+//! the advice.
 
 pub mod amg;
 pub mod augmented;
 pub mod cholesky;
 pub mod dense;
+pub mod error;
 pub mod kernel;
 pub mod ordering;
 pub mod power;
 pub mod rotation;
 pub mod sparse;
+
+pub use error::LinalgError;
 
 /// How many parts faer's parallel kernels split their work into, whatever
 /// the number of cores (docs/methods.md §8.5). faer's default follows

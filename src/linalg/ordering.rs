@@ -1,7 +1,7 @@
 //! Fill-reducing orderings for the sparse Cholesky factors (docs/methods.md §3).
 //!
 //! The factor of C costs what its fill costs: nnz(L) is the memory, Σcⱼ² the
-//! work. Two orderings are offered, chosen by the user (`[solver] ordering`),
+//! work. Two orderings are offered, chosen by the user (a setting of the caller),
 //! never by the size of the model, so the same input gives the same bits:
 //!
 //! - **AMD** (approximate minimum degree, faer's port of SuiteSparse AMD;
@@ -15,6 +15,7 @@
 //!
 //! Orderings are returned as (new → old, old → new).
 
+use crate::linalg::error::LinalgError;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMat;
 use std::sync::Mutex;
@@ -30,7 +31,7 @@ pub enum Ordering {
 }
 
 impl Ordering {
-    /// The spellings of `[solver] ordering` and `--ordering`.
+    /// The spellings a user writes for each ordering.
     pub const NAMES: [&'static str; 2] = ["amd", "nested-dissection"];
 
     pub fn name(self) -> &'static str {
@@ -54,7 +55,7 @@ impl Ordering {
 pub fn order(
     sym: &SymbolicSparseColMat<usize>,
     ordering: Ordering,
-) -> Result<(Vec<usize>, Vec<usize>), String> {
+) -> Result<(Vec<usize>, Vec<usize>), LinalgError> {
     match ordering {
         Ordering::Amd => amd(sym),
         Ordering::NestedDissection => nested_dissection(sym),
@@ -62,13 +63,13 @@ pub fn order(
 }
 
 /// AMD (faer) of the pattern `sym`.
-pub fn amd(sym: &SymbolicSparseColMat<usize>) -> Result<(Vec<usize>, Vec<usize>), String> {
+pub fn amd(sym: &SymbolicSparseColMat<usize>) -> Result<(Vec<usize>, Vec<usize>), LinalgError> {
     use faer::sparse::linalg::amd;
     let n = sym.nrows();
     let nnz = sym.row_idx().len();
     let (mut perm, mut perm_inv) = (vec![0usize; n], vec![0usize; n]);
     let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(n, nnz))
-        .map_err(|_| "out of memory for the ordering".to_string())?;
+        .map_err(|_| LinalgError::Ordering("out of memory for the ordering".into()))?;
     amd::order_maybe_unsorted(
         &mut perm,
         &mut perm_inv,
@@ -76,7 +77,7 @@ pub fn amd(sym: &SymbolicSparseColMat<usize>) -> Result<(Vec<usize>, Vec<usize>)
         amd::Control::default(),
         MemStack::new(&mut mem),
     )
-    .map_err(|e| format!("AMD ordering: {e:?}"))?;
+    .map_err(|e| LinalgError::Ordering(format!("AMD ordering: {e:?}")))?;
     Ok((perm, perm_inv))
 }
 
@@ -92,7 +93,7 @@ const METIS_SEED: i32 = 42;
 /// vertices of equal adjacency: the two DOFs of a node) of the pattern `sym`.
 pub fn nested_dissection(
     sym: &SymbolicSparseColMat<usize>,
-) -> Result<(Vec<usize>, Vec<usize>), String> {
+) -> Result<(Vec<usize>, Vec<usize>), LinalgError> {
     let n = sym.nrows();
     if n <= 2 {
         let id: Vec<usize> = (0..n).collect();
@@ -111,9 +112,7 @@ pub fn nested_dissection(
     }
     let total: usize = deg.iter().sum();
     if total > i32::MAX as usize || n > i32::MAX as usize {
-        return Err(format!(
-            "nested dissection: the graph has {total} adjacency entries, more than METIS's 32-bit indices hold; use ordering = \"amd\""
-        ));
+        return Err(LinalgError::GraphTooLarge { entries: total });
     }
     let mut xadj = vec![0i32; n + 1];
     for i in 0..n {
@@ -157,12 +156,12 @@ pub fn nested_dissection(
         }
     };
     if rc != metis_sys::rstatus_et_METIS_OK {
-        return Err(match rc {
+        return Err(LinalgError::Ordering(match rc {
             metis_sys::rstatus_et_METIS_ERROR_MEMORY => {
                 "nested dissection: METIS ran out of memory".to_string()
             }
             _ => format!("nested dissection: METIS_NodeND failed (status {rc})"),
-        });
+        }));
     }
     // METIS: row i of the permuted matrix is row perm[i] of the original.
     let fwd: Vec<usize> = perm.iter().map(|&v| v as usize).collect();
@@ -170,7 +169,9 @@ pub fn nested_dissection(
     let mut seen = vec![false; n];
     for (k, &i) in fwd.iter().enumerate() {
         if i >= n || seen[i] || inv[i] != k {
-            return Err("nested dissection: METIS returned no permutation".into());
+            return Err(LinalgError::Ordering(
+                "nested dissection: METIS returned no permutation".into(),
+            ));
         }
         seen[i] = true;
     }

@@ -20,6 +20,7 @@ pub mod active_set;
 pub mod driver;
 pub mod dual;
 pub mod executor;
+mod factor_advice;
 pub mod kkt;
 pub mod method;
 pub mod precond;
@@ -456,16 +457,6 @@ pub enum QpError {
     /// path (the bits of an answer must not depend on free memory).
     #[error("{0}")]
     Memory(String),
-}
-
-impl From<crate::linalg::cholesky::FactorError> for QpError {
-    fn from(e: crate::linalg::cholesky::FactorError) -> QpError {
-        if e.memory {
-            QpError::Memory(e.message)
-        } else {
-            QpError::Factor(e.message)
-        }
-    }
 }
 
 /// The large number of §5 (overflow guard, step for zero curvature).

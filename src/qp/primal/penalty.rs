@@ -237,14 +237,14 @@ impl Relax<'_> {
         // the machine's free memory.
         let fac = match self.ws.cholesky(k, &[]) {
             Ok(f) => f,
-            Err(e) if e.memory => {
+            Err(e) if e.is_memory() => {
                 self.error = Some(e.into());
                 return false;
             }
             Err(_) if !qp.kernel.is_empty() => match self.ws.cholesky(k, &qp.kernel) {
                 Ok(f) => f,
                 Err(e) => {
-                    if e.memory {
+                    if e.is_memory() {
                         self.error = Some(e.into());
                     }
                     return false;

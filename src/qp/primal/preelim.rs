@@ -139,7 +139,7 @@ fn factor_c11(
         return Ok(None);
     }
     ctx.ws.cholesky(&c11, &[]).map(Some).map_err(|e| {
-        if e.memory {
+        if e.is_memory() {
             return e.into();
         }
         QpError::Unsupported(format!(

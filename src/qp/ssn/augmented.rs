@@ -82,7 +82,7 @@ impl Ssn<'_> {
                     Ok(f) => Some(f),
                     // Memory is not a property of K_J: end the solve, do
                     // not fall back (QpError::Memory).
-                    Err(e) if e.memory => {
+                    Err(e) if e.is_memory() => {
                         self.error = Some(e.into());
                         None
                     }
