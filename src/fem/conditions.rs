@@ -70,10 +70,7 @@ impl Conditions {
     ) -> Result<(), FemError> {
         for (i, dch) in problem.file.dirichlet.iter().enumerate() {
             let what = format!("[[dirichlet]] #{} (on = \"{}\")", i + 1, dch.on);
-            let (ux, uy) = match dch.u {
-                Some(u) => (Some(u[0]), Some(u[1])),
-                None => (dch.ux, dch.uy),
-            };
+            let [ux, uy] = dch.value.components();
             let mut pts: Vec<usize> = topo
                 .group_points(mesh, problem, &dch.on, &what)?
                 .into_iter()

@@ -11,7 +11,7 @@ use super::conditions::PointDofs;
 use super::contact::ContactRow;
 use super::topology::Topology;
 use super::{FemError, Model};
-use crate::problem::Problem;
+use crate::problem::{ContactPair, FrictionLaw, Problem};
 use crate::qp::{Csr, Friction, SlipBound};
 
 /// The row with its normal turned by +90°: its coefficients are those of
@@ -34,20 +34,11 @@ pub fn tangential_coefficients(row: &ContactRow) -> Vec<(usize, [f64; 2])> {
 /// pairs are numbered first, then the non-matching ones; `topology`, `pairs`).
 fn contact_of_interface(problem: &Problem) -> Vec<usize> {
     let c = &problem.file.contact;
+    let conforming = |i: &usize| matches!(c[*i].pair, ContactPair::Conforming { .. });
     (0..c.len())
-        .filter(|&i| c[i].on.is_some())
-        .chain((0..c.len()).filter(|&i| c[i].on.is_none()))
+        .filter(conforming)
+        .chain((0..c.len()).filter(|i| !conforming(i)))
         .collect()
-}
-
-/// How `[[contact]]` #i is named in messages.
-fn pair_name(problem: &Problem, i: usize) -> String {
-    let c = &problem.file.contact[i];
-    match (&c.on, &c.slave, &c.master) {
-        (Some(on), _, _) => format!("[[contact]] #{} on = \"{on}\"", i + 1),
-        (_, Some(s), Some(m)) => format!("[[contact]] #{} \"{s}\" -> \"{m}\"", i + 1),
-        _ => format!("[[contact]] #{}", i + 1),
-    }
 }
 
 /// The friction of the QP rows `qp_rows` (None without a friction key;
@@ -64,8 +55,9 @@ pub(super) fn build(
         return Ok(None);
     }
     let contacts = &problem.file.contact;
-    let tresca = contacts.iter().any(|c| c.tresca.is_some());
-    let coulomb = contacts.iter().any(|c| c.friction.is_some_and(|m| m > 0.0));
+    let law = |l: fn(&FrictionLaw) -> bool| contacts.iter().any(|c| l(&c.friction));
+    let tresca = law(|f| matches!(f, FrictionLaw::Tresca(_)));
+    let coulomb = law(|f| matches!(f, FrictionLaw::Coulomb(_)));
     if tresca && coulomb {
         return Err(FemError::new(
             &problem.path,
@@ -81,10 +73,24 @@ pub(super) fn build(
         let ci = owner[row.interface as usize];
         rows_of[ci] += 1;
         let c = &contacts[ci];
-        bound.push(if tresca {
-            c.tresca.unwrap_or(0.0) * row.trib * t_eff
-        } else {
-            c.friction.unwrap_or(0.0)
+        bound.push(match c.friction {
+            FrictionLaw::Tresca(s) => {
+                let b = s * row.trib * t_eff;
+                if !b.is_finite() {
+                    return Err(FemError::new(
+                        &problem.path,
+                        format!(
+                            "[[contact]] #{} ({}): tresca = {s:e} times the tributary length {:e} and the thickness {t_eff:e} overflows; change the units",
+                            ci + 1,
+                            c.keys(),
+                            row.trib
+                        ),
+                    ));
+                }
+                b
+            }
+            FrictionLaw::Coulomb(mu) => mu,
+            FrictionLaw::Frictionless => 0.0,
         });
         for (p, cvec) in tangential(row).coefficients() {
             let pd = dofs[p];
@@ -97,13 +103,13 @@ pub(super) fn build(
         }
     }
     for (ci, c) in contacts.iter().enumerate() {
-        let has = c.friction.is_some_and(|m| m > 0.0) || c.tresca.is_some();
-        if has && rows_of[ci] == 0 {
+        if c.has_friction() && rows_of[ci] == 0 {
             return Err(FemError::new(
                 &problem.path,
                 format!(
-                    "{}: friction is given but the pair has no contact rows (every point fixed, or no slave node projects onto the master)",
-                    pair_name(problem, ci)
+                    "[[contact]] #{} ({}): friction is given but the pair has no contact rows (every point fixed, or no slave node projects onto the master)",
+                    ci + 1,
+                    c.keys()
                 ),
             ));
         }

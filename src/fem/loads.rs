@@ -14,7 +14,7 @@ use super::stiffness::Materials;
 use super::topology::{dim_name, group_names, Topology};
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::problem::Problem;
+use crate::problem::{Problem, TractionLoad};
 use crate::qp::Csr;
 
 /// The nodal loads on every point [N] (thickness included), and their
@@ -101,13 +101,12 @@ impl Loads<'_> {
                 let Some((a, b, t)) = seg else { continue };
                 let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
                 let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
-                let pv = match (tr.p, tr.pn) {
-                    (Some(pv), _) => pv,
-                    (None, Some(pn)) => {
+                let pv = match tr.load {
+                    TractionLoad::Vector(pv) => pv,
+                    TractionLoad::Normal(pn) => {
                         let nrm = topo.outward_normal(mesh, t, a, b);
                         [pn * nrm[0], pn * nrm[1]]
                     }
-                    _ => [0.0, 0.0],
                 };
                 self.add(p, [0.5 * th * len * pv[0], 0.5 * th * len * pv[1]]);
             }

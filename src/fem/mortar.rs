@@ -17,7 +17,7 @@ use super::pairs::{BoundarySeg, Pair};
 use super::topology::Topology;
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::problem::{Contact, Problem};
+use crate::problem::{NonMatchingPair, Problem};
 use std::collections::{BTreeMap, HashMap};
 
 /// Gauss–Legendre points and weights on [0, 1] (5 points: exact to degree
@@ -150,16 +150,13 @@ impl Topology {
         &mut self,
         mesh: &Mesh,
         problem: &Problem,
-        c: &Contact,
+        c: &NonMatchingPair,
         pair: &Pair,
     ) -> Result<(), FemError> {
         let (id, what) = (pair.id, &pair.what);
         let (msegs, ssegs) = (&pair.masters[..], &pair.slaves[..]);
         let err = |msg: String| FemError::new(&problem.path, msg);
-        let (sname, mname) = (
-            c.slave.as_deref().unwrap_or(""),
-            c.master.as_deref().unwrap_or(""),
-        );
+        let (sname, mname) = (c.slave.as_str(), c.master.as_str());
         // Averaged slave normals: the sum of the adjacent segments' unit
         // outward normals, normalized (§7.1).
         let mut nsum: HashMap<(usize, u32), [f64; 2]> = HashMap::new();

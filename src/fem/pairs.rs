@@ -14,7 +14,7 @@ use super::edges::NONE32;
 use super::topology::{curve_group, Topology};
 use super::FemError;
 use crate::mesh::{Mesh, PhysicalGroup};
-use crate::problem::{Contact, NormalKind, Problem};
+use crate::problem::{ContactPair, Discretization, NonMatchingPair, NormalKind, Problem};
 use std::collections::HashMap;
 
 /// A conforming node on one pair of bodies: (mesh node, body k, body l), k < l.
@@ -42,8 +42,10 @@ impl Topology {
             .file
             .contact
             .iter()
-            .filter(|c| c.on.is_some())
-            .map(|c| c.normals)
+            .filter_map(|c| match c.pair {
+                ContactPair::Conforming { normals, .. } => Some(normals),
+                ContactPair::NonMatching(_) => None,
+            })
             .collect();
         let (acc, segs) = self.conforming_nodes(mesh, problem, contact_edges)?;
         let mut keys: Vec<NodePair> = acc.keys().copied().collect();
@@ -200,9 +202,10 @@ impl Topology {
         problem: &Problem,
     ) -> Result<(), FemError> {
         for (ci, c) in problem.file.contact.iter().enumerate() {
-            let (Some(sname), Some(mname)) = (&c.slave, &c.master) else {
+            let ContactPair::NonMatching(nm) = &c.pair else {
                 continue;
             };
+            let (sname, mname) = (&nm.slave, &nm.master);
             let what = format!("[[contact]] #{}", ci + 1);
             let sg = curve_group(mesh, sname, &what, &problem.path)?;
             let mg = curve_group(mesh, mname, &what, &problem.path)?;
@@ -214,10 +217,9 @@ impl Topology {
                 slaves: self.boundary_segments(mesh, problem, sg, &what, "slave", sname)?,
                 what,
             };
-            if c.mortar() {
-                self.mortar_rows(mesh, problem, c, &pair)?;
-            } else {
-                self.nonmatching_rows(mesh, problem, c, &pair)?;
+            match nm.discretization {
+                Discretization::Mortar => self.mortar_rows(mesh, problem, nm, &pair)?,
+                Discretization::Nts => self.nonmatching_rows(mesh, problem, nm, &pair)?,
             }
         }
         Ok(())
@@ -260,16 +262,13 @@ impl Topology {
         &mut self,
         mesh: &Mesh,
         problem: &Problem,
-        c: &Contact,
+        c: &NonMatchingPair,
         pair: &Pair,
     ) -> Result<(), FemError> {
         let (id, what) = (pair.id, &pair.what);
         let (msegs, ssegs) = (&pair.masters[..], &pair.slaves[..]);
         let err = |msg: String| FemError::new(&problem.path, msg);
-        let (sname, mname) = (
-            c.slave.as_deref().unwrap_or(""),
-            c.master.as_deref().unwrap_or(""),
-        );
+        let (sname, mname) = (c.slave.as_str(), c.master.as_str());
         let tree = SegmentTree::build(mesh, msegs);
         let mut stack = vec![];
         // Slave nodes with owner body and tributary length.

@@ -12,7 +12,7 @@ pub use super::contact::{ContactRow, RowKind};
 use super::edges::{Edges, UnionFind, NONE32};
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::problem::Problem;
+use crate::problem::{ContactPair, Problem};
 
 #[derive(Debug, Clone, Default)]
 pub struct Topology {
@@ -382,7 +382,7 @@ fn conforming_edges(
     let mut interface_names: Vec<String> = vec![];
     let mut contact_edges: Vec<((usize, usize), u32)> = vec![];
     for (ci, c) in problem.file.contact.iter().enumerate() {
-        if let Some(on) = &c.on {
+        if let ContactPair::Conforming { on, .. } = &c.pair {
             let g = curve_group(mesh, on, &format!("[[contact]] #{}", ci + 1), &problem.path)?;
             let id = interface_names.len() as u32;
             interface_names.push(on.clone());

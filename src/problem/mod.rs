@@ -5,6 +5,10 @@
 //! (E > 0, −1 < ν < 0.5, ρ ≥ 0, …); names are checked against the mesh in
 //! `fem::topology`.
 
+mod raw;
+mod toml_error;
+mod validate;
+
 pub use crate::qp::SolverSection;
 use serde::{Deserialize, Deserializer};
 use std::collections::BTreeMap;
@@ -125,25 +129,80 @@ pub struct Material {
     pub rho: f64,
 }
 
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// A `[[dirichlet]]` entry: the group and what it prescribes.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Dirichlet {
     pub on: String,
-    #[serde(default, deserialize_with = "opt_pair")]
-    pub u: Option<[f64; 2]>,
-    pub ux: Option<f64>,
-    pub uy: Option<f64>,
+    pub value: Prescribed,
 }
 
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// What a `[[dirichlet]]` prescribes: `u = [ux, uy]`, or `ux` and/or `uy`
+/// (a component not given stays free).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Prescribed {
+    /// `u = [ux, uy]`: both components.
+    Both([f64; 2]),
+    /// `ux`, `uy` or both; at least one is present.
+    Components { ux: Option<f64>, uy: Option<f64> },
+}
+
+impl Prescribed {
+    /// The prescribed [ux, uy]; None where the component is free.
+    pub fn components(&self) -> [Option<f64>; 2] {
+        match *self {
+            Prescribed::Both([x, y]) => [Some(x), Some(y)],
+            Prescribed::Components { ux, uy } => [ux, uy],
+        }
+    }
+
+    /// The same components with every value scaled by `f`.
+    fn scaled(&self, f: f64) -> Prescribed {
+        match *self {
+            Prescribed::Both(u) => Prescribed::Both([u[0] * f, u[1] * f]),
+            Prescribed::Components { ux, uy } => Prescribed::Components {
+                ux: ux.map(|v| v * f),
+                uy: uy.map(|v| v * f),
+            },
+        }
+    }
+
+    /// The same components with the values `u` of a load step
+    /// (`[[steps]] dirichlet`); a free component stays free.
+    fn replaced(&self, u: [f64; 2]) -> Prescribed {
+        match *self {
+            Prescribed::Both(_) => Prescribed::Both(u),
+            Prescribed::Components { ux, uy } => Prescribed::Components {
+                ux: ux.map(|_| u[0]),
+                uy: uy.map(|_| u[1]),
+            },
+        }
+    }
+}
+
+/// A `[[traction]]` entry: the curve and its load.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Traction {
     pub on: String,
-    /// Traction vector P [N/m²].
-    #[serde(default, deserialize_with = "opt_pair")]
-    pub p: Option<[f64; 2]>,
-    /// Normal pressure, positive outward (compression negative).
-    pub pn: Option<f64>,
+    pub load: TractionLoad,
+}
+
+/// The load of a `[[traction]]` [N/m²].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TractionLoad {
+    /// `p = [px, py]`: a fixed vector.
+    Vector([f64; 2]),
+    /// `pn`: along the outward normal of the body owning the segment
+    /// (negative pushes in).
+    Normal(f64),
+}
+
+impl TractionLoad {
+    fn scaled(&self, f: f64) -> TractionLoad {
+        match *self {
+            TractionLoad::Vector(p) => TractionLoad::Vector([p[0] * f, p[1] * f]),
+            TractionLoad::Normal(v) => TractionLoad::Normal(v * f),
+        }
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -171,33 +230,81 @@ pub enum NormalKind {
     Segment,
 }
 
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// A `[[contact]]` entry: which curves it pairs and the friction law on
+/// them (docs/problem-format.md §2, §4).
+#[derive(Debug, Clone, PartialEq)]
 pub struct Contact {
-    /// Conforming interface: one physical curve between two bodies.
-    pub on: Option<String>,
-    /// Non-matching pair: slave curve projected onto master curve.
-    pub slave: Option<String>,
-    pub master: Option<String>,
-    #[serde(default)]
-    pub normals: NormalKind,
-    /// Non-matching: largest initial gap at which a slave node is paired
-    /// (default: unlimited, i.e. every slave node that projects onto the master).
+    pub pair: ContactPair,
+    pub friction: FrictionLaw,
+}
+
+/// The two forms of a `[[contact]]` entry.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ContactPair {
+    /// `on = "curve"`: one physical curve shared by two bodies, node-to-node
+    /// rows (docs/methods.md §2.6–2.7).
+    Conforming { on: String, normals: NormalKind },
+    /// `slave`, `master`: two curves, one on each body (docs/methods.md §7).
+    NonMatching(NonMatchingPair),
+}
+
+/// A non-matching pair: slave curve projected onto the master curve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NonMatchingPair {
+    pub slave: String,
+    pub master: String,
+    /// Largest initial gap at which a slave node is paired (None: every
+    /// slave node that projects onto the master).
     pub max_gap: Option<f64>,
-    /// Coulomb friction coefficient μ ≥ 0 (default 0: frictionless).
-    pub friction: Option<f64>,
-    /// Tresca friction: the bound of the tangential traction (Pa), ≥ 0.
-    pub tresca: Option<f64>,
-    /// Non-matching: "nts" (node-to-segment, the default) or "mortar"
-    /// (segment-to-segment with dual multipliers, docs/methods.md §7.1).
-    pub discretization: Option<String>,
+    pub discretization: Discretization,
+}
+
+/// The rows of a non-matching pair (`discretization`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Discretization {
+    /// `"nts"` (the default): node-to-segment rows.
+    #[default]
+    Nts,
+    /// `"mortar"`: segment-to-segment rows with dual multipliers
+    /// (docs/methods.md §7.1).
+    Mortar,
+}
+
+/// The friction law of a pair (docs/methods.md §9).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FrictionLaw {
+    /// No friction key, or `friction = 0` (the same results bit for bit).
+    Frictionless,
+    /// `friction = μ`, μ > 0: the tangential force is bounded by μ λ_n.
+    Coulomb(f64),
+    /// `tresca = s`, s ≥ 0 [Pa]: the tangential traction is bounded by s.
+    Tresca(f64),
 }
 
 impl Contact {
-    /// Whether this non-matching pair uses mortar rows (docs/methods.md §7.1);
-    /// the value was checked by `Problem::validate`.
-    pub fn mortar(&self) -> bool {
-        self.discretization.as_deref() == Some("mortar")
+    /// The curve names of the pair: `[on]` or `[slave, master]`.
+    pub fn groups(&self) -> Vec<&str> {
+        match &self.pair {
+            ContactPair::Conforming { on, .. } => vec![on.as_str()],
+            ContactPair::NonMatching(p) => vec![p.slave.as_str(), p.master.as_str()],
+        }
+    }
+
+    /// The pair as written: `on = "x"` or `slave = "s", master = "m"`.
+    pub fn keys(&self) -> String {
+        match &self.pair {
+            ContactPair::Conforming { on, .. } => format!("on = \"{}\"", shorten(on)),
+            ContactPair::NonMatching(p) => format!(
+                "slave = \"{}\", master = \"{}\"",
+                shorten(&p.slave),
+                shorten(&p.master)
+            ),
+        }
+    }
+
+    /// Whether the pair has friction (μ > 0, or a `tresca` bound).
+    pub fn has_friction(&self) -> bool {
+        self.friction != FrictionLaw::Frictionless
     }
 }
 
@@ -237,31 +344,20 @@ pub struct LoadStep {
     pub dirichlet: BTreeMap<String, [f64; 2]>,
 }
 
-/// The whole problem file.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// The whole problem file, checked and typed (`validate`).
+#[derive(Debug, Clone)]
 pub struct ProblemFile {
     pub mesh: MeshSection,
-    #[serde(default)]
     pub model: ModelSection,
-    #[serde(default)]
     pub materials: BTreeMap<String, Material>,
-    #[serde(default)]
     pub dirichlet: Vec<Dirichlet>,
-    #[serde(default)]
     pub traction: Vec<Traction>,
-    #[serde(default)]
     pub slip: Vec<Slip>,
-    #[serde(default)]
     pub force: Vec<Force>,
-    #[serde(default)]
     pub contact: Vec<Contact>,
-    #[serde(default)]
     pub solver: SolverSection,
-    #[serde(default)]
     pub output: OutputSection,
     /// Load steps (extension); none = one step with the values as given.
-    #[serde(default)]
     pub steps: Vec<LoadStep>,
 }
 
@@ -276,26 +372,17 @@ impl ProblemFile {
         let lf = st.load.or(st.factor).unwrap_or(1.0);
         let df = st.displacement.or(st.factor).unwrap_or(1.0);
         for t in f.traction.iter_mut() {
-            t.p = t.p.map(|p| [p[0] * lf, p[1] * lf]);
-            t.pn = t.pn.map(|v| v * lf);
+            t.load = t.load.scaled(lf);
         }
         for fo in f.force.iter_mut() {
             fo.f = [fo.f[0] * lf, fo.f[1] * lf];
         }
         f.model.gravity = f.model.gravity.map(|g| [g[0] * lf, g[1] * lf]);
         for d in f.dirichlet.iter_mut() {
-            if let Some(u) = st.dirichlet.get(&d.on) {
-                if d.u.is_some() {
-                    d.u = Some(*u);
-                } else {
-                    d.ux = d.ux.map(|_| u[0]);
-                    d.uy = d.uy.map(|_| u[1]);
-                }
-            } else {
-                d.u = d.u.map(|u| [u[0] * df, u[1] * df]);
-                d.ux = d.ux.map(|v| v * df);
-                d.uy = d.uy.map(|v| v * df);
-            }
+            d.value = match st.dirichlet.get(&d.on) {
+                Some(u) => d.value.replaced(*u),
+                None => d.value.scaled(df),
+            };
         }
         f
     }
@@ -328,10 +415,7 @@ pub struct Problem {
 impl Problem {
     /// Whether any `[[contact]]` has friction (μ > 0 or a `tresca` bound).
     pub fn has_friction(&self) -> bool {
-        self.file
-            .contact
-            .iter()
-            .any(|c| c.friction.is_some_and(|m| m > 0.0) || c.tresca.is_some())
+        self.file.contact.iter().any(Contact::has_friction)
     }
 
     pub fn load(path: &Path) -> Result<Problem, ModelError> {
@@ -345,22 +429,24 @@ impl Problem {
     /// Parse `text` as the problem file `path` (used for messages and for
     /// resolving the mesh path).
     pub fn parse(path: &Path, text: &str) -> Result<Problem, ModelError> {
-        let file: ProblemFile = toml::from_str(text).map_err(|e| ModelError::Syntax {
+        let raw: raw::RawFile = toml::from_str(text).map_err(|e| ModelError::Syntax {
             path: path.to_path_buf(),
-            msg: describe_toml_error(text, &e),
+            msg: toml_error::describe_toml_error(text, &e),
+        })?;
+        let file = validate::validate(raw).map_err(|msg| ModelError::Invalid {
+            path: path.to_path_buf(),
+            msg,
         })?;
         let name = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "model".into());
-        let p = Problem {
+        Ok(Problem {
             path: path.to_path_buf(),
             name,
             text: text.to_string(),
             file,
-        };
-        p.validate()?;
-        Ok(p)
+        })
     }
 
     /// The mesh path, resolved relative to the TOML file.
@@ -372,397 +458,4 @@ impl Problem {
             self.path.parent().unwrap_or(Path::new(".")).join(f)
         }
     }
-
-    fn invalid(&self, msg: String) -> ModelError {
-        ModelError::Invalid {
-            path: self.path.clone(),
-            msg,
-        }
-    }
-
-    fn validate(&self) -> Result<(), ModelError> {
-        let f = &self.file;
-        let finite = |v: f64| v.is_finite();
-        // Names are echoed in messages, which must stay one line: no control
-        // characters (a TOML escape such as "\n" could put one there).
-        let mut names: Vec<(&str, &str)> = vec![];
-        names.extend(f.materials.keys().map(|n| ("[materials.NAME]", n.as_str())));
-        names.extend(
-            f.dirichlet
-                .iter()
-                .map(|d| ("[[dirichlet]] on", d.on.as_str())),
-        );
-        names.extend(
-            f.traction
-                .iter()
-                .map(|t| ("[[traction]] on", t.on.as_str())),
-        );
-        names.extend(f.slip.iter().map(|s| ("[[slip]] on", s.on.as_str())));
-        names.extend(f.force.iter().map(|x| ("[[force]] on", x.on.as_str())));
-        for c in &f.contact {
-            for (what, n) in [
-                ("[[contact]] on", &c.on),
-                ("[[contact]] slave", &c.slave),
-                ("[[contact]] master", &c.master),
-            ] {
-                if let Some(n) = n {
-                    names.push((what, n.as_str()));
-                }
-            }
-        }
-        for st in &f.steps {
-            names.extend(
-                st.dirichlet
-                    .keys()
-                    .map(|n| ("[[steps]] dirichlet", n.as_str())),
-            );
-        }
-        names.extend(
-            f.output
-                .probes
-                .keys()
-                .map(|n| ("[output] probes", n.as_str())),
-        );
-        let mesh_file = f.mesh.file.to_string_lossy();
-        names.push(("[mesh] file", &mesh_file));
-        for (what, n) in names {
-            if n.chars().any(char::is_control) {
-                return Err(self.invalid(format!(
-                    "{what}: the name {:?} contains a control character",
-                    shorten(n)
-                )));
-            }
-            if n.len() > MAX_NAME {
-                return Err(self.invalid(format!(
-                    "{what}: the name \"{}\" is longer than {MAX_NAME} bytes",
-                    shorten(n)
-                )));
-            }
-        }
-        // A contact curve (conforming, or the slave side) that is also fixed
-        // or sliding: the contact rows of its points would be dropped without
-        // a word. A fixed master is an obstacle and stays allowed.
-        for (i, c) in f.contact.iter().enumerate() {
-            for n in [&c.on, &c.slave].into_iter().flatten() {
-                let fixed = f
-                    .dirichlet
-                    .iter()
-                    .map(|d| ("[[dirichlet]]", &d.on))
-                    .chain(f.slip.iter().map(|s| ("[[slip]]", &s.on)))
-                    .find(|(_, on)| *on == n);
-                if let Some((what, _)) = fixed {
-                    return Err(self.invalid(format!(
-                        "[[contact]] #{}: curve \"{}\" is also in {what}; a curve is either in contact or supported, not both",
-                        i + 1,
-                        shorten(n)
-                    )));
-                }
-            }
-        }
-        let big = |v: f64| {
-            let within = v.abs() <= MAX_MAGNITUDE;
-            !within
-        };
-        let too_big = |what: String, v: f64| {
-            self.invalid(format!(
-                "{what} = {v:e} is beyond ±{MAX_MAGNITUDE:e}: products with it would overflow; change the units"
-            ))
-        };
-        let mut loads: Vec<(String, f64)> = vec![];
-        if let Some(g) = f.model.gravity {
-            loads.extend(g.iter().map(|v| ("[model] gravity".to_string(), *v)));
-        }
-        for d in &f.dirichlet {
-            let what = format!("[[dirichlet]] on = \"{}\": u", shorten(&d.on));
-            loads.extend(
-                d.u.iter()
-                    .flatten()
-                    .chain(&d.ux)
-                    .chain(&d.uy)
-                    .map(|v| (what.clone(), *v)),
-            );
-        }
-        for t in &f.traction {
-            let what = format!("[[traction]] on = \"{}\": p", shorten(&t.on));
-            loads.extend(
-                t.p.iter()
-                    .flatten()
-                    .chain(&t.pn)
-                    .map(|v| (what.clone(), *v)),
-            );
-        }
-        for x in &f.force {
-            let what = format!("[[force]] on = \"{}\": f", shorten(&x.on));
-            loads.extend(x.f.iter().map(|v| (what.clone(), *v)));
-        }
-        for (what, v) in loads {
-            if v.is_finite() && big(v) {
-                return Err(too_big(what, v));
-            }
-        }
-        for (name, m) in &f.materials {
-            if m.e.is_finite() && m.e > 0.0 && (big(m.e) || m.e < 1.0 / MAX_MAGNITUDE) {
-                return Err(self.invalid(format!(
-                    "[materials.{}] E = {:e} lies outside [{:e}, {MAX_MAGNITUDE:e}]: stiffness products would underflow or overflow; change the units",
-                    shorten(name),
-                    m.e,
-                    1.0 / MAX_MAGNITUDE
-                )));
-            }
-        }
-        if !(f.model.thickness > 0.0 && finite(f.model.thickness)) {
-            return Err(self.invalid(format!(
-                "[model] thickness = {} must be positive",
-                f.model.thickness
-            )));
-        }
-        if let Some(g) = f.model.gravity {
-            if !g.iter().all(|v| finite(*v)) {
-                return Err(self.invalid("[model] gravity must be finite".into()));
-            }
-        }
-        if f.materials.is_empty() {
-            return Err(self.invalid(
-                "no [materials.NAME] table: every physical surface needs a material".into(),
-            ));
-        }
-        for (name, m) in &f.materials {
-            if !(m.e > 0.0 && finite(m.e)) {
-                return Err(
-                    self.invalid(format!("[materials.{name}] E = {} must be positive", m.e))
-                );
-            }
-            if !(m.nu > -1.0 && m.nu < 0.5) {
-                return Err(self.invalid(format!(
-                    "[materials.{name}] nu = {} must lie in (-1, 0.5)",
-                    m.nu
-                )));
-            }
-            if !(m.rho >= 0.0 && finite(m.rho)) {
-                return Err(self.invalid(format!(
-                    "[materials.{name}] rho = {} must be non-negative",
-                    m.rho
-                )));
-            }
-        }
-        for (i, d) in f.dirichlet.iter().enumerate() {
-            let n = d.u.is_some() as u8 + (d.ux.is_some() || d.uy.is_some()) as u8;
-            if n != 1 {
-                return Err(self.invalid(format!(
-                    "[[dirichlet]] #{} (on = \"{}\"): give either u = [ux, uy] or ux and/or uy",
-                    i + 1,
-                    d.on
-                )));
-            }
-            let vals =
-                d.u.map(|u| u.to_vec())
-                    .unwrap_or_else(|| d.ux.into_iter().chain(d.uy).collect());
-            if !vals.iter().all(|v| finite(*v)) {
-                return Err(self.invalid(format!(
-                    "[[dirichlet]] on = \"{}\": values must be finite",
-                    d.on
-                )));
-            }
-        }
-        for (i, t) in f.traction.iter().enumerate() {
-            if t.p.is_some() == t.pn.is_some() {
-                return Err(self.invalid(format!(
-                    "[[traction]] #{} (on = \"{}\"): give exactly one of p = [px, py] or pn",
-                    i + 1,
-                    t.on
-                )));
-            }
-            let ok = t.p.map(|p| p.iter().all(|v| finite(*v))).unwrap_or(true)
-                && t.pn.map(finite).unwrap_or(true);
-            if !ok {
-                return Err(self.invalid(format!(
-                    "[[traction]] on = \"{}\": values must be finite",
-                    t.on
-                )));
-            }
-        }
-        for fo in &f.force {
-            if !fo.f.iter().all(|v| finite(*v)) {
-                return Err(self.invalid(format!(
-                    "[[force]] on = \"{}\": values must be finite",
-                    fo.on
-                )));
-            }
-        }
-        for (i, c) in f.contact.iter().enumerate() {
-            let conf = c.on.is_some();
-            let nm = c.slave.is_some() || c.master.is_some();
-            if conf == nm || (nm && (c.slave.is_none() || c.master.is_none())) {
-                return Err(self.invalid(format!(
-                    "[[contact]] #{}: give either on = \"curve\" (conforming) or both slave and master (non-matching)",
-                    i + 1
-                )));
-            }
-            if let Some(g) = c.max_gap {
-                if g.is_nan() || g < 0.0 {
-                    return Err(
-                        self.invalid(format!("[[contact]] #{}: max_gap must be >= 0", i + 1))
-                    );
-                }
-            }
-            if c.friction.is_some() && c.tresca.is_some() {
-                return Err(self.invalid(format!(
-                    "[[contact]] #{}: give either friction = μ (Coulomb) or tresca = s (Tresca), not both",
-                    i + 1
-                )));
-            }
-            for (key, v) in [("friction", c.friction), ("tresca", c.tresca)] {
-                if let Some(v) = v {
-                    if !(v.is_finite() && v >= 0.0) {
-                        return Err(self.invalid(format!(
-                            "[[contact]] #{}: {key} = {v} must be a finite number >= 0",
-                            i + 1
-                        )));
-                    }
-                }
-            }
-            if let Some(d) = &c.discretization {
-                let pair = match (&c.on, &c.slave, &c.master) {
-                    (Some(on), _, _) => format!("on = \"{}\"", shorten(on)),
-                    (_, Some(s), Some(m)) => {
-                        format!("slave = \"{}\", master = \"{}\"", shorten(s), shorten(m))
-                    }
-                    _ => String::new(),
-                };
-                if conf {
-                    return Err(self.invalid(format!(
-                        "[[contact]] #{} ({pair}): discretization applies to non-matching pairs (slave, master) only; a conforming pair has node-to-node rows",
-                        i + 1
-                    )));
-                }
-                if d != "nts" && d != "mortar" {
-                    return Err(self.invalid(format!(
-                        "[[contact]] #{} ({pair}): discretization = {:?} is unknown; use \"nts\" or \"mortar\"",
-                        i + 1,
-                        shorten(d)
-                    )));
-                }
-            }
-        }
-        let s = &f.solver;
-        if let Some(t) = s.tol {
-            if !(t > 0.0 && t < 1.0) {
-                return Err(self.invalid(format!("[solver] tol = {t} must lie in (0, 1)")));
-            }
-        }
-        if s.max_iter == Some(0) {
-            return Err(self.invalid("[solver] max_iter must be positive".into()));
-        }
-        let mut last_t = f64::NEG_INFINITY;
-        for (i, st) in f.steps.iter().enumerate() {
-            for v in [st.t, st.factor, st.load, st.displacement]
-                .into_iter()
-                .flatten()
-            {
-                if !v.is_finite() {
-                    return Err(
-                        self.invalid(format!("[[steps]] #{}: values must be finite", i + 1))
-                    );
-                }
-            }
-            let t = st.t.unwrap_or((i + 1) as f64);
-            if t <= last_t {
-                return Err(self.invalid(format!(
-                    "[[steps]] #{}: t = {t} must increase from step to step",
-                    i + 1
-                )));
-            }
-            last_t = t;
-            for (name, u) in &st.dirichlet {
-                if !f.dirichlet.iter().any(|d| &d.on == name) {
-                    return Err(self.invalid(format!(
-                        "[[steps]] #{}: dirichlet.{name}: no [[dirichlet]] with on = \"{name}\"",
-                        i + 1
-                    )));
-                }
-                if !u.iter().all(|v| v.is_finite()) {
-                    return Err(self.invalid(format!(
-                        "[[steps]] #{}: dirichlet.{name}: values must be finite",
-                        i + 1
-                    )));
-                }
-            }
-        }
-        if let Some(k) = f.output.reference_step {
-            let n = f.nsteps();
-            if k == 0 || k > n {
-                return Err(self.invalid(format!(
-                    "[output] reference_step = {k}: load steps count from 1, and the problem has {n} step{}",
-                    if n == 1 { "" } else { "s" }
-                )));
-            }
-        }
-        for (name, p) in &f.output.probes {
-            if !p.iter().all(|v| finite(*v)) {
-                return Err(
-                    self.invalid(format!("[output] probe {name}: coordinates must be finite"))
-                );
-            }
-        }
-        Ok(())
-    }
-}
-
-/// One line: what is wrong, where (line:column), and the key when known.
-fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
-    let msg = e.message().trim().replace('\n', "; ");
-    match e.span() {
-        Some(span) => {
-            let mut start = span.start.min(text.len());
-            while !text.is_char_boundary(start) {
-                start -= 1;
-            }
-            let line = text[..start].matches('\n').count() + 1;
-            let line_start = text[..start].rfind('\n').map(|i| i + 1).unwrap_or(0);
-            let col = start - line_start + 1;
-            let line_text = text[line_start..].lines().next().unwrap_or("");
-            let snippet: String = text[start..]
-                .lines()
-                .next()
-                .unwrap_or("")
-                .chars()
-                .take(40)
-                .collect();
-            // The table the error is in; none when the error is in a table
-            // header itself (the header is the snippet).
-            let table = if line_text.trim_start().starts_with('[') {
-                String::new()
-            } else {
-                enclosing_table(text, line_start)
-            };
-            // The key of a `key = value` line, when the error is in its value.
-            let key = line_text
-                .split_once('=')
-                .map(|(k, _)| k.trim())
-                .filter(|k| {
-                    !k.is_empty()
-                        && !k.starts_with('[')
-                        && line_start + line_text.find('=').unwrap_or(0) < start
-                })
-                .map(|k| format!(", key `{k}`"))
-                .unwrap_or_default();
-            let at = match snippet.trim() {
-                "" => String::new(),
-                sn => format!(" (at `{sn}`)"),
-            };
-            format!("line {line}, column {col}{table}{key}: {msg}{at}")
-        }
-        None => msg,
-    }
-}
-
-/// " in [table]" for the table header that precedes byte offset `pos`.
-fn enclosing_table(text: &str, pos: usize) -> String {
-    text[..pos]
-        .lines()
-        .rev()
-        .map(str::trim)
-        .find(|l| l.starts_with('['))
-        .map(|l| format!(" in {}", l.split('#').next().unwrap_or(l).trim()))
-        .unwrap_or_default()
 }

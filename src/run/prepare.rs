@@ -84,7 +84,7 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 /// constraint at all: the bodies would pass through each other unnoticed.
 fn check_contact_groups(problem: &Problem, mesh: &Mesh) -> Result<(), RunError> {
     for (i, c) in problem.file.contact.iter().enumerate() {
-        for name in [&c.on, &c.slave, &c.master].into_iter().flatten() {
+        for name in c.groups() {
             if let Some(g) = mesh.group_any(name) {
                 if g.elements.is_empty() {
                     return Err(RunError::Solver {

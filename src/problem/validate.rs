@@ -1,0 +1,455 @@
+//! Checks of the problem file that need no mesh, and the one conversion of
+//! the raw entries ([`super::raw`]) into typed ones: a file either becomes a
+//! [`ProblemFile`] whose entries cannot be contradictory, or gives one
+//! message naming the table, entry and key (the caller adds the file).
+//! Names are checked against the mesh in `fem::topology`.
+
+use super::raw::{RawContact, RawDirichlet, RawFile, RawTraction};
+use super::{
+    shorten, Contact, ContactPair, Dirichlet, Discretization, FrictionLaw, NonMatchingPair,
+    Prescribed, ProblemFile, Traction, TractionLoad, MAX_MAGNITUDE, MAX_NAME,
+};
+
+type Check<T = ()> = Result<T, String>;
+
+/// The whole file, in the order the checks have always run (the first
+/// error found is the one reported).
+pub(super) fn validate(raw: RawFile) -> Check<ProblemFile> {
+    check_names(&raw)?;
+    check_contact_not_supported(&raw)?;
+    check_magnitudes(&raw)?;
+    check_model(&raw)?;
+    check_materials(&raw)?;
+    let dirichlet = collect(&raw.dirichlet, dirichlet)?;
+    let traction = collect(&raw.traction, traction)?;
+    for fo in &raw.force {
+        if !fo.f.iter().all(|v| v.is_finite()) {
+            return Err(format!(
+                "[[force]] on = \"{}\": values must be finite",
+                fo.on
+            ));
+        }
+    }
+    let contact = collect(&raw.contact, contact)?;
+    check_pairs_once(&contact)?;
+    check_solver(&raw)?;
+    check_steps(&raw)?;
+    check_output(&raw)?;
+    Ok(ProblemFile {
+        mesh: raw.mesh,
+        model: raw.model,
+        materials: raw.materials,
+        dirichlet,
+        traction,
+        slip: raw.slip,
+        force: raw.force,
+        contact,
+        solver: raw.solver,
+        output: raw.output,
+        steps: raw.steps,
+    })
+}
+
+/// Converts entry #i of a `[[table]]` array by `f(i, entry)`.
+fn collect<R, T>(raw: &[R], f: impl Fn(usize, &R) -> Check<T>) -> Check<Vec<T>> {
+    raw.iter().enumerate().map(|(i, r)| f(i, r)).collect()
+}
+
+/// Names are echoed in messages, which must stay one line: no control
+/// characters (a TOML escape such as "\n" could put one there), and no
+/// longer than [`MAX_NAME`].
+fn check_names(f: &RawFile) -> Check {
+    let mut names: Vec<(&str, &str)> = vec![];
+    names.extend(f.materials.keys().map(|n| ("[materials.NAME]", n.as_str())));
+    names.extend(
+        f.dirichlet
+            .iter()
+            .map(|d| ("[[dirichlet]] on", d.on.as_str())),
+    );
+    names.extend(
+        f.traction
+            .iter()
+            .map(|t| ("[[traction]] on", t.on.as_str())),
+    );
+    names.extend(f.slip.iter().map(|s| ("[[slip]] on", s.on.as_str())));
+    names.extend(f.force.iter().map(|x| ("[[force]] on", x.on.as_str())));
+    for c in &f.contact {
+        for (key, n) in c.names() {
+            let what = match key {
+                "on" => "[[contact]] on",
+                "slave" => "[[contact]] slave",
+                _ => "[[contact]] master",
+            };
+            names.push((what, n));
+        }
+    }
+    for st in &f.steps {
+        names.extend(
+            st.dirichlet
+                .keys()
+                .map(|n| ("[[steps]] dirichlet", n.as_str())),
+        );
+    }
+    names.extend(
+        f.output
+            .probes
+            .keys()
+            .map(|n| ("[output] probes", n.as_str())),
+    );
+    let mesh_file = f.mesh.file.to_string_lossy();
+    names.push(("[mesh] file", &mesh_file));
+    for (what, n) in names {
+        if n.chars().any(char::is_control) {
+            return Err(format!(
+                "{what}: the name {:?} contains a control character",
+                shorten(n)
+            ));
+        }
+        if n.len() > MAX_NAME {
+            return Err(format!(
+                "{what}: the name \"{}\" is longer than {MAX_NAME} bytes",
+                shorten(n)
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A contact curve (conforming, or the slave side) that is also fixed or
+/// sliding: the contact rows of its points would be dropped without a
+/// word. A fixed master is an obstacle and stays allowed.
+fn check_contact_not_supported(f: &RawFile) -> Check {
+    for (i, c) in f.contact.iter().enumerate() {
+        for n in [&c.on, &c.slave].into_iter().flatten() {
+            let fixed = f
+                .dirichlet
+                .iter()
+                .map(|d| ("[[dirichlet]]", &d.on))
+                .chain(f.slip.iter().map(|s| ("[[slip]]", &s.on)))
+                .find(|(_, on)| *on == n);
+            if let Some((what, _)) = fixed {
+                return Err(format!(
+                    "[[contact]] #{}: curve \"{}\" is also in {what}; a curve is either in contact or supported, not both",
+                    i + 1,
+                    shorten(n)
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether a finite `v` lies beyond ±[`MAX_MAGNITUDE`].
+fn beyond(v: f64) -> bool {
+    v.is_finite() && v.abs() > MAX_MAGNITUDE
+}
+
+/// Loads, prescribed displacements and E: their products (stiffness ×
+/// displacement, energy) must stay far inside the range of double precision.
+fn check_magnitudes(f: &RawFile) -> Check {
+    let mut loads: Vec<(String, f64)> = vec![];
+    if let Some(g) = f.model.gravity {
+        loads.extend(g.iter().map(|v| ("[model] gravity".to_string(), *v)));
+    }
+    for d in &f.dirichlet {
+        let what = format!("[[dirichlet]] on = \"{}\": u", shorten(&d.on));
+        loads.extend(d.values().map(|v| (what.clone(), v)));
+    }
+    for t in &f.traction {
+        let what = format!("[[traction]] on = \"{}\": p", shorten(&t.on));
+        loads.extend(t.values().map(|v| (what.clone(), v)));
+    }
+    for x in &f.force {
+        let what = format!("[[force]] on = \"{}\": f", shorten(&x.on));
+        loads.extend(x.f.iter().map(|v| (what.clone(), *v)));
+    }
+    if let Some((what, v)) = loads.into_iter().find(|(_, v)| beyond(*v)) {
+        return Err(format!(
+            "{what} = {v:e} is beyond ±{MAX_MAGNITUDE:e}: products with it would overflow; change the units"
+        ));
+    }
+    for (name, m) in &f.materials {
+        if m.e.is_finite() && m.e > 0.0 && (beyond(m.e) || m.e < 1.0 / MAX_MAGNITUDE) {
+            return Err(format!(
+                "[materials.{}] E = {:e} lies outside [{:e}, {MAX_MAGNITUDE:e}]: stiffness products would underflow or overflow; change the units",
+                shorten(name),
+                m.e,
+                1.0 / MAX_MAGNITUDE
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn check_model(f: &RawFile) -> Check {
+    let t = f.model.thickness;
+    if !(t > 0.0 && t.is_finite()) {
+        return Err(format!("[model] thickness = {t} must be positive"));
+    }
+    if let Some(g) = f.model.gravity {
+        if !g.iter().all(|v| v.is_finite()) {
+            return Err("[model] gravity must be finite".into());
+        }
+    }
+    Ok(())
+}
+
+fn check_materials(f: &RawFile) -> Check {
+    if f.materials.is_empty() {
+        return Err("no [materials.NAME] table: every physical surface needs a material".into());
+    }
+    for (name, m) in &f.materials {
+        if !(m.e > 0.0 && m.e.is_finite()) {
+            return Err(format!("[materials.{name}] E = {} must be positive", m.e));
+        }
+        if !(m.nu > -1.0 && m.nu < 0.5) {
+            return Err(format!(
+                "[materials.{name}] nu = {} must lie in (-1, 0.5)",
+                m.nu
+            ));
+        }
+        if !(m.rho >= 0.0 && m.rho.is_finite()) {
+            return Err(format!(
+                "[materials.{name}] rho = {} must be non-negative",
+                m.rho
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `[[dirichlet]]` #i: `u = [ux, uy]`, or `ux` and/or `uy`, finite.
+fn dirichlet(i: usize, d: &RawDirichlet) -> Check<Dirichlet> {
+    let value = match (d.u, d.ux, d.uy) {
+        (Some(u), None, None) => Prescribed::Both(u),
+        (None, ux, uy) if ux.is_some() || uy.is_some() => Prescribed::Components { ux, uy },
+        _ => {
+            return Err(format!(
+                "[[dirichlet]] #{} (on = \"{}\"): give either u = [ux, uy] or ux and/or uy",
+                i + 1,
+                d.on
+            ))
+        }
+    };
+    if !d.values().all(f64::is_finite) {
+        return Err(format!(
+            "[[dirichlet]] on = \"{}\": values must be finite",
+            d.on
+        ));
+    }
+    Ok(Dirichlet {
+        on: d.on.clone(),
+        value,
+    })
+}
+
+/// `[[traction]]` #i: exactly one of `p = [px, py]` and `pn`, finite.
+fn traction(i: usize, t: &RawTraction) -> Check<Traction> {
+    let load = match (t.p, t.pn) {
+        (Some(p), None) => TractionLoad::Vector(p),
+        (None, Some(pn)) => TractionLoad::Normal(pn),
+        _ => {
+            return Err(format!(
+                "[[traction]] #{} (on = \"{}\"): give exactly one of p = [px, py] or pn",
+                i + 1,
+                t.on
+            ))
+        }
+    };
+    if !t.values().all(f64::is_finite) {
+        return Err(format!(
+            "[[traction]] on = \"{}\": values must be finite",
+            t.on
+        ));
+    }
+    Ok(Traction {
+        on: t.on.clone(),
+        load,
+    })
+}
+
+/// `[[contact]]` #i: its form (`on`, or `slave` and `master`), the keys
+/// that apply to that form only, and the friction law.
+fn contact(i: usize, c: &RawContact) -> Check<Contact> {
+    let n = i + 1;
+    let pair = match (&c.on, &c.slave, &c.master) {
+        (Some(on), None, None) => ContactPair::Conforming {
+            on: on.clone(),
+            normals: c.normals.unwrap_or_default(),
+        },
+        (None, Some(slave), Some(master)) => ContactPair::NonMatching(NonMatchingPair {
+            slave: slave.clone(),
+            master: master.clone(),
+            max_gap: c.max_gap,
+            discretization: Discretization::Nts,
+        }),
+        _ => {
+            return Err(format!(
+                "[[contact]] #{n}: give either on = \"curve\" (conforming) or both slave and master (non-matching)"
+            ))
+        }
+    };
+    let mut typed = Contact {
+        pair,
+        friction: FrictionLaw::Frictionless,
+    };
+    let at = format!("[[contact]] #{n} ({})", typed.keys());
+    if let Some(g) = c.max_gap {
+        if g.is_nan() || g < 0.0 {
+            return Err(format!("{at}: max_gap = {g} must be >= 0"));
+        }
+    }
+    typed.friction = friction_law(c, &at)?;
+    match &mut typed.pair {
+        ContactPair::Conforming { .. } => {
+            // Keys of the other form would be dropped without a word.
+            let other = [
+                ("discretization", c.discretization.is_some()),
+                ("max_gap", c.max_gap.is_some()),
+            ];
+            if let Some((key, _)) = other.iter().find(|k| k.1) {
+                return Err(format!(
+                    "{at}: {key} applies to non-matching pairs (slave, master) only; a conforming pair has node-to-node rows"
+                ));
+            }
+        }
+        ContactPair::NonMatching(p) => {
+            if c.normals.is_some() {
+                return Err(format!(
+                    "{at}: normals applies to conforming pairs (on = \"curve\") only; a non-matching pair takes the master's normal (nts) or the slave's (mortar)"
+                ));
+            }
+            p.discretization = match c.discretization.as_deref() {
+                None | Some("nts") => Discretization::Nts,
+                Some("mortar") => Discretization::Mortar,
+                Some(d) => {
+                    return Err(format!(
+                        "{at}: discretization = {:?} is unknown; use \"nts\" or \"mortar\"",
+                        shorten(d)
+                    ))
+                }
+            };
+        }
+    }
+    Ok(typed)
+}
+
+/// `friction = μ` or `tresca = s` (not both), finite, ≥ 0 and at most
+/// [`MAX_MAGNITUDE`]: the row bound (μ λ_n, or s × tributary length ×
+/// thickness, docs/methods.md §9) must stay finite; `friction = 0` is no
+/// friction.
+fn friction_law(c: &RawContact, at: &str) -> Check<FrictionLaw> {
+    if c.friction.is_some() && c.tresca.is_some() {
+        return Err(format!(
+            "{at}: give either friction = μ (Coulomb) or tresca = s (Tresca), not both"
+        ));
+    }
+    for (key, v) in [("friction", c.friction), ("tresca", c.tresca)] {
+        let Some(v) = v else { continue };
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!("{at}: {key} = {v} must be a finite number >= 0"));
+        }
+        if v > MAX_MAGNITUDE {
+            return Err(format!(
+                "{at}: {key} = {v:e} is beyond {MAX_MAGNITUDE:e}: the friction bound of a row would overflow; change the units"
+            ));
+        }
+    }
+    Ok(match (c.friction, c.tresca) {
+        (_, Some(s)) => FrictionLaw::Tresca(s),
+        (Some(mu), None) if mu > 0.0 => FrictionLaw::Coulomb(mu),
+        _ => FrictionLaw::Frictionless,
+    })
+}
+
+/// One entry per pair. Two entries naming the same groups (the same `on`
+/// curve, or the same two curves as slave and master in either order)
+/// would give every node its rows twice, or one entry's keys (friction,
+/// discretization) would silently lose to the other's. Curves of other
+/// names that share segments are found with the mesh (`fem::topology`,
+/// `fem::pairs`).
+fn check_pairs_once(contact: &[Contact]) -> Check {
+    for (j, b) in contact.iter().enumerate() {
+        let mut gb = b.groups();
+        gb.sort_unstable();
+        let same = contact[..j].iter().position(|a| {
+            let mut ga = a.groups();
+            ga.sort_unstable();
+            ga == gb
+        });
+        if let Some(i) = same {
+            return Err(format!(
+                "[[contact]] #{} ({}) and #{} ({}) pair the same curves; give each pair once, with all its keys in one entry",
+                i + 1,
+                contact[i].keys(),
+                j + 1,
+                b.keys()
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn check_solver(f: &RawFile) -> Check {
+    let s = &f.solver;
+    if let Some(t) = s.tol {
+        if !(t > 0.0 && t < 1.0) {
+            return Err(format!("[solver] tol = {t} must lie in (0, 1)"));
+        }
+    }
+    if s.max_iter == Some(0) {
+        return Err("[solver] max_iter must be positive".into());
+    }
+    Ok(())
+}
+
+/// `[[steps]]`: finite values, increasing t, and explicit displacements only
+/// for groups that have a `[[dirichlet]]`.
+fn check_steps(f: &RawFile) -> Check {
+    let mut last_t = f64::NEG_INFINITY;
+    for (i, st) in f.steps.iter().enumerate() {
+        let n = i + 1;
+        let values = [st.t, st.factor, st.load, st.displacement];
+        if !values.into_iter().flatten().all(f64::is_finite) {
+            return Err(format!("[[steps]] #{n}: values must be finite"));
+        }
+        let t = st.t.unwrap_or(n as f64);
+        if t <= last_t {
+            return Err(format!(
+                "[[steps]] #{n}: t = {t} must increase from step to step"
+            ));
+        }
+        last_t = t;
+        for (name, u) in &st.dirichlet {
+            if !f.dirichlet.iter().any(|d| &d.on == name) {
+                return Err(format!(
+                    "[[steps]] #{n}: dirichlet.{name}: no [[dirichlet]] with on = \"{name}\""
+                ));
+            }
+            if !u.iter().all(|v| v.is_finite()) {
+                return Err(format!(
+                    "[[steps]] #{n}: dirichlet.{name}: values must be finite"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_output(f: &RawFile) -> Check {
+    if let Some(k) = f.output.reference_step {
+        let n = f.steps.len().max(1);
+        if k == 0 || k > n {
+            return Err(format!(
+                "[output] reference_step = {k}: load steps count from 1, and the problem has {n} step{}",
+                if n == 1 { "" } else { "s" }
+            ));
+        }
+    }
+    for (name, p) in &f.output.probes {
+        if !p.iter().all(|v| v.is_finite()) {
+            return Err(format!("[output] probe {name}: coordinates must be finite"));
+        }
+    }
+    Ok(())
+}
