@@ -83,6 +83,12 @@ pub fn stagnated(status: &Status) -> bool {
     matches!(status, Status::Failed(m) if m.starts_with(STAGNATION))
 }
 
+/// A stop asked for from outside the solve, like the deadline but set by a
+/// signal: the number of the signal `signorini solve` received (SIGTERM,
+/// SIGINT; 0: none). Every executor ends at its next iteration; the run then
+/// rolls its outputs back (`run::interrupted`, docs/problem-format.md §6).
+pub static STOP: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::new(0);
+
 pub struct Executor {
     pub max_iter: usize,
     pub observers: Vec<Box<dyn Observer>>,
@@ -117,6 +123,10 @@ impl Executor {
         let status = loop {
             if n >= self.max_iter {
                 break Status::MaxIter;
+            }
+            let stop = STOP.load(std::sync::atomic::Ordering::Relaxed);
+            if stop != 0 {
+                break Status::Failed(format!("interrupted by signal {stop} after {n} iterations"));
             }
             if let Some(d) = self.deadline {
                 let now = Instant::now();
