@@ -459,8 +459,8 @@ impl OutputLock {
                 Err(std::fs::TryLockError::WouldBlock) => {
                     let mut head = Vec::new();
                     let _ = (&file).take(LOCK_READ_MAX).read_to_end(&mut head);
-                    let pid = String::from_utf8_lossy(&head);
-                    let pid = pid.trim();
+                    let head = String::from_utf8_lossy(&head);
+                    let pid = head.lines().next().unwrap_or("").trim();
                     let holder = if !pid.is_empty()
                         && pid.len() < 12
                         && pid.bytes().all(|b| b.is_ascii_digit())
