@@ -635,3 +635,199 @@ fn messages_stay_one_short_line() {
         line.len()
     );
 }
+
+// ------------------------------------------------------------ the lock file
+//
+// Issue 34: an existing `.NAME.lock` is never opened for writing (a hard
+// link to a file elsewhere stays as it was), a fresh one is created with
+// O_EXCL, and of an existing one at most a few bytes are read (a huge one
+// names its holder at once instead of running out of memory).
+
+/// `two_blocks` solved into `out` (created); (exit code, log).
+fn solve_two_blocks(out: &Path) -> (i32, String) {
+    let problem = meshes().join("two_blocks.toml");
+    run_with_deadline(
+        &[
+            "solve",
+            problem.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ],
+        Duration::from_secs(120),
+    )
+}
+
+/// The bytes, length and modification time of `p`.
+fn fingerprint_of(p: &Path) -> (Vec<u8>, u64, std::time::SystemTime) {
+    let m = std::fs::metadata(p).unwrap();
+    (std::fs::read(p).unwrap(), m.len(), m.modified().unwrap())
+}
+
+#[test]
+fn a_lock_hard_linked_to_a_file_elsewhere_is_never_written() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let victim = d.path().join("victim.txt");
+    std::fs::write(&victim, b"precious contents, not a PID\n").unwrap();
+    let was = fingerprint_of(&victim);
+    std::fs::hard_link(&victim, out.join(".two_blocks.lock")).unwrap();
+    // Nobody holds it: a stale lock; its name is replaced, the file kept.
+    let (code, log) = solve_two_blocks(&out);
+    assert_eq!(code, 0, "{log}");
+    assert_eq!(fingerprint_of(&victim), was, "the linked file was written");
+    assert!(!out.join(".two_blocks.lock").exists(), "lock left");
+    assert!(out.join("two_blocks.json").is_file());
+}
+
+#[test]
+fn a_held_lock_hard_linked_elsewhere_names_the_holder_and_stays_untouched() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let victim = d.path().join("victim.txt");
+    std::fs::write(&victim, b"31337\n").unwrap();
+    let held = std::fs::File::open(&victim).unwrap();
+    held.try_lock().unwrap();
+    let was = fingerprint_of(&victim);
+    std::fs::hard_link(&victim, out.join(".two_blocks.lock")).unwrap();
+    let (code, log) = solve_two_blocks(&out);
+    let line = assert_bad_input(code, &log, "held hard-linked lock");
+    assert!(line.contains("31337"), "{line}");
+    assert_eq!(fingerprint_of(&victim), was);
+    assert_eq!(
+        snapshot(&out).into_keys().collect::<Vec<_>>(),
+        vec![".two_blocks.lock"]
+    );
+    drop(held);
+}
+
+/// An 8 GiB sparse lock file starting with `head`, in a new `out` under `d`.
+fn huge_lock(d: &Path, head: &[u8]) -> PathBuf {
+    use std::io::Write;
+    let out = d.join("out");
+    std::fs::create_dir(&out).unwrap();
+    let lock = out.join(".two_blocks.lock");
+    let mut f = std::fs::File::create(&lock).unwrap();
+    f.write_all(head).unwrap();
+    f.set_len(8 << 30).unwrap();
+    lock
+}
+
+/// `two_blocks` solved into `out` under a 2 GiB address-space limit (the
+/// lock file must not be read whole); (exit code, log, seconds).
+fn solve_two_blocks_limited(out: &Path) -> (i32, String, f64) {
+    let t0 = Instant::now();
+    let o = Command::new("timeout")
+        .env("HDF5_USE_FILE_LOCKING", "FALSE")
+        .args(["120", "sh", "-c"])
+        .arg(format!(
+            "ulimit -v 2097152 && exec {} solve {} --out {} --quiet",
+            exe(),
+            meshes().join("two_blocks.toml").display(),
+            out.display()
+        ))
+        .output()
+        .unwrap();
+    let (code, log) = joined(&o);
+    (code, log, t0.elapsed().as_secs_f64())
+}
+
+#[test]
+fn a_huge_held_lock_file_names_its_holder_promptly() {
+    let d = tempfile::tempdir().unwrap();
+    let lock = huge_lock(d.path(), b"4242\n");
+    let held = std::fs::File::open(&lock).unwrap();
+    held.try_lock().unwrap();
+    let (code, log, secs) = solve_two_blocks_limited(&lock.parent().unwrap().to_path_buf());
+    let line = assert_bad_input(code, &log, "huge held lock");
+    assert!(
+        line.contains("process 4242") && !line.contains("out of memory"),
+        "{line}"
+    );
+    assert!(secs < 60.0, "{secs} s");
+    assert_eq!(std::fs::metadata(&lock).unwrap().len(), 8 << 30);
+    drop(held);
+}
+
+#[test]
+fn a_huge_stale_lock_file_is_replaced_promptly() {
+    let d = tempfile::tempdir().unwrap();
+    let lock = huge_lock(d.path(), b"999999999\n");
+    let out = lock.parent().unwrap().to_path_buf();
+    let (code, log, secs) = solve_two_blocks_limited(&out);
+    assert_eq!(code, 0, "{log}");
+    assert!(secs < 60.0, "{secs} s");
+    assert!(!lock.exists(), "the stale lock is left");
+}
+
+#[test]
+fn a_fifo_at_the_lock_name_is_refused_at_once_and_kept() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let fifo = out.join(".two_blocks.lock");
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let (code, log) = solve_two_blocks(&out);
+    let line = assert_bad_input(code, &log, "FIFO lock");
+    assert!(line.contains("not a regular file"), "{line}");
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::symlink_metadata(&fifo)
+        .unwrap()
+        .file_type()
+        .is_fifo());
+    assert_eq!(snapshot(&out).len(), 1, "the refused run wrote files");
+}
+
+#[test]
+fn a_directory_at_the_lock_name_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    std::fs::create_dir_all(out.join(".two_blocks.lock")).unwrap();
+    std::fs::write(out.join(".two_blocks.lock").join("keep"), b"x").unwrap();
+    let (code, log) = solve_two_blocks(&out);
+    let line = assert_bad_input(code, &log, "directory lock");
+    assert!(line.contains(".two_blocks.lock"), "{line}");
+    assert_eq!(
+        std::fs::read(out.join(".two_blocks.lock").join("keep")).unwrap(),
+        b"x"
+    );
+}
+
+#[test]
+fn a_stale_lock_of_a_dead_run_is_taken_over_and_removed() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    // What a killed run leaves: its PID, no flock.
+    std::fs::write(out.join(".two_blocks.lock"), b"999999\n").unwrap();
+    let (code, log) = solve_two_blocks(&out);
+    assert_eq!(code, 0, "{log}");
+    let names: Vec<String> = snapshot(&out).into_keys().collect();
+    assert!(!names.iter().any(|n| n.starts_with('.')), "{names:?}");
+}
+
+#[test]
+fn a_lock_held_while_the_run_starts_is_never_truncated() {
+    // The holder's file keeps its bytes: the refused run reads, never writes.
+    use std::io::Write;
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let lock = out.join(".two_blocks.lock");
+    let mut held = std::fs::File::create(&lock).unwrap();
+    held.try_lock().unwrap();
+    held.write_all(b"12345\nand more bytes after the PID\n")
+        .unwrap();
+    let was = fingerprint_of(&lock);
+    let (code, log) = solve_two_blocks(&out);
+    let line = assert_bad_input(code, &log, "held lock");
+    assert!(line.contains("process 12345"), "{line}");
+    assert_eq!(fingerprint_of(&lock), was);
+    drop(held);
+}

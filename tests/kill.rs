@@ -311,3 +311,269 @@ fn killed_runs_leave_complete_files_and_restart_to_the_same_result() {
         "only {after_checkpoint} kills landed after a checkpoint step existed"
     );
 }
+
+// ---------------------------------------------------------------- signals
+//
+// SIGTERM and SIGINT (issue 34): the run stops, rolls back the commits it
+// made, and the output directory holds exactly what it held before (byte for
+// byte), without its staging directory or lock; exit code 128 + the signal
+// and one `error:` line. The signal is sent as soon as the first step's
+// commit is seen (the checkpoint's inode changes, a rename), while later
+// steps remain: each test asserts the run was still going.
+
+/// Every entry of `dir` (hidden ones included) with its bytes (directories: empty).
+fn snapshot(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let mut m = std::collections::BTreeMap::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let bytes = if e.file_type().unwrap().is_file() {
+            std::fs::read(e.path()).unwrap()
+        } else {
+            vec![]
+        };
+        m.insert(name, bytes);
+    }
+    m
+}
+
+fn inode(p: &Path) -> Option<u64> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::symlink_metadata(p).ok().map(|m| m.ino())
+}
+
+fn send(child: &std::process::Child, sig: i32) {
+    // SAFETY: kill(2) on the PID of a child not yet reaped.
+    let r = unsafe { libc::kill(child.id() as libc::pid_t, sig) };
+    assert_eq!(r, 0, "kill({}, {sig})", child.id());
+}
+
+/// How a signalled run ended: exit code (None: killed by a signal) and stderr.
+struct Stopped {
+    code: Option<i32>,
+    stderr: String,
+}
+
+/// Runs `solve NAME.toml --out dir extra…`, and once the checkpoint in `dir`
+/// is a new file (the first step committed) sends `signals` in order;
+/// waits at most 300 s for the end.
+fn signal_after_first_commit(name: &str, dir: &Path, extra: &[&str], signals: &[i32]) -> Stopped {
+    let h5 = dir.join(format!("{name}.h5"));
+    let before = inode(&h5);
+    let err = dir.with_extension("stderr");
+    let mut child = command()
+        .arg("solve")
+        .arg(meshes().join(format!("{name}.toml")))
+        .arg("--out")
+        .arg(dir)
+        .args(extra)
+        .stdout(Stdio::null())
+        .stderr(std::fs::File::create(&err).unwrap())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    loop {
+        let now = inode(&h5);
+        if now.is_some() && now != before {
+            break;
+        }
+        if let Some(s) = child.try_wait().unwrap() {
+            panic!("the run ended ({s}) before its first commit was seen");
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(300),
+            "no commit within 300 s"
+        );
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the run ended before the signal: nothing left to interrupt"
+    );
+    for &s in signals {
+        send(&child, s);
+    }
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if t0.elapsed() > Duration::from_secs(300) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("the run did not stop within 300 s of the signal");
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    Stopped {
+        code: status.code(),
+        stderr: std::fs::read_to_string(&err).unwrap(),
+    }
+}
+
+/// The run stopped by `sig` with its exit code and one `error:` line.
+fn assert_stopped(s: &Stopped, sig: i32, what: &str) {
+    assert_eq!(
+        s.code,
+        Some(128 + sig),
+        "{what}: exit code; stderr:\n{}",
+        s.stderr
+    );
+    let errors: Vec<&str> = s
+        .stderr
+        .lines()
+        .filter(|l| l.starts_with("error"))
+        .collect();
+    assert_eq!(errors.len(), 1, "{what}: {}", s.stderr);
+    let want = if sig == libc::SIGTERM {
+        "SIGTERM"
+    } else {
+        "SIGINT"
+    };
+    assert!(
+        errors[0].contains("interrupted") && errors[0].contains(want),
+        "{what}: {}",
+        errors[0]
+    );
+    assert!(!s.stderr.contains("panicked"), "{what}: {}", s.stderr);
+}
+
+/// A complete set of `name` in `dir`; returns its snapshot.
+fn previous_set(
+    name: &str,
+    dir: &Path,
+    extra: &[&str],
+) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let o = command()
+        .arg("solve")
+        .arg(meshes().join(format!("{name}.toml")))
+        .arg("--out")
+        .arg(dir)
+        .arg("--quiet")
+        .args(extra)
+        .output()
+        .unwrap();
+    let (code, log) = joined(&o);
+    assert_eq!(code, 0, "{log}");
+    let s = snapshot(dir);
+    assert!(s.contains_key(&format!("{name}.json")), "{s:?}");
+    assert!(!s.keys().any(|k| k.starts_with('.')), "{:?}", s.keys());
+    s
+}
+
+fn signal_restores(name: &str, sig: i32, signals: &[i32]) {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let before = previous_set(name, &out, &[]);
+    let s = signal_after_first_commit(name, &out, &["--quiet"], signals);
+    assert_stopped(&s, sig, name);
+    let after = snapshot(&out);
+    assert_eq!(
+        after.keys().collect::<Vec<_>>(),
+        before.keys().collect::<Vec<_>>(),
+        "{name}: the files in the directory changed (staging folder or lock left?)"
+    );
+    for (k, v) in &before {
+        assert!(after[k] == *v, "{name}: {k} is not the previous run's");
+    }
+}
+
+#[test]
+fn sigterm_after_the_first_commit_leaves_the_previous_set_byte_for_byte() {
+    signal_restores("geodynamic_steps", libc::SIGTERM, &[libc::SIGTERM]);
+}
+
+#[test]
+fn sigint_after_the_first_commit_leaves_the_previous_set_byte_for_byte() {
+    signal_restores("geodynamic_steps", libc::SIGINT, &[libc::SIGINT]);
+}
+
+#[test]
+fn sigterm_on_three_bodies_steps_leaves_the_previous_set_byte_for_byte() {
+    signal_restores(NAME, libc::SIGTERM, &[libc::SIGTERM]);
+}
+
+#[test]
+fn sigterm_then_sigint_still_roll_back_once_with_the_first_signal() {
+    signal_restores(
+        "geodynamic_steps",
+        libc::SIGTERM,
+        &[libc::SIGTERM, libc::SIGINT, libc::SIGTERM],
+    );
+}
+
+#[test]
+fn a_signal_in_a_fresh_directory_leaves_no_output() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let s = signal_after_first_commit("geodynamic_steps", &out, &["--quiet"], &[libc::SIGINT]);
+    assert_stopped(&s, libc::SIGINT, "fresh directory");
+    let left: Vec<String> = snapshot(&out).into_keys().collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
+
+#[test]
+fn a_signal_during_a_restart_leaves_the_partial_set_and_a_restart_then_completes() {
+    let name = "geodynamic_steps";
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let before = previous_set(name, &out, &["--max-steps", "2"]);
+    let h5 = out.join(format!("{name}.h5"));
+    let h5s = h5.to_str().unwrap().to_string();
+    let s = signal_after_first_commit(
+        name,
+        &out,
+        &["--quiet", "--restart", &h5s],
+        &[libc::SIGTERM],
+    );
+    assert_stopped(&s, libc::SIGTERM, "restart");
+    assert!(snapshot(&out) == before, "the partial set changed");
+    assert_eq!(read_checkpoint(&h5).unwrap().steps.len(), 2);
+    // The restart, not interrupted, completes the sequence.
+    let o = command()
+        .arg("solve")
+        .arg(meshes().join(format!("{name}.toml")))
+        .args(["--out", out.to_str().unwrap(), "--quiet", "--restart", &h5s])
+        .output()
+        .unwrap();
+    let (code, log) = joined(&o);
+    assert_eq!(code, 0, "{log}");
+    assert_eq!(read_checkpoint(&h5).unwrap().steps.len(), 5);
+}
+
+#[test]
+fn a_signal_at_the_start_leaves_the_directory_as_it_was() {
+    // Sent at once: before the handler is installed the signal's default
+    // action ends the process; after, the run stops at its first check.
+    // Either way nothing of this run is left.
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let before = previous_set(NAME, &out, &[]);
+    for sig in [libc::SIGTERM, libc::SIGINT] {
+        let mut child = command()
+            .arg("solve")
+            .arg(problem())
+            .args(["--out", out.to_str().unwrap(), "--quiet"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+        send(&child, sig);
+        let t0 = Instant::now();
+        let status = loop {
+            if let Some(s) = child.try_wait().unwrap() {
+                break s;
+            }
+            assert!(t0.elapsed() < Duration::from_secs(300), "no stop");
+            std::thread::sleep(Duration::from_millis(5));
+        };
+        assert!(
+            status.code().is_none_or(|c| c == 128 + sig),
+            "{sig}: {status}"
+        );
+        assert!(
+            snapshot(&out) == before,
+            "signal {sig}: the directory changed"
+        );
+    }
+}

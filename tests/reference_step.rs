@@ -350,3 +350,257 @@ fn a_reference_step_outside_the_steps_is_bad_input() {
         assert!(!dir.path().join("o").join(format!("{NAME}.h5")).exists());
     }
 }
+
+// ------------------------------------------- restarts that change the question
+//
+// Issue 34. `[output] reference_step` between a run and its `--restart`: the
+// checkpoint's change fields must be those an uninterrupted run with the
+// new value writes; otherwise the restart is refused naming the key, and
+// the output directory is left as it was. Step groups are continued by
+// name; a reference step with non-finite fields is refused naming the file
+// and the group.
+
+/// Every entry of `dir` with its bytes (directories: empty).
+fn snapshot(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let mut m = std::collections::BTreeMap::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let bytes = if e.file_type().unwrap().is_file() {
+            std::fs::read(e.path()).unwrap()
+        } else {
+            vec![]
+        };
+        m.insert(e.file_name().to_string_lossy().into_owned(), bytes);
+    }
+    m
+}
+
+/// The first `k` steps with `reference`, in `dir/out`; (toml dir, out, h5).
+fn partial(dir: &Path, reference: Option<usize>, k: usize) -> (PathBuf, PathBuf) {
+    let a = dir.join("a");
+    std::fs::create_dir_all(&a).unwrap();
+    let toml = variant(&a, reference);
+    let out = dir.join("out");
+    solve(&toml, &out, &["--quiet", "--max-steps", &k.to_string()]);
+    let h5 = out.join(format!("{NAME}.h5"));
+    (out, h5)
+}
+
+/// `--restart h5` of the variant with `reference`, into `out`: (code, log).
+fn restart(dir: &Path, reference: Option<usize>, out: &Path, h5: &Path) -> (i32, String) {
+    let b = dir.join("b");
+    std::fs::create_dir_all(&b).unwrap();
+    let toml = variant(&b, reference);
+    run(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--restart",
+        h5.to_str().unwrap(),
+    ])
+}
+
+/// Exit 2, one `error:` line naming the checkpoint and containing `want`;
+/// the output directory as it was.
+fn assert_refused(
+    code: i32,
+    log: &str,
+    h5: &Path,
+    want: &[&str],
+    out: &Path,
+    before: &std::collections::BTreeMap<String, Vec<u8>>,
+) {
+    assert_eq!(code, 2, "{log}");
+    assert!(!log.contains("panicked"), "{log}");
+    let errors: Vec<&str> = log.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(errors.len(), 1, "{log}");
+    assert!(errors[0].contains(h5.to_str().unwrap()), "{}", errors[0]);
+    for w in want {
+        assert!(errors[0].contains(w), "no {w:?} in: {}", errors[0]);
+    }
+    assert!(snapshot(out) == *before, "the output directory changed");
+}
+
+fn refused_reference_change(from: Option<usize>, to: Option<usize>, done: usize) {
+    let d = tempfile::tempdir().unwrap();
+    let (out, h5) = partial(d.path(), from, done);
+    let before = snapshot(&out);
+    let (code, log) = restart(d.path(), to, &out, &h5);
+    assert_refused(code, &log, &h5, &["reference_step"], &out, &before);
+}
+
+#[test]
+fn restart_adding_a_reference_step_the_checkpoint_holds_is_refused() {
+    refused_reference_change(None, Some(1), 2);
+}
+
+#[test]
+fn restart_adding_the_last_held_step_as_reference_is_refused() {
+    refused_reference_change(None, Some(2), 2);
+}
+
+#[test]
+fn restart_changing_the_reference_step_is_refused() {
+    refused_reference_change(Some(1), Some(2), 2);
+}
+
+#[test]
+fn restart_moving_the_reference_step_later_is_refused() {
+    refused_reference_change(Some(2), Some(4), 3);
+}
+
+#[test]
+fn restart_removing_the_reference_step_is_refused() {
+    refused_reference_change(Some(1), None, 2);
+}
+
+/// A restart whose new reference step gives the same checkpoint as an
+/// uninterrupted run with it: continued, and equal to that run.
+fn consistent_reference_change(from: Option<usize>, to: Option<usize>, done: usize) {
+    let d = tempfile::tempdir().unwrap();
+    let (out, h5) = partial(d.path(), from, done);
+    let (code, log) = restart(d.path(), to, &out, &h5);
+    assert_eq!(code, 0, "{log}");
+    let full_dir = d.path().join("full");
+    std::fs::create_dir_all(&full_dir).unwrap();
+    let toml = variant(&full_dir, to);
+    solve(&toml, &full_dir.join("out"), &["--quiet"]);
+    let (a, b) = (checkpoint(&out), checkpoint(&full_dir.join("out")));
+    assert_eq!(a.steps.len(), b.steps.len());
+    for (k, (x, y)) in a.steps.iter().zip(&b.steps).enumerate() {
+        assert_eq!(x.displacement, y.displacement, "step {}", k + 1);
+        assert_eq!(x.change, y.change, "step {}", k + 1);
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join(format!("{NAME}.json"))).unwrap())
+            .unwrap();
+    assert_eq!(json["reference_step"].as_u64().map(|v| v as usize), to);
+}
+
+#[test]
+fn restart_adding_a_reference_step_after_the_held_steps_equals_the_uninterrupted_run() {
+    consistent_reference_change(None, Some(3), 2);
+}
+
+#[test]
+fn restart_removing_a_reference_step_not_yet_reached_equals_the_plain_run() {
+    consistent_reference_change(Some(4), None, 2);
+}
+
+/// A checkpoint of the first `k` steps with reference step 1, edited by `edit`.
+fn edited(dir: &Path, k: usize, edit: impl FnOnce(&hdf5::File)) -> (PathBuf, PathBuf) {
+    let (out, h5) = partial(dir, Some(1), k);
+    let f = hdf5::File::open_rw(&h5).unwrap();
+    edit(&f);
+    f.close().unwrap();
+    (out, h5)
+}
+
+fn poison(f: &hdf5::File, ds: &str, at: usize, v: f64) {
+    let ds = f.dataset(ds).unwrap();
+    let mut x = ds.read_raw::<f64>().unwrap();
+    x[at] = v;
+    ds.write_raw(&x).unwrap();
+}
+
+fn refused_edit(k: usize, edit: impl FnOnce(&hdf5::File), want: &[&str]) {
+    let d = tempfile::tempdir().unwrap();
+    let (out, h5) = edited(d.path(), k, edit);
+    let before = snapshot(&out);
+    let (code, log) = restart(d.path(), Some(1), &out, &h5);
+    assert_refused(code, &log, &h5, want, &out, &before);
+}
+
+#[test]
+fn nan_stress_in_the_reference_step_is_refused_naming_the_group() {
+    refused_edit(
+        2,
+        |f| poison(f, "steps/0001/stress", 5, f64::NAN),
+        &["/steps/0001/stress", "not finite"],
+    );
+}
+
+#[test]
+fn inf_contact_pressure_in_the_reference_step_is_refused_naming_the_group() {
+    refused_edit(
+        2,
+        |f| poison(f, "steps/0001/contact_pressure", 0, f64::INFINITY),
+        &["/steps/0001/contact_pressure", "not finite"],
+    );
+}
+
+#[test]
+fn nan_displacement_in_the_reference_step_is_refused_naming_the_group() {
+    refused_edit(
+        3,
+        |f| poison(f, "steps/0001/displacement", 3, f64::NAN),
+        &["/steps/0001/displacement", "not finite"],
+    );
+}
+
+#[test]
+fn a_checkpoint_with_a_step_group_missing_is_refused_naming_it() {
+    refused_edit(
+        3,
+        |f| f.group("steps").unwrap().unlink("0002").unwrap(),
+        &["/steps/0003", "/steps/0002 is missing"],
+    );
+}
+
+#[test]
+fn a_checkpoint_with_an_extra_group_0000_is_refused_naming_it() {
+    refused_edit(
+        2,
+        |f| f.link_hard("steps/0002", "steps/0000").unwrap(),
+        &["/steps/0000"],
+    );
+}
+
+#[test]
+fn a_checkpoint_with_a_renamed_step_group_is_refused() {
+    // 0001, 0003 (was 0002): the time of the group is not step 2's... and
+    // the name is not the one a run gives step 2.
+    refused_edit(
+        2,
+        |f| f.group("steps").unwrap().relink("0002", "0003").unwrap(),
+        &["/steps/0003"],
+    );
+}
+
+#[test]
+fn a_checkpoint_with_more_steps_than_the_problem_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let (out, h5) = partial(d.path(), Some(1), 5);
+    {
+        let f = hdf5::File::open_rw(&h5).unwrap();
+        f.link_hard("steps/0005", "steps/0006").unwrap();
+        f.close().unwrap();
+    }
+    let before = snapshot(&out);
+    let (code, log) = restart(d.path(), Some(1), &out, &h5);
+    assert_refused(
+        code,
+        &log,
+        &h5,
+        &["/steps/0006", "5 load step"],
+        &out,
+        &before,
+    );
+}
+
+#[test]
+fn a_checkpoint_mixing_two_reference_steps_is_refused() {
+    refused_edit(
+        3,
+        |f| {
+            f.group("steps/0003")
+                .unwrap()
+                .attr("reference_step")
+                .unwrap()
+                .write_scalar(&2u64)
+                .unwrap()
+        },
+        &["/steps/0003", "mixes"],
+    );
+}

@@ -16,12 +16,15 @@ pub use crate::run::{EXIT_BAD_INPUT, EXIT_NOT_CONVERGED};
 
 pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
     let t0 = Instant::now();
+    // SIGTERM/SIGINT roll the outputs back (docs/problem-format.md §6).
+    run::catch_signals();
     if let Some(target) = a.solver.section.kkt_target {
         if !(target > 0.0 && target.is_finite()) {
             return bad_input(&format!(
                 "--kkt-target {target}: the KKT target must be a positive number"
             ));
         }
+    }
     }
     if a.max_steps == Some(0) {
         return bad_input(&"--max-steps 0: load steps count from 1");
@@ -37,7 +40,10 @@ pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 
     opts.progress = !quiet;
     match solve(a, quiet, t0, &prep, method, &opts) {
         Ok(code) => code,
-        Err(e) => bad_input(&e),
+        Err(e) => {
+            bad_input(&e);
+            e.exit_code()
+        }
     }
 }
 
@@ -57,6 +63,10 @@ fn solve(
         .clone()
         .or(file.output.dir.clone())
         .unwrap_or_else(|| PathBuf::from("out"));
+    // A signal during the reading leaves the directory untouched.
+    if let Some(sig) = run::interrupted() {
+        return Err(RunError::Interrupted(sig));
+    }
     // The output directory is checked (and locked) before any time is spent
     // solving; an error drops `tx`, which puts the previous files back.
     let mut tx = Transaction::open(&dir, &prep.problem.name)?;

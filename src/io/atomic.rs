@@ -367,40 +367,100 @@ pub fn write_atomic_bytes(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
 /// An advisory lock (`flock`) on `.NAME.lock` in an output directory: one
 /// run per output name at a time. The lock file holds the PID of its holder
 /// and is removed when the lock is released.
+///
+/// A lock file is only ever written by the process that created it
+/// (`O_CREAT | O_EXCL`): a file found at the lock's name, whatever it is (a
+/// hard link to a file elsewhere, a huge file, a FIFO), is opened read-only
+/// and not blocking, and of it at most [`LOCK_READ_MAX`] bytes are read, to
+/// name its holder. One that nobody holds is stale (its holder died): its
+/// name is unlinked while we hold its lock, and a fresh file is created.
 pub struct OutputLock {
     path: PathBuf,
     file: Option<File>,
 }
+
+/// Bytes of an existing lock file read to name its holder (a PID and a newline).
+pub const LOCK_READ_MAX: u64 = 32;
+
+/// Attempts of [`OutputLock::acquire`]: each one that does not end only lost
+/// a race with another run that created, took or unlinked the file meanwhile.
+const LOCK_ATTEMPTS: usize = 100;
 
 impl OutputLock {
     /// Takes the lock of `name` in `dir` or fails at once, naming the holder.
     pub fn acquire(dir: &Path, name: &str) -> Result<OutputLock, String> {
         let path = dir.join(format!(".{name}.lock"));
         let shown = path.display();
-        // The file may be unlinked by its previous holder between our open and
-        // our lock; then the lock is on a dead inode: open again.
-        for _ in 0..100 {
-            let mut file = OpenOptions::new()
+        let same_inode = |file: &File| match (file.metadata(), std::fs::symlink_metadata(&path)) {
+            (Ok(a), Ok(b)) => a.ino() == b.ino() && a.dev() == b.dev(),
+            _ => false,
+        };
+        for _ in 0..LOCK_ATTEMPTS {
+            match OpenOptions::new()
                 .read(true)
                 .write(true)
-                .create(true)
-                .truncate(false)
+                .create_new(true)
                 .mode(0o644)
-                .custom_flags(libc::O_NOFOLLOW)
                 .open(&path)
-                .map_err(|e| {
-                    if e.raw_os_error() == Some(libc::ELOOP) {
-                        format!("{shown}: is a symbolic link; refusing to follow it")
-                    } else {
-                        format!("{shown}: cannot open the lock file: {e}")
+            {
+                Ok(mut file) => {
+                    // Ours, unless a run that took it for stale holds or
+                    // unlinked it between our create and our lock: try again.
+                    if file.try_lock().is_err() || !same_inode(&file) {
+                        continue;
                     }
-                })?;
+                    let _ = file.write_all(format!("{}\n", std::process::id()).as_bytes());
+                    let _ = file.flush();
+                    return Ok(OutputLock {
+                        path,
+                        file: Some(file),
+                    });
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+                Err(e) => return Err(format!("{shown}: cannot create the lock file: {e}")),
+            }
+            // Something is there. Never written to: read-only, not following
+            // a symbolic link, not blocking on a FIFO.
+            let file = match OpenOptions::new()
+                .read(true)
+                .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK)
+                .open(&path)
+            {
+                Ok(f) => f,
+                // Unlinked by its holder since: try again.
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                Err(e) if e.raw_os_error() == Some(libc::ELOOP) => {
+                    return Err(format!(
+                        "{shown}: is a symbolic link; refusing to follow it"
+                    ))
+                }
+                Err(e) => return Err(format!("{shown}: cannot open the lock file: {e}")),
+            };
+            match file.metadata() {
+                Ok(m) if m.is_file() => {}
+                Ok(_) => {
+                    return Err(format!(
+                        "{shown}: is not a regular file (a directory, FIFO, socket or device), so it cannot be the lock of \"{name}\"; remove it"
+                    ))
+                }
+                Err(e) => return Err(format!("{shown}: cannot open the lock file: {e}")),
+            }
             match file.try_lock() {
-                Ok(()) => {}
+                Ok(()) => {
+                    // Stale: unlink the name (only the name: a hard link's
+                    // other names keep the file as it was), then create anew.
+                    if same_inode(&file) {
+                        std::fs::remove_file(&path).map_err(|e| {
+                            format!("{shown}: cannot remove the stale lock file: {e}")
+                        })?;
+                    }
+                    continue;
+                }
                 Err(std::fs::TryLockError::WouldBlock) => {
-                    let mut pid = String::new();
-                    let _ = file.read_to_string(&mut pid);
-                    let pid = pid.trim();
+                    let mut head = Vec::new();
+                    let _ = (&file).take(LOCK_READ_MAX).read_to_end(&mut head);
+                    let head = String::from_utf8_lossy(&head);
+                    let pid = head.lines().next().unwrap_or("").trim();
                     let holder = if !pid.is_empty()
                         && pid.len() < 12
                         && pid.bytes().all(|b| b.is_ascii_digit())
@@ -418,20 +478,6 @@ impl OutputLock {
                     return Err(format!("{shown}: cannot lock: {e}"));
                 }
             }
-            let same = match (file.metadata(), std::fs::symlink_metadata(&path)) {
-                (Ok(a), Ok(b)) => a.ino() == b.ino() && a.dev() == b.dev(),
-                _ => false,
-            };
-            if !same {
-                continue;
-            }
-            let _ = file.set_len(0);
-            let _ = file.write_all(format!("{}\n", std::process::id()).as_bytes());
-            let _ = file.flush();
-            return Ok(OutputLock {
-                path,
-                file: Some(file),
-            });
         }
         Err(format!(
             "{shown}: cannot lock: the lock file keeps changing"

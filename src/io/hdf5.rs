@@ -57,6 +57,10 @@ pub struct Checkpoint {
     pub mesh: OutMesh,
     /// The steps in increasing index order (1, 2, …).
     pub steps: Vec<StepOutput>,
+    /// The name of each step's group under `/steps` (same order): a
+    /// restart continues by these names, not by the count
+    /// (`run::Restart` refuses a gap, a `0000` or a duplicate).
+    pub step_groups: Vec<String>,
     /// The friction arrays of each step (same order; None: frictionless).
     pub friction: Vec<Option<StepFriction>>,
     /// The string attributes of the root group (alphabetical order).
@@ -655,6 +659,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
 
     let mut steps = Vec::new();
     let mut friction = Vec::new();
+    let mut step_groups = Vec::new();
     if file.link_exists("steps") {
         let sg = file.group("steps").map_err(ctx.h5("/steps"))?;
         let mut names: Vec<(usize, String)> = sg
@@ -668,11 +673,13 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
             let g = sg.group(&name).map_err(ctx.h5(format!("/steps/{name}")))?;
             steps.push(read_step(&ctx, &g, &mesh)?);
             friction.push(read_step_friction(&ctx, &g, mesh.contact.points.len())?);
+            step_groups.push(name);
         }
     }
     Ok(Checkpoint {
         mesh,
         steps,
+        step_groups,
         friction,
         attrs,
     })

@@ -87,6 +87,7 @@ impl<'a> Context<'a> {
             self.opts.progress.then_some(label.as_str()),
         );
         e.deadline = self.opts.deadline;
+        e.stop = self.opts.stop;
         for o in &self.opts.observers {
             e.observers.push(Box::new(Forward(o.clone())));
         }

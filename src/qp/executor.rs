@@ -82,6 +82,9 @@ pub struct Executor {
     pub log_limit: usize,
     /// Stop when this instant has passed (a user's time budget).
     pub deadline: Option<Instant>,
+    /// Stop when this flag is non-zero (the caller's cancel,
+    /// [`crate::qp::SolveOptions::stop`]).
+    pub stop: Option<&'static std::sync::atomic::AtomicI32>,
 }
 
 impl Executor {
@@ -96,6 +99,7 @@ impl Executor {
             log: vec![],
             log_limit: 10_000,
             deadline: None,
+            stop: None,
         }
     }
 
@@ -108,6 +112,15 @@ impl Executor {
         let status = loop {
             if n >= self.max_iter {
                 break Status::MaxIter;
+            }
+            if let Some(flag) = self.stop {
+                let signal = flag.load(std::sync::atomic::Ordering::Relaxed);
+                if signal != 0 {
+                    break Status::Failed(Failure::Interrupted {
+                        signal,
+                        iterations: n,
+                    });
+                }
             }
             if let Some(d) = self.deadline {
                 let now = Instant::now();

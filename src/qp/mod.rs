@@ -240,6 +240,9 @@ pub enum Failure {
     /// The caller's time budget ran out after `iterations` iterations
     /// (`compare --time-limit`; never a decision of a method).
     TimeLimit { iterations: usize },
+    /// The caller's stop flag ([`SolveOptions::stop`]) was raised with
+    /// `signal` after `iterations` iterations.
+    Interrupted { signal: i32, iterations: usize },
     /// The working sets cycle: no KKT residual below `best` in `steps`
     /// Newton steps (frictional ssn, docs/methods.md §9.2).
     Cycling { best: f64, steps: usize },
@@ -273,6 +276,9 @@ impl std::fmt::Display for Failure {
             Failure::NotFinite { iteration } => write!(f, "NaN or Inf in iteration {iteration}"),
             Failure::TimeLimit { iterations } => {
                 write!(f, "time limit reached after {iterations} iterations")
+            }
+            Failure::Interrupted { signal, iterations } => {
+                write!(f, "interrupted by signal {signal} after {iterations} iterations")
             }
             Failure::Cycling { best, steps } => write!(
                 f,
@@ -414,6 +420,12 @@ pub struct SolveOptions {
     /// (`compare --time-limit`; a budget the user sets, never a decision
     /// of a method).
     pub deadline: Option<std::time::Instant>,
+    /// Stop with [`Failure::Interrupted`] at the next iteration once this
+    /// flag is non-zero (its value, a signal number, is reported): the
+    /// caller's cancel (`signorini solve` sets it on SIGTERM/SIGINT,
+    /// `run::catch_signals`). A flag the caller owns, never a decision of
+    /// a method.
+    pub stop: Option<&'static std::sync::atomic::AtomicI32>,
     /// Warm start (load steps, restart): used by methods that can, when feasible.
     pub x0: Option<Vec<f64>>,
     /// Observers of every iteration record, besides the progress bar.
@@ -427,6 +439,7 @@ impl std::fmt::Debug for SolveOptions {
             .field("progress", &self.progress)
             .field("label", &self.label)
             .field("deadline", &self.deadline)
+            .field("stop", &self.stop.is_some())
             .field("x0", &self.x0.as_ref().map(|x| x.len()))
             .field("observers", &self.observers.len())
             .finish()

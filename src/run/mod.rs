@@ -20,8 +20,8 @@ mod summary;
 
 pub use observe::{Progress, StepObserver};
 pub use output::{
-    create_checkpoint, output_paths, CheckpointWriter, Concurrent, Outputs, SummaryWriter,
-    Transaction, VtuWriter,
+    catch_signals, create_checkpoint, interrupted, output_paths, CheckpointWriter, Concurrent,
+    Outputs, SummaryWriter, Transaction, VtuWriter,
 };
 pub use prepare::{
     fingerprint, fingerprint_diff, fnv1a, options, prepare, prepare_with, probes, reduce, solve,
@@ -57,6 +57,10 @@ pub enum RunError {
     /// A setting of the run itself (a step count, a KKT target).
     #[error("{0}")]
     Settings(String),
+    /// SIGTERM or SIGINT (the number) arrived before the run was complete:
+    /// its outputs were rolled back ([`interrupted`]).
+    #[error("interrupted by {}: the run stopped and its outputs were rolled back (the output directory holds what it held before)", output::signal_name(*.0))]
+    Interrupted(i32),
 }
 
 impl From<crate::io::IoError> for RunError {
@@ -68,7 +72,11 @@ impl From<crate::io::IoError> for RunError {
 impl RunError {
     /// The process exit code of this error (docs/problem-format.md §8).
     pub fn exit_code(&self) -> i32 {
-        EXIT_BAD_INPUT
+        match self {
+            // The shell's convention for a process ended by a signal.
+            RunError::Interrupted(sig) => 128 + sig,
+            _ => EXIT_BAD_INPUT,
+        }
     }
 }
 

@@ -15,6 +15,64 @@ use crate::io::atomic::{self, OutputLock, Stage};
 use crate::io::{self, IoError, OutMesh};
 use std::path::{Path, PathBuf};
 
+/// The signal `signorini solve` received (SIGTERM, SIGINT; 0: none), set
+/// by the handler of [`catch_signals`]: a process has one set of signal
+/// handlers, so this is the one process-wide flag.
+pub static SIGNAL: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::new(0);
+
+/// Makes SIGTERM and SIGINT stop the run instead of the process: the
+/// handler only stores the signal's number (an atomic store is
+/// async-signal-safe); the iterative solvers end at their next iteration
+/// ([`SIGNAL`], which every solve of a [`Run`](super::Run) watches through `SolveOptions::stop`) and [`Run`](super::Run) returns
+/// [`RunError::Interrupted`] at its next check (before and after each
+/// step's solve, before each commit, after the last), so the dropped
+/// [`Transaction`] puts back what the output directory held. Later signals
+/// change nothing (the first one is kept); `kill -9` cannot be caught
+/// (docs/problem-format.md §6 says what it leaves).
+pub fn catch_signals() {
+    extern "C" fn on_signal(sig: libc::c_int) {
+        let _ = SIGNAL.compare_exchange(
+            0,
+            sig,
+            std::sync::atomic::Ordering::SeqCst,
+            std::sync::atomic::Ordering::SeqCst,
+        );
+    }
+    for sig in [libc::SIGTERM, libc::SIGINT] {
+        // SAFETY: a zeroed sigaction with a handler that only does an
+        // atomic store; SA_RESTART keeps the file writes in flight going.
+        unsafe {
+            let mut sa: libc::sigaction = std::mem::zeroed();
+            sa.sa_sigaction = on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
+            sa.sa_flags = libc::SA_RESTART;
+            libc::sigemptyset(&mut sa.sa_mask);
+            libc::sigaction(sig, &sa, std::ptr::null_mut());
+        }
+    }
+}
+
+/// The signal that asked the run to stop ([`catch_signals`]), if any.
+pub fn interrupted() -> Option<i32> {
+    match SIGNAL.load(std::sync::atomic::Ordering::SeqCst) {
+        0 => None,
+        sig => Some(sig),
+    }
+}
+
+/// `Err(Interrupted)` once a signal asked the run to stop.
+pub(crate) fn check_interrupt() -> Result<(), RunError> {
+    interrupted().map_or(Ok(()), |sig| Err(RunError::Interrupted(sig)))
+}
+
+/// The name of a signal number (for the message).
+pub(crate) fn signal_name(sig: i32) -> String {
+    match sig {
+        libc::SIGTERM => "SIGTERM".into(),
+        libc::SIGINT => "SIGINT".into(),
+        _ => format!("signal {sig}"),
+    }
+}
+
 /// Output file paths of one solve.
 #[derive(Debug, Clone)]
 pub struct Outputs {

@@ -149,6 +149,9 @@ fn check_probes(problem: &Problem, model: &Model) -> Result<(), RunError> {
 /// table of the TOML except `[mesh]` (its path), `[solver]` and `[output]`
 /// (they change how, not what, is solved), normalised by re-serialising, plus
 /// `--no-contact`. A restart compares part by part and names what differs.
+/// `[output] reference_step` is not a part: a restart checks it against the
+/// checkpoint's change fields instead (`run::Restart`), so that adding one
+/// after the steps a checkpoint holds is continued, not refused.
 pub fn fingerprint(prep: &Prepared, no_contact: bool) -> String {
     let mut parts = vec![("mesh".to_string(), prep.mesh_hash)];
     let table: toml::Table = toml::from_str(&prep.problem.text).unwrap_or_default();

@@ -6,7 +6,7 @@
 //! commit per load step. The summary of the last step ends the run.
 
 use super::observe::StepObserver;
-use super::output::Transaction;
+use super::output::{check_interrupt, Transaction};
 use super::prepare::{reduce, solve_model_in, step_model, Prepared};
 use super::restart::Restart;
 use super::summary::{StepRow, Summary, Timings};
@@ -174,6 +174,9 @@ impl<'a> Run<'a> {
                 "max_steps = 0: load steps count from 1".into(),
             ));
         }
+        // A SIGTERM/SIGINT (output::catch_signals) ends the run at the next
+        // of these checks with an error: the dropped transaction rolls back.
+        check_interrupt()?;
         let (prep, method) = (self.prep, self.method);
         let file = &prep.problem.file;
         let multi = !file.steps.is_empty();
@@ -192,10 +195,12 @@ impl<'a> Run<'a> {
                 }
             }
             if let Some(t) = tx.as_deref_mut() {
+                check_interrupt()?;
                 if !names.is_empty() {
                     t.commit(&names)?;
                 }
             }
+            check_interrupt()?;
             return Ok(Outcome {
                 steps,
                 nsteps,
@@ -216,6 +221,7 @@ impl<'a> Run<'a> {
         // One workspace for every step: C is the same, its factor is reused.
         let ws = self.opts.settings.workspace();
         for s in steps.clone() {
+            check_interrupt()?;
             let ts = Instant::now();
             // Without [[steps]] the prepared model is the problem; with steps
             // every step (the first included) gets its own loads.
@@ -236,8 +242,11 @@ impl<'a> Run<'a> {
             };
             let mut o = self.opts.clone();
             o.x0 = u_prev.as_ref().map(|u| reduce(model_ref, u));
+            o.stop = Some(&super::output::SIGNAL);
             let t_solve0 = Instant::now();
             let res = solve_model_in(prep, model_ref, method, &o, &ws)?;
+            // An interrupted solve is no result to write.
+            check_interrupt()?;
             let t_solve = t_solve0.elapsed().as_secs_f64();
             let t_w = Instant::now();
             let mut problem_s = prep.problem.clone();
@@ -291,6 +300,7 @@ impl<'a> Run<'a> {
             // A load step is one commit: its VTU pair, the time series and
             // the checkpoint grown by this step. The last step's files wait
             // for the summary (below).
+            check_interrupt()?;
             match tx.as_deref_mut() {
                 Some(t) if multi && s + 1 < steps.end => t.commit(&names)?,
                 _ => pending.extend(names),
@@ -377,9 +387,12 @@ impl<'a> Run<'a> {
         // step (a restart solves that step again and writes the summary) or
         // both; never a finished checkpoint without its summary.
         last_commit.extend(pending);
+        check_interrupt()?;
         if let Some(t) = tx {
             t.commit(&last_commit)?;
         }
+        // A signal during the last commit still rolls the run back.
+        check_interrupt()?;
         Ok(Outcome {
             steps,
             nsteps,
