@@ -1,5 +1,5 @@
 //! `signorini compare`: the flags, the progress lines and the printed table
-//! of [`crate::run::compare`], which runs every method (each CGC
+//! of [`crate::run::compare()`], which runs every method (each CGC
 //! preconditioner a variant) on one problem and holds the agreement rules.
 
 use super::solve::{bad_input, EXIT_BAD_INPUT};

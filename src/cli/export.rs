@@ -1,5 +1,5 @@
 //! `signorini export --qp DIR model.toml`: the flags of
-//! [`crate::run::export`] (the assembled QP as Matrix Market files plus
+//! [`crate::run::export()`] (the assembled QP as Matrix Market files plus
 //! `meta.json`, README "Exported QP") and its one line of report.
 
 use super::solve::bad_input;

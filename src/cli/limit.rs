@@ -1,4 +1,4 @@
-//! `signorini limit model.toml`: the flags of [`crate::run::limit`] (one
+//! `signorini limit model.toml`: the flags of [`crate::run::limit()`] (one
 //! sparse Cholesky factorization of C and one solve C x = d, the benchmark's
 //! yardstick) and its report printed as one JSON line.
 

@@ -6,7 +6,7 @@
 //!
 //! Load steps (docs/problem-format.md §4): frictionless elastic contact does
 //! not depend on the loading path, so each variant solves the last step from
-//! a cold start. With friction the answer does (docs/methods.md §9.5: the
+//! a cold start. With friction the answer does (docs/methods.md §9.1: the
 //! slip of a step is measured from the previous step), so each variant
 //! follows the load path as [`Run`] does and the last step is compared.
 
