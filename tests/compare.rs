@@ -499,3 +499,33 @@ fn variants_are_read_as_documented() {
     let e = variants(Some("cgc:nope")).unwrap_err().to_string();
     assert!(e.contains("unknown preconditioner \"nope\""), "{e}");
 }
+
+/// The command says on stderr and in its JSON that a frictional step model
+/// is compared along its load path.
+#[test]
+fn the_command_names_the_load_path() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = sheared_steps(tmp.path());
+    let json = tmp.path().join("t.json");
+    let (code, stdout, stderr) = signorini(&[
+        "compare",
+        toml.to_str().unwrap(),
+        "--methods",
+        "ssn",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    assert!(
+        stderr.contains("has 3 load steps and friction; every variant follows the load path"),
+        "{stderr}"
+    );
+    let t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(t["steps"]["path"], true, "{}", t["steps"]);
+    assert!(
+        t["rows"][0]["rel_diff_lambda_t"].is_number(),
+        "{}",
+        t["rows"][0]
+    );
+}
