@@ -1,6 +1,13 @@
 //! `signorini compare`: every variant on every shipped example; the rows agree.
 
-use std::path::Path;
+use signorini::qp::{precond::PrecondKind, SolverSection};
+use signorini::run::compare::{
+    deadline, table, variants, SolvedRow, Table, Variant, VariantResult,
+};
+use signorini::run::{self, CompareSpec, Prepared};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 mod common;
 
@@ -200,5 +207,325 @@ fn a_fallback_is_named_under_its_row() {
             .get(at + 1)
             .is_some_and(|l| l.contains("└ ssn: cycling") && l.contains("solved by mprgp instead")),
         "{stdout}"
+    );
+}
+
+/// Two blocks (meshes/two_blocks.msh) with Coulomb friction μ = 0.3, the
+/// upper block's top pressed down in step 1 and moved sideways in steps 2
+/// and 3: partial slip, whose answer depends on the load path.
+fn sheared_steps(dir: &Path) -> PathBuf {
+    std::fs::copy(meshes().join("two_blocks.msh"), dir.join("two_blocks.msh")).unwrap();
+    let p = dir.join("sheared.toml");
+    std::fs::write(
+        &p,
+        r#"[mesh]
+file = "two_blocks.msh"
+[model]
+plane = "strain"
+[materials.lower]
+E = 2.0e9
+nu = 0.25
+[materials.upper]
+E = 2.0e9
+nu = 0.25
+[[dirichlet]]
+on = "bottom"
+u = [0.0, 0.0]
+[[slip]]
+on = "left_lower"
+[[slip]]
+on = "right_lower"
+[[dirichlet]]
+on = "top"
+u = [0.0, 0.0]
+[[contact]]
+on = "interface"
+friction = 0.3
+[[steps]]
+dirichlet = { top = [0.0, -2.0e-4] }
+[[steps]]
+dirichlet = { top = [2.0e-5, -2.0e-4] }
+[[steps]]
+dirichlet = { top = [4.0e-5, -2.0e-4] }
+[output]
+probes = { mid = [0.5, 0.5], top_left = [0.0, 0.75], corner = [1.0, 0.5] }
+"#,
+    )
+    .unwrap();
+    p
+}
+
+/// `compare` through the library, without progress lines.
+fn compare_lib(prep: &Prepared, methods: &str) -> Table {
+    let spec = CompareSpec {
+        methods: Some(methods.into()),
+        ..Default::default()
+    };
+    run::compare(prep, &spec, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn row<'a>(t: &'a Table, method: &str) -> &'a SolvedRow {
+    t.rows
+        .iter()
+        .find(|r| r.method == method)
+        .and_then(|r| r.solved.as_ref())
+        .unwrap_or_else(|| panic!("no {method} row"))
+}
+
+/// Largest |a − b| over the probes, relative to the largest |a|.
+fn probe_diff(a: &BTreeMap<String, [f64; 2]>, b: &BTreeMap<String, [f64; 2]>) -> f64 {
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    let scale = a.values().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let d = a
+        .iter()
+        .flat_map(|(k, u)| (0..2).map(move |i| (u[i] - b[k][i]).abs()))
+        .fold(0.0f64, f64::max);
+    d / scale
+}
+
+/// Issue 33 item 2: with friction and load steps every variant follows the
+/// load path as `solve` does (warm starts, slip from the previous step), so
+/// its probes are `solve`'s at the last step, and not those of a cold solve
+/// of the last step (2.4 % apart in u1 at the interface's middle).
+#[test]
+fn frictional_steps_are_compared_along_the_load_path() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = sheared_steps(tmp.path());
+    let prep = run::prepare(&toml, false).unwrap();
+    let t = compare_lib(&prep, "ssn,mprgp");
+    assert!(t.steps.path, "{:?}", t.steps);
+    assert_eq!((t.steps.count, t.steps.compared), (3, 3));
+    let ssn = row(&t, "ssn");
+    // `signorini solve`, the answer along the path.
+    let out = tmp.path().join("out");
+    let (code, stdout, stderr) = signorini(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--method",
+        "ssn",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sheared.json")).unwrap()).unwrap();
+    let solved: BTreeMap<String, [f64; 2]> = summary["probes"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .map(|(k, v)| {
+            let u = &v["u"];
+            (k.clone(), [u[0].as_f64().unwrap(), u[1].as_f64().unwrap()])
+        })
+        .collect();
+    assert!(
+        probe_diff(&solved, &ssn.probes) <= 1e-12,
+        "{solved:?} vs {:?}",
+        ssn.probes
+    );
+    // A cold solve of the last step answers another question.
+    let last = run::step_model(&prep, 2).unwrap();
+    let (m, opts) = run::options(
+        &prep.problem,
+        &SolverSection {
+            method: Some("ssn".into()),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let cold = run::solve_model(&prep, &last, &m, &opts).unwrap();
+    let cold_probes: BTreeMap<String, [f64; 2]> = run::probes(&prep, &last.displacements(&cold.x))
+        .into_iter()
+        .map(|(n, _, _, u)| (n, u))
+        .collect();
+    let d = probe_diff(&solved, &cold_probes);
+    assert!(
+        d > 1e-3,
+        "the cold last step is only {d:.2e} from the path's answer"
+    );
+    // Both methods agree, the tangential forces compared too.
+    for r in &t.rows {
+        let s = r.solved.as_ref().unwrap();
+        assert!(r.agrees, "{}: {s:?}", r.method);
+        assert!(
+            s.rel_diff_lambda_t.is_some_and(|v| v <= s.agree_tol_lambda),
+            "{s:?}"
+        );
+    }
+    assert!(t.to_json().contains("\"rel_diff_lambda_t\""));
+    assert!(t.to_json().contains("\"path\": true"));
+}
+
+/// Frictionless load steps keep the cold solve of the last step (the
+/// answer does not depend on the path); `steps.path` says so.
+#[test]
+fn frictionless_steps_compare_the_last_step_cold() {
+    let toml = meshes().join("three_bodies_steps.toml");
+    let prep = run::prepare(&toml, false).unwrap();
+    let t = compare_lib(&prep, "ssn");
+    assert!(!t.steps.path);
+    let n = prep.problem.file.nsteps();
+    assert!(n > 1);
+    let last = run::step_model(&prep, n - 1).unwrap();
+    let (m, opts) = run::options(
+        &prep.problem,
+        &SolverSection {
+            method: Some("ssn".into()),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let cold = run::solve_model(&prep, &last, &m, &opts).unwrap();
+    let s = row(&t, "ssn");
+    assert_eq!(s.energy, cold.energy);
+    assert!(s.rel_diff_lambda_t.is_none());
+    assert!(!t.to_json().contains("rel_diff_lambda_t"));
+}
+
+/// Issue 33 item 3: a row whose tangential forces are off is not in
+/// agreement, even with x and λ equal to the reference's.
+#[test]
+fn tangential_forces_enter_the_agreement() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = sheared_steps(tmp.path());
+    let prep = run::prepare(&toml, false).unwrap();
+    let last = run::step_model(&prep, 2).unwrap();
+    let (m, opts) = run::options(
+        &prep.problem,
+        &SolverSection {
+            method: Some("ssn".into()),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let q = run::solve_model(&prep, &last, &m, &opts).unwrap();
+    assert!(q.lambda_t.iter().any(|v| *v != 0.0));
+    let good = VariantResult {
+        probes: BTreeMap::new(),
+        time_s: 0.0,
+        iterations: q.iterations,
+        inner_iterations: q.inner_iterations,
+        phases: BTreeMap::new(),
+        path_certified: true,
+        notes: vec![],
+        result: q,
+    };
+    let mut off = good.clone();
+    for v in off.result.lambda_t.iter_mut() {
+        *v *= 1.0 + 1e-3;
+    }
+    let v = |p: Option<PrecondKind>| Variant {
+        method: if p.is_some() {
+            "cgc".into()
+        } else {
+            "ssn".into()
+        },
+        preconditioner: p,
+    };
+    let runs = vec![
+        (v(None), Ok(good)),
+        (v(Some(PrecondKind::Cholesky)), Ok(off)),
+    ];
+    let t = table(&prep, &last, &runs, 1e-6, None);
+    let (a, b) = (&t.rows[0], &t.rows[1]);
+    assert!(a.agrees);
+    let s = b.solved.as_ref().unwrap();
+    assert_eq!((s.rel_diff, s.rel_diff_lambda), (0.0, 0.0));
+    let rt = s.rel_diff_lambda_t.unwrap();
+    assert!((rt - 1e-3).abs() < 1e-9, "{rt}");
+    assert!(!b.agrees, "λ_t 1e-3 off agrees");
+}
+
+/// Issue 34: `--time-limit` of any finite positive size runs (a budget no
+/// clock can hold is no deadline); inf, NaN and ≤ 0 are refused naming the
+/// flag.
+#[test]
+fn huge_time_limits_run_and_bad_ones_are_named() {
+    let toml = meshes().join("two_blocks.toml");
+    let toml = toml.to_str().unwrap();
+    for t in ["1e19", "1e20", "1e300"] {
+        let (code, stdout, stderr) =
+            signorini(&["compare", toml, "--methods", "ssn", "--time-limit", t, "-q"]);
+        assert_eq!(code, 0, "--time-limit {t}: {stdout}\n{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+    for t in ["inf", "NaN", "0", "-1"] {
+        let flag = format!("--time-limit={t}");
+        let (code, _, stderr) = signorini(&["compare", toml, "--methods", "ssn", &flag]);
+        assert_eq!(code, 2, "--time-limit {t}: {stderr}");
+        assert!(stderr.contains("--time-limit"), "{stderr}");
+    }
+    let now = Instant::now();
+    assert!(deadline(now, 1e20).is_none());
+    assert!(deadline(now, 1e300).is_none());
+    assert!(deadline(now, 1.0).is_some_and(|d| d > now));
+    // The library refuses what the flag refuses.
+    let prep = run::prepare(&meshes().join("two_blocks.toml"), false).unwrap();
+    for t in [f64::INFINITY, f64::NAN, 0.0, -1.0] {
+        let spec = CompareSpec {
+            methods: Some("ssn".into()),
+            time_limit: Some(t),
+            ..Default::default()
+        };
+        let e = run::compare(&prep, &spec, &mut |_| {}).unwrap_err();
+        assert!(e.to_string().contains("time limit"), "{e}");
+        assert_eq!(e.exit_code(), 2);
+    }
+}
+
+#[test]
+fn variants_are_read_as_documented() {
+    let all = variants(None).unwrap();
+    assert_eq!(all.len(), 14);
+    let cgc = variants(Some("cgc")).unwrap();
+    assert_eq!(cgc.len(), PrecondKind::ALL.len());
+    let two = variants(Some(" cgc:ic0 , ssn,")).unwrap();
+    assert_eq!(
+        two,
+        vec![
+            Variant {
+                method: "cgc".into(),
+                preconditioner: Some(PrecondKind::Ic0)
+            },
+            Variant {
+                method: "ssn".into(),
+                preconditioner: None
+            }
+        ]
+    );
+    assert_eq!(two[0].name(), "cgc:ic0");
+    let e = variants(Some("ssn,nope")).unwrap_err().to_string();
+    assert!(e.contains("unknown method \"nope\""), "{e}");
+    let e = variants(Some("cgc:nope")).unwrap_err().to_string();
+    assert!(e.contains("unknown preconditioner \"nope\""), "{e}");
+}
+
+/// The command says on stderr and in its JSON that a frictional step model
+/// is compared along its load path.
+#[test]
+fn the_command_names_the_load_path() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = sheared_steps(tmp.path());
+    let json = tmp.path().join("t.json");
+    let (code, stdout, stderr) = signorini(&[
+        "compare",
+        toml.to_str().unwrap(),
+        "--methods",
+        "ssn",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    assert!(
+        stderr.contains("has 3 load steps and friction; every variant follows the load path"),
+        "{stderr}"
+    );
+    let t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(t["steps"]["path"], true, "{}", t["steps"]);
+    assert!(
+        t["rows"][0]["rel_diff_lambda_t"].is_number(),
+        "{}",
+        t["rows"][0]
     );
 }

@@ -25,7 +25,6 @@ pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 
             ));
         }
     }
-    }
     if a.max_steps == Some(0) {
         return bad_input(&"--max-steps 0: load steps count from 1");
     }

@@ -11,6 +11,9 @@
 //! [`Summary`]), §8 (certificate and exit codes); warm starts:
 //! docs/methods.md §8.3.
 
+pub mod compare;
+pub mod export;
+pub mod limit;
 mod observe;
 mod output;
 mod prepare;
@@ -18,6 +21,9 @@ mod restart;
 mod steps;
 mod summary;
 
+pub use compare::{compare, CompareSpec};
+pub use export::{export, ExportReport, ExportSpec};
+pub use limit::{limit, LimitReport, LimitSpec};
 pub use observe::{Progress, StepObserver};
 pub use output::{
     catch_signals, create_checkpoint, interrupted, output_paths, CheckpointWriter, Concurrent,
