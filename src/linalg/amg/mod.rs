@@ -24,8 +24,8 @@
 //! requires.
 //!
 //! The code: the hierarchy and its V-cycle here, the setup steps 1–5 in
-//! [`setup`], the vector kernels whose bits do not depend on the thread
-//! count in [`kernels`], and the CG in [`pcg`](mod@pcg).
+//! `setup`, the vector kernels whose bits do not depend on the thread
+//! count in `kernels`, and the CG in `pcg`.
 
 mod kernels;
 mod pcg;

@@ -1,6 +1,7 @@
 //! Tests of the hierarchy and its PCG through their public interface.
 
 use super::*;
+use crate::linalg::sparse::{dot, norm};
 
 fn identity(r: &[f64], z: &mut [f64]) {
     z.copy_from_slice(r);

@@ -16,10 +16,10 @@
 //! pattern of C + AᵀA) reuses the symbolic analysis (ordering,
 //! supernodes, elimination tree). [`Cholesky::new`] reuses nothing.
 //!
-//! The code is split by responsibility: [`workspace`] makes the factors
-//! (caching, orderings, the factorization itself), [`border`] holds the
+//! The code is split by responsibility: `workspace` makes the factors
+//! (caching, orderings, the factorization itself), `border` holds the
 //! solves that read the trailing block of a bordered factor, and
-//! [`memory`] refuses a factor that cannot fit before it starts.
+//! `memory` refuses a factor that cannot fit before it starts.
 
 mod border;
 mod memory;

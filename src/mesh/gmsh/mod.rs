@@ -10,9 +10,9 @@
 //! [`MeshError`] that names the file, the section and the line (ASCII) or the
 //! byte offset (binary).
 //!
-//! The parser's state is here; [`lexer`] reads tokens and values (ASCII
-//! and binary) and makes the messages, [`sections`] parses each section,
-//! and [`assemble`] turns what was read into a [`Mesh`].
+//! The parser's state is here; `lexer` reads tokens and values (ASCII
+//! and binary) and makes the messages, `sections` parses each section,
+//! and `assemble` turns what was read into a [`Mesh`].
 
 mod assemble;
 mod lexer;

@@ -15,9 +15,9 @@
 //! font is needed. The finished file is written atomically.
 //!
 //! The code: options, checks and the steps drawn here; the mesh figure in
-//! [`mesh`], its colour scale, colour bar and legend in [`colorbar`], the
-//! contact figure in [`contact`], and fonts, colours and number formats in
-//! [`style`].
+//! `mesh`, its colour scale, colour bar and legend in `colorbar`, the
+//! contact figure in `contact`, and fonts, colours and number formats in
+//! `style`.
 
 mod colorbar;
 mod contact;
