@@ -740,7 +740,7 @@ fn a_huge_held_lock_file_names_its_holder_promptly() {
     let lock = huge_lock(d.path(), b"4242\n");
     let held = std::fs::File::open(&lock).unwrap();
     held.try_lock().unwrap();
-    let (code, log, secs) = solve_two_blocks_limited(&lock.parent().unwrap().to_path_buf());
+    let (code, log, secs) = solve_two_blocks_limited(lock.parent().unwrap());
     let line = assert_bad_input(code, &log, "huge held lock");
     assert!(
         line.contains("process 4242") && !line.contains("out of memory"),

@@ -1,3 +1,6 @@
+//! Signals (issue 34, at the end): SIGTERM and SIGINT after a commit roll
+//! the run back, the directory byte for byte as before.
+//!
 //! A multi-step run killed with SIGKILL at several moments never leaves a
 //! half-written output under its final name, its checkpoint is complete for
 //! every step it lists, and `--restart` from it ends where an uninterrupted
@@ -464,7 +467,6 @@ fn signal_restores(name: &str, sig: i32, signals: &[i32]) {
     let out = d.path().join("out");
     let before = previous_set(name, &out, &[]);
     let s = signal_after_first_commit(name, &out, &["--quiet"], signals);
-    assert_stopped(&s, sig, name);
     let after = snapshot(&out);
     assert_eq!(
         after.keys().collect::<Vec<_>>(),
@@ -474,6 +476,7 @@ fn signal_restores(name: &str, sig: i32, signals: &[i32]) {
     for (k, v) in &before {
         assert!(after[k] == *v, "{name}: {k} is not the previous run's");
     }
+    assert_stopped(&s, sig, name);
 }
 
 #[test]
@@ -506,9 +509,9 @@ fn a_signal_in_a_fresh_directory_leaves_no_output() {
     let out = d.path().join("out");
     std::fs::create_dir(&out).unwrap();
     let s = signal_after_first_commit("geodynamic_steps", &out, &["--quiet"], &[libc::SIGINT]);
-    assert_stopped(&s, libc::SIGINT, "fresh directory");
     let left: Vec<String> = snapshot(&out).into_keys().collect();
     assert!(left.is_empty(), "left behind: {left:?}");
+    assert_stopped(&s, libc::SIGINT, "fresh directory");
 }
 
 #[test]
@@ -525,9 +528,9 @@ fn a_signal_during_a_restart_leaves_the_partial_set_and_a_restart_then_completes
         &["--quiet", "--restart", &h5s],
         &[libc::SIGTERM],
     );
-    assert_stopped(&s, libc::SIGTERM, "restart");
     assert!(snapshot(&out) == before, "the partial set changed");
     assert_eq!(read_checkpoint(&h5).unwrap().steps.len(), 2);
+    assert_stopped(&s, libc::SIGTERM, "restart");
     // The restart, not interrupted, completes the sequence.
     let o = command()
         .arg("solve")
