@@ -1,6 +1,6 @@
 //! `signorini compare`: every variant on every shipped example; the rows agree.
 
-use signorini::qp::{precond::PrecondKind, SolverSection};
+use signorini::qp::{precond::PrecondKind, MethodId, SolverSection};
 use signorini::run::compare::{
     deadline, table, variants, SolvedRow, Table, Variant, VariantResult,
 };
@@ -333,7 +333,7 @@ fn frictional_steps_are_compared_along_the_load_path() {
         },
     )
     .unwrap();
-    let cold = run::solve_model(&prep, &last, &m, &opts).unwrap();
+    let cold = run::solve_model(&prep, &last, m, &opts).unwrap();
     let cold_probes: BTreeMap<String, [f64; 2]> = run::probes(&prep, &last.displacements(&cold.x))
         .into_iter()
         .map(|(n, _, _, u)| (n, u))
@@ -375,7 +375,7 @@ fn frictionless_steps_compare_the_last_step_cold() {
         },
     )
     .unwrap();
-    let cold = run::solve_model(&prep, &last, &m, &opts).unwrap();
+    let cold = run::solve_model(&prep, &last, m, &opts).unwrap();
     let s = row(&t, "ssn");
     assert_eq!(s.energy, cold.energy);
     assert!(s.rel_diff_lambda_t.is_none());
@@ -398,7 +398,7 @@ fn tangential_forces_enter_the_agreement() {
         },
     )
     .unwrap();
-    let q = run::solve_model(&prep, &last, &m, &opts).unwrap();
+    let q = run::solve_model(&prep, &last, m, &opts).unwrap();
     assert!(q.lambda_t.iter().any(|v| *v != 0.0));
     let good = VariantResult {
         probes: BTreeMap::new(),
@@ -408,6 +408,7 @@ fn tangential_forces_enter_the_agreement() {
         phases: BTreeMap::new(),
         path_certified: true,
         notes: vec![],
+        fallback: None,
         result: q,
     };
     let mut off = good.clone();
@@ -416,9 +417,9 @@ fn tangential_forces_enter_the_agreement() {
     }
     let v = |p: Option<PrecondKind>| Variant {
         method: if p.is_some() {
-            "cgc".into()
+            MethodId::Cgc
         } else {
-            "ssn".into()
+            MethodId::Ssn
         },
         preconditioner: p,
     };
@@ -484,11 +485,11 @@ fn variants_are_read_as_documented() {
         two,
         vec![
             Variant {
-                method: "cgc".into(),
+                method: MethodId::Cgc,
                 preconditioner: Some(PrecondKind::Ic0)
             },
             Variant {
-                method: "ssn".into(),
+                method: MethodId::Ssn,
                 preconditioner: None
             }
         ]

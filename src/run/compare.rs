@@ -91,7 +91,7 @@ pub fn variants(spec: Option<&str>) -> Result<Vec<Variant>, RunError> {
 }
 
 /// What to compare and how.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct CompareSpec {
     /// The variants as [`variants`] reads them. None: every method, or with
     /// friction every method that solves it (the others would all be
@@ -107,17 +107,6 @@ pub struct CompareSpec {
     pub time_limit: Option<f64>,
     /// The methods' progress lines on stderr.
     pub progress: bool,
-}
-
-impl Default for CompareSpec {
-    fn default() -> Self {
-        CompareSpec {
-            methods: None,
-            solver: SolverSection::default(),
-            time_limit: None,
-            progress: false,
-        }
-    }
 }
 
 /// What [`compare`] reports while it runs (the CLI prints it on stderr).

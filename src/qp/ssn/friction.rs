@@ -678,7 +678,11 @@ mod tests {
     fn other_methods_refuse_friction_and_nan_fails_the_certificate() {
         let qp = point(2.0, 0.3, -1.0, SlipBound::Coulomb(vec![0.5]));
         let e = registry::solve("cgc", &qp, &SolveOptions::default()).unwrap_err();
-        assert!(e.to_string().contains("does not solve contact with friction"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("does not solve contact with friction"),
+            "{e}"
+        );
         let k = crate::qp::kkt::residuals_with_friction(&qp, &[0.0, 0.0], &[1.0], &[f64::NAN]);
         assert!(!k.within(1e300));
         // A tangential force above the bound fails the friction residual.
