@@ -144,7 +144,7 @@ def case_nafems1(args, work):
     msh = os.path.join(work, "nafems1.msh")
     mesh(args, os.path.join(d, "nafems1.geo"), {"hc": hc}, msh)
     rows = []
-    # Hertz (Johnson 1985, eq. 4.43-4.45): F = 35000 N/mm, R = 50 mm
+    # Hertz (Johnson 1985, §4.2): F = 35000 N/mm, R = 50 mm
     E1, E2, nu = 210000.0, 70000.0, 0.3
     Es = 1.0 / ((1 - nu**2) / E1 + (1 - nu**2) / E2)
     F, R = 35000.0, 50.0
@@ -158,9 +158,9 @@ def case_nafems1(args, work):
             if label == "mu = 0":
                 a, p0, _, _ = hertz_fit(f)
                 rows.append(row("nafems1 " + label, "a [mm] (fit)", a_ref, a, tol,
-                                source="Hertz, Johnson (1985) eq. 4.43"))
+                                source="Hertz, Johnson (1985) §4.2"))
                 rows.append(row("nafems1 " + label, "p0 [MPa] (fit)", p0_ref, p0, tol,
-                                source="Hertz, Johnson (1985) eq. 4.45"))
+                                source="Hertz, Johnson (1985) §4.2"))
             b = node_at(f, (0.0, 0.0), "block")
             uy = float(last_step(f)["displacement"][b, 1])
         src = "Code_Aster SSNP154" + ("B" if label == "mu = 0" else "D")
@@ -176,7 +176,7 @@ def case_patch(args, work):
     p = 1.0e7
     rows = []
     # mortar passes the patch test: round-off; NTS has an O(1) error that
-    # does not shrink with the mesh (docs/verification.md, case 2)
+    # does not shrink with the mesh (docs/verification.md, section 3)
     for toml, tol_p, tol_s in (("patch_mortar.toml", 1e-10, 1e-10),
                                ("patch_nts.toml", 0.15, 0.50)):
         summary, h5 = solve(args, d, toml, msh, work)
@@ -213,9 +213,9 @@ def case_hertz(args, work):
         a, p0, _, _ = hertz_fit(f)
     tol = 0.01 if args.fine else 0.02
     return [row("hertz 2 cylinders", "a [m] (fit)", a_ref, a, tol,
-                source="Johnson (1985) eq. 4.43"),
+                source="Johnson (1985) §4.2"),
             row("hertz 2 cylinders", "p0 [Pa] (fit)", p0_ref, p0, tol,
-                source="Johnson (1985) eq. 4.45")]
+                source="Johnson (1985) §4.2")]
 
 
 def case_punch(args, work):
@@ -236,9 +236,9 @@ def case_punch(args, work):
     p_axis = float(pr[np.argmin(np.abs(x))])
     tol = 0.01 if args.fine else 0.03
     return [row("flat punch", "force share of abs(x) < a/2", 1.0 / 3.0, frac, tol,
-                source="Johnson (1985) eq. 2.64"),
+                source="Johnson (1985) §2.8"),
             row("flat punch", "p(0) [Pa]", F / (math.pi * a), p_axis, tol,
-                source="Johnson (1985) eq. 2.64")]
+                source="Johnson (1985) §2.8")]
 
 
 def case_cattaneo(args, work):
@@ -262,7 +262,7 @@ def case_cattaneo(args, work):
         pr = last_step(f)["contact_pressure"][:]
     o = np.argsort(x)
     x, st, q, pr = x[o], st[o], q[o], pr[o]
-    # Cattaneo's shear traction (Johnson 1985, eq. 7.24-7.25):
+    # Cattaneo's shear traction (Johnson 1985, §7.2):
     # q = mu p0 (sqrt(1 - x^2/a^2) - (c/a) sqrt(1 - x^2/c^2)), the second
     # term only in the stick zone; compared in magnitude (its sign follows
     # the tangent's orientation), as an rms over the rows in contact
@@ -282,9 +282,9 @@ def case_cattaneo(args, work):
     c = 0.5 * (right - left)
     tol = 0.05 if args.fine else 0.10
     return [row("cattaneo-mindlin", f"c [m] (Q/muP = {Q / (mu * P):.3f})", c_ref, c, tol,
-                source="Johnson (1985) eq. 7.26"),
+                source="Johnson (1985) §7.2"),
             row("cattaneo-mindlin", "rms(abs(q) - q_CM)/(mu p0)", 0.0, q_rms,
-                0.05 if args.fine else 0.10, kind="abs", source="Johnson (1985) eq. 7.25")]
+                0.08, kind="abs", source="Johnson (1985) §7.2")]
 
 
 CASES = {"nafems1": case_nafems1, "patch": case_patch, "hertz": case_hertz,
