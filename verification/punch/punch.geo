@@ -8,7 +8,7 @@
 // ripple. A mesh node sits at x = a/2 (Point 3) so that the force on the
 // central half of the punch can be summed exactly node by node.
 // hc: element size along the punch base (set by scripts/verify).
-DefineConstant[ hc = {0.01, Name "hc"} ];
+DefineConstant[ hc = {0.005, Name "hc"} ];
 Mesh.MshFileVersion = 4.1;
 Mesh.ElementOrder = 1;
 a = 0.1; hp = 0.1; W = 4.0; D = 4.0; hmax = 0.4;
