@@ -50,6 +50,7 @@ cargo test --release --all-targets 2>&1
 
 stage python
 bash scripts/python_checks.sh
+bash scripts/verify  # docs/verification.md: the coarse verification cases, each error within its tolerance
 
 stage bench
 bench_tmp=$(mktemp -d)
