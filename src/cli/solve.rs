@@ -199,6 +199,47 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
     for note in &s.notes {
         println!("note        {note}");
     }
+    print_certificate(s);
+    print_forces(s);
+    for (name, x, node, u) in run::probes(prep, &last.output.displacement) {
+        println!(
+            "probe {name:<5} ({:.6}, {:.6}) node {node}: u = ({:.6e}, {:.6e})",
+            x[0], x[1], u[0], u[1]
+        );
+    }
+    if let Some(k) = s.reference_step {
+        println!(
+            "reference   step {k}: displacement_change, stress_change and contact_pressure_change (this step minus step {k}) in the VTU and HDF5 outputs of step {k} and later"
+        );
+    }
+    if let Some(rows) = &s.steps {
+        print_steps(rows);
+    }
+    let phases: Vec<String> = res
+        .timings
+        .iter()
+        .map(|(k, v)| format!("{k} {v:.3}"))
+        .collect();
+    let t = &s.timings;
+    println!(
+        "time [s]    read {:.3}  assemble {:.3}  solve {:.3} ({})  write {:.3}  total {:.3}",
+        t.read,
+        t.assemble,
+        t.solve,
+        phases.join(", "),
+        t.write,
+        t.total
+    );
+    let multi = !prep.problem.file.steps.is_empty();
+    let out = run::output_paths(dir, &prep.problem.name, multi.then_some(outcome.steps.end));
+    println!("outputs     {}", out.vtu.display());
+    println!("            {}", out.contact_vtu.display());
+    println!("            {}", out.h5.display());
+    println!("            {}", out.json.display());
+}
+
+/// The KKT line: every residual and the verdict (docs/methods.md §8.4).
+fn print_certificate(s: &run::Summary) {
     let k = &s.kkt;
     println!(
         "KKT         primal {:.2e}  dual {:.2e}  complementarity {:.2e}  stationarity {:.2e}  contact balance {:.2e}{}  → {}",
@@ -224,6 +265,11 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
             format!("NOT certified (target {:.0e})", k.target)
         }
     );
+}
+
+/// Energy, contact, friction, reactions, the global balance and the
+/// interface resultants (docs/problem-format.md §7).
+fn print_forces(s: &run::Summary) {
     println!(
         "energy      {:.6e} (QP objective); strain energy {:.6e}, work of the loads {:.6e}",
         s.energy, s.strain_energy, s.load_work
@@ -235,7 +281,7 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
     if let (Some(stick), Some(slip)) = (s.contact.stick, s.contact.slip) {
         println!(
             "friction    {stick} rows stick, {slip} slip; friction residual {:.2e}",
-            k.friction
+            s.kkt.friction
         );
     }
     // Global balance: loads + reactions = 0 (contact forces are internal).
@@ -278,41 +324,6 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
             i.max_pressure
         );
     }
-    for (name, x, node, u) in run::probes(prep, &last.output.displacement) {
-        println!(
-            "probe {name:<5} ({:.6}, {:.6}) node {node}: u = ({:.6e}, {:.6e})",
-            x[0], x[1], u[0], u[1]
-        );
-    }
-    if let Some(k) = s.reference_step {
-        println!(
-            "reference   step {k}: displacement_change, stress_change and contact_pressure_change (this step minus step {k}) in the VTU and HDF5 outputs of step {k} and later"
-        );
-    }
-    if let Some(rows) = &s.steps {
-        print_steps(rows);
-    }
-    let phases: Vec<String> = res
-        .timings
-        .iter()
-        .map(|(k, v)| format!("{k} {v:.3}"))
-        .collect();
-    let t = &s.timings;
-    println!(
-        "time [s]    read {:.3}  assemble {:.3}  solve {:.3} ({})  write {:.3}  total {:.3}",
-        t.read,
-        t.assemble,
-        t.solve,
-        phases.join(", "),
-        t.write,
-        t.total
-    );
-    let multi = !prep.problem.file.steps.is_empty();
-    let out = run::output_paths(dir, &prep.problem.name, multi.then_some(outcome.steps.end));
-    println!("outputs     {}", out.vtu.display());
-    println!("            {}", out.contact_vtu.display());
-    println!("            {}", out.h5.display());
-    println!("            {}", out.json.display());
 }
 
 /// The per-step table (the report's §3.4 table; `steps` in the JSON).

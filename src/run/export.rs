@@ -9,7 +9,7 @@
 use super::prepare::{options, solve, Prepared};
 use super::RunError;
 use crate::io::{atomic, mtx};
-use crate::qp::{kkt, Kkt, QpResult, SlipBound, SolverSection};
+use crate::qp::{kkt, Friction, Kkt, QpResult, SlipBound, SolverSection};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -53,6 +53,147 @@ pub struct ExportReport {
     pub t_write: f64,
 }
 
+/// The files of one export: the directory, the header line every file
+/// carries, and the names written so far.
+struct Files<'a> {
+    dir: &'a Path,
+    src: String,
+    names: Vec<String>,
+}
+
+impl Files<'_> {
+    /// Write `name` with `f` (atomically: the writers of `io` stage and
+    /// rename), and remember it.
+    fn put(
+        &mut self,
+        name: &str,
+        f: impl FnOnce(&Path) -> Result<(), crate::io::IoError>,
+    ) -> Result<(), RunError> {
+        f(&self.dir.join(name))?;
+        self.names.push(name.to_string());
+        Ok(())
+    }
+
+    /// A vector file with its header and a one-line description.
+    fn vector(&mut self, name: &str, v: &[f64], what: &str) -> Result<(), RunError> {
+        let header = format!("{}\n{what}", self.src);
+        self.put(name, |p| mtx::write_vector(p, v, &header))
+    }
+
+    /// A sparse matrix file (`symmetric`: the lower triangle).
+    fn sparse(
+        &mut self,
+        name: &str,
+        a: &crate::qp::Csr,
+        symmetric: bool,
+        what: &str,
+    ) -> Result<(), RunError> {
+        let header = format!("{}\n{what}", self.src);
+        self.put(name, |p| mtx::write_sparse(p, a, symmetric, &header))
+    }
+}
+
+/// The objective line of `meta.json` for the friction law (None: none).
+fn objective(law: Option<&str>) -> &'static str {
+    match law {
+        None => "min 1/2 x'Cx - d'x subject to Ax <= g",
+        Some("tresca") => "min 1/2 x'Cx - d'x + sum_i s_i |(Tx - t0)_i| subject to Ax <= g",
+        Some(_) => {
+            "min 1/2 x'Cx - d'x + sum_i s_i |(Tx - t0)_i| subject to Ax <= g, with s_i = mu_i lambda_i (Coulomb: a fixed point)"
+        }
+    }
+}
+
+/// C, A, d, g and the kernel basis R (one column per rigid mode).
+fn write_qp(files: &mut Files, qp: &crate::qp::QpProblem) -> Result<(), RunError> {
+    files.sparse(
+        "C.mtx",
+        &qp.c,
+        true,
+        "C: stiffness, symmetric positive (semi)definite, lower triangle",
+    )?;
+    files.sparse("A.mtx", &qp.a, false, "A: one row per contact constraint")?;
+    files.vector("d.mtx", &qp.d, "d: load vector")?;
+    files.vector("g.mtx", &qp.g, "g: initial gaps")?;
+    let src = files.src.clone();
+    files.put("R.mtx", |p| {
+        atomic::write_atomic_with(p, |w| {
+            writeln!(w, "%%MatrixMarket matrix array real general")?;
+            writeln!(
+                w,
+                "% {src}\n% R: basis of ker C (column-major), one column per rigid mode"
+            )?;
+            writeln!(w, "{} {}", qp.n(), qp.kernel.len())?;
+            for v in &qp.kernel {
+                for x in v {
+                    writeln!(w, "{x:e}")?;
+                }
+            }
+            Ok(())
+        })
+    })
+}
+
+/// Friction (docs/methods.md §9): one tangential row per contact row, in
+/// the order of A, the offsets t0 of the slip v = Tx − t0, and the bound
+/// (s for Tresca, μ for Coulomb); returns the bound's file name.
+fn write_friction(files: &mut Files, f: &Friction) -> Result<&'static str, RunError> {
+    files.sparse(
+        "T.mtx",
+        &f.t,
+        false,
+        "T: one tangential row per contact row (the order of A)",
+    )?;
+    files.vector(
+        "t0.mtx",
+        &f.t0,
+        "t0: tangential offsets, the slip is v = Tx - t0",
+    )?;
+    let (name, values, what) = match &f.bound {
+        SlipBound::Tresca(s) => (
+            "s.mtx",
+            s,
+            "s: Tresca slip bound per row (N), |lambda_t| <= s",
+        ),
+        SlipBound::Coulomb(mu) => (
+            "mu.mtx",
+            mu,
+            "mu: Coulomb coefficient per row, |lambda_t| <= mu lambda",
+        ),
+    };
+    files.vector(name, values, what)?;
+    Ok(name)
+}
+
+/// x, λ (and λ_t) and the residuals of what was written (the values
+/// round-trip exactly), not the solver's claim: meta.json cannot
+/// contradict the files.
+fn write_solution(
+    files: &mut Files,
+    qp: &crate::qp::QpProblem,
+    method: &str,
+    res: &QpResult,
+) -> Result<ExportedSolution, RunError> {
+    files.vector("x.mtx", &res.x, "x: signorini's solution")?;
+    files.vector("lambda.mtx", &res.lambda, "lambda: contact multipliers")?;
+    let lambda_t: &[f64] = if qp.friction.is_some() {
+        files.vector(
+            "lambda_t.mtx",
+            &res.lambda_t,
+            "lambda_t: tangential forces, one per contact row",
+        )?;
+        &res.lambda_t
+    } else {
+        &[]
+    };
+    Ok(ExportedSolution {
+        method: method.to_string(),
+        converged: res.status.converged(),
+        energy: qp.energy_with_friction(&res.x, &res.lambda),
+        kkt: kkt::residuals_with_friction(qp, &res.x, &res.lambda, lambda_t),
+    })
+}
+
 /// Write the QP of `prep` (and with `spec.solution` signorini's answer)
 /// into `spec.dir`. Every file is written atomically, meta.json last; an
 /// error names the file.
@@ -77,149 +218,66 @@ pub fn export(prep: &Prepared, spec: &ExportSpec) -> Result<ExportReport, RunErr
         SlipBound::Tresca(_) => "tresca",
         SlipBound::Coulomb(_) => "coulomb",
     });
-    let objective = match law {
-        None => "min 1/2 x'Cx - d'x subject to Ax <= g",
-        Some("tresca") => {
-            "min 1/2 x'Cx - d'x + sum_i s_i |(Tx - t0)_i| subject to Ax <= g"
-        }
-        Some(_) => {
-            "min 1/2 x'Cx - d'x + sum_i s_i |(Tx - t0)_i| subject to Ax <= g, with s_i = mu_i lambda_i (Coulomb: a fixed point)"
-        }
+    let mut files = Files {
+        dir: &spec.dir,
+        src: format!(
+            "signorini export of {} ({})",
+            prep.problem.path.display(),
+            objective(law)
+        ),
+        names: vec![],
     };
-    let src = format!(
-        "signorini export of {} ({objective})",
-        prep.problem.path.display()
-    );
-    let mut files = vec![];
-    let put = |name: &str,
-               files: &mut Vec<String>,
-               f: &dyn Fn(&Path) -> Result<(), crate::io::IoError>|
-     -> Result<(), RunError> {
-        f(&spec.dir.join(name))?;
-        files.push(name.to_string());
-        Ok(())
-    };
-    put("C.mtx", &mut files, &|p| {
-        mtx::write_sparse(
-            p,
-            &qp.c,
-            true,
-            &format!("{src}\nC: stiffness, symmetric positive (semi)definite, lower triangle"),
-        )
-    })?;
-    put("A.mtx", &mut files, &|p| {
-        mtx::write_sparse(
-            p,
-            &qp.a,
-            false,
-            &format!("{src}\nA: one row per contact constraint"),
-        )
-    })?;
-    put("d.mtx", &mut files, &|p| {
-        mtx::write_vector(p, &qp.d, &format!("{src}\nd: load vector"))
-    })?;
-    put("g.mtx", &mut files, &|p| {
-        mtx::write_vector(p, &qp.g, &format!("{src}\ng: initial gaps"))
-    })?;
-    // Kernel of C (rigid motions of floating bodies), one column each.
-    let k = qp.kernel.len();
-    put("R.mtx", &mut files, &|p| {
-        atomic::write_atomic_with(p, |w| {
-            writeln!(w, "%%MatrixMarket matrix array real general")?;
-            writeln!(
-                w,
-                "% {src}\n% R: basis of ker C (column-major), one column per rigid mode"
-            )?;
-            writeln!(w, "{} {}", qp.n(), k)?;
-            for v in &qp.kernel {
-                for x in v {
-                    writeln!(w, "{x:e}")?;
-                }
-            }
-            Ok(())
-        })
-    })?;
-    // Friction (docs/methods.md §9): one tangential row per contact row, in
-    // the order of A, the slip v = Tx − t0 and its bound.
-    let bound_file = match friction.map(|f| &f.bound) {
-        Some(SlipBound::Tresca(_)) => Some("s.mtx"),
-        Some(SlipBound::Coulomb(_)) => Some("mu.mtx"),
-        None => None,
-    };
-    if let Some(f) = friction {
-        put("T.mtx", &mut files, &|p| {
-            mtx::write_sparse(
-                p,
-                &f.t,
-                false,
-                &format!("{src}\nT: one tangential row per contact row (the order of A)"),
-            )
-        })?;
-        put("t0.mtx", &mut files, &|p| {
-            mtx::write_vector(
-                p,
-                &f.t0,
-                &format!("{src}\nt0: tangential offsets, the slip is v = Tx - t0"),
-            )
-        })?;
-        let (name, values, what) = match &f.bound {
-            SlipBound::Tresca(s) => (
-                "s.mtx",
-                s,
-                "s: Tresca slip bound per row (N), |lambda_t| <= s",
-            ),
-            SlipBound::Coulomb(mu) => (
-                "mu.mtx",
-                mu,
-                "mu: Coulomb coefficient per row, |lambda_t| <= mu lambda",
-            ),
-        };
-        put(name, &mut files, &|p| {
-            mtx::write_vector(p, values, &format!("{src}\n{what}"))
-        })?;
+    write_qp(&mut files, qp)?;
+    let bound_file = friction
+        .map(|f| write_friction(&mut files, f))
+        .transpose()?;
+    let solution = solved
+        .as_ref()
+        .map(|(method, res)| write_solution(&mut files, qp, method, res))
+        .transpose()?;
+    let mut meta = meta_json(prep, law, solution.as_ref());
+    // Friction's keys only with friction: a frictionless export is as before.
+    if let (Some(f), Some(law), Some(bound)) = (friction, law, bound_file) {
+        let has = solution.is_some();
+        let names = &mut meta["files"];
+        names["T"] = json!("T.mtx");
+        names["t0"] = json!("t0.mtx");
+        names[bound.trim_end_matches(".mtx")] = json!(bound);
+        names["lambda_t"] = json!(has.then_some("lambda_t.mtx"));
+        meta["friction"] = json!(law);
+        meta["nnz_T"] = json!(f.t.nnz());
     }
-    let mut solution = None;
-    if let Some((method, res)) = &solved {
-        put("x.mtx", &mut files, &|p| {
-            mtx::write_vector(p, &res.x, &format!("{src}\nx: signorini's solution"))
-        })?;
-        put("lambda.mtx", &mut files, &|p| {
-            mtx::write_vector(
-                p,
-                &res.lambda,
-                &format!("{src}\nlambda: contact multipliers"),
-            )
-        })?;
-        if friction.is_some() {
-            put("lambda_t.mtx", &mut files, &|p| {
-                mtx::write_vector(
-                    p,
-                    &res.lambda_t,
-                    &format!("{src}\nlambda_t: tangential forces, one per contact row"),
-                )
-            })?;
-        }
-        // The residuals of what was written (the values round-trip
-        // exactly), not the solver's claim: meta.json cannot contradict the
-        // files.
-        let lambda_t: &[f64] = if friction.is_some() {
-            &res.lambda_t
-        } else {
-            &[]
-        };
-        solution = Some(ExportedSolution {
-            method: method.clone(),
-            converged: res.status.converged(),
-            energy: qp.energy_with_friction(&res.x, &res.lambda),
-            kkt: kkt::residuals_with_friction(qp, &res.x, &res.lambda, lambda_t),
-        });
-    }
+    let text = serde_json::to_string_pretty(&meta).unwrap_or_default();
+    files.put("meta.json", |p| {
+        atomic::write_atomic_bytes(p, text.as_bytes())
+    })?;
+    Ok(ExportReport {
+        dir: spec.dir.clone(),
+        n: qp.n(),
+        m: qp.m(),
+        nnz_c: qp.c.nnz(),
+        kernel_dim: qp.kernel.len(),
+        friction: law,
+        files: files.names,
+        solution,
+        t_write: t_write.elapsed().as_secs_f64(),
+    })
+}
+
+/// `meta.json` (docs/guide.md, "Exported QP"): sizes, sources and, with a
+/// solution, its energy, method and every KKT residual (the one [`Kkt`]
+/// type, as in the run's JSON).
+fn meta_json(
+    prep: &Prepared,
+    law: Option<&str>,
+    solution: Option<&ExportedSolution>,
+) -> serde_json::Value {
+    let qp = &prep.model.qp;
     let has = solution.is_some();
-    let fr = friction.is_some();
-    let mut meta = json!({
+    json!({
         "format": "signorini-qp",
         "version": 1,
-        "objective": objective,
+        "objective": objective(law),
         "files": {"C": "C.mtx", "A": "A.mtx", "d": "d.mtx", "g": "g.mtx", "R": "R.mtx",
                   "x": has.then_some("x.mtx"), "lambda": has.then_some("lambda.mtx")},
         "problem": prep.problem.path.display().to_string(),
@@ -228,47 +286,14 @@ pub fn export(prep: &Prepared, spec: &ExportSpec) -> Result<ExportReport, RunErr
         "m": qp.m(),
         "nnz_C": qp.c.nnz(),
         "nnz_A": qp.a.nnz(),
-        "kernel_dim": k,
+        "kernel_dim": qp.kernel.len(),
         "nodes": prep.mesh.nodes.len(),
         "triangles": prep.model.topo.triangles.len(),
-        "energy": solution.as_ref().map(|s| s.energy),
-        "method": solution.as_ref().map(|s| s.method.clone()),
-        "converged": solution.as_ref().map(|s| s.converged),
-        "kkt": solution.as_ref().map(|s| {
-            let mut v = json!({
-                "primal": s.kkt.primal, "dual": s.kkt.dual,
-                "complementarity": s.kkt.complementarity, "stationarity": s.kkt.stationarity});
-            if fr {
-                v["friction"] = json!(s.kkt.friction);
-            }
-            v
-        }),
+        "energy": solution.map(|s| s.energy),
+        "method": solution.map(|s| s.method.clone()),
+        "converged": solution.map(|s| s.converged),
+        "kkt": solution.map(|s| s.kkt),
         "t_read": prep.t_read,
         "t_assemble": prep.t_assemble,
-    });
-    // Friction's keys only with friction: a frictionless export is as before.
-    if let (Some(f), Some(law), Some(bound)) = (friction, law, bound_file) {
-        let files = &mut meta["files"];
-        files["T"] = json!("T.mtx");
-        files["t0"] = json!("t0.mtx");
-        files[bound.trim_end_matches(".mtx")] = json!(bound);
-        files["lambda_t"] = json!(has.then_some("lambda_t.mtx"));
-        meta["friction"] = json!(law);
-        meta["nnz_T"] = json!(f.t.nnz());
-    }
-    let text = serde_json::to_string_pretty(&meta).unwrap_or_default();
-    put("meta.json", &mut files, &|p| {
-        atomic::write_atomic_bytes(p, text.as_bytes())
-    })?;
-    Ok(ExportReport {
-        dir: spec.dir.clone(),
-        n: qp.n(),
-        m: qp.m(),
-        nnz_c: qp.c.nnz(),
-        kernel_dim: k,
-        friction: law,
-        files,
-        solution,
-        t_write: t_write.elapsed().as_secs_f64(),
     })
 }

@@ -13,6 +13,7 @@
 //! One executor iteration = one visit of a face (FACE_CG until a face minimum,
 //! a new constraint, or KMAX steps); the CG steps are the inner iterations.
 
+use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::sparse::{axpy, dot, norm, norm_inf};
 use crate::qp::executor::{Iterative, Step};
 use crate::qp::method::{Capabilities, Factor, MethodId};
@@ -49,7 +50,7 @@ pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
         precond::build_in(s.cgc.preconditioner, &qp.c, &qp.kernel, s.cgc.omega, ctx.ws)
     })?;
     let x0 = ctx.x0.filter(|x| x.len() == qp.n() && is_feasible(qp, x));
-    let mut state = Cgc::new(qp, pc.as_ref(), s.tol, s.cgc.multiple_release, x0);
+    let mut state = Cgc::new(qp, pc.as_ref(), s.tol, s.cgc.multiple_release, x0)?;
     state.kmax_cap = s.max_iter.max(1);
     let mut exec = ctx.executor("cgc");
     let (status, iters) = ctx.phase("iterate", |_| exec.run(&mut state));
@@ -126,7 +127,7 @@ impl<'a> Cgc<'a> {
         tol: f64,
         multiple: bool,
         x0: Option<&[f64]>,
-    ) -> Cgc<'a> {
+    ) -> Result<Cgc<'a>, QpError> {
         let n = qp.n();
         let m = qp.m();
         let x = match x0 {
@@ -153,7 +154,7 @@ impl<'a> Cgc<'a> {
             .collect();
         let mut wd = vec![0.0; n];
         pc.apply(&qp.d, &mut wd);
-        let kernel = crate::qp::ssn::orthonormal_kernel(&qp.c, &qp.kernel).unwrap_or_default();
+        let kernel = orthonormal_kernel(&qp.c, &qp.kernel)?;
         let mut st = Cgc {
             qp,
             pc,
@@ -180,7 +181,7 @@ impl<'a> Cgc<'a> {
         };
         let (_, r) = st.project();
         st.ref_norm = st.ref_norm.max(r.sqrt()).max(1e-300);
-        st
+        Ok(st)
     }
 
     fn working_set(&self) -> Vec<usize> {

@@ -32,19 +32,13 @@ impl Ssn<'_> {
         self.aug_solve(in_j, d, g, mu0)
     }
 
-    /// The KKT system `Cx + A_Jᵀλ_J = d, A_J x = g_J` through
-    /// K_J = C + A_JᵀΡA_J, CG on its Schur complement started from `mu0`
-    /// (one value per row of J); None if K_J is not positive definite or CG
-    /// does not converge. Returns (λ over all rows, x).
-    pub(super) fn aug_solve(
-        &mut self,
-        in_j: &[bool],
-        d: &[f64],
-        g: &[f64],
-        mu0: Vec<f64>,
-    ) -> Option<(Vec<f64>, Vec<f64>)> {
+    /// The factor of K_J = C + A_JᵀΡA_J for `in_j` (rows `jset`): the kept
+    /// factor of K' = C + A_{J'}ᵀΡA_{J'} with a low-rank correction for the
+    /// rows that changed (Some(update)), or a new factor (None); None
+    /// outside if K_J cannot be factored (a memory refusal is kept in
+    /// `self.error`).
+    fn factor_for(&mut self, in_j: &[bool], jset: &[usize]) -> Option<Option<LowRank>> {
         let qp = self.qp;
-        let jset: Vec<usize> = (0..qp.m()).filter(|&i| in_j[i]).collect();
         let n = qp.n();
         // Reuse K' = C + A_{J'}ᵀΡA_{J'} with a low-rank correction, or refactor.
         let mut update = None;
@@ -69,7 +63,7 @@ impl Ssn<'_> {
                 update = lr.map(Some);
             }
         }
-        let update = match update {
+        Some(match update {
             Some(u) => u,
             None => {
                 let aug = self.aug.as_mut()?;
@@ -93,7 +87,24 @@ impl Ssn<'_> {
                 self.kfac_set = Some(in_j.to_vec());
                 None
             }
-        };
+        })
+    }
+
+    /// The KKT system `Cx + A_Jᵀλ_J = d, A_J x = g_J` through
+    /// K_J = C + A_JᵀΡA_J, CG on its Schur complement started from `mu0`
+    /// (one value per row of J); None if K_J is not positive definite or CG
+    /// does not converge. Returns (λ over all rows, x).
+    pub(super) fn aug_solve(
+        &mut self,
+        in_j: &[bool],
+        d: &[f64],
+        g: &[f64],
+        mu0: Vec<f64>,
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let qp = self.qp;
+        let jset: Vec<usize> = (0..qp.m()).filter(|&i| in_j[i]).collect();
+        let n = qp.n();
+        let update = self.factor_for(in_j, &jset)?;
         let fac = self.kfac.as_ref().expect("factor of K'");
         // x ← K_J⁻¹x: the factor of K', then the Woodbury correction.
         let kinv = |x: &mut Vec<f64>| {
