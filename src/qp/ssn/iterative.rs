@@ -248,9 +248,12 @@ impl<'a> State<'a> {
             });
             let amg = match Amg::new(self.aug.matrix(), near, &AmgSettings::default()) {
                 Ok(a) => a,
+                // Not a free motion (that is `holds_kernel`'s verdict
+                // above): say what failed instead of blaming the bodies.
                 Err(e) => {
-                    log::debug!("ssn iterative: multigrid of K_J: {e}");
-                    return Kkt::Singular;
+                    return Kkt::Stalled(format!(
+                        "ssn iterative: no multigrid of K_J ({e}); ssn_path = \"auto\" factors K_J instead"
+                    ))
                 }
             };
             self.t_setup += t.elapsed().as_secs_f64();
@@ -316,7 +319,8 @@ impl<'a> State<'a> {
             let floor_ok = rep.stalled;
             if !(rep.converged || floor_ok) || !rep.rel_residual.is_finite() {
                 return Kkt::Stalled(format!(
-                    "ssn iterative: CG on K_J stopped at relative residual {:.2e} after {} steps",
+                    "ssn iterative: CG on K_J stopped at relative residual {:.2e} after {} steps \
+                     (a stiffness contrast beyond what the multigrid resolves; ssn_path = \"auto\" factors K_J instead)",
                     rep.rel_residual, rep.iterations
                 ));
             }
