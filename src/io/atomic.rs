@@ -406,7 +406,17 @@ impl OutputLock {
                 Ok(mut file) => {
                     // Ours, unless a run that took it for stale holds or
                     // unlinked it between our create and our lock: try again.
-                    if file.try_lock().is_err() || !same_inode(&file) {
+                    match file.try_lock() {
+                        Ok(()) => {}
+                        Err(std::fs::TryLockError::WouldBlock) => continue,
+                        Err(std::fs::TryLockError::Error(e)) => {
+                            if same_inode(&file) {
+                                let _ = std::fs::remove_file(&path);
+                            }
+                            return Err(format!("{shown}: cannot lock: {e}"));
+                        }
+                    }
+                    if !same_inode(&file) {
                         continue;
                     }
                     let _ = file.write_all(format!("{}\n", std::process::id()).as_bytes());
