@@ -580,3 +580,53 @@ fn a_signal_at_the_start_leaves_the_directory_as_it_was() {
         );
     }
 }
+
+#[test]
+fn a_signal_stops_a_long_solve_at_its_next_iteration() {
+    // Uzawa with a tiny step takes many thousands of iterations on
+    // three_bodies (about 10 s here); the signal lands inside the solve and
+    // the executor stops at its next iteration: the run ends within a few
+    // seconds, not when the solve would have (the bound is generous; it is
+    // no decision of the product).
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let mut child = command()
+        .arg("solve")
+        .arg(meshes().join("three_bodies.toml"))
+        .args(["--out", out.to_str().unwrap(), "--quiet"])
+        .args(["--method", "uzawa", "--rho", "1e-6", "--tol", "1e-14"])
+        .args(["--max-iter", "100000000"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    if child.try_wait().unwrap().is_some() {
+        eprintln!("SKIPPED: the solve ended within 1.5 s; nothing to interrupt");
+        return;
+    }
+    send(&child, libc::SIGINT);
+    let t0 = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if t0.elapsed() > Duration::from_secs(300) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("no stop within 300 s");
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let waited = t0.elapsed();
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("interrupted by SIGINT"), "{stderr}");
+    assert!(
+        waited < Duration::from_secs(5),
+        "the solve went on for {waited:?} after the signal"
+    );
+    let left: Vec<String> = snapshot(&out).into_keys().collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}

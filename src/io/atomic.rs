@@ -406,7 +406,17 @@ impl OutputLock {
                 Ok(mut file) => {
                     // Ours, unless a run that took it for stale holds or
                     // unlinked it between our create and our lock: try again.
-                    if file.try_lock().is_err() || !same_inode(&file) {
+                    match file.try_lock() {
+                        Ok(()) => {}
+                        Err(std::fs::TryLockError::WouldBlock) => continue,
+                        Err(std::fs::TryLockError::Error(e)) => {
+                            if same_inode(&file) {
+                                let _ = std::fs::remove_file(&path);
+                            }
+                            return Err(format!("{shown}: cannot lock: {e}"));
+                        }
+                    }
+                    if !same_inode(&file) {
                         continue;
                     }
                     let _ = file.write_all(format!("{}\n", std::process::id()).as_bytes());
@@ -501,5 +511,41 @@ fn lock_hint(cause: &::hdf5::Error) -> &'static str {
          close it, or run with HDF5_USE_FILE_LOCKING=FALSE if it is only being read)"
     } else {
         ""
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_second_lock_of_the_same_name_names_the_first_holder() {
+        let d = tempfile::tempdir().unwrap();
+        let first = OutputLock::acquire(d.path(), "m").unwrap();
+        let err = OutputLock::acquire(d.path(), "m").err().unwrap();
+        assert!(
+            err.contains(&format!("process {}", std::process::id())),
+            "{err}"
+        );
+        drop(first);
+        assert!(!d.path().join(".m.lock").exists());
+        let again = OutputLock::acquire(d.path(), "m").unwrap();
+        drop(again);
+    }
+
+    #[test]
+    fn a_stale_hard_link_loses_its_name_only() {
+        let d = tempfile::tempdir().unwrap();
+        let other = d.path().join("other");
+        std::fs::write(&other, b"keep me").unwrap();
+        let out = d.path().join("out");
+        std::fs::create_dir(&out).unwrap();
+        std::fs::hard_link(&other, out.join(".m.lock")).unwrap();
+        let lock = OutputLock::acquire(&out, "m").unwrap();
+        assert_eq!(std::fs::read(&other).unwrap(), b"keep me");
+        let text = std::fs::read_to_string(out.join(".m.lock")).unwrap();
+        assert_eq!(text.trim(), std::process::id().to_string());
+        drop(lock);
+        assert_eq!(std::fs::read(&other).unwrap(), b"keep me");
     }
 }

@@ -3,7 +3,8 @@
 //! directory ([`Stage`]) under the output directory's lock ([`OutputLock`])
 //! and committed per load step (VTU pair, PVD, the grown checkpoint), the
 //! JSON summary last; an error drops the transaction, which puts back what
-//! the directory held before.
+//! the directory held before. SIGTERM and SIGINT become such an error
+//! ([`catch_signals`]).
 
 use super::observe::StepObserver;
 use super::prepare::{fingerprint, Prepared};

@@ -244,9 +244,11 @@ impl<'a> Run<'a> {
             o.x0 = u_prev.as_ref().map(|u| reduce(model_ref, u));
             o.stop = Some(&super::output::SIGNAL);
             let t_solve0 = Instant::now();
-            let res = solve_model_in(prep, model_ref, method, &o, &ws)?;
-            // An interrupted solve is no result to write.
+            let res = solve_model_in(prep, model_ref, method, &o, &ws);
+            // An interrupted solve is no result to write, nor an error of
+            // the problem.
             check_interrupt()?;
+            let res = res?;
             let t_solve = t_solve0.elapsed().as_secs_f64();
             let t_w = Instant::now();
             let mut problem_s = prep.problem.clone();
