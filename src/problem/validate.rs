@@ -32,6 +32,7 @@ pub(super) fn validate(raw: RawFile) -> Check<ProblemFile> {
     }
     let contact = collect(&raw.contact, contact)?;
     check_pairs_once(&contact)?;
+    check_one_friction_law(&contact)?;
     check_solver(&raw)?;
     check_steps(&raw)?;
     check_output(&raw)?;
@@ -390,6 +391,28 @@ fn check_pairs_once(contact: &[Contact]) -> Check {
     Ok(())
 }
 
+/// Tresca and Coulomb pairs in one problem: the QP holds one kind of slip
+/// bound (docs/methods.md §9), so the mix is refused naming one of each.
+fn check_one_friction_law(contact: &[Contact]) -> Check {
+    let first = |tresca: bool| {
+        contact.iter().position(|c| match c.friction {
+            FrictionLaw::Tresca(_) => tresca,
+            FrictionLaw::Coulomb(_) => !tresca,
+            FrictionLaw::Frictionless => false,
+        })
+    };
+    if let (Some(t), Some(c)) = (first(true), first(false)) {
+        return Err(format!(
+            "[[contact]] #{} ({}) has tresca = s and #{} ({}) friction = μ: Tresca and Coulomb pairs in one problem are not supported; use one law for every pair",
+            t + 1,
+            contact[t].keys(),
+            c + 1,
+            contact[c].keys()
+        ));
+    }
+    Ok(())
+}
+
 fn check_solver(f: &RawFile) -> Check {
     let s = &f.solver;
     if let Some(t) = s.tol {
@@ -472,7 +495,7 @@ mod tests {
     fn contact_keys_become_one_typed_entry() {
         let f = parse(
             "[[contact]]\non = \"i\"\nnormals = \"segment\"\nfriction = 0.0\n\
-             [[contact]]\nslave = \"s\"\nmaster = \"m\"\ndiscretization = \"mortar\"\nmax_gap = 0.5\ntresca = 2.0\n\
+             [[contact]]\nslave = \"s\"\nmaster = \"m\"\ndiscretization = \"mortar\"\nmax_gap = 0.5\nfriction = 2.0\n\
              [[contact]]\nslave = \"t\"\nmaster = \"m\"\nfriction = 0.25\n",
         )
         .unwrap();
@@ -492,7 +515,7 @@ mod tests {
                     max_gap: Some(0.5),
                     discretization: Discretization::Mortar,
                 }),
-                friction: FrictionLaw::Tresca(2.0),
+                friction: FrictionLaw::Coulomb(2.0),
             },
             Contact {
                 pair: ContactPair::NonMatching(NonMatchingPair {
@@ -505,6 +528,9 @@ mod tests {
             },
         ];
         assert_eq!(f.contact, want);
+        let f = parse("[[contact]]\non = \"i\"\ntresca = 0.0\n").unwrap();
+        // A zero Tresca bound stays a friction law (rows with a zero slip bound).
+        assert_eq!(f.contact[0].friction, FrictionLaw::Tresca(0.0));
     }
 
     #[test]
@@ -578,6 +604,10 @@ mod tests {
             (
                 "slave = \"s\"\nmaster = \"m\"\nmax_gap = -1.0",
                 "max_gap = -1 must be >= 0",
+            ),
+            (
+                "on = \"i\"\ntresca = 1.0\n[[contact]]\non = \"j\"\nfriction = 0.5",
+                "#1 (on = \"i\") has tresca = s and #2 (on = \"j\") friction",
             ),
         ] {
             let e = parse(&format!("[[contact]]\n{keys}\n")).unwrap_err();
