@@ -80,7 +80,7 @@ pub(super) fn build(
                     return Err(FemError::new(
                         &problem.path,
                         format!(
-                            "[[contact]] #{} ({}): tresca = {s:e} times the tributary length {:e} and the thickness {t_eff:e} overflows; change the units",
+                            "[[contact]] #{} ({}): tresca = {s:e} times the tributary length {:.3e} and the thickness {t_eff:e} overflows; change the units",
                             ci + 1,
                             c.keys(),
                             row.trib

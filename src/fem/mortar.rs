@@ -157,27 +157,12 @@ impl Topology {
         let (msegs, ssegs) = (&pair.masters[..], &pair.slaves[..]);
         let err = |msg: String| FemError::new(&problem.path, msg);
         let (sname, mname) = (c.slave.as_str(), c.master.as_str());
-        // Averaged slave normals: the sum of the adjacent segments' unit
-        // outward normals, normalized (§7.1).
-        let mut nsum: HashMap<(usize, u32), [f64; 2]> = HashMap::new();
-        for &(a, b, body, n) in ssegs {
-            for v in [a, b] {
-                let e = nsum.entry((v, body)).or_insert([0.0, 0.0]);
-                e[0] += n[0];
-                e[1] += n[1];
-            }
-        }
-        let mut normal: HashMap<(usize, u32), [f64; 2]> = HashMap::new();
-        for (&(v, body), s) in &nsum {
-            let len = (s[0] * s[0] + s[1] * s[1]).sqrt();
-            if len.is_nan() || len <= 1e-12 {
-                return Err(err(format!(
-                    "{what}: the normals of slave curve \"{sname}\" cancel at node {} (a cusp); split the curve there",
-                    mesh.node_tags[v]
-                )));
-            }
-            normal.insert((v, body), [s[0] / len, s[1] / len]);
-        }
+        let normal = slave_normals(ssegs).map_err(|v| {
+            err(format!(
+                "{what}: the normals of slave curve \"{sname}\" cancel at node {} (a cusp); split the curve there",
+                mesh.node_tags[v]
+            ))
+        })?;
         // D_jj, M_jm (by master point) and g̃_j, per slave node.
         let mut dj: HashMap<(usize, u32), f64> = HashMap::new();
         let mut mj: HashMap<(usize, u32), BTreeMap<usize, f64>> = HashMap::new();
@@ -195,36 +180,9 @@ impl Topology {
             if pieces.is_empty() {
                 continue;
             }
-            // Dual basis on the projecting part: Φ = A N with A = D_e M_e⁻¹,
-            // M_e, D_e the mass and lumped matrices on the pieces (Popp et
-            // al. 2013); on a whole segment Φ₁ = 2N₁ − N₂, Φ₂ = 2N₂ − N₁.
-            let mut me = [[0.0; 2]; 2];
-            let mut de = [0.0; 2];
-            for p in &pieces {
-                for &(t, w) in &GAUSS {
-                    let s = p.s0 + t * (p.s1 - p.s0);
-                    let wl = w * (p.s1 - p.s0) * len;
-                    let nn = [1.0 - s, s];
-                    for i in 0..2 {
-                        de[i] += nn[i] * wl;
-                        for k in 0..2 {
-                            me[i][k] += nn[i] * nn[k] * wl;
-                        }
-                    }
-                }
-            }
-            let det = me[0][0] * me[1][1] - me[0][1] * me[1][0];
-            if det.is_nan() || det <= 0.0 {
+            let Some((de, amat)) = dual_basis(&pieces, len) else {
                 continue;
-            }
-            let inv = [
-                [me[1][1] / det, -me[0][1] / det],
-                [-me[1][0] / det, me[0][0] / det],
-            ];
-            let amat = [
-                [de[0] * inv[0][0], de[0] * inv[0][1]],
-                [de[1] * inv[1][0], de[1] * inv[1][1]],
-            ];
+            };
             let keys = [(a, sb), (b, sb)];
             for (i, key) in keys.iter().enumerate() {
                 *dj.entry(*key).or_insert(0.0) += de[i];
@@ -318,6 +276,64 @@ impl Topology {
         }
         Ok(())
     }
+}
+
+/// Averaged slave normals: the sum of the adjacent segments' unit outward
+/// normals, normalized (docs/methods.md §7.1); `Err(node)` where they cancel.
+fn slave_normals(ssegs: &[BoundarySeg]) -> Result<HashMap<(usize, u32), [f64; 2]>, usize> {
+    let mut nsum: HashMap<(usize, u32), [f64; 2]> = HashMap::new();
+    for &(a, b, body, n) in ssegs {
+        for v in [a, b] {
+            let e = nsum.entry((v, body)).or_insert([0.0, 0.0]);
+            e[0] += n[0];
+            e[1] += n[1];
+        }
+    }
+    let mut normal: HashMap<(usize, u32), [f64; 2]> = HashMap::new();
+    for (&(v, body), s) in &nsum {
+        let len = (s[0] * s[0] + s[1] * s[1]).sqrt();
+        if len.is_nan() || len <= 1e-12 {
+            return Err(v);
+        }
+        normal.insert((v, body), [s[0] / len, s[1] / len]);
+    }
+    Ok(normal)
+}
+
+/// The dual basis of a slave segment of length `len` on its projecting
+/// `pieces`: Φ = A N with A = D_e M_e⁻¹, M_e, D_e the mass and lumped
+/// matrices on the pieces (Popp et al. 2013; on a whole segment
+/// Φ₁ = 2N₁ − N₂, Φ₂ = 2N₂ − N₁). Returns (D_e, A); None when M_e is
+/// singular.
+fn dual_basis(pieces: &[Piece], len: f64) -> Option<([f64; 2], [[f64; 2]; 2])> {
+    let mut me = [[0.0; 2]; 2];
+    let mut de = [0.0; 2];
+    for p in pieces {
+        for &(t, w) in &GAUSS {
+            let s = p.s0 + t * (p.s1 - p.s0);
+            let wl = w * (p.s1 - p.s0) * len;
+            let nn = [1.0 - s, s];
+            for i in 0..2 {
+                de[i] += nn[i] * wl;
+                for k in 0..2 {
+                    me[i][k] += nn[i] * nn[k] * wl;
+                }
+            }
+        }
+    }
+    let det = me[0][0] * me[1][1] - me[0][1] * me[1][0];
+    if det.is_nan() || det <= 0.0 {
+        return None;
+    }
+    let inv = [
+        [me[1][1] / det, -me[0][1] / det],
+        [-me[1][0] / det, me[0][0] / det],
+    ];
+    let amat = [
+        [de[0] * inv[0][0], de[0] * inv[0][1]],
+        [de[1] * inv[1][0], de[1] * inv[1][1]],
+    ];
+    Some((de, amat))
 }
 
 /// The parts of a slave segment with a master segment of another body

@@ -15,7 +15,7 @@ use super::topology::{curve_group, Topology};
 use super::FemError;
 use crate::mesh::{Mesh, PhysicalGroup};
 use crate::problem::{ContactPair, Discretization, NonMatchingPair, NormalKind, Problem};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// A conforming node on one pair of bodies: (mesh node, body k, body l), k < l.
 type NodePair = (usize, u32, u32);
@@ -201,6 +201,7 @@ impl Topology {
         mesh: &Mesh,
         problem: &Problem,
     ) -> Result<(), FemError> {
+        let mut seen: Vec<(usize, Segments, Segments)> = vec![];
         for (ci, c) in problem.file.contact.iter().enumerate() {
             let ContactPair::NonMatching(nm) = &c.pair else {
                 continue;
@@ -217,6 +218,30 @@ impl Topology {
                 slaves: self.boundary_segments(mesh, problem, sg, &what, "slave", sname)?,
                 what,
             };
+            let (ss, ms) = (segment_set(&pair.slaves), segment_set(&pair.masters));
+            for (i, si, mi) in &seen {
+                let twice = shared(si, &ss)
+                    .zip(shared(mi, &ms))
+                    .or_else(|| shared(si, &ms).zip(shared(mi, &ss)));
+                if let Some(((a, b), (p, q))) = twice {
+                    let tag = |v: usize| mesh.node_tags[v];
+                    return Err(FemError::new(
+                        &problem.path,
+                        format!(
+                            "[[contact]] #{} ({}) and #{} ({}) overlap: both pair the segment ({}, {}) with the segment ({}, {}), so its nodes would get their rows twice; give each stretch of curve to one [[contact]]",
+                            i + 1,
+                            problem.file.contact[*i].keys(),
+                            ci + 1,
+                            c.keys(),
+                            tag(a),
+                            tag(b),
+                            tag(p),
+                            tag(q)
+                        ),
+                    ));
+                }
+            }
+            seen.push((ci, ss, ms));
             match nm.discretization {
                 Discretization::Mortar => self.mortar_rows(mesh, problem, nm, &pair)?,
                 Discretization::Nts => self.nonmatching_rows(mesh, problem, nm, &pair)?,
@@ -352,6 +377,21 @@ pub(super) struct Pair {
     pub(super) what: String,
     pub(super) masters: Vec<MasterSeg>,
     pub(super) slaves: Vec<MasterSeg>,
+}
+
+/// Segments as sorted (a < b) mesh node pairs.
+type Segments = HashSet<(usize, usize)>;
+
+fn segment_set(segs: &[MasterSeg]) -> Segments {
+    segs.iter()
+        .map(|&(a, b, _, _)| (a.min(b), a.max(b)))
+        .collect()
+}
+
+/// The smallest segment in both sets (the smallest, so that the message
+/// does not depend on hashing).
+fn shared(a: &Segments, b: &Segments) -> Option<(usize, usize)> {
+    a.intersection(b).min().copied()
 }
 
 /// Orthogonal projection of `xs` on the segment (pa, pb): (distance, ξ) if

@@ -372,20 +372,24 @@ fn signed_areas(mesh: &Mesh, problem: &Problem) -> Result<Vec<f64>, FemError> {
 }
 
 /// The interface names of the conforming `[[contact]] on` curves and their
-/// segments as sorted (a < b) node pairs with their interface; a segment in
-/// two contact groups belongs to the last one.
+/// segments as sorted (a < b) node pairs with their interface. A segment in
+/// two `[[contact]]` curves is refused: one entry's keys (normals, friction)
+/// would silently give way to the other's there (docs/problem-format.md §5).
 #[allow(clippy::type_complexity)]
 fn conforming_edges(
     mesh: &Mesh,
     problem: &Problem,
 ) -> Result<(Vec<String>, Vec<((usize, usize), u32)>), FemError> {
     let mut interface_names: Vec<String> = vec![];
+    // The [[contact]] entry of each interface.
+    let mut entry: Vec<usize> = vec![];
     let mut contact_edges: Vec<((usize, usize), u32)> = vec![];
     for (ci, c) in problem.file.contact.iter().enumerate() {
         if let ContactPair::Conforming { on, .. } = &c.pair {
             let g = curve_group(mesh, on, &format!("[[contact]] #{}", ci + 1), &problem.path)?;
             let id = interface_names.len() as u32;
             interface_names.push(on.clone());
+            entry.push(ci);
             for &l in &g.elements {
                 let [a, b] = mesh.lines[l];
                 let key = if a < b { (a, b) } else { (b, a) };
@@ -393,12 +397,29 @@ fn conforming_edges(
             }
         }
     }
-    // Stable sort by key, then keep the last entry of each key.
+    // Stable sort by key; a group may list a segment twice, two groups may not.
     contact_edges.sort_by_key(|e| e.0);
     let mut dedup: Vec<((usize, usize), u32)> = Vec::with_capacity(contact_edges.len());
     for e in contact_edges {
         match dedup.last_mut() {
-            Some(last) if last.0 == e.0 => *last = e,
+            Some(last) if last.0 == e.0 && last.1 == e.1 => {}
+            Some(last) if last.0 == e.0 => {
+                let c = &problem.file.contact;
+                let (i, j) = (entry[last.1 as usize], entry[e.1 as usize]);
+                let ((a, b), (i, j)) = (e.0, (i.min(j), i.max(j)));
+                return Err(FemError::new(
+                    &problem.path,
+                    format!(
+                        "[[contact]] #{} ({}) and #{} ({}) overlap: both hold the segment ({}, {}); give each segment of a contact curve to one [[contact]]",
+                        i + 1,
+                        c[i].keys(),
+                        j + 1,
+                        c[j].keys(),
+                        mesh.node_tags[a],
+                        mesh.node_tags[b]
+                    ),
+                ));
+            }
             _ => dedup.push(e),
         }
     }

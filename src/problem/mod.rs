@@ -277,7 +277,7 @@ pub enum FrictionLaw {
     Frictionless,
     /// `friction = μ`, μ > 0: the tangential force is bounded by μ λ_n.
     Coulomb(f64),
-    /// `tresca = s`, s ≥ 0 [Pa]: the tangential traction is bounded by s.
+    /// `tresca = s`, s ≥ 0 (Pa): the tangential traction is bounded by s.
     Tresca(f64),
 }
 

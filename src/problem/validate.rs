@@ -32,6 +32,7 @@ pub(super) fn validate(raw: RawFile) -> Check<ProblemFile> {
     }
     let contact = collect(&raw.contact, contact)?;
     check_pairs_once(&contact)?;
+    check_one_friction_law(&contact)?;
     check_solver(&raw)?;
     check_steps(&raw)?;
     check_output(&raw)?;
@@ -390,6 +391,28 @@ fn check_pairs_once(contact: &[Contact]) -> Check {
     Ok(())
 }
 
+/// Tresca and Coulomb pairs in one problem: the QP holds one kind of slip
+/// bound (docs/methods.md §9), so the mix is refused naming one of each.
+fn check_one_friction_law(contact: &[Contact]) -> Check {
+    let first = |tresca: bool| {
+        contact.iter().position(|c| match c.friction {
+            FrictionLaw::Tresca(_) => tresca,
+            FrictionLaw::Coulomb(_) => !tresca,
+            FrictionLaw::Frictionless => false,
+        })
+    };
+    if let (Some(t), Some(c)) = (first(true), first(false)) {
+        return Err(format!(
+            "[[contact]] #{} ({}) has tresca = s and #{} ({}) friction = μ: Tresca and Coulomb pairs in one problem are not supported; use one law for every pair",
+            t + 1,
+            contact[t].keys(),
+            c + 1,
+            contact[c].keys()
+        ));
+    }
+    Ok(())
+}
+
 fn check_solver(f: &RawFile) -> Check {
     let s = &f.solver;
     if let Some(t) = s.tol {
@@ -452,4 +475,150 @@ fn check_output(f: &RawFile) -> Check {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{NormalKind, Problem};
+    use super::*;
+    use std::path::Path;
+
+    const HEAD: &str = "[mesh]\nfile = \"m.msh\"\n[materials.a]\nE = 1.0\nnu = 0.3\n";
+
+    fn parse(body: &str) -> Result<ProblemFile, String> {
+        Problem::parse(Path::new("p.toml"), &format!("{HEAD}{body}"))
+            .map(|p| p.file)
+            .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn contact_keys_become_one_typed_entry() {
+        let f = parse(
+            "[[contact]]\non = \"i\"\nnormals = \"segment\"\nfriction = 0.0\n\
+             [[contact]]\nslave = \"s\"\nmaster = \"m\"\ndiscretization = \"mortar\"\nmax_gap = 0.5\nfriction = 2.0\n\
+             [[contact]]\nslave = \"t\"\nmaster = \"m\"\nfriction = 0.25\n",
+        )
+        .unwrap();
+        let want = [
+            Contact {
+                pair: ContactPair::Conforming {
+                    on: "i".into(),
+                    normals: NormalKind::Segment,
+                },
+                // μ = 0 is frictionless (the same results bit for bit).
+                friction: FrictionLaw::Frictionless,
+            },
+            Contact {
+                pair: ContactPair::NonMatching(NonMatchingPair {
+                    slave: "s".into(),
+                    master: "m".into(),
+                    max_gap: Some(0.5),
+                    discretization: Discretization::Mortar,
+                }),
+                friction: FrictionLaw::Coulomb(2.0),
+            },
+            Contact {
+                pair: ContactPair::NonMatching(NonMatchingPair {
+                    slave: "t".into(),
+                    master: "m".into(),
+                    max_gap: None,
+                    discretization: Discretization::Nts,
+                }),
+                friction: FrictionLaw::Coulomb(0.25),
+            },
+        ];
+        assert_eq!(f.contact, want);
+        let f = parse("[[contact]]\non = \"i\"\ntresca = 0.0\n").unwrap();
+        // A zero Tresca bound stays a friction law (rows with a zero slip bound).
+        assert_eq!(f.contact[0].friction, FrictionLaw::Tresca(0.0));
+    }
+
+    #[test]
+    fn dirichlet_and_traction_forms_are_typed_and_scaled_by_steps() {
+        let f = parse(
+            "[[dirichlet]]\non = \"b\"\nu = [1.0, 2.0]\n[[dirichlet]]\non = \"c\"\nuy = 3.0\n\
+             [[traction]]\non = \"t\"\npn = -4.0\n[[traction]]\non = \"q\"\np = [5.0, 6.0]\n\
+             [[steps]]\nfactor = 2.0\ndirichlet = { c = [7.0, 8.0] }\n",
+        )
+        .unwrap();
+        assert_eq!(f.dirichlet[0].value, Prescribed::Both([1.0, 2.0]));
+        assert_eq!(f.dirichlet[1].value.components(), [None, Some(3.0)]);
+        assert_eq!(f.traction[0].load, TractionLoad::Normal(-4.0));
+        let s = f.at_step(0);
+        assert_eq!(s.dirichlet[0].value, Prescribed::Both([2.0, 4.0]));
+        // Explicit step values replace the given component only.
+        assert_eq!(s.dirichlet[1].value.components(), [None, Some(8.0)]);
+        assert_eq!(s.traction[0].load, TractionLoad::Normal(-8.0));
+        assert_eq!(s.traction[1].load, TractionLoad::Vector([10.0, 12.0]));
+    }
+
+    #[test]
+    fn a_pair_given_twice_is_refused_naming_both_entries() {
+        for (a, b) in [
+            ("on = \"i\"\nfriction = 0.3", "on = \"i\""),
+            (
+                "slave = \"s\"\nmaster = \"m\"",
+                "slave = \"s\"\nmaster = \"m\"\ndiscretization = \"mortar\"",
+            ),
+            (
+                "slave = \"s\"\nmaster = \"m\"",
+                "slave = \"m\"\nmaster = \"s\"",
+            ),
+        ] {
+            let e = parse(&format!(
+                "[[contact]]\non = \"x\"\n[[contact]]\n{a}\n[[contact]]\n{b}\n"
+            ))
+            .unwrap_err();
+            assert!(
+                e.starts_with("p.toml: [[contact]] #2 (")
+                    && e.contains(" and #3 (")
+                    && e.contains("same curves"),
+                "{a} / {b}: {e}"
+            );
+        }
+        // One slave against two masters, and two slaves on one master, stay allowed.
+        parse("[[contact]]\nslave = \"s\"\nmaster = \"m\"\n[[contact]]\nslave = \"s\"\nmaster = \"n\"\n[[contact]]\nslave = \"t\"\nmaster = \"m\"\n")
+            .unwrap();
+    }
+
+    #[test]
+    fn friction_bounds_and_keys_of_the_other_form_are_named() {
+        for (keys, want) in [
+            (
+                "on = \"i\"\ntresca = 1e307",
+                "#1 (on = \"i\"): tresca = 1e307 is beyond",
+            ),
+            ("on = \"i\"\nfriction = 1e101", "friction = 1e101 is beyond"),
+            (
+                "on = \"i\"\nfriction = -0.0001",
+                "friction = -0.0001 must be",
+            ),
+            (
+                "on = \"i\"\nmax_gap = 1.0",
+                "max_gap applies to non-matching",
+            ),
+            (
+                "slave = \"s\"\nmaster = \"m\"\nnormals = \"averaged\"",
+                "normals applies to conforming",
+            ),
+            (
+                "slave = \"s\"\nmaster = \"m\"\nmax_gap = -1.0",
+                "max_gap = -1 must be >= 0",
+            ),
+            (
+                "on = \"i\"\ntresca = 1.0\n[[contact]]\non = \"j\"\nfriction = 0.5",
+                "#1 (on = \"i\") has tresca = s and #2 (on = \"j\") friction",
+            ),
+        ] {
+            let e = parse(&format!("[[contact]]\n{keys}\n")).unwrap_err();
+            assert!(
+                e.contains(want) && e.contains("[[contact]] #1"),
+                "{keys}: {e}"
+            );
+        }
+        // The largest accepted values, and an unlimited max_gap.
+        parse("[[contact]]\non = \"i\"\ntresca = 1e100\n").unwrap();
+        parse("[[contact]]\nslave = \"s\"\nmaster = \"m\"\nfriction = 1e100\nmax_gap = inf\n")
+            .unwrap();
+    }
 }
