@@ -320,7 +320,7 @@ fn checked_start<'a>(
 /// start, solve with the free motions held, check any unbounded claim
 /// ([`recession::certify`]; a claim that fails is not trusted and the solve
 /// falls back, said in `notes`), and attach the KKT certificate and the
-/// energy ([`certify`]).
+/// energy (`certify`).
 pub fn run(
     method: &dyn Method,
     qp: &QpProblem,
