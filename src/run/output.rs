@@ -24,7 +24,7 @@ pub static SIGNAL: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::
 /// Makes SIGTERM and SIGINT stop the run instead of the process: the
 /// handler only stores the signal's number (an atomic store is
 /// async-signal-safe); the iterative solvers end at their next iteration
-/// ([`SIGNAL`], which every solve of a [`Run`](super::Run) watches through `SolveOptions::stop`) and [`Run`](super::Run) returns
+/// (`SIGNAL`, which every solve of a [`Run`](super::Run) watches through `SolveOptions::stop`) and [`Run`](super::Run) returns
 /// [`RunError::Interrupted`] at its next check (before and after each
 /// step's solve, before each commit, after the last), so the dropped
 /// [`Transaction`] puts back what the output directory held. Later signals
