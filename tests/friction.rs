@@ -152,7 +152,7 @@ fn methods_without_friction_are_refused_and_bad_keys_are_named() {
     ]);
     assert_eq!(code, 2, "{log}");
     assert!(
-        log.contains("frictionless contact only") && log.contains("ssn"),
+        log.contains("does not solve contact with friction") && log.contains("ssn"),
         "{log}"
     );
     for (law, want) in [
