@@ -62,10 +62,9 @@ pub trait TrescaStep {
 /// the given bound, or Coulomb's loop (docs/methods.md §9.1). Each solve's
 /// log follows the last one's (iterations numbered on).
 pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Output, QpError> {
-    let mu = match &fr.bound {
-        SlipBound::Tresca(s) => return Ok(into_output(step.solve(Bound::Given(s))?, 0, 0, vec![])),
-        SlipBound::Coulomb(mu) => mu,
-    };
+    if let SlipBound::Tresca(s) = &fr.bound {
+        return Ok(into_output(step.solve(Bound::Given(s))?, 0, 0, vec![]));
+    }
     let (mut iterations, mut inner, mut log) = (0, 0, vec![]);
     let mut relax = CoulombRelaxation::default();
     // None: glued.
@@ -78,11 +77,7 @@ pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Ou
         if !r.status.converged() {
             return Ok(into_output(r, iterations, inner, log));
         }
-        let target: Vec<f64> = mu
-            .iter()
-            .zip(&r.lambda_n)
-            .map(|(m, l)| m * l.max(0.0))
-            .collect();
+        let target = fr.slip_bound(&r.lambda_n);
         let smax = norm_inf(&target).max(f64::MIN_POSITIVE);
         let change = s.as_ref().map_or(f64::INFINITY, |s| {
             target

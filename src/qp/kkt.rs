@@ -63,7 +63,9 @@ pub fn residuals(qp: &QpProblem, x: &[f64], lambda: &[f64]) -> Kkt {
 ///   sticks or slips along λ_tᵢ = sᵢ·sign vᵢ,
 ///
 /// with Fᵢ = max(sᵢ, |λ_tᵢ|, max|λ|, max|λ_t|) (the row's bound or the
-/// contact-force scale, whichever is larger), X = max(max|x|, max|t0|), s
+/// contact-force scale, whichever is larger), X = max(max|x|,
+/// maxᵢ (|T||x| + |t0|)ᵢ) (the displacements and the scale the slips are
+/// formed at), s
 /// the slip bound at λ and v = T x − t0 (docs/methods.md §9.4). Both are
 /// unitless and do not grow with μ or s: a row far below a huge bound
 /// (μ = 10⁶, a Tresca bound of 10¹²: glued) is judged by its slip alone,
@@ -179,9 +181,14 @@ pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda
         Some(f) => {
             let s = f.slip_bound(lambda);
             let v = f.slip(x);
-            // The contact-force and displacement scales.
+            // The contact-force scale, and the slip's: max|x| or the largest
+            // (|T||x| + |t0|)ᵢ, what vᵢ is formed from.
             let force = lmax.max(norm_inf(lambda_t));
-            let disp = xmax.max(norm_inf(&f.t0));
+            let disp = (0..f.t.nrows).fold(xmax, |m, i| {
+                let (cols, vals) = f.t.row(i);
+                let tx: f64 = cols.iter().zip(vals).map(|(&j, a)| (a * x[j]).abs()).sum();
+                m.max(tx + f.t0[i].abs())
+            });
             s.iter()
                 .zip(lambda_t)
                 .zip(&v)

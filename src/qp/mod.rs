@@ -93,14 +93,17 @@ pub struct Friction {
 }
 
 impl Friction {
-    /// The slip bound s of each row at the normal forces `lambda_n`.
+    /// The slip bound s of each row at the normal forces `lambda_n`; a
+    /// Coulomb bound μλ_n that overflows is the largest finite number (a
+    /// glued row either way; an infinite s would make the certificate and
+    /// the Coulomb loop NaN).
     pub fn slip_bound(&self, lambda_n: &[f64]) -> Vec<f64> {
         match &self.bound {
             SlipBound::Tresca(s) => s.clone(),
             SlipBound::Coulomb(mu) => mu
                 .iter()
                 .zip(lambda_n)
-                .map(|(m, l)| m * l.max(0.0))
+                .map(|(m, l)| (m * l.max(0.0)).min(f64::MAX))
                 .collect(),
         }
     }

@@ -693,6 +693,62 @@ mod tests {
         );
     }
 
+    /// Huge but finite bounds: the point, resting on a floor 0.5 below it,
+    /// sticks (λ_t = fx, certified, finite energy) with ssn and mprgp, also
+    /// where μλ_n overflows (μ = f64::MAX, λ_n = 1.5); a Tresca bound whose force on the unknowns
+    /// overflows (f64::MAX on a tangential row of coefficient 10) is
+    /// refused naming the slip bound s. Never a NaN or an infinity.
+    #[test]
+    fn a_huge_bound_sticks_or_is_refused_by_name() {
+        for (bound, fy, tscale) in [
+            (SlipBound::Tresca(vec![1e307]), -3.0, 1.0),
+            (SlipBound::Tresca(vec![f64::MAX]), -3.0, 1.0),
+            (SlipBound::Tresca(vec![1e307]), -3.0, 10.0),
+            (SlipBound::Coulomb(vec![f64::MAX]), -3.0, 1.0),
+            (SlipBound::Tresca(vec![f64::MAX]), -3.0, 10.0),
+        ] {
+            let mut qp = point(2.0, 0.3, fy, bound.clone());
+            qp.g = vec![0.5];
+            if let Some(f) = qp.friction.as_mut() {
+                f.t.data.iter_mut().for_each(|v| *v *= tscale);
+            }
+            let refused = match &bound {
+                SlipBound::Tresca(s) => !(s[0] * tscale).is_finite(),
+                SlipBound::Coulomb(_) => false,
+            };
+            for m in ["ssn", "mprgp"] {
+                let what = format!("{bound:?}, T × {tscale}, {m}");
+                match registry::solve(m, &qp, &SolveOptions::default()) {
+                    Ok(r) => {
+                        assert!(!refused, "{what}: solved");
+                        assert!(
+                            r.status.converged() && r.kkt.within(1e-10),
+                            "{what}: {:?}",
+                            r.kkt
+                        );
+                        assert!(
+                            (r.lambda_t[0] * tscale - 0.3).abs() < 1e-12,
+                            "{what}: {:?}",
+                            r.lambda_t
+                        );
+                        assert!(
+                            r.x[0].abs() < 1e-12 && r.energy.is_finite(),
+                            "{what}: {:?}",
+                            r.x
+                        );
+                    }
+                    Err(e) => {
+                        assert!(refused, "{what}: {e}");
+                        assert!(
+                            e.to_string().contains("slip bound s of contact row 0"),
+                            "{what}: {e}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn other_methods_refuse_friction_and_nan_fails_the_certificate() {
         let qp = point(2.0, 0.3, -1.0, SlipBound::Coulomb(vec![0.5]));
