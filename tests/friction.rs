@@ -513,6 +513,60 @@ fn ssn_and_mprgp_agree_on_the_frictional_models() {
     }
 }
 
+/// Issue 34: the friction residual is unitless in μ and s (docs/methods.md
+/// §9.4). The sheared two_blocks is certified by every friction-capable
+/// method at μ = 0.12 (14 of 21 rows slip), 0.3, 10³ and 10⁶ and under a
+/// Tresca bound of 10¹² (glued). Before, the residual grew like s × the
+/// slip a solve leaves: mprgp's glued answers had 3.6·10⁻⁵ at μ = 10⁶ and
+/// at s = 10¹² (exit 3). A tangential force flipped on the slipping row of
+/// most dissipation still fails the friction residual.
+#[test]
+fn the_certificate_does_not_depend_on_mu_or_the_bound() {
+    use signorini::qp::{kkt, MethodId};
+    let d = tempfile::tempdir().unwrap();
+    let msh = meshes().join("two_blocks.msh");
+    let able: Vec<MethodId> = MethodId::ALL
+        .into_iter()
+        .filter(|m| m.capabilities().friction)
+        .collect();
+    assert!(able.contains(&MethodId::Ssn) && able.contains(&MethodId::Mprgp));
+    for law in [
+        "friction = 0.12",
+        "friction = 0.3",
+        "friction = 1.0e3",
+        "friction = 1.0e6",
+        "tresca = 1.0e12",
+    ] {
+        let p = model_file(d.path(), "scan", &msh, &sheared_blocks(law, true));
+        for m in &able {
+            // `solve` asserts that the run is certified (exit 0).
+            let (prep, _, res) = solve(&p, m.name());
+            let target = signorini::qp::settings::DEFAULT_KKT_TARGET;
+            assert!(
+                res.status.converged() && res.kkt.within(target),
+                "{law}, {m}: {:?}",
+                res.kkt
+            );
+            if law != "friction = 0.12" {
+                continue;
+            }
+            let qp = &prep.model.qp;
+            let fr = qp.friction.as_ref().unwrap();
+            let s = fr.slip_bound(&res.lambda);
+            let v = fr.slip(&res.x);
+            let (row, _) = (0..qp.m())
+                .filter(|&i| res.lambda_t[i].abs() >= (1.0 - 1e-6) * s[i] && s[i] > 0.0)
+                .map(|i| (i, s[i] * v[i].abs()))
+                .fold((usize::MAX, 0.0f64), |b, c| if c.1 > b.1 { c } else { b });
+            assert!(row < qp.m(), "{m}: no slipping row");
+            let mut lt = res.lambda_t.clone();
+            lt[row] = -lt[row];
+            let k = kkt::residuals_with_friction(qp, &res.x, &res.lambda, &lt);
+            assert!(k.friction > target && !k.within(target), "{m}: {k:?}");
+        }
+    }
+}
+
 #[test]
 fn the_checkpoint_holds_the_friction_arrays() {
     // docs/problem-format.md §6: a frictional step group has multipliers_t,

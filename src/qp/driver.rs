@@ -584,6 +584,20 @@ pub fn check_problem(qp: &QpProblem) -> Result<(), QpError> {
                 s[i]
             )));
         }
+        // The force a Tresca bound puts on the unknowns, sᵢ·Σⱼ|Tᵢⱼ|, must be
+        // a number: the slip forces and the dissipation are formed from it.
+        if let crate::qp::SlipBound::Tresca(s) = &f.bound {
+            for (i, &si) in s.iter().enumerate() {
+                let row: f64 = f.t.row(i).1.iter().map(|v| v.abs()).sum();
+                if !(si * row).is_finite() {
+                    return Err(QpError::BadParameter(format!(
+                        "the slip bound s of contact row {i} is {si:e}: times its tangential row \
+                         (Σ|T| = {row:e}) it overflows; a bound far above the contact forces \
+                         glues the interface just as well (use a smaller tresca)"
+                    )));
+                }
+            }
+        }
     }
     if let Some((i, z)) = qp.kernel.iter().enumerate().find(|(_, z)| z.len() != n) {
         return Err(QpError::BadParameter(format!(

@@ -57,12 +57,20 @@ pub fn residuals(qp: &QpProblem, x: &[f64], lambda: &[f64]) -> Kkt {
 
 /// [`residuals`] with the tangential forces `lambda_t` of a frictional
 /// problem (docs/methods.md §9.4): r = Cx − d + Aᵀλ + Tᵀλ_t, Γ also holds
-/// the unknowns T touches, and `friction` = max of
-/// * the bound max((|λ_tᵢ| − sᵢ)⁺) / max(max|λ|, max|λ_t|, 1);
-/// * the slip rule Σ(sᵢ|vᵢ| − λ_tᵢvᵢ) / max(max(|λ|, |λ_t|)·max|x|, tiny),
-///   zero iff every slip vᵢ ≠ 0 has λ_tᵢ = sᵢ·sign vᵢ (given the bound),
+/// the unknowns T touches, and `friction` = the largest over the rows of
+/// * the bound (|λ_tᵢ| − sᵢ)⁺ / Fᵢ;
+/// * the slip rule |vᵢ|/X · |sᵢ − λ_tᵢ sign vᵢ| / Fᵢ, zero iff the row
+///   sticks or slips along λ_tᵢ = sᵢ·sign vᵢ,
 ///
-/// with s the slip bound at λ and v = T x − t0. Without friction
+/// with Fᵢ = max(sᵢ, |λ_tᵢ|, max|λ|, max|λ_t|) (the row's bound or the
+/// contact-force scale, whichever is larger), X = max(max|x|,
+/// maxᵢ (|T||x| + |t0|)ᵢ) (the displacements and the scale the slips are
+/// formed at), s
+/// the slip bound at λ and v = T x − t0 (docs/methods.md §9.4). Both are
+/// unitless and do not grow with μ or s: a row far below a huge bound
+/// (μ = 10⁶, a Tresca bound of 10¹²: glued) is judged by its slip alone,
+/// |vᵢ|/X, where the sum Σ sᵢ|vᵢ| of the former rule turned a slip at
+/// rounding level into a residual of 4·10⁻⁵ (mprgp). Without friction
 /// `lambda_t` must be empty and the result is [`residuals`]'s.
 pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda_t: &[f64]) -> Kkt {
     let finite = |v: &[f64]| v.iter().all(|e| e.is_finite());
@@ -173,18 +181,25 @@ pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda
         Some(f) => {
             let s = f.slip_bound(lambda);
             let v = f.slip(x);
-            let lt = lmax.max(norm_inf(lambda_t));
-            let bound = lambda_t
-                .iter()
-                .zip(&s)
-                .fold(0.0f64, |m, (l, s)| m.max(l.abs() - s));
-            let slip: f64 = v
-                .iter()
-                .zip(&s)
+            // The contact-force scale, and the slip's: max|x| or the largest
+            // (|T||x| + |t0|)ᵢ, what vᵢ is formed from.
+            let force = lmax.max(norm_inf(lambda_t));
+            let disp = (0..f.t.nrows).fold(xmax, |m, i| {
+                let (cols, vals) = f.t.row(i);
+                let tx: f64 = cols.iter().zip(vals).map(|(&j, a)| (a * x[j]).abs()).sum();
+                m.max(tx + f.t0[i].abs())
+            });
+            s.iter()
                 .zip(lambda_t)
-                .map(|((v, s), l)| s * v.abs() - l * v)
-                .sum();
-            (bound / lt.max(1.0)).max(slip.abs() / (lt * xmax).max(f64::MIN_POSITIVE))
+                .zip(&v)
+                .map(|((&si, &li), &vi)| {
+                    // Never a product with s: a huge bound cannot overflow.
+                    let den = si.max(li.abs()).max(force);
+                    let bound = ratio((li.abs() - si).max(0.0), den);
+                    let slip = ratio(vi.abs(), disp) * ratio((si - li * vi.signum()).abs(), den);
+                    bound.max(slip)
+                })
+                .fold(0.0f64, |m, r| if r.is_nan() { r } else { m.max(r) })
         }
     };
     let k = Kkt {
@@ -459,6 +474,60 @@ mod tests {
             k.stationarity_floor < 1e-14 && k.balance_floor < 1e-14,
             "{k:?}"
         );
+    }
+
+    /// The point of `ssn::friction`'s tests on a floor 0.5 below it
+    /// (C = diag(2, 3), d = (0.3, −3)): it rests on the floor, x = (0,
+    /// −0.5), λ_n = 1.5, and sticks with λ_t = 0.3 under any bound ≥ 0.3.
+    fn resting_point(bound: crate::qp::SlipBound) -> QpProblem {
+        let mut q = crate::qp::testing::friction_point(2.0, 0.3, -3.0, bound);
+        q.g = vec![0.5];
+        q
+    }
+
+    /// The friction residual of a sticking answer with a slip of 10⁻¹²
+    /// (what a Tresca solve leaves) is the same whatever μ or s: before,
+    /// s·|v| made it grow with the bound (1.3 at s = 10¹²), so a correct
+    /// glued answer failed. A tangential force flipped on a slipping row,
+    /// or above the bound, still fails.
+    #[test]
+    fn the_friction_residual_does_not_grow_with_mu_or_s() {
+        use crate::qp::SlipBound;
+        let v = 1e-12;
+        let (x, ln, lt) = ([v, -0.5], [1.5], [0.3 - 2.0 * v]);
+        let mut seen = vec![];
+        for bound in [
+            SlipBound::Coulomb(vec![0.3]),
+            SlipBound::Coulomb(vec![1e3]),
+            SlipBound::Coulomb(vec![1e6]),
+            SlipBound::Tresca(vec![1.0]),
+            SlipBound::Tresca(vec![1e12]),
+            SlipBound::Tresca(vec![1e300]),
+        ] {
+            let k = residuals_with_friction(&resting_point(bound.clone()), &x, &ln, &lt);
+            assert!(k.within(1e-10), "{bound:?}: {k:?}");
+            assert!(
+                k.friction > 0.0 && k.friction <= 4.1e-12,
+                "{bound:?}: {k:?}"
+            );
+            seen.push(k.friction);
+        }
+        // Far below the bound the residual is the slip over the scale of x.
+        for f in &seen[1..3] {
+            assert!((f - 2.0 * v).abs() < 1e-3 * v, "{seen:?}");
+        }
+        assert!((seen[4] - 2.0 * v).abs() < 1e-3 * v, "{seen:?}");
+        // Slipping under s = 1 with fx = 3: λ_t = 1, x0 = 1; λ_t flipped.
+        let mut q =
+            crate::qp::testing::friction_point(2.0, 3.0, -3.0, SlipBound::Tresca(vec![1.0]));
+        q.g = vec![0.5];
+        let k = residuals_with_friction(&q, &[1.0, -0.5], &[1.5], &[1.0]);
+        assert!(k.within(1e-12), "{k:?}");
+        let k = residuals_with_friction(&q, &[1.0, -0.5], &[1.5], &[-1.0]);
+        assert!(k.friction > 0.5, "{k:?}");
+        // Above the bound.
+        let k = residuals_with_friction(&q, &[0.0, -0.5], &[1.5], &[1.1]);
+        assert!(k.friction > 0.05, "{k:?}");
     }
 
     #[test]

@@ -17,6 +17,7 @@
 //! method is one type implementing [`Method`], named by one [`MethodId`].
 
 pub mod active_set;
+pub mod coulomb;
 pub mod driver;
 pub mod dual;
 pub mod executor;
@@ -35,6 +36,7 @@ pub(crate) mod testing;
 mod tests_methods;
 
 pub use crate::linalg::sparse::{self, Csr};
+pub use coulomb::CoulombRelaxation;
 pub use driver::{Context, Note, Output};
 pub use method::{Capabilities, FallbackCause, Method, MethodChoice, MethodId};
 pub use settings::{Settings, SolverSection};
@@ -92,14 +94,17 @@ pub struct Friction {
 }
 
 impl Friction {
-    /// The slip bound s of each row at the normal forces `lambda_n`.
+    /// The slip bound s of each row at the normal forces `lambda_n`; a
+    /// Coulomb bound μλ_n that overflows is the largest finite number (a
+    /// glued row either way; an infinite s would make the certificate and
+    /// the Coulomb loop NaN).
     pub fn slip_bound(&self, lambda_n: &[f64]) -> Vec<f64> {
         match &self.bound {
             SlipBound::Tresca(s) => s.clone(),
             SlipBound::Coulomb(mu) => mu
                 .iter()
                 .zip(lambda_n)
-                .map(|(m, l)| m * l.max(0.0))
+                .map(|(m, l)| (m * l.max(0.0)).min(f64::MAX))
                 .collect(),
         }
     }
@@ -110,67 +115,6 @@ impl Friction {
             *vi -= t0;
         }
         v
-    }
-}
-
-/// The Coulomb outer loop's update of the slip bound (docs/methods.md
-/// §9.1): s ← s + ω r with the residual r = μλ_n − s. The plain fixed
-/// point (ω = 1) can settle into a 2-cycle: a soft keystone wedged between
-/// abutments 10²–10⁷ times stiffer alternated between two bounds 55 % and
-/// 84 % apart for 200 Tresca solves. ω follows Aitken's Δ² rule (Irons &
-/// Tuck 1969; as in partitioned fluid–structure coupling, Küttler & Wall,
-/// Comput. Mech. 43, 2008), ω_k = −ω_{k−1} r_{k−1}ᵀ(r_k − r_{k−1}) /
-/// ‖r_k − r_{k−1}‖², clamped to [[`CoulombRelaxation::OMEGA_MIN`], 1]: a
-/// rule on the residuals only, so the same input takes the same path.
-#[derive(Debug, Clone)]
-pub struct CoulombRelaxation {
-    omega: f64,
-    last: Option<Vec<f64>>,
-}
-
-impl Default for CoulombRelaxation {
-    fn default() -> Self {
-        CoulombRelaxation {
-            omega: 1.0,
-            last: None,
-        }
-    }
-}
-
-impl CoulombRelaxation {
-    /// The smallest ω.
-    pub const OMEGA_MIN: f64 = 1.0 / 64.0;
-
-    /// The next bound from the current `s` and `target` = μλ_n; `glued`
-    /// for the first update after the glued start (then s = target and
-    /// no residual is kept).
-    pub fn next(&mut self, s: &[f64], target: Vec<f64>, glued: bool) -> Vec<f64> {
-        if glued {
-            self.last = None;
-            return target;
-        }
-        let r: Vec<f64> = target.iter().zip(s).map(|(t, s)| t - s).collect();
-        if let Some(prev) = &self.last {
-            let (mut num, mut den) = (0.0, 0.0);
-            for (rk, rp) in r.iter().zip(prev) {
-                let dr = rk - rp;
-                num += rp * dr;
-                den += dr * dr;
-            }
-            let w = -self.omega * num / den;
-            if den > 0.0 && w.is_finite() {
-                self.omega = w.clamp(Self::OMEGA_MIN, 1.0);
-            }
-        }
-        let w = self.omega;
-        let next = s.iter().zip(&r).map(|(si, ri)| si + w * ri).collect();
-        self.last = Some(r);
-        next
-    }
-
-    /// The current relaxation factor ω.
-    pub fn omega(&self) -> f64 {
-        self.omega
     }
 }
 

@@ -9,32 +9,28 @@
 //! tangential rows stacked under the contact rows and an upper bound on
 //! them. Coulomb is a sequence of such Tresca problems, s = μ_f·λ_n of the
 //! previous one, the first one glued (s = ∞), each warm-started from the
-//! last multipliers, until s is stationary (the outer loop of §9.1, as in
-//! `ssn`), under-relaxed when it stops contracting ([`CoulombRelaxation`]).
+//! last multipliers: the outer loop of §9.1 shared with `ssn`
+//! ([`crate::qp::coulomb`]), of which this file is the Tresca solve.
 
 use super::{row_scaling_of, BoundStep, BoxBounds, DualOp, Smalbe};
 use crate::linalg::kernel::orthonormal_kernel;
-use crate::linalg::sparse::{norm_inf, Csr};
-use crate::qp::Failure;
-use crate::qp::{
-    Context, CoulombRelaxation, IterRecord, Output, QpError, QpProblem, SlipBound, Status,
-};
+use crate::linalg::sparse::Csr;
+use crate::qp::coulomb::{self, Bound, Tresca, TrescaStep};
+use crate::qp::{Context, Output, QpError, QpProblem};
 use std::time::Instant;
 
-/// The Coulomb loop stops at a relative change of s ≤ COULOMB_TOL_FACTOR·tol:
-/// each Tresca solve is accurate to tol in the dual gradient only, and on
-/// the inclined plane of tests/friction.rs at tol = 10⁻¹⁰ the change
-/// stagnated at 4.7·tol.
+/// The Coulomb loop stops at a relative change of s ≤ COULOMB_TOL_FACTOR·tol
+/// ([`TrescaStep::resolution`]): each Tresca solve is accurate to tol in
+/// the dual gradient only, and on the inclined plane of tests/friction.rs
+/// at tol = 10⁻¹⁰ the change stagnated at 4.7·tol.
 const COULOMB_TOL_FACTOR: f64 = 100.0;
-/// Largest number of Tresca solves of the Coulomb loop.
-const OUTER_MAX: usize = 200;
 
 /// Solve the frictional `qp` on the box-constrained dual with the bound
 /// steps `make` builds (one per Tresca solve); returns x and [λ_n; λ_t].
 pub(crate) fn solve_friction<S: BoundStep>(
     qp: &QpProblem,
     ctx: &mut Context,
-    mut make: impl FnMut() -> S,
+    make: impl FnMut() -> S,
     name: &'static str,
 ) -> Result<Output, QpError> {
     let Some(fr) = qp.friction.as_ref() else {
@@ -74,87 +70,80 @@ pub(crate) fn solve_friction<S: BoundStep>(
         friction: None,
         near: None,
     };
-    // Slip bounds of the rows in force units (∞: glued).
-    let mut s_bound: Vec<f64> = match &fr.bound {
-        SlipBound::Tresca(s) => s.clone(),
-        SlipBound::Coulomb(_) => vec![f64::INFINITY; m],
+    let mut step = DualTresca {
+        qp,
+        sq: &sq,
+        sc,
+        ctx,
+        make,
+        name,
+        lam0: None,
     };
-    let mut lam0: Option<Vec<f64>> = None;
-    let (mut iterations, mut inner) = (0, 0);
-    let mut log: Vec<IterRecord> = vec![];
-    let mut outer = 0;
-    let mut relax = CoulombRelaxation::default();
-    loop {
-        outer += 1;
+    let mut out = coulomb::solve(fr, &mut step, name)?;
+    out.timings = vec![("iterate".into(), t_start.elapsed().as_secs_f64())];
+    Ok(out)
+}
+
+/// The Tresca solve of the dual: the host on the stacked rows [A; T] with
+/// the box |λ_t| ≤ s, warm-started from the last multipliers.
+struct DualTresca<'q, 'c, 'a, F> {
+    qp: &'q QpProblem,
+    /// The scaled stacked problem (B = [A; T], c = [g; t0]).
+    sq: &'q QpProblem,
+    /// The row scaling of B: λ = sc·μ for the host's multiplier μ.
+    sc: Vec<f64>,
+    ctx: &'c Context<'a>,
+    make: F,
+    name: &'static str,
+    /// The scaled multipliers of the last solve (the next one's start).
+    lam0: Option<Vec<f64>>,
+}
+
+impl<S: BoundStep, F: FnMut() -> S> TrescaStep for DualTresca<'_, '_, '_, F> {
+    fn resolution(&self) -> f64 {
+        COULOMB_TOL_FACTOR * self.ctx.settings.tol
+    }
+
+    fn solve(&mut self, bound: Bound<'_>) -> Result<Tresca, QpError> {
+        let (qp, ctx, name) = (self.qp, self.ctx, self.name);
+        let m = qp.m();
         let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
         let fac = ctx.ws.cholesky(&qp.c, &qp.kernel)?;
-        let op = DualOp::new(&sq, fac, r, name)?;
-        // |λ_t| ≤ s ⇔ |μ| ≤ s/sc for the scaled multiplier μ = λ/sc.
-        let upper: Vec<f64> = s_bound.iter().zip(&sc[m..]).map(|(s, c)| s / c).collect();
+        let op = DualOp::new(self.sq, fac, r, name)?;
+        // |λ_t| ≤ s ⇔ |μ| ≤ s/sc for the scaled multiplier μ = λ/sc; glued:
+        // no bound (s = ∞).
+        let upper: Vec<f64> = match bound {
+            Bound::Glued => vec![f64::INFINITY; m],
+            Bound::Given(s) => s.iter().zip(&self.sc[m..]).map(|(s, c)| s / c).collect(),
+        };
         let boxed = BoxBounds {
             m_n: m,
             upper,
-            lam0: lam0.take(),
+            lam0: self.lam0.take(),
         };
-        let mut st = Smalbe::new(op, ctx.settings.tol, make(), name, Some(&boxed))?;
+        let mut st = Smalbe::new(op, ctx.settings.tol, (self.make)(), name, Some(&boxed))?;
         st.s.target = ctx.settings.kkt_target;
         let mut exec = ctx.executor(name);
         let (status, iters) = exec.run(&mut st);
         let out = st.into_result(status, iters, exec.log, vec![]);
-        iterations += out.iterations;
-        inner += out.inner_iterations;
-        log.extend(out.log);
-        let mu_scaled = out.lambda;
-        let lambda: Vec<f64> = mu_scaled.iter().zip(&sc).map(|(l, s)| l * s).collect();
-        let mut status = out.status;
-        let done = match (&fr.bound, status.converged()) {
-            (_, false) | (SlipBound::Tresca(_), true) => true,
-            (SlipBound::Coulomb(mu), true) => {
-                let s_new: Vec<f64> = mu
-                    .iter()
-                    .zip(&lambda[..m])
-                    .map(|(f, l)| f * l.max(0.0))
-                    .collect();
-                let change = s_new
-                    .iter()
-                    .zip(&s_bound)
-                    .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-                let smax = norm_inf(&s_new).max(f64::MIN_POSITIVE);
-                log::debug!(
-                    "{name}: Coulomb update {outer}: change of s {:.3e}, ω = {}",
-                    change / smax,
-                    relax.omega()
-                );
-                if change <= COULOMB_TOL_FACTOR * ctx.settings.tol * smax {
-                    true
-                } else if outer >= OUTER_MAX {
-                    status = Status::Failed(Failure::CoulombUnsettled {
-                        outer: OUTER_MAX,
-                        change: change / smax,
-                    });
-                    true
-                } else {
-                    s_bound = relax.next(&s_bound, s_new, outer == 1);
-                    lam0 = Some(mu_scaled);
-                    false
-                }
-            }
-        };
-        if done {
-            // The host solved the stacked rows [A; T] (docs/methods.md §9.2).
-            let mut lambda = lambda;
-            let lambda_t = lambda.split_off(m);
-            return Ok(Output {
-                x: out.x,
-                lambda,
-                lambda_t,
-                active: out.active,
-                status,
-                iterations,
-                inner_iterations: inner,
-                log,
-                timings: vec![("iterate".into(), t_start.elapsed().as_secs_f64())],
-            });
-        }
+        let mut lambda: Vec<f64> = out
+            .lambda
+            .iter()
+            .zip(&self.sc)
+            .map(|(l, s)| l * s)
+            .collect();
+        self.lam0 = Some(out.lambda);
+        // The host solved the stacked rows [A; T] (docs/methods.md §9.2).
+        let lambda_t = lambda.split_off(m);
+        Ok(Tresca {
+            x: out.x,
+            lambda_n: lambda,
+            lambda_t,
+            active: out.active,
+            status: out.status,
+            iterations: out.iterations,
+            inner_iterations: out.inner_iterations,
+            log: out.log,
+        })
     }
 }

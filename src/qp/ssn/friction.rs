@@ -21,9 +21,10 @@
 //! backward error). The step is repeated until the sets no longer change
 //! (a KKT point of the Tresca problem); a set seen before, or one that
 //! frees a rigid motion friction can hold, is entered one row at a time.
-//! Coulomb starts glued (S = N) and
-//! then moves s towards μλ_n of the last solution until s is stationary,
-//! under-relaxed when it stops contracting ([`CoulombRelaxation`]).
+//! Coulomb starts glued (S = N) and then moves s towards μλ_n of the last
+//! solution until s is stationary: the outer loop of §9.1 shared with the
+//! dual ([`crate::qp::coulomb`]); each Tresca solve starts from the working
+//! sets the new bound predicts at the last answer.
 //!
 //! A working set that leaves a rigid motion z free (B z = 0 for some z in
 //! ker C) is tested: if the loads do more work along ±z than friction can
@@ -34,13 +35,12 @@
 use crate::linalg::dense::sym_eigen;
 use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::sparse::{dot, norm_inf, Csr};
+use crate::qp::coulomb::{self, Bound, Tresca, TrescaStep};
 use crate::qp::executor::{Iterative, Step};
 use crate::qp::Failure;
 use std::collections::HashSet;
 
-use crate::qp::{
-    Context, CoulombRelaxation, Friction, IterRecord, Output, QpError, QpProblem, SlipBound, Status,
-};
+use crate::qp::{Context, Friction, IterRecord, Output, QpError, QpProblem, Status};
 
 /// ρᵢ = RHO · (the row's stiffness) in K = C + Bᵀ diag(ρ) B.
 const RHO: f64 = super::RHO_FACTOR;
@@ -51,8 +51,6 @@ const AL_MAX: usize = 200;
 /// With c_t = c the block of tests/friction.rs at tan θ = 0.9μ under
 /// Tresca cycled between stick zones; with 10⁻² it settles in 7 steps.
 const CT_FACTOR: f64 = 1e-2;
-/// Largest number of Coulomb updates of s.
-const OUTER_MAX: usize = 500;
 
 /// Solve the frictional `qp` (qp.friction is Some).
 pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
@@ -62,23 +60,63 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
         ));
     };
     let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
-    let mut st = State::new(qp, fr, r, ctx);
-    let mut exec = ctx.executor("ssn");
-    let (status, iters) = exec.run(&mut st);
-    if let Some(e) = st.error.take() {
-        return Err(e);
+    let st = State::new(qp, fr, r, ctx);
+    coulomb::solve(fr, &mut SsnTresca { st, ctx, steps: 0 }, "ssn")
+}
+
+/// The Tresca solve of ssn: Newton steps from the working sets of the last
+/// solve (the start's for the first) until they settle. The steps of all
+/// solves share one MAXIT.
+struct SsnTresca<'c, 'a> {
+    st: State<'a>,
+    ctx: &'c Context<'a>,
+    /// Newton steps of the solves so far.
+    steps: usize,
+}
+
+impl TrescaStep for SsnTresca<'_, '_> {
+    fn resolution(&self) -> f64 {
+        self.st.tol
     }
-    Ok(Output {
-        x: st.x,
-        lambda: st.ln,
-        lambda_t: st.lt,
-        active: st.in_n,
-        status,
-        iterations: iters,
-        inner_iterations: st.inner,
-        log: exec.log,
-        timings: vec![],
-    })
+
+    fn solve(&mut self, bound: Bound<'_>) -> Result<Tresca, QpError> {
+        let st = &mut self.st;
+        let m = st.qp.m();
+        match bound {
+            Bound::Glued => {
+                st.s = vec![0.0; m];
+                st.glued = true;
+            }
+            Bound::Given(s) => {
+                st.s = s.to_vec();
+                st.glued = false;
+            }
+        }
+        if st.last.is_none() {
+            st.start_sets();
+        } else {
+            st.fresh = true;
+        }
+        st.best = (f64::INFINITY, 0);
+        let inner = st.inner;
+        let mut exec = self.ctx.executor("ssn");
+        exec.max_iter = exec.max_iter.saturating_sub(self.steps);
+        let (status, iters) = exec.run(st);
+        self.steps += iters;
+        if let Some(e) = st.error.take() {
+            return Err(e);
+        }
+        Ok(Tresca {
+            x: st.x.clone(),
+            lambda_n: st.ln.clone(),
+            lambda_t: st.lt.clone(),
+            active: st.in_n.clone(),
+            status,
+            iterations: iters,
+            inner_iterations: st.inner - inner,
+            log: exec.log,
+        })
+    }
 }
 
 /// factor / Σ_k b_ik² / c_kk for each row of `b`: the stiffness the row
@@ -134,10 +172,12 @@ struct State<'a> {
     lt: Vec<f64>,
     /// The current slip bound.
     s: Vec<f64>,
-    /// Coulomb before its first update of s: S = N.
+    /// Coulomb's glued start: S = N.
     glued: bool,
-    /// The Coulomb update of s.
-    relax: CoulombRelaxation,
+    /// A new bound: the next step takes the sets it predicts as they are.
+    fresh: bool,
+    /// The sets the last answer predicts (at the current bound).
+    predicted: Option<(Vec<bool>, Vec<Tangential>)>,
     in_n: Vec<bool>,
     tang: Vec<Tangential>,
     /// The sets of the last solve (None before the first).
@@ -176,22 +216,6 @@ impl<'a> State<'a> {
         let ax = qp.a.mul(&x);
         let scale = norm_inf(&x).max(norm_inf(&qp.g)).max(f64::MIN_POSITIVE);
         let in_n: Vec<bool> = (0..m).map(|i| ax[i] - qp.g[i] >= -1e-12 * scale).collect();
-        let (s, glued) = match &fr.bound {
-            SlipBound::Tresca(s) => (s.clone(), false),
-            SlipBound::Coulomb(_) => (vec![0.0; m], true),
-        };
-        // Tresca starts glued: every row with a bound sticks (docs §9.2).
-        let tang = in_n
-            .iter()
-            .zip(&s)
-            .map(|(&a, &si)| {
-                if a || (!glued && si > 0.0) {
-                    Tangential::Stick
-                } else {
-                    Tangential::Slip(true)
-                }
-            })
-            .collect();
         State {
             qp,
             fr,
@@ -204,10 +228,11 @@ impl<'a> State<'a> {
             x,
             ln: vec![0.0; m],
             lt: vec![0.0; m],
-            s,
-            glued,
-            relax: CoulombRelaxation::default(),
-            tang,
+            s: vec![0.0; m],
+            glued: true,
+            fresh: false,
+            predicted: None,
+            tang: vec![Tangential::Stick; m],
             in_n,
             last: None,
             outer: 0,
@@ -216,6 +241,24 @@ impl<'a> State<'a> {
             best: (f64::INFINITY, 0),
             error: None,
         }
+    }
+
+    /// The tangential sets of the first solve: Tresca starts glued, every
+    /// row with a bound sticks (docs/methods.md §9.2); Coulomb's glued
+    /// start sticks the rows in contact.
+    fn start_sets(&mut self) {
+        self.tang = self
+            .in_n
+            .iter()
+            .zip(&self.s)
+            .map(|(&a, &si)| {
+                if a || (!self.glued && si > 0.0) {
+                    Tangential::Stick
+                } else {
+                    Tangential::Slip(true)
+                }
+            })
+            .collect();
     }
 
     /// The sets predicted at the current (x, λ_n, λ_t).
@@ -516,56 +559,23 @@ impl<'a> State<'a> {
 }
 
 impl Iterative for State<'_> {
+    /// One Newton step: the sets predicted at the last answer (one row at
+    /// a time if they were seen before or free a motion friction holds; as
+    /// predicted after a new bound), their solve, and the end of the Tresca
+    /// solve when the answer predicts the sets it was solved with.
     fn step(&mut self) -> Step {
         let it = self.outer + 1;
         self.outer += 1;
-        if self.last.is_some() {
+        if self.fresh {
+            // A new bound (the Coulomb loop's update): its prediction.
+            self.fresh = false;
+            self.predicted = None;
             let (n_set, tang) = self.predict();
-            let settled = self
-                .last
-                .as_ref()
-                .is_some_and(|(ln, lt)| *ln == n_set && *lt == tang);
-            if settled {
-                // A KKT point of the current Tresca problem.
-                match &self.fr.bound {
-                    SlipBound::Tresca(_) => return Step::Done(Status::Converged, self.record(it)),
-                    SlipBound::Coulomb(mu) => {
-                        let s_new: Vec<f64> = mu
-                            .iter()
-                            .zip(&self.ln)
-                            .map(|(m, l)| m * l.max(0.0))
-                            .collect();
-                        let change = s_new
-                            .iter()
-                            .zip(&self.s)
-                            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-                        let smax = norm_inf(&s_new).max(f64::MIN_POSITIVE);
-                        log::debug!(
-                            "ssn: Coulomb update at step {it}: change of s {:.3e}, ω = {}",
-                            change / smax,
-                            self.relax.omega()
-                        );
-                        if !self.glued && change <= self.tol * smax {
-                            return Step::Done(Status::Converged, self.record(it));
-                        }
-                        if self.outer > OUTER_MAX {
-                            return Step::Done(
-                                Status::Failed(Failure::CoulombUnsettled {
-                                    outer: OUTER_MAX,
-                                    change: change / smax,
-                                }),
-                                self.record(it),
-                            );
-                        }
-                        self.s = self.relax.next(&self.s, s_new, self.glued);
-                        self.best = (f64::INFINITY, 0);
-                        self.glued = false;
-                        let (n_set, tang) = self.predict();
-                        self.in_n = n_set;
-                        self.tang = tang;
-                    }
-                }
-            } else if self.visited.contains(&(n_set.clone(), tang.clone()))
+            self.in_n = n_set;
+            self.tang = tang;
+        } else if self.last.is_some() {
+            let (n_set, tang) = self.predicted.take().unwrap_or_else(|| self.predict());
+            if self.visited.contains(&(n_set.clone(), tang.clone()))
                 || self.frees_a_bounded_motion(&n_set, &tang)
             {
                 // A working set seen before (the full step cycles), or one
@@ -601,7 +611,16 @@ impl Iterative for State<'_> {
                         rec,
                     );
                 }
-                Step::Continue(rec)
+                // The answer predicts the sets it was solved with: a KKT
+                // point of the current Tresca problem.
+                let next = self.predict();
+                let settled = self.last.as_ref() == Some(&next);
+                self.predicted = Some(next);
+                if settled {
+                    Step::Done(Status::Converged, rec)
+                } else {
+                    Step::Continue(rec)
+                }
             }
             Ok(Some(status)) => Step::Done(status, self.record(it)),
             Err(e) => {
@@ -672,6 +691,62 @@ mod tests {
             "{:?}",
             r.status
         );
+    }
+
+    /// Huge but finite bounds: the point, resting on a floor 0.5 below it,
+    /// sticks (λ_t = fx, certified, finite energy) with ssn and mprgp, also
+    /// where μλ_n overflows (μ = f64::MAX, λ_n = 1.5); a Tresca bound whose force on the unknowns
+    /// overflows (f64::MAX on a tangential row of coefficient 10) is
+    /// refused naming the slip bound s. Never a NaN or an infinity.
+    #[test]
+    fn a_huge_bound_sticks_or_is_refused_by_name() {
+        for (bound, fy, tscale) in [
+            (SlipBound::Tresca(vec![1e307]), -3.0, 1.0),
+            (SlipBound::Tresca(vec![f64::MAX]), -3.0, 1.0),
+            (SlipBound::Tresca(vec![1e307]), -3.0, 10.0),
+            (SlipBound::Coulomb(vec![f64::MAX]), -3.0, 1.0),
+            (SlipBound::Tresca(vec![f64::MAX]), -3.0, 10.0),
+        ] {
+            let mut qp = point(2.0, 0.3, fy, bound.clone());
+            qp.g = vec![0.5];
+            if let Some(f) = qp.friction.as_mut() {
+                f.t.data.iter_mut().for_each(|v| *v *= tscale);
+            }
+            let refused = match &bound {
+                SlipBound::Tresca(s) => !(s[0] * tscale).is_finite(),
+                SlipBound::Coulomb(_) => false,
+            };
+            for m in ["ssn", "mprgp"] {
+                let what = format!("{bound:?}, T × {tscale}, {m}");
+                match registry::solve(m, &qp, &SolveOptions::default()) {
+                    Ok(r) => {
+                        assert!(!refused, "{what}: solved");
+                        assert!(
+                            r.status.converged() && r.kkt.within(1e-10),
+                            "{what}: {:?}",
+                            r.kkt
+                        );
+                        assert!(
+                            (r.lambda_t[0] * tscale - 0.3).abs() < 1e-12,
+                            "{what}: {:?}",
+                            r.lambda_t
+                        );
+                        assert!(
+                            r.x[0].abs() < 1e-12 && r.energy.is_finite(),
+                            "{what}: {:?}",
+                            r.x
+                        );
+                    }
+                    Err(e) => {
+                        assert!(refused, "{what}: {e}");
+                        assert!(
+                            e.to_string().contains("slip bound s of contact row 0"),
+                            "{what}: {e}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]

@@ -1,0 +1,317 @@
+//! The Coulomb outer loop of every frictional method (docs/methods.md
+//! §9.1): Coulomb's bound s = μλ_n depends on the answer, so the problem is
+//! solved as successive Tresca problems, the first glued, each later one
+//! with s moved towards μλ_n of the last ([`CoulombRelaxation`]), until s
+//! no longer changes. A method supplies the Tresca solve ([`TrescaStep`])
+//! and keeps between solves what it needs (ssn its working sets, the dual
+//! its multipliers); the loop, its stopping rule and its limit
+//! ([`MAX_UPDATES`], then [`Failure::CoulombUnsettled`]) are the same for
+//! every method.
+
+use crate::linalg::sparse::norm_inf;
+use crate::qp::{Failure, Friction, IterRecord, Output, QpError, SlipBound, Status};
+
+/// The most Tresca solves of one Coulomb loop (the glued one included).
+/// Both methods settle in far fewer: the keystone of tests/trust.rs, the
+/// hardest model here, in 36–38 Newton steps (ssn) and 17–25 solves
+/// (mprgp). Before the loop was shared, ssn stopped after 500 Newton steps
+/// and the dual after 200 Tresca solves.
+pub const MAX_UPDATES: usize = 200;
+
+/// The bound of one Tresca solve.
+#[derive(Debug, Clone, Copy)]
+pub enum Bound<'a> {
+    /// Coulomb's start: every row in contact sticks, whatever the force
+    /// (s = ∞ on closed rows, 0 on open ones).
+    Glued,
+    /// The slip bound sᵢ of each row.
+    Given(&'a [f64]),
+}
+
+/// What a method returns for one Tresca problem.
+#[derive(Debug, Clone)]
+pub struct Tresca {
+    pub x: Vec<f64>,
+    pub lambda_n: Vec<f64>,
+    pub lambda_t: Vec<f64>,
+    pub active: Vec<bool>,
+    /// Converged: a KKT point of the Tresca problem (to the method's
+    /// accuracy); anything else ends the Coulomb loop with this status.
+    pub status: Status,
+    pub iterations: usize,
+    pub inner_iterations: usize,
+    pub log: Vec<IterRecord>,
+}
+
+/// One Tresca solve of a frictional method.
+pub trait TrescaStep {
+    /// The relative change of s (to max s) below which this method's
+    /// Tresca answers cannot tell two bounds apart: the loop stops there.
+    /// ssn solves each Tresca problem exactly (to rounding): `tol`; the
+    /// dual only to `tol` in its projected gradient: 100·`tol` (on the
+    /// inclined plane of tests/friction.rs at tol = 10⁻¹⁰ the change of s
+    /// stagnated at 4.7·tol).
+    fn resolution(&self) -> f64;
+
+    /// Solve the Tresca problem with `bound`, warm-started from the state
+    /// the previous call left (the first call: the method's own start).
+    fn solve(&mut self, bound: Bound<'_>) -> Result<Tresca, QpError>;
+}
+
+/// Solve the frictional problem of `fr` by `step`: one Tresca solve with
+/// the given bound, or Coulomb's loop (docs/methods.md §9.1). Each solve's
+/// log follows the last one's (iterations numbered on).
+pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Output, QpError> {
+    if let SlipBound::Tresca(s) = &fr.bound {
+        return Ok(into_output(step.solve(Bound::Given(s))?, 0, 0, vec![]));
+    }
+    let (mut iterations, mut inner, mut log) = (0, 0, vec![]);
+    let mut relax = CoulombRelaxation::default();
+    // None: glued.
+    let mut s: Option<Vec<f64>> = None;
+    let mut outer = 0;
+    loop {
+        outer += 1;
+        let bound = s.as_deref().map_or(Bound::Glued, Bound::Given);
+        let mut r = step.solve(bound)?;
+        if !r.status.converged() {
+            return Ok(into_output(r, iterations, inner, log));
+        }
+        let target = fr.slip_bound(&r.lambda_n);
+        let smax = norm_inf(&target).max(f64::MIN_POSITIVE);
+        let change = s.as_ref().map_or(f64::INFINITY, |s| {
+            target
+                .iter()
+                .zip(s)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+        }) / smax;
+        log::debug!(
+            "{name}: Coulomb update {outer}: change of s {change:.3e}, ω = {}",
+            relax.omega()
+        );
+        if change <= step.resolution() {
+            return Ok(into_output(r, iterations, inner, log));
+        }
+        if outer >= MAX_UPDATES {
+            r.status = Status::Failed(Failure::CoulombUnsettled {
+                outer: MAX_UPDATES,
+                change,
+            });
+            return Ok(into_output(r, iterations, inner, log));
+        }
+        iterations += r.iterations;
+        inner += r.inner_iterations;
+        let at = log.last().map_or(0, |l: &IterRecord| l.iter);
+        log.extend(r.log.into_iter().map(|mut l| {
+            l.iter += at;
+            l
+        }));
+        let glued = s.is_none();
+        s = Some(relax.next(s.as_deref().unwrap_or(&[]), target, glued));
+    }
+}
+
+/// The last Tresca solve with the counts and the log of those before.
+fn into_output(r: Tresca, iterations: usize, inner: usize, mut log: Vec<IterRecord>) -> Output {
+    let at = log.last().map_or(0, |l| l.iter);
+    log.extend(r.log.into_iter().map(|mut l| {
+        l.iter += at;
+        l
+    }));
+    Output {
+        x: r.x,
+        lambda: r.lambda_n,
+        lambda_t: r.lambda_t,
+        active: r.active,
+        status: r.status,
+        iterations: iterations + r.iterations,
+        inner_iterations: inner + r.inner_iterations,
+        log,
+        timings: vec![],
+    }
+}
+
+/// The Coulomb outer loop's update of the slip bound (docs/methods.md
+/// §9.1): s ← s + ω r with the residual r = μλ_n − s. The plain fixed
+/// point (ω = 1) can settle into a 2-cycle: a soft keystone wedged between
+/// abutments 10²–10⁷ times stiffer alternated between two bounds 55 % and
+/// 84 % apart for 200 Tresca solves. ω follows Aitken's Δ² rule (Irons &
+/// Tuck 1969; as in partitioned fluid–structure coupling, Küttler & Wall,
+/// Comput. Mech. 43, 2008), ω_k = −ω_{k−1} r_{k−1}ᵀ(r_k − r_{k−1}) /
+/// ‖r_k − r_{k−1}‖², clamped to [[`CoulombRelaxation::OMEGA_MIN`], 1]: a
+/// rule on the residuals only, so the same input takes the same path.
+#[derive(Debug, Clone)]
+pub struct CoulombRelaxation {
+    omega: f64,
+    last: Option<Vec<f64>>,
+}
+
+impl Default for CoulombRelaxation {
+    fn default() -> Self {
+        CoulombRelaxation {
+            omega: 1.0,
+            last: None,
+        }
+    }
+}
+
+impl CoulombRelaxation {
+    /// The smallest ω.
+    pub const OMEGA_MIN: f64 = 1.0 / 64.0;
+
+    /// The next bound from the current `s` and `target` = μλ_n; `glued`
+    /// for the first update after the glued start (then s = target and
+    /// no residual is kept).
+    pub fn next(&mut self, s: &[f64], target: Vec<f64>, glued: bool) -> Vec<f64> {
+        if glued {
+            self.last = None;
+            return target;
+        }
+        let r: Vec<f64> = target.iter().zip(s).map(|(t, s)| t - s).collect();
+        if let Some(prev) = &self.last {
+            let (mut num, mut den) = (0.0, 0.0);
+            for (rk, rp) in r.iter().zip(prev) {
+                let dr = rk - rp;
+                num += rp * dr;
+                den += dr * dr;
+            }
+            let w = -self.omega * num / den;
+            if den > 0.0 && w.is_finite() {
+                self.omega = w.clamp(Self::OMEGA_MIN, 1.0);
+            }
+        }
+        let w = self.omega;
+        let next = s.iter().zip(&r).map(|(si, ri)| si + w * ri).collect();
+        self.last = Some(r);
+        next
+    }
+
+    /// The current relaxation factor ω.
+    pub fn omega(&self) -> f64 {
+        self.omega
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::qp::Csr;
+
+    /// A scalar "method": λ_n = 1 + 0.5·(s − 1) settles at s = μ(1 + …);
+    /// counts each solve, records the bounds it was given.
+    struct Scalar {
+        seen: Vec<Option<f64>>,
+        fail_at: Option<usize>,
+        slope: f64,
+    }
+
+    impl TrescaStep for Scalar {
+        fn resolution(&self) -> f64 {
+            1e-12
+        }
+        fn solve(&mut self, bound: Bound<'_>) -> Result<Tresca, QpError> {
+            let s = match bound {
+                Bound::Glued => None,
+                Bound::Given(s) => Some(s[0]),
+            };
+            self.seen.push(s);
+            let ln = 1.0 + self.slope * s.unwrap_or(0.0);
+            let status = if self.fail_at == Some(self.seen.len()) {
+                Status::MaxIter
+            } else {
+                Status::Converged
+            };
+            Ok(Tresca {
+                x: vec![0.0],
+                lambda_n: vec![ln],
+                lambda_t: vec![s.unwrap_or(0.0)],
+                active: vec![true],
+                status,
+                iterations: 2,
+                inner_iterations: 3,
+                log: vec![
+                    IterRecord {
+                        iter: 1,
+                        ..Default::default()
+                    },
+                    IterRecord {
+                        iter: 2,
+                        ..Default::default()
+                    },
+                ],
+            })
+        }
+    }
+
+    fn friction(bound: SlipBound) -> Friction {
+        Friction {
+            t: Csr::zeros(1, 1),
+            t0: vec![0.0],
+            bound,
+        }
+    }
+
+    /// The loop starts glued, moves s to the fixed point s = μ(1 + a s),
+    /// adds up counts and numbers the log on; a Tresca bound is one solve
+    /// with that bound; a failed solve ends the loop with its status.
+    #[test]
+    fn the_loop_starts_glued_and_settles_at_the_fixed_point() {
+        let mut m = Scalar {
+            seen: vec![],
+            fail_at: None,
+            slope: 0.5,
+        };
+        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        assert!(out.status.converged(), "{:?}", out.status);
+        assert_eq!(m.seen[0], None);
+        assert_eq!(m.seen[1], Some(0.4));
+        let s = 0.4 / (1.0 - 0.4 * 0.5);
+        assert!((out.lambda_t[0] - s).abs() < 1e-11, "{:?}", out.lambda_t);
+        let k = m.seen.len();
+        assert_eq!((out.iterations, out.inner_iterations), (2 * k, 3 * k));
+        let iters: Vec<usize> = out.log.iter().map(|l| l.iter).collect();
+        assert_eq!(iters, (1..=2 * k).collect::<Vec<_>>());
+
+        let mut m = Scalar {
+            seen: vec![],
+            fail_at: None,
+            slope: 0.5,
+        };
+        let out = solve(&friction(SlipBound::Tresca(vec![7.0])), &mut m, "t").unwrap();
+        assert_eq!(m.seen, vec![Some(7.0)]);
+        assert_eq!(out.iterations, 2);
+
+        let mut m = Scalar {
+            seen: vec![],
+            fail_at: Some(3),
+            slope: 0.5,
+        };
+        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        assert_eq!(out.status, Status::MaxIter);
+        assert_eq!(m.seen.len(), 3);
+    }
+
+    /// A fixed point the relaxation cannot reach (λ_n = 1 + 2s with μ = 1
+    /// runs away) stops after [`MAX_UPDATES`] solves, said as such.
+    #[test]
+    fn an_unsettled_loop_stops_at_the_limit() {
+        let mut m = Scalar {
+            seen: vec![],
+            fail_at: None,
+            slope: 2.0,
+        };
+        let out = solve(&friction(SlipBound::Coulomb(vec![1.0])), &mut m, "t").unwrap();
+        assert!(
+            matches!(
+                out.status,
+                Status::Failed(Failure::CoulombUnsettled {
+                    outer: MAX_UPDATES,
+                    ..
+                })
+            ),
+            "{:?}",
+            out.status
+        );
+        assert_eq!(m.seen.len(), MAX_UPDATES);
+    }
+}
