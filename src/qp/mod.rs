@@ -190,7 +190,7 @@ pub enum Failure {
     /// The working sets cycle: no KKT residual below `best` in `steps`
     /// Newton steps (frictional ssn, docs/methods.md §9.2).
     Cycling { best: f64, steps: usize },
-    /// The Coulomb fixed point s = μλ_n did not settle in `outer` updates
+    /// The Coulomb fixed point s = μλ_n did not settle in `outer` Tresca solves
     /// (last relative change `change`, docs/methods.md §9.1).
     CoulombUnsettled { outer: usize, change: f64 },
     /// The method's own check of its settled answer missed the
@@ -230,7 +230,7 @@ impl std::fmt::Display for Failure {
             ),
             Failure::CoulombUnsettled { outer, change } => write!(
                 f,
-                "the Coulomb fixed point (s = μλ_n) did not settle in {outer} updates (last change {change:.3e} of max s)"
+                "the Coulomb fixed point (s = μλ_n) did not settle in {outer} Tresca solves (last change {change:.3e} of max s)"
             ),
             Failure::Uncertified { residual, target } => write!(
                 f,
