@@ -31,6 +31,14 @@ For each family and size it
      and peak RSS against the limit's, determinism over the repeats), and the
      raw results as JSON next to it.
 
+Load steps (issue 36): `--steps N` runs, instead of the above, each family and
+size as a model with N load steps (`factor = k/N`, loads and prescribed
+displacements ramped) by the first of --methods (default ssn), back to back
+with `signorini limit` on the same mesh, and writes the steps table (whole
+process ÷ limit against 1.5 + 0.15 (N − 1), peak RSS ÷ limit against 1.3, the
+per-step assembly / solve / write times from `--log-level debug`) to
+--steps-out (default bench/steps.md, raw JSON next to it).
+
 Runs whose median is longer than --long seconds (default 60) are not repeated.
 Exit status: 0 if the benchmark ran (whatever the methods did), 2 on a setup
 error (no binary, no gmsh).
@@ -498,6 +506,103 @@ def write_issue15(w, res) -> None:
     w("")
 
 
+# ----------------------------------------------------------------- load steps
+def make_steps_toml(family: str, msh: Path, work: Path, nsteps: int) -> Path:
+    """family.toml on msh with nsteps [[steps]], factor k/N (loads and
+    prescribed displacements ramped together)."""
+    text = make_toml(family, msh, work).read_text()
+    if "[[steps]]" in text:
+        raise RuntimeError(f"meshes/{family}.toml has [[steps]] already")
+    text += "\n" + "".join(f"\n[[steps]]\nt = {k}.0\nfactor = {k / nsteps!r}\n"
+                           for k in range(1, nsteps + 1))
+    path = work / f"{msh.stem}_steps{nsteps}.toml"
+    path.write_text(text)
+    return path
+
+
+STEP_LOG = re.compile(r"step (\d+): assembly ([0-9.]+) s, solve ([0-9.]+) s")
+STEP_WRITE = re.compile(r"step (\d+): writing ([0-9.]+) s")
+
+
+def steps_once(binary, toml: Path, method: str, outdir: Path, timeout):
+    """One multi-step `signorini solve --log-level debug`: whole process wall
+    time, peak RSS, and each step's assembly, solve and write times."""
+    if outdir.exists():
+        shutil.rmtree(outdir)
+    timef = outdir.parent / (outdir.name + ".time")
+    # not --quiet: it silences the debug log the step times are read from
+    rc, _, err, wall = run(["/usr/bin/time", "-v", "-o", timef, binary, "solve", toml, "--out", outdir,
+                            "--method", method, "--log-level", "debug"], timeout=timeout)
+    r = {"exit": rc, "wall": wall}
+    if rc not in (0, 3):
+        r["status"] = f"exit {rc}: {err.strip().splitlines()[-1] if err.strip() else ''}"
+        return r
+    r["rss_mb"] = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", timef.read_text()).group(1)) / 1024
+    steps = {}
+    for m in STEP_LOG.finditer(err):
+        steps.setdefault(int(m.group(1)), {}).update(assemble=float(m.group(2)), solve=float(m.group(3)))
+    for m in STEP_WRITE.finditer(err):
+        steps.setdefault(int(m.group(1)), {})["write"] = float(m.group(2))
+    js = list(outdir.glob("*.json"))
+    if js:
+        d = json.loads(js[0].read_text())
+        # the solve times of the JSON's step rows where the log has none
+        for row in d.get("steps") or []:
+            steps.setdefault(row["step"], {}).setdefault("solve", row["time_solve"])
+        r.update(status=d["status"], converged=d["converged"], certified=d["kkt"]["certified"],
+                 dofs=d["dofs"], total=d["timings_s"]["total"])
+    r["steps"] = [dict(steps[k], step=k) for k in sorted(steps)]
+    return r
+
+
+def run_steps(args, binary, work: Path, size_spec) -> int:
+    """The steps table (issue 36): N-step runs against `signorini limit`."""
+    n = args.steps
+    method = (args.methods.split(",")[0].strip() if args.methods else "ssn") or "ssn"
+    rows = []
+    for fam in [f.strip() for f in args.families.split(",") if f.strip()]:
+        for _, size in sorted([fs for fs in size_spec if fs[0] in (None, fam)], key=lambda fs: SIZES[fs[1]]):
+            msh, nodes, _ = make_mesh(fam, SIZES[size], work, args.gmsh)
+            toml = make_steps_toml(fam, msh, work, n)
+            limit_toml = make_toml(fam, msh, work)
+            for rep in range(args.repeats):
+                # back to back: the limit, then the N-step run
+                tf = work / "limit.time"
+                rc, out, err, lwall = run(["/usr/bin/time", "-v", "-o", tf, binary, "limit", limit_toml])
+                lrss = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", tf.read_text()).group(1)) / 1024 if rc == 0 else None
+                r = steps_once(binary, toml, method, work / "out_steps", max(4 * args.budget, 120.0))
+                row = {"family": fam, "size": size, "nodes": nodes, "nsteps": n, "method": method, "repeat": rep + 1,
+                       "limit_wall": lwall if rc == 0 else None, "limit_rss_mb": lrss, **r}
+                rows.append(row)
+                log(f"steps {fam} {size} #{rep + 1}: whole {fmt(r.get('wall'))} s, limit {fmt(lwall)} s, "
+                    f"RSS {fmt(r.get('rss_mb'))} / {fmt(lrss)} MB, {r.get('status')}")
+    out = Path(args.steps_out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.with_suffix(".json").write_text(json.dumps({"machine": machine(), "cmdline": "python3 scripts/bench.py " + " ".join(sys.argv[1:]),
+                                                    "rows": rows}, indent=1, default=str))
+    target = 1.5 + 0.15 * (n - 1)
+    L = [f"Load steps: {n} steps, `--method {method}`, each run back to back with `signorini limit` "
+         f"(whole processes; target whole ÷ limit ≤ 1.5 + 0.15 (N − 1) = {target:.2f}, peak RSS ÷ limit ≤ 1.3).\n",
+         "| family | size | nodes | run | whole [s] | limit [s] | whole ÷ limit | met | RSS [MB] | limit RSS [MB] | RSS ÷ limit | met | step 1 asm / solve / write [s] | steps 2–N asm / solve / write, median [s] |",
+         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        wl = r["wall"] / r["limit_wall"] if r.get("limit_wall") and r.get("wall") and r.get("converged") else None
+        rl = r["rss_mb"] / r["limit_rss_mb"] if r.get("limit_rss_mb") and r.get("rss_mb") else None
+        st = r.get("steps") or []
+        first = st[0] if st else {}
+        later = st[1:]
+        med = lambda k: median([s.get(k) for s in later])
+        L.append(f"| {r['family']} | {r['size']} | {r['nodes']} | {r['repeat']} | {fmt(r.get('wall'))} | {fmt(r.get('limit_wall'))} | "
+                 f"{fmt(wl)} | {'yes' if wl is not None and wl <= target else 'no'} | {fmt(r.get('rss_mb'))} | {fmt(r.get('limit_rss_mb'))} | "
+                 f"{fmt(rl)} | {'yes' if rl is not None and rl <= 1.3 else 'no'} | "
+                 f"{fmt(first.get('assemble'))} / {fmt(first.get('solve'))} / {fmt(first.get('write'))} | "
+                 f"{fmt(med('assemble'))} / {fmt(med('solve'))} / {fmt(med('write'))} |")
+    out.write_text("\n".join(L) + "\n")
+    print("\n".join(L))
+    log(f"wrote {out} and {out.with_suffix('.json')}")
+    return 0
+
+
 # ----------------------------------------------------------------- main
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -515,6 +620,9 @@ def main() -> int:
     ap.add_argument("--out", default=str(ROOT / "BENCHMARKS.md"))
     ap.add_argument("--binary", default=str(ROOT / "target" / "release" / "signorini"))
     ap.add_argument("--gmsh", default="gmsh")
+    ap.add_argument("--steps", type=int, default=0, metavar="N",
+                    help="run the load-step table instead (N steps per model; see the module doc)")
+    ap.add_argument("--steps-out", default=str(ROOT / "bench" / "steps.md"))
     ap.add_argument("--report-only", metavar="JSON",
                     help="run nothing: rewrite --out from the raw results of an earlier run (its JSON)")
     ap.add_argument("--check", action="store_true",
@@ -549,6 +657,8 @@ def main() -> int:
         if s not in SIZES:
             print(f"bench: unknown size {s}; known: {', '.join(SIZES)}", file=sys.stderr)
             return 2
+    if args.steps > 0:
+        return run_steps(args, binary, work, size_spec)
     vs = variants(binary)
     if args.methods:
         want = [m.strip() for m in args.methods.split(",")]

@@ -181,3 +181,48 @@ fn load_steps_reuse_the_factorization() {
     let xm = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     assert!(dx <= 1e-8 * xm, "{dx}");
 }
+
+/// A load step's model reuses the prepared C, A and elimination and
+/// computes only d, g and u0 again (`run::step_model_reusing`, the last
+/// step's model given up for the next, as a run does): every step of the
+/// shipped step models, solved by ssn with warm starts, gives the same x,
+/// bit for bit, as a full assembly of that step (`fem::build_with`).
+#[test]
+fn reused_assembly_gives_the_answers_of_a_fresh_one_bit_for_bit() {
+    use signorini::linalg::cholesky::Workspace;
+    use signorini::qp::{registry, SolveOptions};
+    use signorini::run;
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for name in ["three_bodies_steps", "geodynamic_steps"] {
+        let path = common::example(name);
+        let prep = run::prepare(std::path::Path::new(&path), false).unwrap();
+        let nsteps = prep.problem.file.nsteps();
+        assert!(nsteps > 1, "{name}");
+        let (ws_reused, ws_fresh) = (Workspace::new(), Workspace::new());
+        let mut u_prev: Option<Vec<[f64; 2]>> = None;
+        // As a run makes them: each step's model from the last one's.
+        let mut prev = None;
+        for s in 0..nsteps {
+            let reused = run::step_model_reusing(&prep, s, prev.take()).unwrap();
+            let mut p = prep.problem.clone();
+            p.file = prep.problem.file.at_step(s);
+            let fresh = signorini::fem::build_with(&prep.mesh, &p, &prep.build).unwrap();
+            let at = format!("{name} step {}", s + 1);
+            assert_eq!(bits(&reused.qp.d), bits(&fresh.qp.d), "d, {at}");
+            assert_eq!(bits(&reused.qp.g), bits(&fresh.qp.g), "g, {at}");
+            let mut xs = vec![];
+            for (model, ws) in [(&reused, &ws_reused), (&fresh, &ws_fresh)] {
+                let opts = SolveOptions {
+                    x0: u_prev.as_ref().map(|u| run::reduce(model, u)),
+                    ..SolveOptions::default()
+                };
+                let r = registry::solve_in("ssn", &model.qp, &opts, ws).unwrap();
+                assert!(r.status.converged(), "{at}");
+                xs.push(r.solution.x);
+            }
+            assert_eq!(bits(&xs[0]), bits(&xs[1]), "x, {at}");
+            u_prev = Some(reused.displacements(&xs[0]));
+            prev = Some(reused);
+        }
+    }
+}

@@ -12,7 +12,7 @@ use super::conditions::PointDofs;
 use super::element;
 use super::stiffness::Materials;
 use super::topology::{dim_name, group_names, Topology};
-use super::FemError;
+use super::{FemError, Model};
 use crate::mesh::Mesh;
 use crate::problem::{Problem, TractionLoad};
 use crate::qp::Csr;
@@ -151,6 +151,103 @@ impl Loads<'_> {
     }
 }
 
+/// What a load step changes in a model (`super::step_model`).
+pub(super) struct StepLoads {
+    pub(super) dofs: Vec<PointDofs>,
+    pub(super) d: Vec<f64>,
+    pub(super) g: Vec<f64>,
+    pub(super) loads: Vec<[f64; 2]>,
+}
+
+/// The d, g, u0 and nodal loads of `problem` (a load step of the problem
+/// `base` was built from) on `base`'s topology, with the checks a full build
+/// makes on them, in the same order; None when the step's conditions give a
+/// point other DOFs than in `base` (C and A would differ).
+pub(super) fn step_loads(
+    base: &Model,
+    mesh: &Mesh,
+    problem: &Problem,
+) -> Result<Option<StepLoads>, FemError> {
+    let topo = &base.topo;
+    let conds = super::conditions::Conditions::collect(mesh, topo, problem)?;
+    let dofs = conds.eliminate(mesh, topo, &base.body_names, problem)?;
+    if !same_dofs(&dofs, &base.dofs) {
+        return Ok(None);
+    }
+    let n = base.qp.n();
+    let mats = Materials::new(topo, problem);
+    let mut d = element_d(topo, &dofs, n, &mats);
+    let loads = nodal_loads(mesh, topo, &dofs, problem, &mats, &mut d)?;
+    check_scale(&base.qp.c, &d, &dofs, topo, mesh, problem)?;
+    // The rows of A are the same (same T); g and the check of the rows
+    // whose points are all fixed depend on u0.
+    let (_, g, _) = super::contact::reduced_rows(mesh, topo, &dofs, n, problem)?;
+    Ok(Some(StepLoads { dofs, d, g, loads }))
+}
+
+/// The same unknowns point by point (numbering, T, and which points the
+/// assembly treats as free): the same C and A.
+pub(super) fn same_dofs(a: &[PointDofs], b: &[PointDofs]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(a, b)| {
+            a.start == b.start && a.ndof == b.ndof && a.t == b.t && is_free(a) == is_free(b)
+        })
+}
+
+/// A point without conditions, as `stiffness::assemble` tells them apart
+/// (it skips their T, which changes the sign of zeros).
+fn is_free(pd: &PointDofs) -> bool {
+    pd.ndof == 2 && pd.t == [[1.0, 0.0], [0.0, 1.0]] && pd.u0 == [0.0, 0.0]
+}
+
+/// The element part of d, Σ T_eᵀ(f_e − C_e u0_e), without C: the same
+/// terms as `stiffness::assemble` adds, in the same order (each point's in
+/// increasing triangle order from 0), so the same bits; C_e is computed
+/// only for the triangles with a prescribed vertex.
+fn element_d(topo: &Topology, dofs: &[PointDofs], n: usize, mats: &Materials) -> Vec<f64> {
+    let mut d = vec![0.0f64; n];
+    let th = mats.th;
+    for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
+        let mi = mi as usize;
+        let pts = [
+            topo.points[tri[0]],
+            topo.points[tri[1]],
+            topo.points[tri[2]],
+        ];
+        let free = tri.map(|p| is_free(&dofs[p]));
+        let area = element::area2(&pts) / 2.0;
+        let fb = mats.bforce[mi];
+        for (a, &p) in tri.iter().enumerate() {
+            let pd = &dofs[p];
+            if pd.ndof == 0 {
+                continue;
+            }
+            let mut fe = [th * area / 3.0 * fb[0], th * area / 3.0 * fb[1]];
+            if free.iter().any(|f| !f) {
+                let ke = element::stiffness_rows(&pts, &mats.dmats[mi], th, a);
+                for (k, fk) in fe.iter_mut().enumerate() {
+                    for b in 0..3 {
+                        if free[b] {
+                            continue;
+                        }
+                        let u0 = dofs[tri[b]].u0;
+                        *fk -= ke[k][2 * b] * u0[0] + ke[k][2 * b + 1] * u0[1];
+                    }
+                }
+            }
+            if free[a] {
+                d[pd.start] += fe[0];
+                d[pd.start + 1] += fe[1];
+            } else {
+                for (k, ta) in pd.t[..pd.ndof].iter().enumerate() {
+                    d[pd.start + k] += ta[0] * fe[0] + ta[1] * fe[1];
+                }
+            }
+        }
+    }
+    d
+}
+
 /// Refuses a C or d that is not finite, or whose displacement scale
 /// max|d| / max C_ii is so large that energies would overflow (a NaN in the
 /// solver otherwise). Names the body and node of the largest load.
@@ -210,4 +307,51 @@ pub(super) fn check_scale(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    /// The model of every load step of every shipped example, made from the
+    /// problem's by [`super::super::step_model_reusing`], is the one a full
+    /// build makes, bit for bit (d, g, u0, loads, t0; C and A shared).
+    #[test]
+    fn step_model_is_the_full_build_bit_for_bit() {
+        let opts = super::super::BuildOptions::default();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut stepped = 0;
+        for (path, problem, mesh) in crate::shipped_examples() {
+            let base = super::super::build_with(&mesh, &problem, &opts).unwrap();
+            // Step 1 from a copy of the base, the later ones from the last
+            // step's model (as a run makes them).
+            let mut prev = None;
+            for s in 0..problem.file.nsteps() {
+                let mut p = problem.clone();
+                p.file = problem.file.at_step(s);
+                let full = super::super::build_with(&mesh, &p, &opts).unwrap();
+                let reused =
+                    super::super::step_model_reusing(&base, prev.take(), &mesh, &p, &opts).unwrap();
+                let at = format!("{} step {}", path.display(), s + 1);
+                assert_eq!(bits(&reused.qp.d), bits(&full.qp.d), "d, {at}");
+                assert_eq!(bits(&reused.qp.g), bits(&full.qp.g), "g, {at}");
+                assert_eq!(reused.qp.c, full.qp.c, "C, {at}");
+                assert_eq!(reused.qp.a, full.qp.a, "A, {at}");
+                assert_eq!(reused.qp_rows, full.qp_rows, "{at}");
+                let u0 = |m: &super::super::Model| {
+                    m.dofs
+                        .iter()
+                        .flat_map(|p| [p.u0[0].to_bits(), p.u0[1].to_bits(), p.start as u64])
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(u0(&reused), u0(&full), "u0, {at}");
+                let flat =
+                    |m: &super::super::Model| m.loads.iter().flat_map(|l| *l).collect::<Vec<f64>>();
+                assert_eq!(bits(&flat(&reused)), bits(&flat(&full)), "loads, {at}");
+                assert_eq!(reused.qp.friction, full.qp.friction, "friction, {at}");
+                stepped += usize::from(problem.file.nsteps() > 1);
+                prev = Some(reused);
+            }
+        }
+        // The shipped examples with [[steps]] were among them.
+        assert!(stepped >= 2, "{stepped}");
+    }
 }

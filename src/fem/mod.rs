@@ -47,6 +47,7 @@ impl Default for BuildOptions {
 }
 
 /// The assembled problem with the maps back to the mesh.
+#[derive(Clone)]
 pub struct Model {
     pub topo: Topology,
     pub dofs: Vec<PointDofs>,
@@ -181,6 +182,54 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     lap.lap("rigid modes");
     rigid::check_semicoercive(&model, problem)?;
     lap.lap("semicoercivity check");
+    Ok(model)
+}
+
+/// The model of a load step of the problem `base` was built from
+/// (`problem` is that problem at the step, `ProblemFile::at_step`): a step
+/// changes only loads and prescribed values (docs/problem-format.md §2), so
+/// C, A, T and the rigid modes of `base` are kept and only d, g, u0, the
+/// nodal loads and the friction offset t0 are computed again
+/// (docs/methods.md §8.5). Bit for bit the model [`build_with`] makes; when
+/// the step changes which DOFs a point has (a prescribed value turning a
+/// free point into a fixed one), that full build is what it returns.
+pub fn step_model(
+    base: &Model,
+    mesh: &Mesh,
+    problem: &Problem,
+    opts: &BuildOptions,
+) -> Result<Model, FemError> {
+    step_model_reusing(base, None, mesh, problem, opts)
+}
+
+/// [`step_model`] made from `prev` (the model of another step of the same
+/// problem, which is given up) instead of a copy of `base` when it has
+/// `base`'s DOFs, hence its C and A: a sequence of load steps copies C once.
+pub fn step_model_reusing(
+    base: &Model,
+    prev: Option<Model>,
+    mesh: &Mesh,
+    problem: &Problem,
+    opts: &BuildOptions,
+) -> Result<Model, FemError> {
+    let mut lap = Lap::new("fem::step_model");
+    let Some(s) = loads::step_loads(base, mesh, problem)? else {
+        log::debug!("fem::step_model: the DOFs changed, full assembly");
+        return build_with(mesh, problem, opts);
+    };
+    lap.lap("loads");
+    // Everything but the step's values is the base's.
+    let mut model = match prev {
+        Some(m) if loads::same_dofs(&m.dofs, &base.dofs) => m,
+        _ => base.clone(),
+    };
+    model.dofs = s.dofs;
+    model.qp.d = s.d;
+    model.qp.g = s.g;
+    model.loads = s.loads;
+    friction::start_step(&mut model, None);
+    rigid::check_semicoercive(&model, problem)?;
+    lap.lap("copy and checks");
     Ok(model)
 }
 

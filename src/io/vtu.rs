@@ -220,8 +220,19 @@ fn vtkio_bytes(piece: UnstructuredGridPiece, compress: bool) -> Result<Vec<u8>, 
 /// uncompressed (after [`add_zero_counts`] and [`add_component_names`]),
 /// base64-encoding each array straight into `w`.
 fn stream_piece(w: &mut impl Write, piece: &UnstructuredGridPiece) -> std::io::Result<()> {
-    let np = piece.points.len() / 3;
-    let nc = piece.cells.types.len();
+    stream_head(w, piece.points.len() / 3, piece.cells.types.len())?;
+    let point = data_parts(&piece.data.point);
+    let cell = data_parts(&piece.data.cell);
+    stream_data(w, &point, &cell)?;
+    stream_geometry(w, &piece.points, &piece.cells)?;
+    w.write_all(PIECE_TAIL)
+}
+
+/// The end of a one-piece file.
+const PIECE_TAIL: &[u8] = b"</Piece></UnstructuredGrid></VTKFile>";
+
+/// The file's start up to the `<Piece>` tag with its counts.
+fn stream_head(w: &mut impl Write, np: usize, nc: usize) -> std::io::Result<()> {
     w.write_all(
         b"<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"><UnstructuredGrid><Piece",
     )?;
@@ -236,47 +247,75 @@ fn stream_piece(w: &mut impl Write, piece: &UnstructuredGridPiece) -> std::io::R
             write!(w, " {key}=\"{v}\"")?;
         }
     }
-    w.write_all(b">")?;
-    for (tag, attrs) in [
-        ("PointData", &piece.data.point),
-        ("CellData", &piece.data.cell),
-    ] {
-        let arrays: Vec<&DataArray> = attrs
-            .iter()
-            .filter_map(|a| match a {
-                Attribute::DataArray(d) => Some(d),
-                Attribute::Field { .. } => None,
-            })
-            .collect();
-        // vtkio leaves out an empty PointData / CellData.
-        if arrays.is_empty() {
+    w.write_all(b">")
+}
+
+/// One array of a `<PointData>` or `<CellData>`: its values, or its
+/// `<DataArray>` element already encoded ([`VtuMeshParts`]).
+enum Part<'a> {
+    Data(&'a DataArray),
+    Encoded(&'a [u8]),
+}
+
+/// The data arrays of `attrs` (vtkio writes no field data here).
+fn data_parts(attrs: &[Attribute]) -> Vec<Part<'_>> {
+    attrs
+        .iter()
+        .filter_map(|a| match a {
+            Attribute::DataArray(d) => Some(Part::Data(d)),
+            Attribute::Field { .. } => None,
+        })
+        .collect()
+}
+
+/// The data array `a` as a part (None: field data).
+fn part_of(a: &Attribute) -> Option<Part<'_>> {
+    data_parts(std::slice::from_ref(a)).pop()
+}
+
+/// `<PointData>` and `<CellData>`, each left out when empty (as vtkio does).
+fn stream_data(w: &mut impl Write, point: &[Part], cell: &[Part]) -> std::io::Result<()> {
+    for (tag, parts) in [("PointData", point), ("CellData", cell)] {
+        if parts.is_empty() {
             continue;
         }
         write!(w, "<{tag}")?;
-        if let Some(v) = arrays.iter().find(|d| d.elem == ElementType::Vectors) {
+        let vectors = parts.iter().find_map(|p| match p {
+            Part::Data(d) if d.elem == ElementType::Vectors => Some(d),
+            _ => None,
+        });
+        if let Some(v) = vectors {
             write!(w, " Vectors=\"{}\"", v.name)?;
         }
         w.write_all(b">")?;
-        for d in arrays {
-            stream_array(w, &d.name, d.elem.num_comp(), Slice::of(&d.data)?)?;
+        for p in parts {
+            match p {
+                Part::Data(d) => stream_array(w, &d.name, d.elem.num_comp(), Slice::of(&d.data)?)?,
+                Part::Encoded(bytes) => w.write_all(bytes)?,
+            }
         }
         write!(w, "</{tag}>")?;
     }
+    Ok(())
+}
+
+/// `<Points>` and `<Cells>`.
+fn stream_geometry(w: &mut impl Write, points: &IOBuffer, cells: &Cells) -> std::io::Result<()> {
     w.write_all(b"<Points>")?;
-    stream_array(w, "Points", 3, Slice::of(&piece.points)?)?;
+    stream_array(w, "Points", 3, Slice::of(points)?)?;
     w.write_all(b"</Points><Cells>")?;
     let VertexNumbers::XML {
         connectivity,
         offsets,
-    } = &piece.cells.cell_verts
+    } = &cells.cell_verts
     else {
         return Err(std::io::Error::other("cells must be in XML form"));
     };
     stream_array(w, "connectivity", 1, Slice::U64(connectivity))?;
     stream_array(w, "offsets", 1, Slice::U64(offsets))?;
-    let types: Vec<u8> = piece.cells.types.iter().map(|&t| t as u8).collect();
+    let types: Vec<u8> = cells.types.iter().map(|&t| t as u8).collect();
     stream_array(w, "types", 1, Slice::U8(&types))?;
-    w.write_all(b"</Cells></Piece></UnstructuredGrid></VTKFile>")
+    w.write_all(b"</Cells>")
 }
 
 /// The values of an array, borrowed.
@@ -393,6 +432,71 @@ fn add_zero_counts(mut buf: Vec<u8>) -> Vec<u8> {
     buf
 }
 
+/// The arrays of a bulk VTU that depend on the mesh only (`body`,
+/// `contact_role`, `material`, the points and the cells), encoded once for
+/// the files of a series of load steps: each step then encodes its own
+/// fields only ([`write_vtu_with`]), and writes the same bytes.
+pub struct VtuMeshParts {
+    n: usize,
+    m: usize,
+    body: Vec<u8>,
+    contact_role: Vec<u8>,
+    material: Vec<u8>,
+    geometry: Vec<u8>,
+}
+
+impl VtuMeshParts {
+    /// The encoded mesh arrays of `mesh` (uncompressed files only).
+    pub fn new(mesh: &OutMesh) -> VtuMeshParts {
+        let enc = |a: &Attribute| {
+            let mut buf = vec![];
+            if let Attribute::DataArray(d) = a {
+                // Writing into memory cannot fail; the types are the ones
+                // stream_array takes.
+                let _ = Slice::of(&d.data)
+                    .and_then(|s| stream_array(&mut buf, &d.name, d.elem.num_comp(), s));
+            }
+            buf
+        };
+        let mut geometry = vec![];
+        let _ = stream_geometry(&mut geometry, &points3(&mesh.points), &bulk_cells(mesh));
+        VtuMeshParts {
+            n: mesh.points.len(),
+            m: mesh.triangles.len(),
+            body: enc(&body_array(mesh)),
+            contact_role: enc(&i32_array("contact_role", contact_roles(mesh).into_iter())),
+            material: enc(&material_array(mesh)),
+            geometry,
+        }
+    }
+}
+
+fn body_array(mesh: &OutMesh) -> Attribute {
+    i32_array("body", mesh.point_body.iter().map(|&b| i64::from(b)))
+}
+
+fn material_array(mesh: &OutMesh) -> Attribute {
+    i32_array("material", mesh.material.iter().map(|&k| i64::from(k)))
+}
+
+/// The triangles as VTK cells.
+fn bulk_cells(mesh: &OutMesh) -> Cells {
+    let m = mesh.triangles.len();
+    let connectivity: Vec<u64> = mesh
+        .triangles
+        .iter()
+        .flat_map(|t| t.iter().map(|&i| i as u64))
+        .collect();
+    let offsets: Vec<u64> = (1..=m as u64).map(|k| 3 * k).collect();
+    Cells {
+        cell_verts: VertexNumbers::XML {
+            connectivity,
+            offsets,
+        },
+        types: vec![CellType::Triangle; m],
+    }
+}
+
 /// Writes the bulk mesh with its step fields (see the module doc for the encoding).
 ///
 /// Point data: `displacement` (3 components, z = 0), `body`,
@@ -408,6 +512,19 @@ pub fn write_vtu(
     step: &StepOutput,
     compress: bool,
 ) -> Result<(), IoError> {
+    write_vtu_with(path, mesh, step, compress, None)
+}
+
+/// [`write_vtu`] with the mesh arrays encoded once (`parts` of this mesh;
+/// used for uncompressed files): the same bytes, the step's fields alone
+/// encoded.
+pub fn write_vtu_with(
+    path: &Path,
+    mesh: &OutMesh,
+    step: &StepOutput,
+    compress: bool,
+    parts: Option<&VtuMeshParts>,
+) -> Result<(), IoError> {
     let n = mesh.points.len();
     let m = mesh.triangles.len();
     check_len(path, "point_body", mesh.point_body.len(), n)?;
@@ -421,94 +538,98 @@ pub fn write_vtu(
             check_index(path, "triangle", i, n)?;
         }
     }
-
-    let connectivity: Vec<u64> = mesh
-        .triangles
-        .iter()
-        .flat_map(|t| t.iter().map(|&i| i as u64))
-        .collect();
-    let offsets: Vec<u64> = (1..=m as u64).map(|k| 3 * k).collect();
-    let cells = Cells {
-        cell_verts: VertexNumbers::XML {
-            connectivity,
-            offsets,
-        },
-        types: vec![CellType::Triangle; m],
-    };
-
-    let displacement: Vec<f64> = step
-        .displacement
-        .iter()
-        .flat_map(|u| [u[0], u[1], 0.0])
-        .collect();
-    let point = vec![
-        array(
-            "displacement",
-            ElementType::Vectors,
-            IOBuffer::F64(displacement),
-        ),
-        i32_array("body", mesh.point_body.iter().map(|&b| i64::from(b))),
-        i32_array("contact_role", contact_roles(mesh).into_iter()),
-    ];
-    let mut point = point;
-    if step.reaction.len() == n {
-        point.push(array(
-            "reaction",
-            ElementType::Vectors,
-            IOBuffer::F64(
-                step.reaction
-                    .iter()
-                    .flat_map(|f| [f[0], f[1], 0.0])
-                    .collect(),
-            ),
-        ));
-    }
-
-    let ncomp: usize = if mesh.plane_strain { 4 } else { 3 };
-    let stress: Vec<f64> = step
-        .stress
-        .iter()
-        .flat_map(|s| s[..ncomp].iter().copied())
-        .collect();
-    let mut cell = vec![
-        f64_array("stress", ncomp as u32, stress),
-        f64_array("von_mises", 1, step.von_mises.clone()),
-        f64_array(
-            "principal_stress",
-            2,
-            step.principal.iter().flat_map(|p| [p[0], p[1]]).collect(),
-        ),
-        i32_array("material", mesh.material.iter().map(|&k| i64::from(k))),
-    ];
     if let Some(c) = &step.change {
         check_len(path, "displacement_change", c.displacement.len(), n)?;
         check_len(path, "stress_change", c.stress.len(), m)?;
-        point.push(array(
-            "displacement_change",
-            ElementType::Vectors,
-            IOBuffer::F64(
-                c.displacement
-                    .iter()
-                    .flat_map(|u| [u[0], u[1], 0.0])
-                    .collect(),
-            ),
-        ));
-        cell.push(f64_array(
-            "stress_change",
-            ncomp as u32,
-            c.stress
-                .iter()
-                .flat_map(|s| s[..ncomp].iter().copied())
-                .collect(),
-        ));
     }
-
-    let piece = UnstructuredGridPiece {
-        points: points3(&mesh.points),
-        cells,
-        data: Attributes { point, cell },
+    let vec3 = |v: &[[f64; 2]]| -> Vec<f64> { v.iter().flat_map(|u| [u[0], u[1], 0.0]).collect() };
+    let ncomp: usize = if mesh.plane_strain { 4 } else { 3 };
+    let stress_of = |s: &[[f64; 4]]| -> Vec<f64> {
+        s.iter().flat_map(|s| s[..ncomp].iter().copied()).collect()
     };
-    write_piece(path, piece, compress)
+    let displacement = array(
+        "displacement",
+        ElementType::Vectors,
+        IOBuffer::F64(vec3(&step.displacement)),
+    );
+    let reaction = (step.reaction.len() == n).then(|| {
+        array(
+            "reaction",
+            ElementType::Vectors,
+            IOBuffer::F64(vec3(&step.reaction)),
+        )
+    });
+    let stress = f64_array("stress", ncomp as u32, stress_of(&step.stress));
+    let von_mises = f64_array("von_mises", 1, step.von_mises.clone());
+    let principal = f64_array(
+        "principal_stress",
+        2,
+        step.principal.iter().flat_map(|p| [p[0], p[1]]).collect(),
+    );
+    let change = step.change.as_ref().map(|c| {
+        (
+            array(
+                "displacement_change",
+                ElementType::Vectors,
+                IOBuffer::F64(vec3(&c.displacement)),
+            ),
+            f64_array("stress_change", ncomp as u32, stress_of(&c.stress)),
+        )
+    });
+    match parts.filter(|p| !compress && p.n == n && p.m == m) {
+        Some(p) => {
+            let point: Vec<Part> = [
+                part_of(&displacement),
+                Some(Part::Encoded(&p.body)),
+                Some(Part::Encoded(&p.contact_role)),
+                reaction.as_ref().and_then(part_of),
+                change.as_ref().and_then(|c| part_of(&c.0)),
+            ]
+            .into_iter()
+            .flatten()
+            .collect();
+            let cell: Vec<Part> = [
+                part_of(&stress),
+                part_of(&von_mises),
+                part_of(&principal),
+                Some(Part::Encoded(&p.material)),
+                change.as_ref().and_then(|c| part_of(&c.1)),
+            ]
+            .into_iter()
+            .flatten()
+            .collect();
+            write_atomic(path, |tmp| {
+                let file = super::atomic::create_new(tmp)
+                    .map_err(|e| IoError::io(path, "cannot create", e))?;
+                let mut w = BufWriter::with_capacity(1 << 20, file);
+                stream_head(&mut w, n, m)
+                    .and_then(|()| stream_data(&mut w, &point, &cell))
+                    .and_then(|()| w.write_all(&p.geometry))
+                    .and_then(|()| w.write_all(PIECE_TAIL))
+                    .and_then(|()| w.flush())
+                    .map_err(|e| IoError::io(path, "cannot write", e))
+            })
+        }
+        None => {
+            let mut point = vec![
+                displacement,
+                body_array(mesh),
+                i32_array("contact_role", contact_roles(mesh).into_iter()),
+            ];
+            let mut cell = vec![stress, von_mises, principal, material_array(mesh)];
+            point.extend(reaction);
+            if let Some((du, ds)) = change {
+                point.push(du);
+                cell.push(ds);
+            }
+            let piece = UnstructuredGridPiece {
+                points: points3(&mesh.points),
+                cells: bulk_cells(mesh),
+                data: Attributes { point, cell },
+            };
+            write_piece(path, piece, compress)
+        }
+    }
 }
 
 /// Each point's part in the contact: 0 none, 1 a conforming pair, 2 a
@@ -899,9 +1020,57 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("p.vtu");
         write_piece(&path, piece(9, 4, true), false).unwrap();
+        bulk_with_parts_is_the_same_file(dir.path());
         let back = read_vtu_arrays(&path).unwrap();
         assert_eq!((back.num_points, back.num_cells), (9, 4));
         let s = back.cell_array("stress").unwrap();
         assert_eq!(s.values[5], -3.5e9 + 5e7);
+    }
+
+    /// A bulk VTU written with the mesh arrays encoded once
+    /// ([`VtuMeshParts`]) is byte for byte the one written without, with
+    /// and without reactions and change fields, in plane strain and stress.
+    fn bulk_with_parts_is_the_same_file(dir: &Path) {
+        let mesh = OutMesh {
+            points: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]],
+            point_tags: vec![1, 2, 3, 4],
+            point_body: vec![0, 0, 1, 1],
+            triangles: vec![[0, 1, 2], [1, 3, 2]],
+            material: vec![0, 1],
+            material_names: vec!["a".into(), "b".into()],
+            plane_strain: true,
+            contact: Default::default(),
+        };
+        let mut step = StepOutput {
+            displacement: vec![[1e-3, -2e-3], [0.5, 0.25], [-0.0, 3.0], [7.0, 1e-300]],
+            stress: vec![[1.0, 2.0, 3.0, 4.0], [-5.0, 6.5, f64::NAN, 0.0]],
+            von_mises: vec![2.0, 3.0],
+            principal: vec![[1.0, -1.0], [2.0, 0.5]],
+            ..Default::default()
+        };
+        for k in 0..4 {
+            let mut mesh = mesh.clone();
+            mesh.plane_strain = k % 2 == 0;
+            if k >= 2 {
+                step.reaction = vec![[1.0, 2.0]; 4];
+                step.change = Some(crate::io::Change {
+                    reference_step: 1,
+                    displacement: vec![[0.125, -0.5]; 4],
+                    stress: vec![[9.0; 4]; 2],
+                    contact_pressure: vec![],
+                });
+            }
+            let parts = VtuMeshParts::new(&mesh);
+            let (a, b) = (dir.join(format!("a{k}.vtu")), dir.join(format!("b{k}.vtu")));
+            write_vtu(&a, &mesh, &step, false).unwrap();
+            write_vtu_with(&b, &mesh, &step, false, Some(&parts)).unwrap();
+            let (a, b) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+            assert!(
+                a == b,
+                "k {k}:\n{}\n{}",
+                String::from_utf8_lossy(&a),
+                String::from_utf8_lossy(&b)
+            );
+        }
     }
 }

@@ -282,6 +282,10 @@ pub struct VtuWriter<'a> {
     compress: bool,
     /// Pseudo-time of every load step (the PVD lists steps 1..=k).
     times: Vec<f64>,
+    /// The mesh arrays of the bulk VTU, encoded at the first of several
+    /// load steps (uncompressed files): the later steps encode their
+    /// fields only.
+    parts: Option<io::vtu::VtuMeshParts>,
 }
 
 impl<'a> VtuWriter<'a> {
@@ -301,6 +305,7 @@ impl<'a> VtuWriter<'a> {
             dir: dir.to_path_buf(),
             compress,
             times: (0..file.nsteps()).map(|s| file.step_time(s)).collect(),
+            parts: None,
         }
     }
 }
@@ -309,7 +314,16 @@ impl StepObserver for VtuWriter<'_> {
     fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
         let s = step.index;
         let staged = output_paths(&self.stage_dir, &self.name, step.multi.then_some(s + 1));
-        io::vtu::write_vtu(&staged.vtu, self.om, step.output, self.compress)?;
+        if step.multi && !self.compress && self.parts.is_none() {
+            self.parts = Some(io::vtu::VtuMeshParts::new(self.om));
+        }
+        io::vtu::write_vtu_with(
+            &staged.vtu,
+            self.om,
+            step.output,
+            self.compress,
+            self.parts.as_ref(),
+        )?;
         let fo = crate::post::friction::friction_output(step.model, step.result);
         let arrays = fo.as_ref().map(|f| io::vtu::FrictionArrays {
             tangential_traction: &f.tangential_traction,

@@ -209,11 +209,29 @@ pub fn fingerprint_diff(a: &str, b: &str) -> Vec<String> {
 }
 
 /// The model of load step `s` (0-based): the same mesh and DOF numbering,
-/// with loads and prescribed displacements of that step.
+/// with loads and prescribed displacements of that step. C, A and the
+/// elimination are the prepared model's; only d, g and u0 are computed
+/// again ([`fem::step_model`], the same bits as a full build).
 pub fn step_model(prep: &Prepared, s: usize) -> Result<Model, RunError> {
+    step_model_reusing(prep, s, None)
+}
+
+/// [`step_model`] made from the model `prev` of an earlier step (given up):
+/// C is not copied again ([`fem::step_model_reusing`]).
+pub fn step_model_reusing(
+    prep: &Prepared,
+    s: usize,
+    prev: Option<Model>,
+) -> Result<Model, RunError> {
     let mut p = prep.problem.clone();
     p.file = prep.problem.file.at_step(s);
-    Ok(fem::build_with(&prep.mesh, &p, &prep.build)?)
+    Ok(fem::step_model_reusing(
+        &prep.model,
+        prev,
+        &prep.mesh,
+        &p,
+        &prep.build,
+    )?)
 }
 
 /// Reduced unknowns ξ = Tᵀ(u − u0) of point displacements `u` (a warm start).

@@ -7,12 +7,13 @@
 
 use super::observe::StepObserver;
 use super::output::{check_interrupt, Transaction};
-use super::prepare::{reduce, solve_model_in, step_model, Prepared};
+use super::prepare::{reduce, solve_model_in, step_model_reusing, Prepared};
 use super::restart::Restart;
 use super::summary::{StepRow, Summary, Timings};
 use super::RunError;
 use crate::fem::Model;
 use crate::io::{Change, StepOutput};
+use crate::linalg::cholesky::Workspace;
 use crate::post::{self, forces::Forces};
 use crate::qp::{registry, MethodId, QpResult, SolveOptions};
 use std::ops::Range;
@@ -167,8 +168,23 @@ impl<'a> Run<'a> {
         observers: &mut [&mut dyn StepObserver],
         mut tx: Option<&mut Transaction>,
     ) -> Result<Outcome, RunError> {
+        self.check()?;
+        let steps = self.steps();
+        if steps.is_empty() {
+            return self.nothing_to_do(observers, tx);
+        }
+        let mut carry = Carry::from_restart(self.restart.as_ref());
+        // One workspace for every step: C is the same, its factor is reused.
+        let ws = self.opts.settings.workspace();
+        for s in steps.clone() {
+            self.one_step(s, &ws, &mut carry, observers, tx.as_deref_mut())?;
+        }
+        self.finish(carry, observers, tx)
+    }
+
+    /// The settings and the step count, before anything is solved.
+    fn check(&self) -> Result<(), RunError> {
         self.opts.settings.validate().map_err(RunError::Settings)?;
-        let kkt_target = self.opts.settings.kkt_target;
         if self.max_steps == Some(0) {
             return Err(RunError::Settings(
                 "max_steps = 0: load steps count from 1".into(),
@@ -176,208 +192,234 @@ impl<'a> Run<'a> {
         }
         // A SIGTERM/SIGINT (output::catch_signals) ends the run at the next
         // of these checks with an error: the dropped transaction rolls back.
+        check_interrupt()
+    }
+
+    /// A restart that left no step to solve: the observers' files of it
+    /// (a checkpoint copied into place) are the one commit.
+    fn nothing_to_do(
+        &self,
+        observers: &mut [&mut dyn StepObserver],
+        tx: Option<&mut Transaction>,
+    ) -> Result<Outcome, RunError> {
+        let mut names = vec![];
+        if let Some(r) = &self.restart {
+            for ob in observers.iter_mut() {
+                names.extend(ob.on_nothing_to_do(r).map_err(|e| unstage(&tx, e))?);
+            }
+        }
+        if let Some(t) = tx {
+            check_interrupt()?;
+            if !names.is_empty() {
+                t.commit(&names)?;
+            }
+        }
+        check_interrupt()?;
+        Ok(Outcome {
+            steps: self.steps(),
+            nsteps: self.prep.problem.file.nsteps(),
+            last: None,
+            summary: None,
+            certified: true,
+        })
+    }
+
+    /// Load step `s`: its model, the solve warm-started from the previous
+    /// step, the post-processing, the observers and the step's commit.
+    fn one_step(
+        &self,
+        s: usize,
+        ws: &Workspace,
+        carry: &mut Carry,
+        observers: &mut [&mut dyn StepObserver],
+        tx: Option<&mut Transaction>,
+    ) -> Result<(), RunError> {
         check_interrupt()?;
         let (prep, method) = (self.prep, self.method);
         let file = &prep.problem.file;
         let multi = !file.steps.is_empty();
-        let nsteps = file.nsteps();
-        let steps = self.steps();
-        // Errors of the observers and commits name the final files.
-        let unstage = |tx: &Option<&mut Transaction>, e: RunError| match tx {
-            Some(t) => RunError::Output(t.unstage(&e.to_string())),
-            None => e,
+        // The last step's model becomes this step's (its C is kept, its
+        // loads replaced): one copy of C for all the steps.
+        let prev = carry.last.take().and_then(|(solved, _, _)| solved.model);
+        let ts = Instant::now();
+        // Without [[steps]] the prepared model is the problem; with steps
+        // every step (the first included) gets its own loads.
+        let mut model = if multi {
+            Some(step_model_reusing(prep, s, prev)?)
+        } else {
+            None
         };
-        if steps.is_empty() {
-            let mut names = vec![];
-            if let Some(r) = &self.restart {
-                for ob in observers.iter_mut() {
-                    names.extend(ob.on_nothing_to_do(r).map_err(|e| unstage(&tx, e))?);
-                }
-            }
-            if let Some(t) = tx.as_deref_mut() {
-                check_interrupt()?;
-                if !names.is_empty() {
-                    t.commit(&names)?;
-                }
-            }
-            check_interrupt()?;
-            return Ok(Outcome {
-                steps,
-                nsteps,
-                last: None,
-                summary: None,
-                certified: true,
-            });
+        // Friction: the slip of this step is measured from the last
+        // step's displacements (docs/methods.md §9.5).
+        if let (Some(m), Some(u)) = (model.as_mut(), carry.u_prev.as_deref()) {
+            crate::fem::friction::start_step(m, Some(u));
         }
-        let mut u_prev = self.restart.as_ref().and_then(|r| r.displacement.clone());
-        let mut active_prev = self.restart.as_ref().and_then(|r| r.active.clone());
+        let model_ref = model.as_ref().unwrap_or(&prep.model);
+        let t_assemble = match model {
+            None => prep.t_assemble,
+            Some(_) => ts.elapsed().as_secs_f64(),
+        };
+        let mut o = self.opts.clone();
+        o.x0 = carry.u_prev.as_ref().map(|u| reduce(model_ref, u));
+        o.stop = Some(&super::output::SIGNAL);
+        let t_solve0 = Instant::now();
+        let res = solve_model_in(prep, model_ref, method, &o, ws);
+        // An interrupted solve is no result to write, nor an error of
+        // the problem.
+        check_interrupt()?;
+        let res = res?;
+        let t_solve = t_solve0.elapsed().as_secs_f64();
+        log::debug!(
+            "step {}: assembly {t_assemble:.3} s, solve {t_solve:.3} s",
+            s + 1
+        );
+        let t_w = Instant::now();
+        let (output, forces) =
+            self.post_process(s, model_ref, &res, carry, [t_assemble, t_solve], ts);
+        let verdict = Verdict::of(method, &res, self.opts.settings.kkt_target, self.strict);
+        let step = Step {
+            index: s,
+            nsteps: file.nsteps(),
+            multi,
+            time: file.step_time(s),
+            method,
+            kkt_target: self.opts.settings.kkt_target,
+            model: model_ref,
+            result: &res,
+            output: &output,
+            forces: &forces,
+            verdict,
+            started: ts,
+        };
+        self.observe(&step, observers, tx, &mut carry.pending)?;
+        let t_write = t_w.elapsed().as_secs_f64();
+        log::debug!("step {}: writing {t_write:.3} s", s + 1);
+        carry
+            .rows
+            .push(step_row(&step, carry.active_prev.as_deref(), t_solve));
+        carry.active_prev = Some(output.active.clone());
+        carry.certified &= verdict.certified();
+        carry.u_prev = Some(output.displacement.clone());
+        let timings = Timings {
+            read: prep.t_read,
+            assemble: t_assemble,
+            solve: t_solve,
+            write: t_write,
+            ..Default::default()
+        };
+        let solved = Solved {
+            model,
+            result: res,
+            output,
+            forces,
+        };
+        carry.last = Some((solved, verdict, timings));
+        Ok(())
+    }
+
+    /// The step's fields, forces and change from the reference step, with
+    /// the step's assembly and solve times.
+    fn post_process(
+        &self,
+        s: usize,
+        model: &Model,
+        res: &QpResult,
+        carry: &mut Carry,
+        [t_assemble, t_solve]: [f64; 2],
+        ts: Instant,
+    ) -> (StepOutput, Forces) {
+        let (prep, file) = (self.prep, &self.prep.problem.file);
+        let t_p = Instant::now();
+        let mut problem_s = prep.problem.clone();
+        problem_s.file = file.at_step(s);
+        let (mut output, forces) =
+            post::step_output_with_forces(model, &problem_s, res, file.step_time(s));
+        log::debug!(
+            "step {}: post-processing {:.3} s",
+            s + 1,
+            t_p.elapsed().as_secs_f64()
+        );
+        output.info.method = self.method.name().to_string();
+        output.info.preconditioner = preconditioner_label(self.method, self.opts);
+        output.info.time_assemble = t_assemble;
+        output.info.time_solve = t_solve;
+        output.info.time_total = ts.elapsed().as_secs_f64();
         // The state the `*_change` fields refer to (docs/problem-format.md §6).
         let kref = file.output.reference_step;
-        let mut reference = self.restart.as_ref().and_then(|r| r.reference.clone());
-        let mut pending: Vec<String> = vec![];
-        let mut rows = vec![];
-        let mut certified = true;
-        let mut last = None;
-        // One workspace for every step: C is the same, its factor is reused.
-        let ws = self.opts.settings.workspace();
-        for s in steps.clone() {
-            check_interrupt()?;
-            let ts = Instant::now();
-            // Without [[steps]] the prepared model is the problem; with steps
-            // every step (the first included) gets its own loads.
-            let mut model = if multi {
-                Some(step_model(prep, s)?)
-            } else {
-                None
-            };
-            // Friction: the slip of this step is measured from the last
-            // step's displacements (docs/methods.md §9.5).
-            if let (Some(m), Some(u)) = (model.as_mut(), u_prev.as_deref()) {
-                crate::fem::friction::start_step(m, Some(u));
-            }
-            let model_ref = model.as_ref().unwrap_or(&prep.model);
-            let t_assemble = match model {
-                None => prep.t_assemble,
-                Some(_) => ts.elapsed().as_secs_f64(),
-            };
-            let mut o = self.opts.clone();
-            o.x0 = u_prev.as_ref().map(|u| reduce(model_ref, u));
-            o.stop = Some(&super::output::SIGNAL);
-            let t_solve0 = Instant::now();
-            let res = solve_model_in(prep, model_ref, method, &o, &ws);
-            // An interrupted solve is no result to write, nor an error of
-            // the problem.
-            check_interrupt()?;
-            let res = res?;
-            let t_solve = t_solve0.elapsed().as_secs_f64();
-            let t_w = Instant::now();
-            let mut problem_s = prep.problem.clone();
-            problem_s.file = file.at_step(s);
-            let (mut output, forces) =
-                post::step_output_with_forces(model_ref, &problem_s, &res, file.step_time(s));
-            log::debug!(
-                "step {}: post-processing {:.3} s",
-                s + 1,
-                t_w.elapsed().as_secs_f64()
-            );
-            output.info.method = method.name().to_string();
-            output.info.preconditioner = preconditioner_label(method, self.opts);
-            output.info.time_assemble = t_assemble;
-            output.info.time_solve = t_solve;
-            output.info.time_total = ts.elapsed().as_secs_f64();
-            if kref == Some(s + 1) {
-                reference = Some(output.clone());
-            }
-            if let (Some(k), Some(r)) = (kref, &reference) {
-                if s + 1 >= k {
-                    output.change = Some(Change::between(&output, r, k));
-                }
-            }
-            let verdict = Verdict::of(method, &res, kkt_target, self.strict);
-            let step = Step {
-                index: s,
-                nsteps,
-                multi,
-                time: file.step_time(s),
-                method,
-                kkt_target,
-                model: model_ref,
-                result: &res,
-                output: &output,
-                forces: &forces,
-                verdict,
-                started: ts,
-            };
-            let mut names = vec![];
-            for ob in observers.iter_mut() {
-                let t = Instant::now();
-                names.extend(ob.on_step(&step).map_err(|e| unstage(&tx, e))?);
-                log::debug!(
-                    "step {}: output {:?} {:.3} s",
-                    s + 1,
-                    names.last(),
-                    t.elapsed().as_secs_f64()
-                );
-            }
-            // A load step is one commit: its VTU pair, the time series and
-            // the checkpoint grown by this step. The last step's files wait
-            // for the summary (below).
-            check_interrupt()?;
-            match tx.as_deref_mut() {
-                Some(t) if multi && s + 1 < steps.end => t.commit(&names)?,
-                _ => pending.extend(names),
-            }
-            let t_write = t_w.elapsed().as_secs_f64();
-            let flips = |from: u8| {
-                active_prev.as_ref().map(|p: &Vec<u8>| {
-                    p.iter()
-                        .zip(&output.active)
-                        .filter(|(a, b)| **a == from && **b != from)
-                        .count()
-                })
-            };
-            rows.push(StepRow {
-                step: s + 1,
-                t: file.step_time(s),
-                converged: res.status.converged(),
-                iterations: res.iterations,
-                inner_iterations: res.inner_iterations,
-                kkt_max: res.kkt.max(),
-                energy: res.energy,
-                nodes: model_ref.topo.points.len(),
-                triangles: model_ref.topo.triangles.len(),
-                dofs: model_ref.qp.n(),
-                constraints: model_ref.qp.m(),
-                active: res.active.iter().filter(|a| **a).count(),
-                opened: flips(1),
-                closed: flips(0),
-                time_solve: t_solve,
-                time_step: ts.elapsed().as_secs_f64(),
-            });
-            active_prev = Some(output.active.clone());
-            certified &= matches!(verdict, Verdict::Certified | Verdict::Penalised);
-            u_prev = Some(output.displacement.clone());
-            let timings = Timings {
-                read: prep.t_read,
-                assemble: t_assemble,
-                solve: t_solve,
-                write: t_write,
-                ..Default::default()
-            };
-            last = Some((
-                Solved {
-                    model,
-                    result: res,
-                    output,
-                    forces,
-                },
-                verdict,
-                timings,
-            ));
+        if kref == Some(s + 1) {
+            carry.reference = Some(output.clone());
         }
-        let Some((last, verdict, timings)) = last else {
+        if let (Some(k), Some(r)) = (kref, &carry.reference) {
+            if s + 1 >= k {
+                output.change = Some(Change::between(&output, r, k));
+            }
+        }
+        (output, forces)
+    }
+
+    /// Hands the step to the observers; with `tx`, a load step is one
+    /// commit: its VTU pair, the time series and the checkpoint grown by
+    /// this step. The last step's files wait for the summary
+    /// ([`Run::finish`]), as do all of a single solve's.
+    fn observe(
+        &self,
+        step: &Step<'_>,
+        observers: &mut [&mut dyn StepObserver],
+        tx: Option<&mut Transaction>,
+        pending: &mut Vec<String>,
+    ) -> Result<(), RunError> {
+        let mut names = vec![];
+        for ob in observers.iter_mut() {
+            let t = Instant::now();
+            names.extend(ob.on_step(step).map_err(|e| unstage(&tx, e))?);
+            log::debug!(
+                "step {}: output {:?} {:.3} s",
+                step.index + 1,
+                names.last(),
+                t.elapsed().as_secs_f64()
+            );
+        }
+        check_interrupt()?;
+        match tx {
+            Some(t) if step.multi && step.index + 1 < self.steps().end => t.commit(&names)?,
+            _ => pending.extend(names),
+        }
+        Ok(())
+    }
+
+    /// The summary of the last step, the observers' last files and the
+    /// last commit.
+    fn finish(
+        &self,
+        carry: Carry,
+        observers: &mut [&mut dyn StepObserver],
+        tx: Option<&mut Transaction>,
+    ) -> Result<Outcome, RunError> {
+        let prep = self.prep;
+        let Some((last, verdict, timings)) = carry.last else {
             return Err(RunError::Settings("no load step was solved".into()));
         };
         // The iterative ssn path orders nothing (docs/methods.md §7.2).
-        let ordering = match self.opts.settings.factor_free(method) {
+        let ordering = match self.opts.settings.factor_free(self.method) {
             Some(why) => format!("none ({why})"),
             None => self.opts.settings.ordering.name().to_string(),
         };
+        let multi = !prep.problem.file.steps.is_empty();
         let summary = Summary::new(
             prep,
             last.model(prep),
-            method,
+            self.method,
             &ordering,
             &last.result,
             &last.output,
             &last.forces,
-            kkt_target,
+            self.opts.settings.kkt_target,
             verdict.certified(),
             Timings {
                 total: self.started.elapsed().as_secs_f64(),
                 ..timings
             },
-            multi.then_some(rows),
+            multi.then_some(carry.rows),
         );
         let mut last_commit = vec![];
         for ob in observers.iter_mut() {
@@ -388,7 +430,7 @@ impl<'a> Run<'a> {
         // A run killed inside it leaves either a checkpoint without its last
         // step (a restart solves that step again and writes the summary) or
         // both; never a finished checkpoint without its summary.
-        last_commit.extend(pending);
+        last_commit.extend(carry.pending);
         check_interrupt()?;
         if let Some(t) = tx {
             t.commit(&last_commit)?;
@@ -396,12 +438,79 @@ impl<'a> Run<'a> {
         // A signal during the last commit still rolls the run back.
         check_interrupt()?;
         Ok(Outcome {
-            steps,
-            nsteps,
+            steps: self.steps(),
+            nsteps: prep.problem.file.nsteps(),
             last: Some(last),
             summary: Some(summary),
-            certified,
+            certified: carry.certified,
         })
+    }
+}
+
+/// What one step hands the next, and the run's end: the warm start, the
+/// active set (for the flips), the reference state, the files waiting for
+/// the last commit, the step table, the verdict so far, the last step.
+struct Carry {
+    u_prev: Option<Vec<[f64; 2]>>,
+    active_prev: Option<Vec<u8>>,
+    reference: Option<StepOutput>,
+    pending: Vec<String>,
+    rows: Vec<StepRow>,
+    certified: bool,
+    last: Option<(Solved, Verdict, Timings)>,
+}
+
+impl Carry {
+    fn from_restart(r: Option<&Restart>) -> Carry {
+        Carry {
+            u_prev: r.and_then(|r| r.displacement.clone()),
+            active_prev: r.and_then(|r| r.active.clone()),
+            reference: r.and_then(|r| r.reference.clone()),
+            pending: vec![],
+            rows: vec![],
+            certified: true,
+            last: None,
+        }
+    }
+}
+
+/// The step's row of the summary's step table; `active_prev` is the
+/// previous step's active set (the rows that opened and closed).
+fn step_row(step: &Step<'_>, active_prev: Option<&[u8]>, t_solve: f64) -> StepRow {
+    let (res, model, output) = (step.result, step.model, step.output);
+    let flips = |from: u8| {
+        active_prev.map(|p| {
+            p.iter()
+                .zip(&output.active)
+                .filter(|(a, b)| **a == from && **b != from)
+                .count()
+        })
+    };
+    StepRow {
+        step: step.index + 1,
+        t: step.time,
+        converged: res.status.converged(),
+        iterations: res.iterations,
+        inner_iterations: res.inner_iterations,
+        kkt_max: res.kkt.max(),
+        energy: res.energy,
+        nodes: model.topo.points.len(),
+        triangles: model.topo.triangles.len(),
+        dofs: model.qp.n(),
+        constraints: model.qp.m(),
+        active: res.active.iter().filter(|a| **a).count(),
+        opened: flips(1),
+        closed: flips(0),
+        time_solve: t_solve,
+        time_step: step.started.elapsed().as_secs_f64(),
+    }
+}
+
+/// An observer's or commit's error naming the final files, not the staged ones.
+fn unstage(tx: &Option<&mut Transaction>, e: RunError) -> RunError {
+    match tx {
+        Some(t) => RunError::Output(t.unstage(&e.to_string())),
+        None => e,
     }
 }
 
