@@ -434,3 +434,60 @@ fn the_extent_and_mean_pressure_of_each_interface() {
         }
     }
 }
+
+/// The JSON keys of docs/problem-format.md §7 on tests/data/bumps: per
+/// interface `extent` (two zones, the union's ends on the two bumps'
+/// outer slopes), `mean_pressure` and `couple`; in `contact` the total
+/// couple, which closes the moment balance of loads + reactions.
+#[test]
+fn the_json_reports_extent_mean_pressure_and_couple() {
+    let d = tempfile::tempdir().unwrap();
+    for f in ["bumps.toml", "bumps.msh"] {
+        std::fs::copy(root().join("tests/data/bumps").join(f), d.path().join(f)).unwrap();
+    }
+    let out = d.path().join("out");
+    let st = std::process::Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .args(["solve", "--quiet", "--out"])
+        .arg(&out)
+        .arg(d.path().join("bumps.toml"))
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bumps.json")).unwrap()).unwrap();
+    let c = &s["contact"];
+    let it = &c["interfaces"]["pad_bottom->found_top"];
+    let e = &it["extent"];
+    assert_eq!(e["zones"].as_u64(), Some(2), "{e}");
+    let (x0, x1) = (
+        e["start"][0].as_f64().unwrap(),
+        e["end"][0].as_f64().unwrap(),
+    );
+    // Both flats (|x| in [0.6, 0.9], y = 0) are in contact, the middle is not.
+    assert!(x0.min(x1) < -0.9 && x0.max(x1) > 0.9, "{e}");
+    let (len, act) = (
+        e["length"].as_f64().unwrap(),
+        e["active_length"].as_f64().unwrap(),
+    );
+    assert!(len > 1.8 && act >= 0.6 && act < len - 1.0, "{e}");
+    let (mean, max) = (
+        it["mean_pressure"].as_f64().unwrap(),
+        it["max_pressure"].as_f64().unwrap(),
+    );
+    assert!(mean > 0.0 && mean < max, "{mean} {max}");
+    assert_eq!(c["mean_pressure"].as_f64(), Some(mean));
+    assert_eq!(c["couple"].as_f64(), it["couple"].as_f64());
+    let m = s["loads"]["moment"].as_f64().unwrap()
+        + s["reactions"]
+            .as_object()
+            .unwrap()
+            .values()
+            .map(|r| r["moment"].as_f64().unwrap())
+            .sum::<f64>();
+    let couple = c["couple"].as_f64().unwrap();
+    assert!(couple.abs() > 1e2, "{couple}");
+    assert!(
+        (m + couple).abs() <= 1e-9 * couple.abs() * 1e3,
+        "{m} + {couple}"
+    );
+}

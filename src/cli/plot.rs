@@ -109,7 +109,9 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
     match plot::plot_file(&a.checkpoint, &a.output, &opts) {
         Ok(s) => {
             if !quiet {
-                let what = if a.contact {
+                let what = if a.contact && s.stick_slip.is_some() {
+                    "contact pressure and tangential traction".to_string()
+                } else if a.contact {
                     "contact pressure".to_string()
                 } else {
                     field.name().to_string()
