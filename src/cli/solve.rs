@@ -269,7 +269,12 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
         lf[1] + rf[1],
         lm + rm
     );
-    if s.contact.couple != 0.0 {
+    // Round-off couples of frictionless rows are not worth a line.
+    let mscale = s
+        .reactions
+        .values()
+        .fold(lm.abs(), |a, g| a.max(g.resultant.moment.abs()));
+    if s.contact.couple.abs() > 1e-12 * mscale {
         println!(
             "            contact couple M = {:.4e} (contact forces across initial gaps); loads + reactions + couple M = {:.2e}",
             s.contact.couple,
