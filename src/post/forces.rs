@@ -398,7 +398,7 @@ pub fn compute_with_friction(
         }
         it.extent = extent(t, lambda, i as u32);
     }
-    let couple = interfaces.iter().map(|i| i.couple).sum();
+    let couple = interfaces.iter().fold(0.0, |a, i| a + i.couple);
     for (it, bodies) in interfaces.iter_mut().zip(&sides) {
         it.on_body = bodies
             .iter()
