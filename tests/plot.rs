@@ -476,3 +476,95 @@ fn a_field_whose_span_overflows_is_exit_2() {
     let (code, log, _) = plot_bounded(dir.path(), &ck, &["--field", "uy"], "uy.png");
     assert_eq!(code, 0, "{log}");
 }
+
+/// The RGB pixels of a PNG.
+fn png_pixels(path: &Path) -> Vec<[u8; 3]> {
+    let bytes = std::fs::read(path).unwrap();
+    let mut reader = png::Decoder::new(std::io::Cursor::new(bytes))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0u8; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let ch = info.color_type.samples();
+    buf[..info.buffer_size()]
+        .chunks_exact(ch)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect()
+}
+
+/// Issue 35: `plot --contact` of a frictional checkpoint (tests/data/bumps:
+/// a pad on two bumps, Coulomb μ = 0.4, stick and slip) draws the
+/// tangential traction in its own panel, labelled with its unit, marks
+/// stick and slip and shades the slip stretches; the counts it prints are
+/// the checkpoint's; a frictionless checkpoint gets none of it.
+#[test]
+fn contact_plot_with_friction_draws_tangential_traction_stick_and_slip() {
+    let dir = out_dir();
+    for f in ["bumps.toml", "bumps.msh"] {
+        std::fs::copy(root().join("tests/data/bumps").join(f), dir.path().join(f)).unwrap();
+    }
+    let out = dir.path().join("out");
+    let toml = dir.path().join("bumps.toml");
+    let (code, so, se) = signorini(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{so}\n{se}");
+    let ck_path = out.join("bumps.h5");
+    let ck = signorini::io::hdf5::read_checkpoint(&ck_path).unwrap();
+    let state = &ck.friction[0].as_ref().expect("friction arrays").state;
+    let n = |v: u8| state.iter().filter(|&&s| s == v).count();
+    assert!(n(1) > 0 && n(2) > 0, "stick {} slip {}", n(1), n(2));
+    let png = dir.path().join("fig.png");
+    let (code, so, se) = signorini(&[
+        "plot",
+        ck_path.to_str().unwrap(),
+        "--contact",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{so}\n{se}");
+    assert!(
+        so.contains("contact pressure and tangential traction"),
+        "{so}"
+    );
+    assert!(so.contains("tangential traction: "), "{so}");
+    let counts = format!("friction: {} rows stick, {} slip", n(1), n(2));
+    assert!(so.contains(&counts), "{so} (want {counts})");
+    // The slip shading: white under (214, 39, 40) at 12 %.
+    let px = png_pixels(&png);
+    let band = px
+        .iter()
+        .filter(|p| p[0] >= 249 && (228..=230).contains(&p[1]) && (228..=230).contains(&p[2]))
+        .count();
+    assert!(band > 500, "{band} shaded pixels");
+    let svg = dir.path().join("fig.svg");
+    let (code, so, se) = signorini(&[
+        "plot",
+        ck_path.to_str().unwrap(),
+        "--contact",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{so}\n{se}");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        text.contains("tangential traction [Pa]"),
+        "no tangential axis"
+    );
+    assert!(text.contains("contact pressure [Pa]"));
+    assert!(text.contains(&format!("{} rows stick (dots), {} slip", n(1), n(2))));
+    // Frictionless: the pressure alone, no friction line.
+    let plain = dir.path().join("plain.svg");
+    let (code, so, se) = signorini(&["plot", h5(), "--contact", "-o", plain.to_str().unwrap()]);
+    assert_eq!(code, 0, "{so}\n{se}");
+    assert!(
+        !so.contains("tangential") && !so.contains("friction"),
+        "{so}"
+    );
+    let text = std::fs::read_to_string(&plain).unwrap();
+    assert!(!text.contains("tangential") && text.contains("contact pressure [Pa]"));
+}

@@ -1,6 +1,7 @@
 //! `signorini plot`: a PNG or SVG figure of an HDF5 checkpoint: the
 //! deformed mesh coloured by a field, or (`--contact`) the contact pressure
-//! along each interface. Bad input (unreadable file, step out of range,
+//! along each interface (with friction data, the tangential traction under
+//! it, stick and slip rows marked). Bad input (unreadable file, step out of range,
 //! unknown field, bad extension or size, unwritable output) is one line on
 //! stderr and exit 2, with no output file written.
 
@@ -29,7 +30,9 @@ pub struct PlotArgs {
     /// as 5 % of the bounding-box diagonal).
     #[arg(long, allow_negative_numbers = true)]
     pub scale: Option<f64>,
-    /// Plot the contact pressure along each interface against arc length.
+    /// Plot the contact pressure along each interface against arc length
+    /// (and, when the checkpoint has friction data, the tangential traction
+    /// under it with stick and slip rows marked).
     #[arg(long)]
     pub contact: bool,
     /// Image width [px].
@@ -106,7 +109,9 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
     match plot::plot_file(&a.checkpoint, &a.output, &opts) {
         Ok(s) => {
             if !quiet {
-                let what = if a.contact {
+                let what = if a.contact && s.stick_slip.is_some() {
+                    "contact pressure and tangential traction".to_string()
+                } else if a.contact {
                     "contact pressure".to_string()
                 } else {
                     field.name().to_string()
@@ -151,6 +156,16 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                             (false, false) => "",
                         }
                     );
+                }
+                if let Some((lo, hi)) = s.tangential_range {
+                    println!(
+                        "tangential traction: {} to {} Pa",
+                        plot::fmt_num(lo),
+                        plot::fmt_num(hi)
+                    );
+                }
+                if let Some((stick, slip)) = s.stick_slip {
+                    println!("friction: {stick} rows stick, {slip} slip (last step drawn)");
                 }
                 if let Some(k) = s.scale {
                     let how = if a.scale.is_some() {

@@ -275,8 +275,12 @@ fn print_forces(s: &run::Summary) {
         s.energy, s.strain_energy, s.load_work
     );
     println!(
-        "contact     {} active of {}, max pressure {:.4e}, total force {:.4e}",
-        s.active, s.constraints, s.contact.max_pressure, s.contact.total_force
+        "contact     {} active of {}, max pressure {:.4e} (peak nodal), mean pressure {:.4e}, total force {:.4e}",
+        s.active,
+        s.constraints,
+        s.contact.max_pressure,
+        s.contact.mean_pressure,
+        s.contact.total_force
     );
     if let (Some(stick), Some(slip)) = (s.contact.stick, s.contact.slip) {
         println!(
@@ -284,7 +288,8 @@ fn print_forces(s: &run::Summary) {
             s.kkt.friction
         );
     }
-    // Global balance: loads + reactions = 0 (contact forces are internal).
+    // Global balance: loads + reactions = 0 in force; in moment the couple
+    // the contact forces make across initial gaps joins them (friction).
     let (lf, lm) = (s.loads.force, s.loads.moment);
     let mut rf = [0.0, 0.0];
     let mut rm = 0.0;
@@ -310,10 +315,22 @@ fn print_forces(s: &run::Summary) {
         lf[1] + rf[1],
         lm + rm
     );
+    // Round-off couples of frictionless rows are not worth a line.
+    let mscale = s
+        .reactions
+        .values()
+        .fold(lm.abs(), |a, g| a.max(g.resultant.moment.abs()));
+    if s.contact.couple.abs() > 1e-12 * mscale {
+        println!(
+            "            contact couple M = {:.4e} (contact forces across initial gaps); loads + reactions + couple M = {:.2e}",
+            s.contact.couple,
+            lm + rm + s.contact.couple
+        );
+    }
     for (name, i) in &s.contact.interfaces {
         let (f, mo) = (i.resultant.force, i.resultant.moment);
         println!(
-            "interface   {:<14} on '{}': F = ({:.4e}, {:.4e}), M = {:.4e}; {} of {} rows active, max pressure {:.4e}",
+            "interface   {:<14} on '{}': F = ({:.4e}, {:.4e}), M = {:.4e}; {} of {} rows active, max pressure {:.4e}, mean {:.4e}{}",
             format!("'{name}'"),
             i.on_body,
             f[0],
@@ -321,7 +338,21 @@ fn print_forces(s: &run::Summary) {
             mo,
             i.active,
             i.rows,
-            i.max_pressure
+            i.max_pressure,
+            i.mean_pressure,
+            match &i.extent {
+                Some(e) => format!(
+                    "; contact from ({:.4e}, {:.4e}) to ({:.4e}, {:.4e}), arc {:.4e}, {} zone{}",
+                    e.start[0],
+                    e.start[1],
+                    e.end[0],
+                    e.end[1],
+                    e.length,
+                    e.zones,
+                    if e.zones == 1 { "" } else { "s" }
+                ),
+                None => String::new(),
+            }
         );
     }
 }

@@ -9,6 +9,11 @@
 //! the conditions at p is the support's reaction. Forces carry the thickness
 //! (N in plane stress with thickness t, N per metre in plane strain), like λ;
 //! moments are about the origin, m = x F_y − y F_x at the undeformed point.
+//!
+//! A contact row's forces sum to zero but act at points an initial gap
+//! apart, so with friction they make a couple (−λ_t·g0 on a node-to-segment
+//! row): the moment balance is loads + reactions + contact couple = 0
+//! (docs/methods.md §9.5), and the couple is reported per interface.
 
 use crate::fem::{element, Model};
 use crate::problem::Problem;
@@ -57,10 +62,41 @@ pub struct InterfaceForce {
     /// and opposite up to round-off.
     #[serde(skip)]
     pub other: Resultant,
-    /// Contact rows of the interface, rows with λ > 0 (active), largest pressure.
+    /// Contact rows of the interface, rows with λ > 0 (active).
     pub rows: usize,
     pub active: usize,
+    /// The largest nodal pressure λ/(t·tributary length) of a row: the peak
+    /// of the node-to-node ripple of a P1 contact, not a smoothed peak.
     pub max_pressure: f64,
+    /// Σλ / (t·Σ tributary length) over the active rows: the
+    /// tributary-weighted mean of the nodal pressures over the contact zone
+    /// (0 without an active row).
+    pub mean_pressure: f64,
+    /// The moment of the interface's contact forces on both sides together
+    /// (N·m per m in plane strain): the couple its rows make across their
+    /// initial gaps, zero when every row's forces are collinear (no
+    /// friction, or no gap).
+    pub couple: f64,
+    /// Where the active rows lie along the interface (None: no active row).
+    pub extent: Option<Extent>,
+}
+
+/// The active part of an interface along its curve (docs/problem-format.md
+/// §7): from the first to the last active row point in the order of the
+/// rows along the curve, on the side named by `on_body`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Extent {
+    /// The first and the last active row's point (undeformed coordinates).
+    pub start: [f64; 2],
+    pub end: [f64; 2],
+    /// Arc length from `start` to `end` along the interface, open stretches
+    /// between contact zones included; summed over the pieces of an
+    /// interface made of disjoint curves.
+    pub length: f64,
+    /// Maximal runs of adjacent active rows (contact zones).
+    pub zones: usize,
+    /// Σ arc length of the zones (= `length` with one zone).
+    pub active_length: f64,
 }
 
 /// Everything [`compute`] finds.
@@ -76,6 +112,8 @@ pub struct Forces {
     pub loads: Resultant,
     /// All reactions summed.
     pub reactions: Resultant,
+    /// Σ of the interfaces' couples: loads + reactions + couple = 0 in moment.
+    pub couple: f64,
     /// The physical strain energy ½ uᵀK u of the full displacement
     /// (prescribed parts included), unlike the QP objective.
     pub strain_energy: f64,
@@ -284,8 +322,13 @@ pub fn compute_with_friction(
             rows: 0,
             active: 0,
             max_pressure: 0.0,
+            mean_pressure: 0.0,
+            couple: 0.0,
+            extent: None,
         })
         .collect();
+    // Σλ and Σ tributary length of the active rows, per interface.
+    let mut active_sums = vec![(0.0f64, 0.0f64); interfaces.len()];
     // The bodies of the rows' first points, in row order: a slave curve
     // may run over several bodies, and the resultant is on all of them.
     let mut sides: Vec<Vec<u32>> = vec![vec![]; interfaces.len()];
@@ -295,10 +338,35 @@ pub fn compute_with_friction(
         it.rows += 1;
         if l > 0.0 {
             it.active += 1;
+            if row.trib > 0.0 {
+                let a = &mut active_sums[row.interface as usize];
+                a.0 += l;
+                a.1 += row.trib;
+            }
         }
         if let Some(&pr) = pressure.get(r) {
             it.max_pressure = it.max_pressure.max(pr);
         }
+        // The row's moment about its first point plus that of its net
+        // force (zero up to round-off) at the first point: the couple
+        // without the cancellation of two large moments about the origin.
+        let x0 = t.points[row.first];
+        let mut net = [0.0f64; 2];
+        let mut couple = 0.0;
+        let lt = lambda_t.get(r).copied();
+        let tang = lt.map(|_| crate::fem::friction::tangential_coefficients(row));
+        let parts = row
+            .coefficients()
+            .into_iter()
+            .map(|pc| (pc, l))
+            .chain(tang.into_iter().flatten().map(|pc| (pc, lt.unwrap_or(0.0))));
+        for ((p, c), m) in parts {
+            let f = [-m * c[0], -m * c[1]];
+            let d = [t.points[p][0] - x0[0], t.points[p][1] - x0[1]];
+            couple += d[0] * f[1] - d[1] * f[0];
+            net = [net[0] + f[0], net[1] + f[1]];
+        }
+        it.couple += couple + (x0[0] * net[1] - x0[1] * net[0]);
         let body = t.point_body[row.first];
         if !sides[row.interface as usize].contains(&body) {
             sides[row.interface as usize].push(body);
@@ -322,6 +390,15 @@ pub fn compute_with_friction(
             }
         }
     }
+    let te = model.t_eff();
+    for (i, it) in interfaces.iter_mut().enumerate() {
+        let (sl, st) = active_sums[i];
+        if st > 0.0 {
+            it.mean_pressure = sl / (te * st);
+        }
+        it.extent = extent(t, lambda, i as u32);
+    }
+    let couple = interfaces.iter().fold(0.0, |a, i| a + i.couple);
     for (it, bodies) in interfaces.iter_mut().zip(&sides) {
         it.on_body = bodies
             .iter()
@@ -351,7 +428,216 @@ pub fn compute_with_friction(
         interfaces,
         loads,
         reactions,
+        couple,
         strain_energy,
         load_work,
     }
+}
+
+/// The [`Extent`] of interface `iface`: its rows joined into curves by the
+/// contact segments (and rows at one point, a corner's two normals), each
+/// curve walked in order; `lambda` > 0 marks the active rows.
+/// A curve that closes on itself (a ring) is cut at its longest open
+/// stretch; one that branches (never built by the pairs of
+/// docs/problem-format.md §4, kept for safety) counts the edges left after
+/// pruning its open ends. Pieces come in the order of their lowest row.
+pub fn extent(t: &crate::fem::Topology, lambda: &[f64], iface: u32) -> Option<Extent> {
+    let rows: Vec<usize> = (0..t.contact.len())
+        .filter(|&r| t.contact[r].interface == iface)
+        .collect();
+    let on = |r: usize| lambda.get(r).is_some_and(|&l| l > 0.0);
+    if !rows.iter().any(|&r| on(r)) {
+        return None;
+    }
+    let x = |r: usize| t.points[t.contact[r].first];
+    let dist = |a: usize, b: usize| {
+        let (p, q) = (x(a), x(b));
+        (q[0] - p[0]).hypot(q[1] - p[1])
+    };
+    // Adjacency (row → neighbours), edges once each.
+    let mut adj: std::collections::BTreeMap<usize, Vec<usize>> =
+        rows.iter().map(|&r| (r, vec![])).collect();
+    let mut link = |a: usize, b: usize| {
+        if a != b && adj.contains_key(&a) && adj.contains_key(&b) && !adj[&a].contains(&b) {
+            adj.get_mut(&a).unwrap().push(b);
+            adj.get_mut(&b).unwrap().push(a);
+        }
+    };
+    for &[a, b] in &t.contact_segments {
+        link(a, b);
+    }
+    let mut at_point: std::collections::BTreeMap<usize, usize> = Default::default();
+    for &r in &rows {
+        match at_point.get(&t.contact[r].first) {
+            Some(&q) => link(q, r),
+            None => {
+                at_point.insert(t.contact[r].first, r);
+            }
+        }
+    }
+    for v in adj.values_mut() {
+        v.sort_unstable();
+    }
+    let mut seen: std::collections::BTreeSet<usize> = Default::default();
+    let mut pieces: Vec<Extent> = vec![];
+    for &r0 in &rows {
+        if seen.contains(&r0) {
+            continue;
+        }
+        // The piece of r0 (rows ascending).
+        let mut comp = vec![r0];
+        seen.insert(r0);
+        let mut k = 0;
+        while k < comp.len() {
+            for &q in &adj[&comp[k]] {
+                if seen.insert(q) {
+                    comp.push(q);
+                }
+            }
+            k += 1;
+        }
+        comp.sort_unstable();
+        if !comp.iter().any(|&r| on(r)) {
+            continue;
+        }
+        let edges = comp.iter().map(|r| adj[r].len()).sum::<usize>() / 2;
+        let deg2 = comp.iter().all(|r| adj[r].len() <= 2);
+        let order = if deg2 && edges + 1 == comp.len() {
+            // A path: from its end of lower row index.
+            let start = *comp.iter().find(|r| adj[*r].len() <= 1).unwrap();
+            Some(walk(&adj, start, comp.len()))
+        } else if deg2 && edges == comp.len() {
+            // A ring: cut at the longest stretch between active rows that
+            // holds an open row (all active: one zone round the ring).
+            let ring = walk(&adj, comp[0], comp.len());
+            let n = ring.len();
+            let act: Vec<usize> = (0..n).filter(|&i| on(ring[i])).collect();
+            if act.len() == n {
+                let per: f64 = (0..n).map(|i| dist(ring[i], ring[(i + 1) % n])).sum();
+                pieces.push(Extent {
+                    start: x(ring[0]),
+                    end: x(ring[0]),
+                    length: per,
+                    zones: 1,
+                    active_length: per,
+                });
+                continue;
+            }
+            let mut best = (f64::NEG_INFINITY, 0);
+            for (j, &a) in act.iter().enumerate() {
+                let b = act[(j + 1) % act.len()];
+                let steps = (b + n - a) % n;
+                let steps = if steps == 0 { n } else { steps };
+                if steps < 2 {
+                    continue;
+                }
+                let len: f64 = (0..steps)
+                    .map(|s| dist(ring[(a + s) % n], ring[(a + s + 1) % n]))
+                    .sum();
+                if len > best.0 {
+                    best = (len, (a + 1) % n);
+                }
+            }
+            // The path starts just past the cut's first active row.
+            Some((0..n).map(|s| ring[(best.1 + s) % n]).collect())
+        } else {
+            None
+        };
+        match order {
+            Some(path) => {
+                let first = path.iter().position(|&r| on(r)).unwrap();
+                let last = path.iter().rposition(|&r| on(r)).unwrap();
+                let (mut length, mut active_length, mut zones) = (0.0, 0.0, 1);
+                for i in first..last {
+                    let d = dist(path[i], path[i + 1]);
+                    length += d;
+                    match (on(path[i]), on(path[i + 1])) {
+                        (true, true) => active_length += d,
+                        (false, true) => zones += 1,
+                        _ => {}
+                    }
+                }
+                pieces.push(Extent {
+                    start: x(path[first]),
+                    end: x(path[last]),
+                    length,
+                    zones,
+                    active_length,
+                });
+            }
+            None => {
+                // Branching: prune open leaves, then sum what is left.
+                let mut deg: std::collections::BTreeMap<usize, usize> =
+                    comp.iter().map(|&r| (r, adj[&r].len())).collect();
+                let mut gone: std::collections::BTreeSet<usize> = Default::default();
+                let mut stack: Vec<usize> = comp
+                    .iter()
+                    .copied()
+                    .filter(|&r| !on(r) && deg[&r] <= 1)
+                    .collect();
+                while let Some(r) = stack.pop() {
+                    if !gone.insert(r) {
+                        continue;
+                    }
+                    for &q in &adj[&r] {
+                        if !gone.contains(&q) {
+                            let d = deg.get_mut(&q).unwrap();
+                            *d -= 1;
+                            if *d <= 1 && !on(q) {
+                                stack.push(q);
+                            }
+                        }
+                    }
+                }
+                let (mut length, mut active_length) = (0.0, 0.0);
+                let mut zone_links = 0;
+                for &a in &comp {
+                    for &b in &adj[&a] {
+                        if a < b && !gone.contains(&a) && !gone.contains(&b) {
+                            length += dist(a, b);
+                            if on(a) && on(b) {
+                                active_length += dist(a, b);
+                                zone_links += 1;
+                            }
+                        }
+                    }
+                }
+                let act: Vec<usize> = comp.iter().copied().filter(|&r| on(r)).collect();
+                pieces.push(Extent {
+                    start: x(act[0]),
+                    end: x(act[act.len() - 1]),
+                    length,
+                    // Exact on a forest of active rows; a lower bound else.
+                    zones: act.len().saturating_sub(zone_links).max(1),
+                    active_length,
+                });
+            }
+        }
+    }
+    let (first, last) = (pieces.first()?, pieces.last()?);
+    Some(Extent {
+        start: first.start,
+        end: last.end,
+        length: pieces.iter().map(|p| p.length).sum(),
+        zones: pieces.iter().map(|p| p.zones).sum(),
+        active_length: pieces.iter().map(|p| p.active_length).sum(),
+    })
+}
+
+/// The rows of a path or ring (every row of degree ≤ 2) from `start`: each
+/// step goes on to the neighbour it did not come from (the lower one first).
+fn walk(adj: &std::collections::BTreeMap<usize, Vec<usize>>, start: usize, n: usize) -> Vec<usize> {
+    let mut path = vec![start];
+    let mut prev = usize::MAX;
+    while path.len() < n {
+        let cur = *path.last().unwrap();
+        match adj[&cur].iter().find(|&&q| q != prev) {
+            Some(&q) => {
+                prev = cur;
+                path.push(q);
+            }
+            None => break,
+        }
+    }
+    path
 }

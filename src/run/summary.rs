@@ -70,9 +70,17 @@ impl std::ops::Deref for KktSummary {
 
 #[derive(Debug, Clone, Serialize)]
 pub struct ContactSummary {
+    /// The largest nodal pressure of any row: the peak of a P1 contact's
+    /// node-to-node ripple (docs/problem-format.md §7).
     pub max_pressure: f64,
+    /// Σλ / (t·Σ tributary length) over every active row: the mean
+    /// pressure over the contact zones.
+    pub mean_pressure: f64,
     /// Σ λ over the contact rows.
     pub total_force: f64,
+    /// The moment of all contact forces (the interfaces' couples summed):
+    /// loads + reactions + couple = 0 in moment (docs/methods.md §9.5).
+    pub couple: f64,
     pub interfaces: BTreeMap<String, InterfaceForce>,
     /// With friction: the rows in contact that stick, and that slip.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -131,6 +139,22 @@ pub struct StepRow {
     /// post-process, write) \[s\].
     pub time_solve: f64,
     pub time_step: f64,
+}
+
+/// Σλ / (t·Σ tributary length) over the rows with λ > 0 (0 without one).
+fn mean_pressure(model: &Model, lambda: &[f64]) -> f64 {
+    let (mut sl, mut st) = (0.0, 0.0);
+    for (row, &l) in model.topo.contact.iter().zip(lambda) {
+        if l > 0.0 && row.trib > 0.0 {
+            sl += l;
+            st += row.trib;
+        }
+    }
+    if st > 0.0 {
+        sl / (model.t_eff() * st)
+    } else {
+        0.0
+    }
 }
 
 impl Summary {
@@ -195,7 +219,9 @@ impl Summary {
             },
             contact: ContactSummary {
                 max_pressure: step.contact_pressure.iter().fold(0.0f64, |a, b| a.max(*b)),
+                mean_pressure: mean_pressure(model, &step.multipliers),
                 total_force: step.multipliers.iter().sum(),
+                couple: forces.couple,
                 interfaces: forces
                     .interfaces
                     .iter()

@@ -96,6 +96,15 @@ pub(super) fn contact_grid(n: usize) -> (usize, usize) {
 /// length starts from, and its pieces of (arc length, row).
 type Series = (String, [f64; 2], Vec<Vec<(f64, usize)>>);
 
+/// The friction of one drawn step, per contact row: the tangential traction
+/// (or its change since the reference step) and the state 0 open, 1 stick,
+/// 2 slip (the checkpoint's `tangential_traction` and `state`).
+#[derive(Debug, Clone, Default)]
+pub struct Tangential {
+    pub traction: Vec<f64>,
+    pub state: Vec<u8>,
+}
+
 /// The interfaces that have contact segments, in index order.
 fn contact_series(c: &ContactGeometry) -> Result<Vec<Series>, PlotError> {
     if c.points.is_empty() {
@@ -133,22 +142,50 @@ fn contact_series(c: &ContactGeometry) -> Result<Vec<Series>, PlotError> {
 /// drawn (coloured along viridis with a legend when there are several).
 /// Each panel says where its arc length starts: the first contact point of
 /// the interface's first chain (at the first side: the lower body, or the
-/// slave). `field`: the dataset drawn, for messages.
+/// slave). `field`: the dataset drawn, for messages. With friction data
+/// (`tangential`, one per step, all present) each interface gets a second
+/// panel under its pressure: the tangential traction, stick and slip rows
+/// marked; without, the figure is the frictionless one. Returns the
+/// pressure range and, with friction, the tangential traction's.
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
 pub(super) fn draw_contact<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     c: &ContactGeometry,
     steps: &[(usize, StepOutput)],
+    tangential: Option<&[Tangential]>,
     title: &str,
     fs: f64,
     range: Option<(f64, f64)>,
     field: &str,
-) -> Result<Option<(f64, f64)>, PlotError> {
+) -> Result<(Option<(f64, f64)>, Option<(f64, f64)>), PlotError> {
     let series = contact_series(c)?;
     // Every axis is checked before anything is drawn.
     let axes = series
         .iter()
         .map(|s| panel_axes(s, steps, range, field))
         .collect::<Result<Vec<_>, _>>()?;
+    let tangential = tangential.filter(|t| t.len() == steps.len());
+    let t_axes = match tangential {
+        Some(tg) => {
+            let vals: Vec<(usize, &[f64])> = steps
+                .iter()
+                .zip(tg)
+                .map(|((no, _), t)| (*no, &t.traction[..]))
+                .collect();
+            let what = if field.ends_with("_change") {
+                "tangential_traction_change"
+            } else {
+                "tangential_traction"
+            };
+            Some(
+                series
+                    .iter()
+                    .map(|s| value_axes(s, &vals, None, what, "tangential traction"))
+                    .collect::<Result<Vec<_>, _>>()?,
+            )
+        }
+        None => None,
+    };
     let many = steps.len() > 1;
     let color_of = |j: usize, k: usize| {
         if many {
@@ -163,15 +200,31 @@ pub(super) fn draw_contact<DB: DrawingBackend>(
     }
     let panels = body.split_evenly(contact_grid(series.len()));
     let mut total: Option<(f64, f64)> = None;
+    let mut t_total: Option<(f64, f64)> = None;
     for (k, ((s, ax), panel)) in series.iter().zip(&axes).zip(&panels).enumerate() {
         let (plo, phi) = ax.data;
         total = Some(match total {
             Some((a, b)) => (a.min(plo), b.max(phi)),
             None => (plo, phi),
         });
-        draw_panel(panel, s, ax, steps, fs, many, &|j| color_of(j, k))?;
+        match (tangential, &t_axes) {
+            (Some(tg), Some(tax)) => {
+                let halves = panel.split_evenly((2, 1));
+                draw_panel(&halves[0], s, ax, steps, fs, many, &|j| color_of(j, k))?;
+                let (tlo, thi) = tax[k].data;
+                t_total = Some(match t_total {
+                    Some((a, b)) => (a.min(tlo), b.max(thi)),
+                    None => (tlo, thi),
+                });
+                let change = field.ends_with("_change");
+                draw_tangential(&halves[1], s, &tax[k], tg, fs, many, change, &|j| {
+                    color_of(j, k)
+                })?;
+            }
+            _ => draw_panel(panel, s, ax, steps, fs, many, &|j| color_of(j, k))?,
+        }
     }
-    Ok(total)
+    Ok((total, t_total))
 }
 
 /// The axes of one panel: arc length 0..smax and the pressure range, and
@@ -193,13 +246,29 @@ fn panel_axes(
     range: Option<(f64, f64)>,
     field: &str,
 ) -> Result<PanelAxes, PlotError> {
+    let vals: Vec<(usize, &[f64])> = steps
+        .iter()
+        .map(|(no, st)| (*no, &st.contact_pressure[..]))
+        .collect();
+    value_axes(s, &vals, range, field, "pressure")
+}
+
+/// [`panel_axes`] for any per-row values of each step (step number,
+/// values); `axis` names the value axis in the message.
+fn value_axes(
+    s: &Series,
+    steps: &[(usize, &[f64])],
+    range: Option<(f64, f64)>,
+    field: &str,
+    axis: &str,
+) -> Result<PanelAxes, PlotError> {
     let (name, _, pieces) = s;
     let pts = || {
         steps.iter().flat_map(|(_, st)| {
             pieces
                 .iter()
                 .flatten()
-                .map(|&(s, r)| (s, st.contact_pressure[r]))
+                .map(|&(s, r)| (s, st[r]))
                 .filter(|(s, p)| s.is_finite() && p.is_finite())
         })
     };
@@ -220,20 +289,16 @@ fn panel_axes(
         // The step holding the largest magnitude, for the message.
         let (no, v) = steps
             .iter()
-            .flat_map(|(no, st)| {
-                pieces
-                    .iter()
-                    .flatten()
-                    .map(move |&(_, r)| (*no, st.contact_pressure[r]))
-            })
+            .flat_map(|(no, st)| pieces.iter().flatten().map(move |&(_, r)| (*no, st[r])))
             .filter(|(_, p)| p.is_finite())
             .fold(
                 (0, 0.0f64),
                 |m, q| if q.1.abs() > m.1.abs() { q } else { m },
             );
         return Err(err(format!(
-            "{field} of step {no} on {name} reaches {}: the pressure axis would span more than a double holds (give --range MIN,MAX)",
-            fmt_num(v)
+            "{field} of step {no} on {name} reaches {}: the {axis} axis would span more than a double holds{}",
+            fmt_num(v),
+            if axis == "pressure" { " (give --range MIN,MAX)" } else { "" }
         )));
     }
     let xr = 0.0..if smax > 0.0 { smax } else { 1.0 };
@@ -354,6 +419,127 @@ fn draw_panel<DB: DrawingBackend>(
             chart
                 .draw_series(line.iter().map(|&p| Circle::new(p, radius, color.filled())))
                 .map_err(de)?;
+        }
+    }
+    Ok(())
+}
+
+/// One interface's tangential panel under its pressure panel: the
+/// tangential traction against the same arc length, one curve per step,
+/// each row marked by its state (filled dot: stick, cross: slip, ring:
+/// open), and the arc-length stretches where the last step slips shaded.
+#[allow(clippy::too_many_arguments)]
+fn draw_tangential<DB: DrawingBackend>(
+    panel: &DrawingArea<DB, Shift>,
+    (name, _, pieces): &Series,
+    ax: &PanelAxes,
+    tg: &[Tangential],
+    fs: f64,
+    many: bool,
+    change: bool,
+    color_of: &dyn Fn(usize) -> RGBColor,
+) -> Result<(), PlotError> {
+    let (xr, yr) = (ax.xr.clone(), ax.yr.clone());
+    let (xspan, yspan) = (xr.end - xr.start, yr.end - yr.start);
+    let last = &tg[tg.len() - 1];
+    let count = |v: u8| {
+        pieces
+            .iter()
+            .flatten()
+            .filter(|&&(_, r)| last.state[r] == v)
+            .count()
+    };
+    let caption = format!(
+        "{name}: {} rows stick (dots), {} slip (crosses, shaded){}",
+        count(1),
+        count(2),
+        if many { " at the last step" } else { "" }
+    );
+    let mut chart = ChartBuilder::on(panel)
+        .margin((fs * 0.8) as u32)
+        .caption(caption, ("sans-serif", fs * 0.95))
+        .x_label_area_size((fs * 3.0) as u32)
+        .y_label_area_size((fs * 6.0) as u32)
+        .build_cartesian_2d(xr.clone(), yr.clone())
+        .map_err(de)?;
+    // The slip stretches of the last step: each slipping row's share of
+    // the arc, half-way to its neighbours.
+    let band = RGBColor(214, 39, 40).mix(0.12);
+    for piece in pieces {
+        for (i, &(s, r)) in piece.iter().enumerate() {
+            if last.state[r] != 2 {
+                continue;
+            }
+            let lo = if i > 0 { 0.5 * (piece[i - 1].0 + s) } else { s };
+            let hi = if i + 1 < piece.len() {
+                0.5 * (piece[i + 1].0 + s)
+            } else {
+                s
+            };
+            chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [(lo, yr.start), (hi, yr.end)],
+                    band.filled(),
+                )))
+                .map_err(de)?;
+        }
+    }
+    let (_, ph) = panel.dim_in_pixel();
+    let y_ticks = ((ph as f64 - fs * 7.0) / (fs * 2.2)).clamp(2.0, 10.0) as usize;
+    chart
+        .configure_mesh()
+        .y_labels(y_ticks)
+        .x_desc("arc length s [m]")
+        .y_desc(if change {
+            "tangential traction change [Pa]"
+        } else {
+            "tangential traction [Pa]"
+        })
+        .light_line_style(WHITE.mix(0.0))
+        .bold_line_style(BLACK.mix(0.12))
+        .label_style(("sans-serif", fs * 0.9))
+        .axis_desc_style(("sans-serif", fs))
+        .x_label_formatter(&|v| tick(*v, xspan))
+        .y_label_formatter(&|v| tick(*v, yspan))
+        .draw()
+        .map_err(de)?;
+    let radius = (fs * if many { 0.16 } else { 0.22 }).max(2.0) as i32;
+    for (j, t) in tg.iter().enumerate() {
+        let color = color_of(j);
+        for piece in pieces {
+            let line: Vec<(f64, f64, u8)> = piece
+                .iter()
+                .map(|&(s, r)| (s, t.traction[r], t.state[r]))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(
+                    line.iter().map(|&(s, v, _)| (s, v)),
+                    color.stroke_width(2),
+                ))
+                .map_err(de)?;
+            for &(s, v, st) in &line {
+                let p = (s, v);
+                match st {
+                    1 => chart
+                        .draw_series(std::iter::once(Circle::new(p, radius, color.filled())))
+                        .map(|_| ()),
+                    2 => chart
+                        .draw_series(std::iter::once(Cross::new(
+                            p,
+                            radius + 2,
+                            color.stroke_width(2),
+                        )))
+                        .map(|_| ()),
+                    _ => chart
+                        .draw_series(std::iter::once(Circle::new(
+                            p,
+                            radius,
+                            color.stroke_width(1),
+                        )))
+                        .map(|_| ()),
+                }
+                .map_err(de)?;
+            }
         }
     }
     Ok(())

@@ -24,7 +24,7 @@ mod contact;
 mod mesh;
 mod style;
 
-pub use contact::{arc_lengths, interface_chains};
+pub use contact::{arc_lengths, interface_chains, Tangential};
 pub use mesh::auto_scale;
 pub use style::{fmt_num, viridis};
 
@@ -248,6 +248,12 @@ pub struct PlotSummary {
     /// Range of the plotted values (field, or contact pressure); None for a
     /// categorical field.
     pub range: Option<(f64, f64)>,
+    /// The contact plot of a checkpoint with friction data: the range of
+    /// the tangential traction drawn (or of its change).
+    pub tangential_range: Option<(f64, f64)>,
+    /// The contact plot with friction: rows that stick and that slip at
+    /// the last step drawn.
+    pub stick_slip: Option<(usize, usize)>,
 }
 
 /// Reads `h5`, draws the figure and writes it to `out` (format from its
@@ -373,13 +379,35 @@ pub fn render(
         scale: None,
         max_displacement: max_u,
         range: None,
+        tangential_range: None,
+        stick_slip: None,
     };
+    // The friction data of the drawn steps (contact plot; all or nothing).
+    let tangential = if opts.contact {
+        tangential_of(ck, &drawn, opts.change)?
+    } else {
+        None
+    };
+    if let Some(t) = &tangential {
+        let last = &t[t.len() - 1].state;
+        let n = |v: u8| last.iter().filter(|&&s| s == v).count();
+        summary.stick_slip = Some((n(1), n(2)));
+    }
     let bytes = match format {
         Format::Png => {
             let mut buf = vec![255u8; (w as usize) * (h as usize) * 3];
             {
                 let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-                draw(&root, true, mesh, &drawn, name, opts, &mut summary)?;
+                draw(
+                    &root,
+                    true,
+                    mesh,
+                    &drawn,
+                    tangential.as_deref(),
+                    name,
+                    opts,
+                    &mut summary,
+                )?;
                 root.present().map_err(de)?;
             }
             encode_png(&buf, w, h)?
@@ -388,7 +416,16 @@ pub fn render(
             let mut s = String::new();
             {
                 let root = SVGBackend::with_string(&mut s, (w, h)).into_drawing_area();
-                draw(&root, false, mesh, &drawn, name, opts, &mut summary)?;
+                draw(
+                    &root,
+                    false,
+                    mesh,
+                    &drawn,
+                    tangential.as_deref(),
+                    name,
+                    opts,
+                    &mut summary,
+                )?;
                 root.present().map_err(de)?;
             }
             s.into_bytes()
@@ -403,6 +440,7 @@ fn draw<DB: DrawingBackend>(
     raster: bool,
     mesh: &OutMesh,
     drawn: &[(usize, StepOutput)],
+    tangential: Option<&[Tangential]>,
     name: &str,
     opts: &PlotOptions,
     summary: &mut PlotSummary,
@@ -416,13 +454,15 @@ fn draw<DB: DrawingBackend>(
         _ => String::new(),
     };
     if opts.contact {
-        let (steps, what) = if opts.all_steps {
-            (
-                format!("steps {first}–{step_no}{since}"),
-                "contact pressure",
-            )
+        let what = if tangential.is_some() {
+            "contact pressure and tangential traction"
         } else {
-            (format!("step {step_no}{since}"), "contact pressure")
+            "contact pressure"
+        };
+        let steps = if opts.all_steps {
+            format!("steps {first}–{step_no}{since}")
+        } else {
+            format!("step {step_no}{since}")
         };
         let title = format!("{name} — {steps} — {what}");
         let field = if opts.change {
@@ -430,7 +470,18 @@ fn draw<DB: DrawingBackend>(
         } else {
             "contact_pressure"
         };
-        summary.range = draw_contact(root, &mesh.contact, drawn, &title, fs, opts.range, field)?;
+        let (range, t_range) = draw_contact(
+            root,
+            &mesh.contact,
+            drawn,
+            tangential,
+            &title,
+            fs,
+            opts.range,
+            field,
+        )?;
+        summary.range = range;
+        summary.tangential_range = t_range;
     } else {
         let title = format!("{name} — step {step_no}{since} — {}", opts.field.name());
         let scale = match opts.scale {
@@ -441,6 +492,50 @@ fn draw<DB: DrawingBackend>(
         summary.range = draw_mesh(root, raster, mesh, step, opts, scale, &title, fs)?;
     }
     Ok(())
+}
+
+/// The tangential traction and state of every drawn step, when each has
+/// the checkpoint's friction arrays (None: a frictionless checkpoint, or a
+/// step without them). With `change` the traction is the change since the
+/// reference step, whose own traction must then be in the checkpoint.
+fn tangential_of(
+    ck: &Checkpoint,
+    drawn: &[(usize, StepOutput)],
+    change: bool,
+) -> Result<Option<Vec<Tangential>>, PlotError> {
+    let rows = ck.mesh.contact.points.len();
+    let of = |k: usize| -> Result<Option<&crate::io::hdf5::StepFriction>, PlotError> {
+        match ck.friction.get(k.wrapping_sub(1)).and_then(|f| f.as_ref()) {
+            None => Ok(None),
+            Some(f) if f.tangential_traction.len() == rows && f.state.len() == rows => Ok(Some(f)),
+            Some(_) => Err(err(format!(
+                "step {k}: the friction arrays do not match the contact rows"
+            ))),
+        }
+    };
+    let mut out = Vec::with_capacity(drawn.len());
+    for (k, st) in drawn {
+        let Some(f) = of(*k)? else {
+            return Ok(None);
+        };
+        let mut traction = f.tangential_traction.clone();
+        if change {
+            let Some(r) = st.change.as_ref().map(|c| c.reference_step) else {
+                return Ok(None);
+            };
+            let Some(fr) = of(r)? else {
+                return Ok(None);
+            };
+            for (t, t0) in traction.iter_mut().zip(&fr.tangential_traction) {
+                *t -= t0;
+            }
+        }
+        out.push(Tangential {
+            traction,
+            state: f.state.clone(),
+        });
+    }
+    Ok(Some(out))
 }
 
 /// The first step of an `all_steps` figure: 1, or with `change` the first
