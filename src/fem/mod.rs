@@ -115,10 +115,7 @@ impl Model {
 
     /// The effective thickness for forces → pressures (1 in plane strain).
     pub fn t_eff(&self) -> f64 {
-        match self.plane {
-            Plane::Stress => self.thickness,
-            Plane::Strain => 1.0,
-        }
+        self.plane.t_eff(self.thickness)
     }
 }
 
@@ -146,13 +143,11 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     lap.lap("loads");
     let (a, g, qp_rows) = contact::reduced_rows(mesh, &topo, &dofs, n, problem)?;
     lap.lap("contact rows");
-    let t_eff = match problem.file.model.plane {
-        Plane::Stress => problem.file.model.thickness,
-        Plane::Strain => 1.0,
-    };
+    let t_eff = problem.file.model.plane.t_eff(problem.file.model.thickness);
     let friction = friction::build(&topo, &dofs, n, problem, &qp_rows, t_eff)?;
     lap.lap("friction rows");
-    let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n);
+    let axi = problem.file.model.plane.is_axisymmetric();
+    let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n, axi);
     let near = rigid::near_kernel(&topo, &dofs, n);
     let f = &problem.file;
     let model = Model {

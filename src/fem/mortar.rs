@@ -182,6 +182,7 @@ impl Topology {
         let mut dj: HashMap<(usize, u32), f64> = HashMap::new();
         let mut mj: HashMap<(usize, u32), BTreeMap<usize, f64>> = HashMap::new();
         let mut gj: HashMap<(usize, u32), f64> = HashMap::new();
+        let axi = problem.file.model.plane.is_axisymmetric();
         for &(a, b, sb, ns) in ssegs {
             let geom = SlaveGeom {
                 x: [mesh.nodes[a], mesh.nodes[b]],
@@ -192,6 +193,10 @@ impl Topology {
                 (e[0] * e[0] + e[1] * e[1]).sqrt()
             };
             let pieces = overlap_pieces(mesh, msegs, &geom, sb, ns);
+            // Axisymmetric: every integral carries r (per radian; the dual
+            // basis is then biorthogonal in the r-weighted product), so a
+            // segment on the axis has no weight (docs/methods.md §10).
+            let rw = |s: f64| if axi { geom.point(s)[0] } else { 1.0 };
             if pieces.is_empty() {
                 continue;
             }
@@ -203,7 +208,7 @@ impl Topology {
             for p in &pieces {
                 for &(t, w) in &GAUSS {
                     let s = p.s0 + t * (p.s1 - p.s0);
-                    let wl = w * (p.s1 - p.s0) * len;
+                    let wl = w * (p.s1 - p.s0) * len * rw(s);
                     let nn = [1.0 - s, s];
                     for i in 0..2 {
                         de[i] += nn[i] * wl;
@@ -238,14 +243,14 @@ impl Topology {
                 );
                 for &(t, w) in &GAUSS {
                     let s = p.s0 + t * (p.s1 - p.s0);
-                    let wl = w * (p.s1 - p.s0) * len;
+                    let wl = w * (p.s1 - p.s0) * len * rw(s);
                     let Some((xi, g)) = geom.ray(s, y) else {
                         continue;
                     };
-                    if g < -1e-6 * len {
+                    if g < -1e-6 * len && !c.interference {
                         let x = geom.point(s);
                         return Err(err(format!(
-                            "{what}: slave curve \"{sname}\" penetrates master \"{mname}\" by {:.3e} at ({:.6e}, {:.6e}) (initial gap must be >= 0)",
+                            "{what}: slave curve \"{sname}\" penetrates master \"{mname}\" by {:.3e} at ({:.6e}, {:.6e}) (initial gap must be >= 0; set interference = true if the overlap is an intended fit)",
                             -g, x[0], x[1]
                         )));
                     }

