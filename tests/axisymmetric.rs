@@ -193,3 +193,121 @@ fn lame_cylinder_under_internal_pressure() {
     assert!(fine.0 < 0.05 && fine.1 < 0.05, "{fine:?}");
     assert!(fine.0 < coarse.0 / 2.0 && fine.1 < coarse.1 / 2.0);
 }
+
+/// Lamé's shrink-fit pressure of a tube a ≤ r ≤ c inside a tube c ≤ r ≤ b
+/// with radial interference δ (plane strain, one material): δ equals the
+/// outer tube's expansion at c under internal pressure p less the inner
+/// one's (negative) under external p, both linear in p.
+fn shrink_fit_pressure(a: f64, c: f64, b: f64, delta: f64) -> f64 {
+    let outer = {
+        let aa = c * c / (b * b - c * c);
+        lame_u(aa, aa * b * b, c)
+    };
+    let inner = {
+        let aa = -c * c / (c * c - a * a);
+        lame_u(aa, aa * a * a, c)
+    };
+    delta / (outer - inner)
+}
+
+/// The shrink-fit model: the inner tube's outer radius is c + δ, so the
+/// tubes overlap by δ in the reference configuration (`interference`).
+fn shrink_fit_model(dir: &Path, disc: &str, interference: bool) -> PathBuf {
+    let (a, c, b, h, delta) = (0.5, 1.0, 1.5, 0.25, 1.0e-3);
+    let blocks = [
+        Block {
+            name: "inner",
+            r: [a, c + delta],
+            z: [0.0, h],
+            n: [12, 6],
+        },
+        Block {
+            name: "outer",
+            r: [c, b],
+            z: [0.0, h],
+            n: [12, 6],
+        },
+    ];
+    let mut body = format!(
+        r#"[model]
+plane = "axisymmetric"
+[materials.inner]
+E = {E:e}
+nu = {NU}
+[materials.outer]
+E = {E:e}
+nu = {NU}
+"#
+    );
+    for g in ["inner_bottom", "inner_top", "outer_bottom", "outer_top"] {
+        writeln!(body, "[[dirichlet]]\non = \"{g}\"\nuy = 0.0").unwrap();
+    }
+    writeln!(
+        body,
+        "[[contact]]\nslave = \"inner_outer\"\nmaster = \"outer_inner\"\ndiscretization = \"{disc}\""
+    )
+    .unwrap();
+    if interference {
+        body.push_str("interference = true\n");
+    }
+    write_model(
+        dir,
+        &format!("shrink_{disc}_{interference}"),
+        &blocks,
+        &body,
+    )
+}
+
+/// A shrink fit: the contact pressure on the interface is Lamé's
+/// to 2.5 % (12 elements through each wall), with NTS and mortar rows, ssn, cgc and mprgp agree, and without
+/// `interference = true` the overlap is refused with a message naming it.
+#[test]
+fn shrink_fit_pressure_matches_lame_and_methods_agree() {
+    let dir = tempfile::tempdir().unwrap();
+    let want = shrink_fit_pressure(0.5, 1.0, 1.5, 1.0e-3);
+    for disc in ["nts", "mortar"] {
+        let path = shrink_fit_model(dir.path(), disc, true);
+        let mut us: Vec<Vec<f64>> = vec![];
+        for method in ["ssn", "cgc", "mprgp"] {
+            let (prep, _res, step) = solve_with(&path, Some(method));
+            let rows = &prep.model.topo.contact;
+            let ps: Vec<f64> = rows
+                .iter()
+                .zip(&step.contact_pressure)
+                .map(|(_, &p)| p)
+                .collect();
+            assert!(!ps.is_empty());
+            eprintln!(
+                "{disc} {method}: pressures / Lamé = {:?}",
+                ps.iter().map(|p| p / want).collect::<Vec<_>>()
+            );
+            for &p in &ps {
+                assert!(
+                    (p - want).abs() < 0.025 * want,
+                    "{disc} {method}: pressure {p:e} vs Lamé {want:e}"
+                );
+            }
+            // The rows alternate ±1.2 % with the diagonals; their mean is
+            // Lamé's to 0.06 % (measured).
+            let mean = ps.iter().sum::<f64>() / ps.len() as f64;
+            assert!(
+                (mean - want).abs() < 0.005 * want,
+                "{disc} {method}: mean {mean:e}"
+            );
+            us.push(step.displacement.iter().flat_map(|u| *u).collect());
+        }
+        for k in 1..us.len() {
+            let d = common::rel_diff(&us[k], &us[0]);
+            assert!(d < 1e-6, "{disc}: method {k} differs from ssn by {d:e}");
+        }
+    }
+    let path = shrink_fit_model(dir.path(), "nts", false);
+    let err = match signorini::run::prepare(&path, false) {
+        Ok(_) => panic!("an overlap without interference = true was accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("penetrates") && err.contains("interference = true"),
+        "{err}"
+    );
+}
