@@ -311,3 +311,98 @@ fn shrink_fit_pressure_matches_lame_and_methods_agree() {
         "{err}"
     );
 }
+
+/// A block pressed on a softer base with Coulomb friction (μ = 0.3), the
+/// left side x = 0 a line of symmetry (`[[slip]]` in plane strain, the
+/// axis in an axisymmetric model); non-matching meshes, the block slave.
+fn symmetric_friction_model(dir: &Path, plane: &str, disc: &str) -> PathBuf {
+    let blocks = [
+        Block {
+            name: "base",
+            r: [0.0, 1.0],
+            z: [-1.0, 0.0],
+            n: [7, 7],
+        },
+        Block {
+            name: "block",
+            r: [0.0, 1.0],
+            z: [0.0, 1.0],
+            n: [5, 5],
+        },
+    ];
+    let mut body = format!(
+        r#"[model]
+plane = "{plane}"
+[materials.base]
+E = 1.0e8
+nu = 0.45
+[materials.block]
+E = 1.0e9
+nu = 0.2
+[[dirichlet]]
+on = "base_bottom"
+uy = 0.0
+[[dirichlet]]
+on = "block_top"
+uy = -0.01
+[[contact]]
+slave = "block_bottom"
+master = "base_top"
+discretization = "{disc}"
+friction = 0.3
+"#
+    );
+    if plane != "axisymmetric" {
+        body.push_str("[[slip]]\non = \"base_inner\"\n[[slip]]\non = \"block_inner\"\n");
+    }
+    write_model(dir, &format!("sym_{plane}_{disc}"), &blocks, &body)
+}
+
+/// The mortar row on the line of symmetry carries no tangential traction
+/// (symmetry; NTS rows there have none either), with ssn and mprgp, in
+/// plane strain and axisymmetric; and the total friction force of mortar
+/// rows is NTS's to 3 %.
+#[test]
+fn mortar_friction_row_on_the_symmetry_line_is_zero() {
+    let dir = tempfile::tempdir().unwrap();
+    for plane in ["strain", "axisymmetric"] {
+        let mut total = vec![];
+        for disc in ["nts", "mortar"] {
+            let path = symmetric_friction_model(dir.path(), plane, disc);
+            for method in ["ssn", "mprgp"] {
+                let (prep, res, step) = solve_with(&path, Some(method));
+                let fo = signorini::post::friction::friction_output(&prep.model, &res).unwrap();
+                let t = &prep.model.topo;
+                let mut on_axis = 0;
+                let mut sum = 0.0;
+                for (r, row) in t.contact.iter().enumerate() {
+                    sum += fo.lambda_t[r];
+                    if t.points[row.first][0] == 0.0 {
+                        on_axis += 1;
+                        assert!(step.contact_pressure[r] > 0.0);
+                        assert_eq!(
+                            fo.tangential_traction[r], 0.0,
+                            "{plane} {disc} {method}: row on x = 0 has traction {:e} (state {})",
+                            fo.tangential_traction[r], fo.state[r]
+                        );
+                    }
+                }
+                assert!(on_axis <= 1);
+                // Elsewhere the friction is working (the materials' Poisson
+                // expansions differ).
+                let most = fo
+                    .tangential_traction
+                    .iter()
+                    .fold(0.0f64, |m, v| m.max(v.abs()));
+                assert!(most > 0.0, "{plane} {disc} {method}: no friction at all");
+                eprintln!("{plane} {disc} {method}: Σλ_t = {sum:e}");
+                total.push(sum);
+            }
+        }
+        let (nts, mortar) = (total[0], total[2]);
+        assert!(
+            (mortar - nts).abs() < 0.03 * nts.abs(),
+            "{plane}: friction resultant mortar {mortar:e} vs nts {nts:e}"
+        );
+    }
+}
