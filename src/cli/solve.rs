@@ -264,6 +264,11 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
         lf[1] + rf[1],
         lm + rm
     );
+    if let Some(unit) = s.force_unit {
+        // A ring's radial forces and moments are no resultant: only the
+        // axial sum balances (docs/problem-format.md §11).
+        println!("            axisymmetric: forces in {unit}; only the axial (y) sum balances");
+    }
     for (name, i) in &s.contact.interfaces {
         let (f, mo) = (i.resultant.force, i.resultant.moment);
         println!(
