@@ -406,3 +406,58 @@ fn mortar_friction_row_on_the_symmetry_line_is_zero() {
         );
     }
 }
+
+/// A solid cylinder 0 ≤ r ≤ b spinning at ω (`omega`), plane strain
+/// (ε_zz = 0): σ_rr = (3−2ν)/(8(1−ν)) ρω²(b² − r²) and
+/// σ_θθ = ρω²/(8(1−ν))((3−2ν)b² − (1+2ν)r²) (Timoshenko & Goodier, Theory
+/// of Elasticity, §32, the long rotating cylinder). The mesh has nodes on
+/// the axis (u_r = 0 there without any condition) and no radial support.
+#[test]
+fn spinning_solid_cylinder_matches_the_analytic_stresses() {
+    let dir = tempfile::tempdir().unwrap();
+    let (b, rho, w) = (0.5, 7800.0, 600.0);
+    let blocks = [Block {
+        name: "rotor",
+        r: [0.0, b],
+        z: [0.0, 0.1],
+        n: [40, 8],
+    }];
+    let body = format!(
+        r#"[model]
+plane = "axisymmetric"
+omega = {w}
+[materials.rotor]
+E = {E:e}
+nu = {NU}
+rho = {rho}
+[[dirichlet]]
+on = "rotor_bottom"
+uy = 0.0
+[[dirichlet]]
+on = "rotor_top"
+uy = 0.0
+"#
+    );
+    let path = write_model(dir.path(), "spin", &blocks, &body);
+    let (prep, _res, step) = solve_with(&path, None);
+    let t = &prep.model.topo;
+    let q = rho * w * w;
+    let scale = (3.0 - 2.0 * NU) / (8.0 * (1.0 - NU)) * q * b * b;
+    let (mut er, mut et): (f64, f64) = (0.0, 0.0);
+    for (tri, s) in t.triangles.iter().zip(&step.stress) {
+        let r = (t.points[tri[0]][0] + t.points[tri[1]][0] + t.points[tri[2]][0]) / 3.0;
+        let srr = (3.0 - 2.0 * NU) / (8.0 * (1.0 - NU)) * q * (b * b - r * r);
+        let stt = q / (8.0 * (1.0 - NU)) * ((3.0 - 2.0 * NU) * b * b - (1.0 + 2.0 * NU) * r * r);
+        er = er.max((s[0] - srr).abs() / scale);
+        et = et.max((s[3] - stt).abs() / scale);
+    }
+    eprintln!("spinning cylinder: max |Δσrr|, |Δσθθ| / σ(0) = {er:e}, {et:e}");
+    assert!(er < 0.005 && et < 0.005, "{er:e} {et:e}");
+    // Nodes on the axis do not move radially.
+    for (x, u) in t.points.iter().zip(&step.displacement) {
+        if x[0] == 0.0 {
+            assert_eq!(u[0], 0.0);
+        }
+    }
+    assert!(prep.model.qp.kernel.is_empty());
+}
