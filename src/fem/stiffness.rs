@@ -24,8 +24,11 @@ pub(super) struct Materials {
     pub(super) bforce: Vec<[f64; 2]>,
     pub(super) th: f64,
     /// Axisymmetric models: D4 and ρω² of each material (docs/methods.md §10).
-    pub(super) axi: Option<(Vec<[[f64; 4]; 4]>, Vec<f64>)>,
+    pub(super) axi: Option<AxiMaterials>,
 }
+
+/// D4 and ρω² of each material of an axisymmetric model.
+pub(super) type AxiMaterials = (Vec<[[f64; 4]; 4]>, Vec<f64>);
 
 impl Materials {
     /// The materials of `topo.material_names`, in that order.
