@@ -410,7 +410,7 @@ fn mortar_friction_row_on_the_symmetry_line_is_zero() {
 /// A solid cylinder 0 ≤ r ≤ b spinning at ω (`omega`), plane strain
 /// (ε_zz = 0): σ_rr = (3−2ν)/(8(1−ν)) ρω²(b² − r²) and
 /// σ_θθ = ρω²/(8(1−ν))((3−2ν)b² − (1+2ν)r²) (Timoshenko & Goodier, Theory
-/// of Elasticity, §32, the long rotating cylinder). The mesh has nodes on
+/// of Elasticity, ch. 4, the long rotating cylinder). The mesh has nodes on
 /// the axis (u_r = 0 there without any condition) and no radial support.
 #[test]
 fn spinning_solid_cylinder_matches_the_analytic_stresses() {
