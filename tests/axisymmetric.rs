@@ -460,4 +460,60 @@ uy = 0.0
         }
     }
     assert!(prep.model.qp.kernel.is_empty());
+    // The VTU names the 4th stress component the hoop stress.
+    let om = signorini::post::out_mesh(&prep.model, &prep.mesh);
+    let vtu = dir.path().join("spin.vtu");
+    signorini::io::vtu::write_vtu(&vtu, &om, &step, false).unwrap();
+    let xml = std::fs::read_to_string(&vtu).unwrap();
+    assert!(
+        xml.contains(
+            r#"ComponentName0="srr" ComponentName1="szz" ComponentName2="srz" ComponentName3="stt""#
+        ),
+        "hoop component not named"
+    );
+    assert!(xml.contains(r#"ComponentName0="s1" ComponentName1="s2""#));
+}
+
+/// Bad axisymmetric input is refused with a message naming the key or the
+/// node: a node at r < 0, a radial gravity, `omega` in a plane model,
+/// `interference` on a conforming pair.
+#[test]
+fn bad_axisymmetric_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let block = |r0: f64| Block {
+        name: "part",
+        r: [r0, 1.0],
+        z: [0.0, 1.0],
+        n: [2, 2],
+    };
+    let base = "[materials.part]\nE = 1e9\nnu = 0.3\nrho = 1000.0\n[[dirichlet]]\non = \"part_bottom\"\nuy = 0.0\n";
+    let cases: [(&str, f64, String, &str); 4] = [
+        ("neg", -0.5, format!("[model]\nplane = \"axisymmetric\"\n{base}"), "x = r >= 0"),
+        (
+            "grav",
+            0.0,
+            format!("[model]\nplane = \"axisymmetric\"\ngravity = [1.0, -9.81]\n{base}"),
+            "gravity along z only",
+        ),
+        (
+            "omega",
+            0.0,
+            format!("[model]\nplane = \"strain\"\nomega = 10.0\n{base}"),
+            "omega",
+        ),
+        (
+            "conf",
+            0.0,
+            format!("[model]\nplane = \"axisymmetric\"\n{base}[[contact]]\non = \"part_top\"\ninterference = true\n"),
+            "interference applies to non-matching pairs",
+        ),
+    ];
+    for (name, r0, body, want) in cases {
+        let path = write_model(dir.path(), name, &[block(r0)], &body);
+        let err = match signorini::run::prepare(&path, false) {
+            Ok(_) => panic!("{name}: accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(err.contains(want), "{name}: {err}");
+    }
 }

@@ -52,9 +52,11 @@ impl Materials {
             th: f.model.plane.t_eff(f.model.thickness),
             axi: (f.model.plane == Plane::Axisymmetric).then(|| {
                 let w = f.model.omega.unwrap_or(0.0);
+                // A load step scales ρω²r like every other load.
+                let lf = f.model.centrifugal_factor.unwrap_or(1.0);
                 (
                     mats.iter().map(|m| element::d_axi(m)).collect(),
-                    mats.iter().map(|m| m.rho * w * w).collect(),
+                    mats.iter().map(|m| m.rho * w * w * lf).collect(),
                 )
             }),
         }

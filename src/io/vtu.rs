@@ -114,6 +114,9 @@ const COMPONENT_NAMES: Names = &[
     ("reaction", &["Rx", "Ry", "Rz"]),
     ("stress", &["sxx", "syy", "sxy", "szz"]),
     ("stress_change", &["dsxx", "dsyy", "dsxy", "dszz"]),
+    ("principal_stress", &["s1", "s2"]),
+    ("normal", &["nx", "ny", "nz"]),
+    ("tangent", &["tx", "ty", "tz"]),
 ];
 
 /// The same in an axisymmetric model (x = r, y = z): (σrr, σzz, σrz, σθθ),
@@ -124,9 +127,6 @@ const AXI_COMPONENT_NAMES: Names = &[
     ("reaction", &["Rr", "Rz", "R3"]),
     ("stress", &["srr", "szz", "srz", "stt"]),
     ("stress_change", &["dsrr", "dszz", "dsrz", "dstt"]),
-    ("principal_stress", &["s1", "s2"]),
-    ("normal", &["nx", "ny", "nz"]),
-    ("tangent", &["tx", "ty", "tz"]),
     ("principal_stress", &["s1", "s2"]),
     ("normal", &["nx", "ny", "nz"]),
     ("tangent", &["tx", "ty", "tz"]),

@@ -126,6 +126,10 @@ pub struct ModelSection {
     /// centrifugal body force ρω²r along r (docs/methods.md §10).
     #[serde(default)]
     pub omega: Option<f64>,
+    /// The load factor of the step on the centrifugal load ρω²r (set by
+    /// [`ProblemFile::at_step`], like the factor on gravity; None = 1).
+    #[serde(skip)]
+    pub centrifugal_factor: Option<f64>,
 }
 
 fn one() -> f64 {
@@ -139,6 +143,7 @@ impl Default for ModelSection {
             thickness: 1.0,
             gravity: None,
             omega: None,
+            centrifugal_factor: None,
         }
     }
 }
@@ -406,6 +411,7 @@ impl ProblemFile {
             fo.f = [fo.f[0] * lf, fo.f[1] * lf];
         }
         f.model.gravity = f.model.gravity.map(|g| [g[0] * lf, g[1] * lf]);
+        f.model.centrifugal_factor = Some(lf);
         for d in f.dirichlet.iter_mut() {
             d.value = match st.dirichlet.get(&d.on) {
                 Some(u) => d.value.replaced(*u),
