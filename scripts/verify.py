@@ -218,6 +218,32 @@ def case_hertz(args, work):
                 source="Johnson (1985) §4.2")]
 
 
+def case_hertz_sphere(args, work):
+    """Two spheres, axisymmetric (docs/verification.md §7): the section of
+    case_hertz revolved; forces are per radian, so F = 2 pi q R1^2 / 2."""
+    d = os.path.join(VDIR, "hertz_sphere")
+    hc = 0.00125 if args.fine else 0.005
+    msh = os.path.join(work, "hertz_sphere.msh")
+    mesh(args, os.path.join(d, "hertz_sphere.geo"), {"hc": hc}, msh)
+    summary, h5 = solve(args, d, "hertz_sphere.toml", msh, work)
+    E, nu, R1, R2, q = 2.0e11, 0.3, 1.0, 2.0, 8.744777e6
+    Es = E / (2 * (1 - nu**2))
+    R = R1 * R2 / (R1 + R2)
+    F = q * math.pi * R1**2
+    a_ref = (3 * F * R / (4 * Es)) ** (1 / 3)
+    p0_ref = 3 * F / (2 * math.pi * a_ref**2)
+    with h5py.File(h5) as f:
+        a, p0, _, _ = hertz_fit(f)
+    tol = 0.01 if args.fine else 0.02
+    return [row("hertz sphere (axisymmetric)", "a [m] (fit)", a_ref, a, tol,
+                source="Johnson (1985) §4.2"),
+            row("hertz sphere (axisymmetric)", "p0 [Pa] (fit)", p0_ref, p0, tol,
+                source="Johnson (1985) §4.2"),
+            row("hertz sphere (axisymmetric)", "axial contact force [N/rad]", F / (2 * math.pi),
+                next(iter(summary["contact"]["interfaces"].values()))["force"][1], 1e-6,
+                source="load q pi R1^2 / (2 pi)")]
+
+
 def case_punch(args, work):
     d = os.path.join(VDIR, "punch")
     hc = 0.001 if args.fine else 0.005
@@ -288,7 +314,7 @@ def case_cattaneo(args, work):
 
 
 CASES = {"nafems1": case_nafems1, "patch": case_patch, "hertz": case_hertz,
-         "punch": case_punch, "cattaneo": case_cattaneo}
+         "punch": case_punch, "cattaneo": case_cattaneo, "hertz_sphere": case_hertz_sphere}
 
 
 def main():

@@ -26,6 +26,7 @@ fn mesh(plane_strain: bool) -> OutMesh {
         material: vec![0, 1],
         material_names: vec!["crust".into(), "block β".into()],
         plane_strain,
+        axisymmetric: false,
         contact: ContactGeometry {
             points: vec![[0.0, 0.0], [1.0, 0.0]],
             first: vec![0, 1],

@@ -327,6 +327,11 @@ fn print_forces(s: &run::Summary) {
             lm + rm + s.contact.couple
         );
     }
+    if let Some(unit) = s.force_unit {
+        // A ring's radial forces and moments are no resultant: only the
+        // axial sum balances (docs/problem-format.md §11).
+        println!("            axisymmetric: forces in {unit}; only the axial (y) sum balances");
+    }
     for (name, i) in &s.contact.interfaces {
         let (f, mo) = (i.resultant.force, i.resultant.moment);
         println!(

@@ -58,6 +58,9 @@ impl Conditions {
         };
         c.add_dirichlet(mesh, topo, problem)?;
         c.add_slip(mesh, topo, problem)?;
+        if problem.file.model.plane.is_axisymmetric() {
+            c.add_axis(mesh, topo, problem)?;
+        }
         Ok(c)
     }
 
@@ -96,6 +99,43 @@ impl Conditions {
                         src,
                     });
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// Axisymmetric models: u_r = 0 on every point on the axis r = x = 0
+    /// (within 1e-9 of the largest |x|), added without a TOML entry
+    /// (docs/methods.md §10); a point at r < 0 is an error.
+    fn add_axis(
+        &mut self,
+        mesh: &Mesh,
+        topo: &Topology,
+        problem: &Problem,
+    ) -> Result<(), FemError> {
+        let rmax = topo.points.iter().fold(0.0f64, |m, x| m.max(x[0].abs()));
+        let tol = 1e-9 * rmax;
+        let src = self.src.len();
+        self.src
+            .push("the axis r = 0 (axisymmetric: u_r = 0)".into());
+        self.groups.push(("axis", "r = 0".into()));
+        for (p, x) in topo.points.iter().enumerate() {
+            if x[0] < -tol {
+                return Err(FemError::new(
+                    &problem.path,
+                    format!(
+                        "[model] plane = \"axisymmetric\" takes x = r >= 0, but node {} lies at x = {:e}; mirror the mesh to r >= 0",
+                        mesh.node_tags[topo.point_node[p]],
+                        x[0]
+                    ),
+                ));
+            }
+            if x[0] <= tol {
+                self.at[p].push(Cond {
+                    r: [1.0, 0.0],
+                    v: 0.0,
+                    src,
+                });
             }
         }
         Ok(())

@@ -7,7 +7,8 @@ use crate::problem::{Material, Plane};
 pub fn d_matrix(m: &Material, plane: Plane) -> [[f64; 3]; 3] {
     let (e, nu) = (m.e, m.nu);
     match plane {
-        Plane::Strain => {
+        // The in-plane block of the axisymmetric D4 is that of plane strain.
+        Plane::Strain | Plane::Axisymmetric => {
             let f = e / ((1.0 + nu) * (1.0 - 2.0 * nu));
             [
                 [f * (1.0 - nu), f * nu, 0.0],
@@ -113,8 +114,125 @@ pub fn stress(
     let szz = match plane {
         Plane::Strain => m.nu * (s[0] + s[1]),
         Plane::Stress => 0.0,
+        Plane::Axisymmetric => return axi_stress(p, m, u),
     };
     [s[0], s[1], s[2], szz]
+}
+
+/// D4 of an axisymmetric body for ε = (ε_rr, ε_zz, 2ε_rz, ε_θθ)
+/// (docs/methods.md §10; Zienkiewicz & Taylor, The Finite Element Method,
+/// vol. 1, ch. "Axisymmetric stress analysis").
+pub fn d_axi(m: &Material) -> [[f64; 4]; 4] {
+    let (e, nu) = (m.e, m.nu);
+    let f = e / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    let (a, b, g) = (f * (1.0 - nu), f * nu, f * (1.0 - 2.0 * nu) / 2.0);
+    [
+        [a, b, 0.0, b],
+        [b, a, 0.0, b],
+        [0.0, 0.0, g, 0.0],
+        [b, b, 0.0, a],
+    ]
+}
+
+/// The centroid radius r̄ = (r₁ + r₂ + r₃)/3 of a triangle (x = r).
+pub fn centroid_r(p: &[[f64; 2]; 3]) -> f64 {
+    (p[0][0] + p[1][0] + p[2][0]) / 3.0
+}
+
+/// B4 (4×6) of the axisymmetric P1 triangle with the hoop row evaluated
+/// at the centroid, N_a(r̄)/r̄ = 1/(3r̄): the one-point rule for the hoop
+/// terms, finite whenever the triangle has area (r̄ > 0 even with two
+/// vertices on the axis), with |T|, r̄. Zienkiewicz & Taylor (vol. 1,
+/// "Axisymmetric stress analysis") give this centroid approximation; the
+/// in-plane rows are constant, so r̄|T| BᵀD4B is the one-point rule of
+/// ∫ BᵀD4B r dA (docs/methods.md §10).
+pub fn axi_b(p: &[[f64; 2]; 3]) -> ([[f64; 6]; 4], f64, f64) {
+    let (b3, area) = b_matrix(p);
+    let rbar = centroid_r(p);
+    let mut b = [[0.0; 6]; 4];
+    b[..3].copy_from_slice(&b3);
+    for a in 0..3 {
+        b[3][2 * a] = 1.0 / (3.0 * rbar);
+    }
+    (b, area, rbar)
+}
+
+/// C_e = r̄ |T| B4ᵀ D4 B4 (6×6, per radian) of the axisymmetric triangle.
+pub fn axi_stiffness(p: &[[f64; 2]; 3], d4: &[[f64; 4]; 4]) -> [[f64; 6]; 6] {
+    let (b, area, rbar) = axi_b(p);
+    let mut db = [[0.0; 6]; 4];
+    for i in 0..4 {
+        for j in 0..6 {
+            db[i][j] = (0..4).map(|k| d4[i][k] * b[k][j]).sum();
+        }
+    }
+    let mut k = [[0.0; 6]; 6];
+    for (i, row) in k.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = rbar * area * (0..4).map(|l| b[l][i] * db[l][j]).sum::<f64>();
+        }
+    }
+    k
+}
+
+/// The element stiffness of any `plane` (per radian when axisymmetric).
+pub fn stiffness_in(
+    p: &[[f64; 2]; 3],
+    m: &Material,
+    d: &[[f64; 3]; 3],
+    plane: Plane,
+    th: f64,
+) -> [[f64; 6]; 6] {
+    match plane {
+        Plane::Axisymmetric => axi_stiffness(p, &d_axi(m)),
+        _ => stiffness(p, d, th),
+    }
+}
+
+/// ∫ N_a (f_b r + c r² e_r) dA over an axisymmetric triangle, exactly
+/// (∫ λ₁^i λ₂^j λ₃^k dA = 2|T| i! j! k! / (i + j + k + 2)!): the nodal force
+/// per radian of vertex `a` from a body force f_b (gravity, along z) and a
+/// centrifugal load c r along r (c = ρω²).
+pub fn axi_body_load(p: &[[f64; 2]; 3], a: usize, fb: [f64; 2], c: f64) -> [f64; 2] {
+    let area = area2(p) / 2.0;
+    let r = [p[0][0], p[1][0], p[2][0]];
+    let w1 = area / 12.0 * (r[a] + r[0] + r[1] + r[2]);
+    let fact = [1.0, 1.0, 2.0, 6.0];
+    let mut w2 = 0.0;
+    for i in 0..3 {
+        for j in 0..3 {
+            let mut k = [0usize; 3];
+            k[a] += 1;
+            k[i] += 1;
+            k[j] += 1;
+            w2 += r[i] * r[j] * 2.0 * area * fact[k[0]] * fact[k[1]] * fact[k[2]] / 120.0;
+        }
+    }
+    [w1 * fb[0] + c * w2, w1 * fb[1]]
+}
+
+/// (σ_rr, σ_zz, σ_rz, σ_θθ) at the centroid of an axisymmetric triangle.
+fn axi_stress(p: &[[f64; 2]; 3], m: &Material, u: &[f64; 6]) -> [f64; 4] {
+    let (b, _, _) = axi_b(p);
+    let d4 = d_axi(m);
+    let mut e = [0.0; 4];
+    for (i, ei) in e.iter_mut().enumerate() {
+        *ei = (0..6).map(|j| b[i][j] * u[j]).sum();
+    }
+    let mut s = [0.0; 4];
+    for (i, si) in s.iter_mut().enumerate() {
+        *si = (0..4).map(|k| d4[i][k] * e[k]).sum();
+    }
+    s
+}
+
+/// von Mises from the four components (σ_rr, σ_zz, σ_rz, σ_θθ) of an
+/// axisymmetric stress: sqrt(½[(σ1−σ2)² + (σ2−σ3)² + (σ3−σ1)²] + 3τ²).
+pub fn von_mises_axi(s: &[f64; 4]) -> f64 {
+    let (a, b, c) = (s[0] - s[1], s[1] - s[3], s[3] - s[0]);
+    (0.5 * (a * a + b * b + c * c) + 3.0 * s[2] * s[2])
+        .max(0.0)
+        .sqrt()
 }
 
 /// The report's equivalent stress τe = sqrt(σxx² + σyy² − σxxσyy + 3σxy²) (§1.4).
@@ -181,6 +299,85 @@ mod tests {
                 assert_eq!(r[1], k[2 * a + 1]);
             }
         }
+    }
+
+    /// The axisymmetric element: symmetric, zero energy for the axial
+    /// translation only, and exact for the uniform state u_r = εr, u_z = 0
+    /// (σ_rr = σ_θθ = (a + b)ε, σ_zz = 2bε), also with vertices on the axis.
+    #[test]
+    fn axisymmetric_element_modes_and_uniform_expansion() {
+        let m = Material {
+            e: 2e11,
+            nu: 0.3,
+            rho: 0.0,
+        };
+        let d4 = d_axi(&m);
+        for p in [
+            [[0.0, 0.0], [1.0, 0.2], [0.0, 1.0]],
+            [[1.0, 0.0], [2.0, 0.3], [1.2, 1.5]],
+        ] {
+            let k = axi_stiffness(&p, &d4);
+            for i in 0..6 {
+                for j in 0..6 {
+                    assert!((k[i][j] - k[j][i]).abs() < 1e-9 * k[1][1].abs());
+                }
+            }
+            let axial = [0.0, 1.0, 0.0, 1.0, 0.0, 1.0];
+            let radial = [1.0, 0.0, 1.0, 0.0, 1.0, 0.0];
+            let f = |z: &[f64; 6]| -> f64 {
+                k.iter()
+                    .map(|row| row.iter().zip(z).map(|(a, b)| a * b).sum::<f64>().abs())
+                    .fold(0.0, f64::max)
+            };
+            assert!(f(&axial) < 1e-6 * k[1][1]);
+            assert!(f(&radial) > 1e-3 * k[0][0]);
+            let eps = 1e-3;
+            let u = [eps * p[0][0], 0.0, eps * p[1][0], 0.0, eps * p[2][0], 0.0];
+            let s = stress(
+                &p,
+                &d_matrix(&m, Plane::Axisymmetric),
+                &m,
+                Plane::Axisymmetric,
+                &u,
+            );
+            let want = (d4[0][0] + d4[0][1]) * eps;
+            assert!((s[0] - want).abs() < 1e-9 * want, "{s:?}");
+            assert!((s[3] - want).abs() < 1e-9 * want, "{s:?}");
+            assert!((s[1] - 2.0 * d4[0][1] * eps).abs() < 1e-9 * want);
+            assert!(s[2].abs() < 1e-9 * want);
+        }
+    }
+
+    /// The exact load integrals: Σ_a ∫N_a r = ∫r = |T| r̄ and
+    /// Σ_a ∫N_a r² = ∫r² = |T|/6 (Σr_i² + Σ_{i<j} r_i r_j)·… checked on
+    /// a unit right triangle by a fine midpoint sum.
+    #[test]
+    fn axisymmetric_body_load_integrals() {
+        let p = [[0.5, 0.0], [1.5, 0.0], [0.5, 1.0]];
+        let (mut s1, mut s2) = (0.0, 0.0);
+        for a in 0..3 {
+            let f = axi_body_load(&p, a, [0.0, 1.0], 1.0);
+            s1 += f[1];
+            s2 += f[0];
+        }
+        let n = 400;
+        let (mut q1, mut q2) = (0.0, 0.0);
+        for i in 0..n {
+            for j in 0..n - i {
+                let x = 0.5 + (i as f64 + 1.0 / 3.0) / n as f64;
+                let w = 0.5 / (n * n) as f64;
+                q1 += x * w;
+                q2 += x * x * w;
+                if j + i + 1 < n {
+                    let x2 = 0.5 + (i as f64 + 2.0 / 3.0) / n as f64;
+                    q1 += x2 * w;
+                    q2 += x2 * x2 * w;
+                }
+            }
+        }
+        assert!((s1 - q1).abs() < 1e-3 * q1, "{s1} {q1}");
+        assert!((s2 - q2).abs() < 1e-3 * q2, "{s2} {q2}");
+        assert!((s1 - 0.5 * centroid_r(&p)).abs() < 1e-14);
     }
 
     #[test]

@@ -8,7 +8,7 @@
 //! (Cx − d + Aᵀλ_n + Tᵀλ_t = 0) and opposes that slip.
 
 use super::conditions::PointDofs;
-use super::contact::ContactRow;
+use super::contact::{ContactRow, RowKind};
 use super::topology::Topology;
 use super::{FemError, Model};
 use crate::problem::{ContactPair, FrictionLaw, Problem};
@@ -28,6 +28,33 @@ fn tangential(row: &ContactRow) -> ContactRow {
 /// `row` (its own coefficients with n turned by +90°).
 pub fn tangential_coefficients(row: &ContactRow) -> Vec<(usize, [f64; 2])> {
     tangential(row).coefficients()
+}
+
+/// Whether mortar row `r` sits at the end of its slave curve on a line of
+/// symmetry: its slave point cannot move along the tangent (a `[[slip]]`
+/// or zero `[[dirichlet]]` component across the line, or the axis r = 0 of
+/// an axisymmetric model). Its mortar weights reach master points on one
+/// side of the line only, so its tangential row measures a one-sided
+/// average of the master's motion and would carry a friction force μp of
+/// either sign; the mirrored half cancels it, so by symmetry the row has no
+/// tangential force (NTS rows there have no unknowns and are left out
+/// alike). Such rows get an empty tangential row and bound 0 (docs/methods.md §9).
+pub fn on_symmetry_line(topo: &Topology, dofs: &[PointDofs], r: usize) -> bool {
+    let row = &topo.contact[r];
+    if row.kind != RowKind::Mortar {
+        return false;
+    }
+    let t = [-row.normal[1], row.normal[0]];
+    let pd = &dofs[row.first];
+    let fixed = (0..pd.ndof).all(|k| (t[0] * pd.t[k][0] + t[1] * pd.t[k][1]).abs() < 1e-12)
+        && (t[0] * pd.u0[0] + t[1] * pd.u0[1]) == 0.0;
+    fixed
+        && topo
+            .contact_segments
+            .iter()
+            .filter(|s| s[0] == r || s[1] == r)
+            .count()
+            <= 1
 }
 
 /// Index of the `[[contact]]` entry of each interface id (conforming
@@ -73,6 +100,10 @@ pub(super) fn build(
         let ci = owner[row.interface as usize];
         rows_of[ci] += 1;
         let c = &contacts[ci];
+        if on_symmetry_line(topo, dofs, r) {
+            bound.push(0.0);
+            continue;
+        }
         bound.push(match c.friction {
             FrictionLaw::Tresca(s) => {
                 let b = s * row.trib * t_eff;
@@ -132,6 +163,9 @@ pub fn tangential_displacement(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
         .qp_rows
         .iter()
         .map(|&r| {
+            if on_symmetry_line(&model.topo, &model.dofs, r) {
+                return 0.0;
+            }
             tangential(&model.topo.contact[r])
                 .coefficients()
                 .iter()

@@ -31,7 +31,9 @@ pub(super) fn nodal_loads(
         dofs,
         nodal: gravity(topo, mats),
         d,
+        axi: false,
     };
+    loads.axi = mats.axi.is_some();
     loads.add_tractions(mesh, topo, problem, mats.th)?;
     loads.add_point_forces(mesh, topo, problem, mats.th)?;
     Ok(loads.nodal)
@@ -46,6 +48,14 @@ fn gravity(topo: &Topology, mats: &Materials) -> Vec<[f64; 2]> {
             topo.points[tri[1]],
             topo.points[tri[2]],
         ];
+        if let Some((_, rw2)) = &mats.axi {
+            for (a, &p) in tri.iter().enumerate() {
+                let f = element::axi_body_load(&pts, a, mats.bforce[mi as usize], rw2[mi as usize]);
+                loads[p][0] += f[0];
+                loads[p][1] += f[1];
+            }
+            continue;
+        }
         let w = mats.th * element::area2(&pts) / 6.0;
         let fb = mats.bforce[mi as usize];
         for &p in tri {
@@ -61,6 +71,8 @@ struct Loads<'a> {
     dofs: &'a [PointDofs],
     nodal: Vec<[f64; 2]>,
     d: &'a mut [f64],
+    /// Axisymmetric: tractions weighted by r (∫ N_a P r ds, per radian).
+    axi: bool,
 }
 
 impl Loads<'_> {
@@ -97,7 +109,7 @@ impl Loads<'_> {
                     ));
                 }
             }
-            for (p, _, seg) in topo.group_points(mesh, problem, &tr.on, &what)? {
+            for (p, v, seg) in topo.group_points(mesh, problem, &tr.on, &what)? {
                 let Some((a, b, t)) = seg else { continue };
                 let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
                 let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
@@ -108,7 +120,19 @@ impl Loads<'_> {
                         [pn * nrm[0], pn * nrm[1]]
                     }
                 };
-                self.add(p, [0.5 * th * len * pv[0], 0.5 * th * len * pv[1]]);
+                // Axisymmetric: ∫ N_p r ds = ℓ(2r_p + r_q)/6 per radian
+                // (docs/methods.md §10); th = 1 there.
+                let w = if self.axi {
+                    let (rp, rq) = if v == a {
+                        (pa[0], pb[0])
+                    } else {
+                        (pb[0], pa[0])
+                    };
+                    len * (2.0 * rp + rq) / 6.0
+                } else {
+                    0.5 * th * len
+                };
+                self.add(p, [w * pv[0], w * pv[1]]);
             }
         }
         Ok(())
@@ -142,7 +166,8 @@ impl Loads<'_> {
             for &e in &g.elements {
                 let v = mesh.points[e];
                 if let Some(&(_, p)) = topo.copies(v).first() {
-                    // f is per unit thickness, like every other load (§2.2).
+                    // f is per unit thickness, like every other load (§2.2);
+                    // per radian in an axisymmetric model (th = 1).
                     self.add(p, [th * fo.f[0], th * fo.f[1]]);
                 }
             }

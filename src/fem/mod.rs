@@ -116,10 +116,7 @@ impl Model {
 
     /// The effective thickness for forces → pressures (1 in plane strain).
     pub fn t_eff(&self) -> f64 {
-        match self.plane {
-            Plane::Stress => self.thickness,
-            Plane::Strain => 1.0,
-        }
+        self.plane.t_eff(self.thickness)
     }
 }
 
@@ -147,13 +144,11 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     lap.lap("loads");
     let (a, g, qp_rows) = contact::reduced_rows(mesh, &topo, &dofs, n, problem)?;
     lap.lap("contact rows");
-    let t_eff = match problem.file.model.plane {
-        Plane::Stress => problem.file.model.thickness,
-        Plane::Strain => 1.0,
-    };
+    let t_eff = problem.file.model.plane.t_eff(problem.file.model.thickness);
     let friction = friction::build(&topo, &dofs, n, problem, &qp_rows, t_eff)?;
     lap.lap("friction rows");
-    let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n);
+    let axi = problem.file.model.plane.is_axisymmetric();
+    let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n, axi);
     let near = rigid::near_kernel(&topo, &dofs, n);
     let f = &problem.file;
     let model = Model {
@@ -213,6 +208,12 @@ pub fn step_model_reusing(
     opts: &BuildOptions,
 ) -> Result<Model, FemError> {
     let mut lap = Lap::new("fem::step_model");
+    // The reused loads are those of the plane element (loads::element_d);
+    // an axisymmetric model weights them by r (docs/methods.md §10):
+    // assembled in full until element_d learns the weight.
+    if problem.file.model.plane.is_axisymmetric() {
+        return build_with(mesh, problem, opts);
+    }
     let Some(s) = loads::step_loads(base, mesh, problem)? else {
         log::debug!("fem::step_model: the DOFs changed, full assembly");
         return build_with(mesh, problem, opts);

@@ -167,6 +167,7 @@ impl Topology {
         let mut dj: HashMap<(usize, u32), f64> = HashMap::new();
         let mut mj: HashMap<(usize, u32), BTreeMap<usize, f64>> = HashMap::new();
         let mut gj: HashMap<(usize, u32), f64> = HashMap::new();
+        let axi = problem.file.model.plane.is_axisymmetric();
         for &(a, b, sb, ns) in ssegs {
             let geom = SlaveGeom {
                 x: [mesh.nodes[a], mesh.nodes[b]],
@@ -177,10 +178,14 @@ impl Topology {
                 (e[0] * e[0] + e[1] * e[1]).sqrt()
             };
             let pieces = overlap_pieces(mesh, msegs, &geom, sb, ns);
+            // Axisymmetric: every integral carries r (per radian; the dual
+            // basis is then biorthogonal in the r-weighted product), so a
+            // segment on the axis has no weight (docs/methods.md §10).
+            let rw = |s: f64| if axi { geom.point(s)[0] } else { 1.0 };
             if pieces.is_empty() {
                 continue;
             }
-            let Some((de, amat)) = dual_basis(&pieces, len) else {
+            let Some((de, amat)) = dual_basis(&pieces, len, rw) else {
                 continue;
             };
             let keys = [(a, sb), (b, sb)];
@@ -196,14 +201,14 @@ impl Topology {
                 );
                 for &(t, w) in &GAUSS {
                     let s = p.s0 + t * (p.s1 - p.s0);
-                    let wl = w * (p.s1 - p.s0) * len;
+                    let wl = w * (p.s1 - p.s0) * len * rw(s);
                     let Some((xi, g)) = geom.ray(s, y) else {
                         continue;
                     };
-                    if g < -1e-6 * len {
+                    if g < -1e-6 * len && !c.interference {
                         let x = geom.point(s);
                         return Err(err(format!(
-                            "{what}: slave curve \"{sname}\" penetrates master \"{mname}\" by {:.3e} at ({:.6e}, {:.6e}) (initial gap must be >= 0)",
+                            "{what}: slave curve \"{sname}\" penetrates master \"{mname}\" by {:.3e} at ({:.6e}, {:.6e}) (initial gap must be >= 0; set interference = true if the overlap is an intended fit)",
                             -g, x[0], x[1]
                         )));
                     }
@@ -303,15 +308,20 @@ fn slave_normals(ssegs: &[BoundarySeg]) -> Result<HashMap<(usize, u32), [f64; 2]
 /// The dual basis of a slave segment of length `len` on its projecting
 /// `pieces`: Φ = A N with A = D_e M_e⁻¹, M_e, D_e the mass and lumped
 /// matrices on the pieces (Popp et al. 2013; on a whole segment
-/// Φ₁ = 2N₁ − N₂, Φ₂ = 2N₂ − N₁). Returns (D_e, A); None when M_e is
-/// singular.
-fn dual_basis(pieces: &[Piece], len: f64) -> Option<([f64; 2], [[f64; 2]; 2])> {
+/// Φ₁ = 2N₁ − N₂, Φ₂ = 2N₂ − N₁), the integrals weighted by `rw` (r when
+/// axisymmetric, docs/methods.md §10; 1 otherwise). Returns (D_e, A);
+/// None when M_e is singular.
+fn dual_basis(
+    pieces: &[Piece],
+    len: f64,
+    rw: impl Fn(f64) -> f64,
+) -> Option<([f64; 2], [[f64; 2]; 2])> {
     let mut me = [[0.0; 2]; 2];
     let mut de = [0.0; 2];
     for p in pieces {
         for &(t, w) in &GAUSS {
             let s = p.s0 + t * (p.s1 - p.s0);
-            let wl = w * (p.s1 - p.s0) * len;
+            let wl = w * (p.s1 - p.s0) * len * rw(s);
             let nn = [1.0 - s, s];
             for i in 0..2 {
                 de[i] += nn[i] * wl;

@@ -134,12 +134,16 @@ impl Topology {
             let n = self.outward_normal(mesh, tk, a, b);
             let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
             let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
-            for v in [a, b] {
+            let axi = problem.file.model.plane.is_axisymmetric();
+            for (v, w) in [
+                (a, trib_weight(axi, len, pa, pb)),
+                (b, trib_weight(axi, len, pb, pa)),
+            ] {
                 let e = acc.entry((v, k, l)).or_insert(Acc {
                     normals: vec![],
                     interface: id,
                 });
-                e.normals.push((n, len / 2.0));
+                e.normals.push((n, w));
             }
             segs.push((a, b, k, l, n));
         }
@@ -298,11 +302,12 @@ impl Topology {
         let mut stack = vec![];
         // Slave nodes with owner body and tributary length.
         let mut slave: HashMap<(usize, u32), f64> = HashMap::new();
+        let axi = problem.file.model.plane.is_axisymmetric();
         for &(a, b, body, _) in ssegs {
             let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
             let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
-            *slave.entry((a, body)).or_insert(0.0) += len / 2.0;
-            *slave.entry((b, body)).or_insert(0.0) += len / 2.0;
+            *slave.entry((a, body)).or_insert(0.0) += trib_weight(axi, len, pa, pb);
+            *slave.entry((b, body)).or_insert(0.0) += trib_weight(axi, len, pb, pa);
         }
         let mut snodes: Vec<((usize, u32), f64)> = slave.into_iter().collect();
         snodes.sort_unstable_by_key(|((v, b), _)| (*b, mesh.node_tags[*v]));
@@ -322,9 +327,9 @@ impl Topology {
             let p = [pa[0] + xi * (pb[0] - pa[0]), pa[1] + xi * (pb[1] - pa[1])];
             let g = n[0] * (xs[0] - p[0]) + n[1] * (xs[1] - p[1]);
             let seg_len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
-            if g < -tol_pen * seg_len {
+            if g < -tol_pen * seg_len && !c.interference {
                 return Err(err(format!(
-                    "{what}: slave node {} of \"{sname}\" penetrates master \"{mname}\" by {:.3e} (initial gap must be >= 0)",
+                    "{what}: slave node {} of \"{sname}\" penetrates master \"{mname}\" by {:.3e} (initial gap must be >= 0; set interference = true if the overlap is an intended fit)",
                     mesh.node_tags[v], -g
                 )));
             }
@@ -343,7 +348,9 @@ impl Topology {
                 first,
                 second: [(m1, 1.0 - xi), (m2, xi)],
                 normal: n,
-                gap0: g.max(0.0),
+                // An intended interference keeps its overlap (g < 0): the
+                // first step pushes it out (docs/problem-format.md §5).
+                gap0: if c.interference { g } else { g.max(0.0) },
                 trib,
                 interface: id,
                 masters: vec![],
@@ -392,6 +399,17 @@ fn segment_set(segs: &[MasterSeg]) -> Segments {
 /// does not depend on hashing).
 fn shared(a: &Segments, b: &Segments) -> Option<(usize, usize)> {
     a.intersection(b).min().copied()
+}
+
+/// The tributary weight of node `x` on a segment (x, y) of length `len`:
+/// ∫ N_x ds = ℓ/2, or ∫ N_x r ds = ℓ(2r_x + r_y)/6 per radian when
+/// axisymmetric (docs/methods.md §10).
+fn trib_weight(axi: bool, len: f64, x: [f64; 2], y: [f64; 2]) -> f64 {
+    if axi {
+        len * (2.0 * x[0] + y[0]) / 6.0
+    } else {
+        len / 2.0
+    }
 }
 
 /// Orthogonal projection of `xs` on the segment (pa, pb): (distance, ξ) if

@@ -57,9 +57,14 @@ pub(super) fn rigid_modes(
     dofs: &[PointDofs],
     conds: &[Vec<Cond>],
     n: usize,
+    axi: bool,
 ) -> (Vec<Vec<f64>>, Vec<u32>) {
     let nb = topo.nbodies;
     let basis = RigidBasis::new(topo);
+    // Axisymmetric bodies move rigidly along the axis only (a radial
+    // translation strains the hoop, u_r/r ≠ 0; docs/methods.md §10): the
+    // other two motions are left out of the search below.
+    let skip = |i: usize| axi && i != 1;
     // GᵀG per body (3×3) from every condition row.
     let mut gtg = vec![[[0.0f64; 3]; 3]; nb];
     for (p, cs) in conds.iter().enumerate() {
@@ -67,7 +72,12 @@ pub(super) fn rigid_modes(
         let z = basis.at(b, topo.points[p]);
         for c in cs {
             let r = normalize(c.r);
-            let row: [f64; 3] = z.map(|zi| r[0] * zi[0] + r[1] * zi[1]);
+            let mut row: [f64; 3] = z.map(|zi| r[0] * zi[0] + r[1] * zi[1]);
+            for (i, ri) in row.iter_mut().enumerate() {
+                if skip(i) {
+                    *ri = 0.0;
+                }
+            }
             for i in 0..3 {
                 for j in 0..3 {
                     gtg[b][i][j] += row[i] * row[j];
@@ -94,6 +104,11 @@ pub(super) fn rigid_modes(
     }
     let mut kernel = vec![];
     let mut owner = vec![];
+    for m in gtg.iter_mut() {
+        for i in (0..3).filter(|&i| skip(i)) {
+            m[i][i] = 1.0;
+        }
+    }
     for b in 0..nb {
         let (vals, vecs) = sym_eigen(&gtg[b].iter().map(|r| r.to_vec()).collect::<Vec<_>>());
         for k in 0..3 {

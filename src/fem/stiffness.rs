@@ -23,7 +23,12 @@ pub(super) struct Materials {
     pub(super) dmats: Vec<[[f64; 3]; 3]>,
     pub(super) bforce: Vec<[f64; 2]>,
     pub(super) th: f64,
+    /// Axisymmetric models: D4 and ρω² of each material (docs/methods.md §10).
+    pub(super) axi: Option<AxiMaterials>,
 }
+
+/// D4 and ρω² of each material of an axisymmetric model.
+pub(super) type AxiMaterials = (Vec<[[f64; 4]; 4]>, Vec<f64>);
 
 impl Materials {
     /// The materials of `topo.material_names`, in that order.
@@ -44,10 +49,16 @@ impl Materials {
                 .iter()
                 .map(|m| [m.rho * gvec[0], m.rho * gvec[1]])
                 .collect(),
-            th: match f.model.plane {
-                Plane::Stress => f.model.thickness,
-                Plane::Strain => 1.0,
-            },
+            th: f.model.plane.t_eff(f.model.thickness),
+            axi: (f.model.plane == Plane::Axisymmetric).then(|| {
+                let w = f.model.omega.unwrap_or(0.0);
+                // A load step scales ρω²r like every other load.
+                let lf = f.model.centrifugal_factor.unwrap_or(1.0);
+                (
+                    mats.iter().map(|m| element::d_axi(m)).collect(),
+                    mats.iter().map(|m| m.rho * w * w * lf).collect(),
+                )
+            }),
         }
     }
 }
@@ -455,10 +466,19 @@ impl Gather<'_> {
             };
             let mi = rec.mat as usize;
             let pts = [vx[0].x, vx[1].x, vx[2].x];
-            let ke = element::stiffness_rows(&pts, &mats.dmats[mi], th, a);
-            let area = element::area2(&pts) / 2.0;
-            let fb = mats.bforce[mi];
-            let mut fe = [th * area / 3.0 * fb[0], th * area / 3.0 * fb[1]];
+            let (ke, mut fe) = match &mats.axi {
+                None => {
+                    let ke = element::stiffness_rows(&pts, &mats.dmats[mi], th, a);
+                    let area = element::area2(&pts) / 2.0;
+                    let fb = mats.bforce[mi];
+                    (ke, [th * area / 3.0 * fb[0], th * area / 3.0 * fb[1]])
+                }
+                Some((d4, rw2)) => {
+                    let k = element::axi_stiffness(&pts, &d4[mi]);
+                    let fe = element::axi_body_load(&pts, a, mats.bforce[mi], rw2[mi]);
+                    ([k[2 * a], k[2 * a + 1]], fe)
+                }
+            };
             // fe − Ke u0
             for (k, fk) in fe.iter_mut().enumerate() {
                 for b in 0..3 {

@@ -68,7 +68,7 @@ pub struct Checkpoint {
 }
 
 /// Root attributes that are not user strings.
-const RESERVED_ROOT_ATTRS: [&str; 2] = ["plane_strain", "last_step"];
+const RESERVED_ROOT_ATTRS: [&str; 3] = ["plane_strain", "last_step", "axisymmetric"];
 
 /// Error context: the file the user named plus an HDF5 location.
 struct Ctx<'a> {
@@ -241,6 +241,9 @@ pub fn create_checkpoint(
                 set_attr_str(&ctx, root, k, v)?;
             }
             set_attr_scalar(&ctx, root, "plane_strain", &u8::from(mesh.plane_strain))?;
+            if mesh.axisymmetric {
+                set_attr_scalar(&ctx, root, "axisymmetric", &1u8)?;
+            }
             let g = file.create_group("mesh").map_err(ctx.h5("/mesh"))?;
             write_mesh(&ctx, &g, mesh)?;
         }
@@ -649,6 +652,8 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
         }
     }
     let plane_strain = get_attr::<u8>(&ctx, &file, "plane_strain")? != 0;
+    let axisymmetric =
+        has_attr(&ctx, &file, "axisymmetric")? && get_attr::<u8>(&ctx, &file, "axisymmetric")? != 0;
 
     if !file.link_exists("mesh") {
         return Err(ctx.missing("group /mesh"));
@@ -656,6 +661,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
     let g = file.group("mesh").map_err(ctx.h5("/mesh"))?;
     let mut mesh = read_mesh(&ctx, &g)?;
     mesh.plane_strain = plane_strain;
+    mesh.axisymmetric = axisymmetric;
 
     let mut steps = Vec::new();
     let mut friction = Vec::new();
@@ -721,6 +727,7 @@ fn read_mesh(ctx: &Ctx, g: &Group) -> Result<OutMesh, IoError> {
         material,
         material_names,
         plane_strain: false,
+        axisymmetric: false,
         contact: ContactGeometry {
             points: pairs(&cpoints),
             first,

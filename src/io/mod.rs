@@ -28,6 +28,9 @@ pub struct OutMesh {
     pub material_names: Vec<String>,
     /// Plane strain (true) writes σzz too.
     pub plane_strain: bool,
+    /// Axisymmetric (x = r, y = z): the 4th stress component is the hoop
+    /// stress σθθ, named "stt" (docs/problem-format.md §6).
+    pub axisymmetric: bool,
     /// The contact constraints: one contact point per constraint row.
     pub contact: ContactGeometry,
 }

@@ -106,7 +106,9 @@ fn i32_array(name: &str, data: impl Iterator<Item = i64>) -> Attribute {
 }
 
 /// Component names of the multi-component arrays, as ParaView shows them.
-const COMPONENT_NAMES: &[(&str, &[&str])] = &[
+type Names = &'static [(&'static str, &'static [&'static str])];
+
+const COMPONENT_NAMES: Names = &[
     ("displacement", &["ux", "uy", "uz"]),
     ("displacement_change", &["dux", "duy", "duz"]),
     ("reaction", &["Rx", "Ry", "Rz"]),
@@ -117,10 +119,23 @@ const COMPONENT_NAMES: &[(&str, &[&str])] = &[
     ("tangent", &["tx", "ty", "tz"]),
 ];
 
+/// The same in an axisymmetric model (x = r, y = z): (σrr, σzz, σrz, σθθ),
+/// the 4th the hoop stress (docs/problem-format.md §6).
+const AXI_COMPONENT_NAMES: Names = &[
+    ("displacement", &["ur", "uz", "u3"]),
+    ("displacement_change", &["dur", "duz", "du3"]),
+    ("reaction", &["Rr", "Rz", "R3"]),
+    ("stress", &["srr", "szz", "srz", "stt"]),
+    ("stress_change", &["dsrr", "dszz", "dsrz", "dstt"]),
+    ("principal_stress", &["s1", "s2"]),
+    ("normal", &["nx", "ny", "nz"]),
+    ("tangent", &["tx", "ty", "tz"]),
+];
+
 /// vtkio 0.7's `DataArray` has no component names, so they are added to
 /// the XML it writes: `ComponentName0="sxx"`, … on each `<DataArray>` whose
 /// `Name` is listed in [`COMPONENT_NAMES`] (as many as it has components).
-fn add_component_names(buf: Vec<u8>) -> Vec<u8> {
+fn add_component_names(buf: Vec<u8>, names_of: Names) -> Vec<u8> {
     let Ok(text) = String::from_utf8(buf) else {
         unreachable!("vtkio writes UTF-8 XML")
     };
@@ -142,7 +157,7 @@ fn add_component_names(buf: Vec<u8>) -> Vec<u8> {
             let ncomp: usize = attr("NumberOfComponents")
                 .and_then(|v| v.parse().ok())
                 .unwrap_or(1);
-            if let Some((_, names)) = COMPONENT_NAMES.iter().find(|(n, _)| *n == name) {
+            if let Some((_, names)) = names_of.iter().find(|(n, _)| *n == name) {
                 if ncomp > 1 {
                     for (k, c) in names.iter().take(ncomp).enumerate() {
                         extra.push_str(&format!(" ComponentName{k}=\"{c}\""));
@@ -167,18 +182,23 @@ fn add_component_names(buf: Vec<u8>) -> Vec<u8> {
 
 /// Encodes `piece` as an XML UnstructuredGrid and writes it atomically:
 /// streamed when uncompressed, through vtkio when compressed.
-fn write_piece(path: &Path, piece: UnstructuredGridPiece, compress: bool) -> Result<(), IoError> {
+fn write_piece(
+    path: &Path,
+    piece: UnstructuredGridPiece,
+    compress: bool,
+    names: Names,
+) -> Result<(), IoError> {
     if !compress {
         return write_atomic(path, |tmp| {
             let file = super::atomic::create_new(tmp)
                 .map_err(|e| IoError::io(path, "cannot create", e))?;
             let mut w = BufWriter::with_capacity(1 << 20, file);
-            stream_piece(&mut w, &piece)
+            stream_piece(&mut w, &piece, names)
                 .and_then(|()| w.flush())
                 .map_err(|e| IoError::io(path, "cannot write", e))
         });
     }
-    let buf = vtkio_bytes(piece, true).map_err(|message| IoError::Vtk {
+    let buf = vtkio_bytes(piece, true, names).map_err(|message| IoError::Vtk {
         path: path.to_path_buf(),
         message,
     })?;
@@ -195,7 +215,11 @@ fn write_piece(path: &Path, piece: UnstructuredGridPiece, compress: bool) -> Res
 
 /// The file vtkio writes for `piece` (zlib level [`ZLIB_LEVEL`] with
 /// `compress`), with the zero counts and component names it leaves out.
-fn vtkio_bytes(piece: UnstructuredGridPiece, compress: bool) -> Result<Vec<u8>, String> {
+fn vtkio_bytes(
+    piece: UnstructuredGridPiece,
+    compress: bool,
+    names: Names,
+) -> Result<Vec<u8>, String> {
     let vtk = Vtk {
         version: Version::new_xml(1, 0),
         byte_order: ByteOrder::LittleEndian,
@@ -213,18 +237,22 @@ fn vtkio_bytes(piece: UnstructuredGridPiece, compress: bool) -> Result<Vec<u8>, 
         .map_err(|e| e.to_string())?;
     let mut buf = Vec::new();
     xml.write(&mut buf).map_err(|e| e.to_string())?;
-    Ok(add_component_names(add_zero_counts(buf)))
+    Ok(add_component_names(add_zero_counts(buf), names))
 }
 
 /// Writes `piece` as the XML UnstructuredGrid file vtkio 0.7 writes for it
 /// uncompressed (after [`add_zero_counts`] and [`add_component_names`]),
 /// base64-encoding each array straight into `w`.
-fn stream_piece(w: &mut impl Write, piece: &UnstructuredGridPiece) -> std::io::Result<()> {
+fn stream_piece(
+    w: &mut impl Write,
+    piece: &UnstructuredGridPiece,
+    names: Names,
+) -> std::io::Result<()> {
     stream_head(w, piece.points.len() / 3, piece.cells.types.len())?;
     let point = data_parts(&piece.data.point);
     let cell = data_parts(&piece.data.cell);
-    stream_data(w, &point, &cell)?;
-    stream_geometry(w, &piece.points, &piece.cells)?;
+    stream_data(w, &point, &cell, names)?;
+    stream_geometry(w, &piece.points, &piece.cells, names)?;
     w.write_all(PIECE_TAIL)
 }
 
@@ -274,7 +302,12 @@ fn part_of(a: &Attribute) -> Option<Part<'_>> {
 }
 
 /// `<PointData>` and `<CellData>`, each left out when empty (as vtkio does).
-fn stream_data(w: &mut impl Write, point: &[Part], cell: &[Part]) -> std::io::Result<()> {
+fn stream_data(
+    w: &mut impl Write,
+    point: &[Part],
+    cell: &[Part],
+    names: Names,
+) -> std::io::Result<()> {
     for (tag, parts) in [("PointData", point), ("CellData", cell)] {
         if parts.is_empty() {
             continue;
@@ -290,7 +323,9 @@ fn stream_data(w: &mut impl Write, point: &[Part], cell: &[Part]) -> std::io::Re
         w.write_all(b">")?;
         for p in parts {
             match p {
-                Part::Data(d) => stream_array(w, &d.name, d.elem.num_comp(), Slice::of(&d.data)?)?,
+                Part::Data(d) => {
+                    stream_array(w, &d.name, d.elem.num_comp(), Slice::of(&d.data)?, names)?
+                }
                 Part::Encoded(bytes) => w.write_all(bytes)?,
             }
         }
@@ -300,9 +335,14 @@ fn stream_data(w: &mut impl Write, point: &[Part], cell: &[Part]) -> std::io::Re
 }
 
 /// `<Points>` and `<Cells>`.
-fn stream_geometry(w: &mut impl Write, points: &IOBuffer, cells: &Cells) -> std::io::Result<()> {
+fn stream_geometry(
+    w: &mut impl Write,
+    points: &IOBuffer,
+    cells: &Cells,
+    names: Names,
+) -> std::io::Result<()> {
     w.write_all(b"<Points>")?;
-    stream_array(w, "Points", 3, Slice::of(points)?)?;
+    stream_array(w, "Points", 3, Slice::of(points)?, names)?;
     w.write_all(b"</Points><Cells>")?;
     let VertexNumbers::XML {
         connectivity,
@@ -311,10 +351,10 @@ fn stream_geometry(w: &mut impl Write, points: &IOBuffer, cells: &Cells) -> std:
     else {
         return Err(std::io::Error::other("cells must be in XML form"));
     };
-    stream_array(w, "connectivity", 1, Slice::U64(connectivity))?;
-    stream_array(w, "offsets", 1, Slice::U64(offsets))?;
+    stream_array(w, "connectivity", 1, Slice::U64(connectivity), names)?;
+    stream_array(w, "offsets", 1, Slice::U64(offsets), names)?;
     let types: Vec<u8> = cells.types.iter().map(|&t| t as u8).collect();
-    stream_array(w, "types", 1, Slice::U8(&types))?;
+    stream_array(w, "types", 1, Slice::U8(&types), names)?;
     w.write_all(b"</Cells>")
 }
 
@@ -341,7 +381,13 @@ impl Slice<'_> {
 /// One `<DataArray format="binary">`: attributes as vtkio writes them
 /// (range over all components, Display of f64), then the UInt64 byte count
 /// and the little-endian values, base64-encoded as one stream.
-fn stream_array(w: &mut impl Write, name: &str, ncomp: u32, buf: Slice<'_>) -> std::io::Result<()> {
+fn stream_array(
+    w: &mut impl Write,
+    name: &str,
+    ncomp: u32,
+    buf: Slice<'_>,
+    names_of: Names,
+) -> std::io::Result<()> {
     use base64::engine::general_purpose::STANDARD;
     use base64::write::EncoderWriter;
     fn range<T: Copy + PartialOrd + Into<f64>>(v: &[T]) -> Option<(f64, f64)> {
@@ -370,7 +416,7 @@ fn stream_array(w: &mut impl Write, name: &str, ncomp: u32, buf: Slice<'_>) -> s
     if let Some((lo, hi)) = range {
         write!(w, " RangeMin=\"{lo}\" RangeMax=\"{hi}\"")?;
     }
-    if let Some((_, names)) = COMPONENT_NAMES.iter().find(|(n, _)| *n == name) {
+    if let Some((_, names)) = names_of.iter().find(|(n, _)| *n == name) {
         if ncomp > 1 {
             for (k, c) in names.iter().take(ncomp as usize).enumerate() {
                 write!(w, " ComponentName{k}=\"{c}\"")?;
@@ -454,12 +500,17 @@ impl VtuMeshParts {
                 // Writing into memory cannot fail; the types are the ones
                 // stream_array takes.
                 let _ = Slice::of(&d.data)
-                    .and_then(|s| stream_array(&mut buf, &d.name, d.elem.num_comp(), s));
+                    .and_then(|s| stream_array(&mut buf, &d.name, d.elem.num_comp(), s, COMPONENT_NAMES));
             }
             buf
         };
         let mut geometry = vec![];
-        let _ = stream_geometry(&mut geometry, &points3(&mesh.points), &bulk_cells(mesh));
+        let _ = stream_geometry(
+            &mut geometry,
+            &points3(&mesh.points),
+            &bulk_cells(mesh),
+            COMPONENT_NAMES,
+        );
         VtuMeshParts {
             n: mesh.points.len(),
             m: mesh.triangles.len(),
@@ -533,6 +584,11 @@ pub fn write_vtu_with(
     check_len(path, "stress", step.stress.len(), m)?;
     check_len(path, "von_mises", step.von_mises.len(), m)?;
     check_len(path, "principal", step.principal.len(), m)?;
+    let names = if mesh.axisymmetric {
+        AXI_COMPONENT_NAMES
+    } else {
+        COMPONENT_NAMES
+    };
     for t in &mesh.triangles {
         for &i in t {
             check_index(path, "triangle", i, n)?;
@@ -603,7 +659,7 @@ pub fn write_vtu_with(
                     .map_err(|e| IoError::io(path, "cannot create", e))?;
                 let mut w = BufWriter::with_capacity(1 << 20, file);
                 stream_head(&mut w, n, m)
-                    .and_then(|()| stream_data(&mut w, &point, &cell))
+                    .and_then(|()| stream_data(&mut w, &point, &cell, names))
                     .and_then(|()| w.write_all(&p.geometry))
                     .and_then(|()| w.write_all(PIECE_TAIL))
                     .and_then(|()| w.flush())
@@ -627,7 +683,7 @@ pub fn write_vtu_with(
                 cells: bulk_cells(mesh),
                 data: Attributes { point, cell },
             };
-            write_piece(path, piece, compress)
+            write_piece(path, piece, compress, names)
         }
     }
 }
@@ -783,7 +839,7 @@ pub fn write_contact_vtu_with_friction(
             cell: Vec::new(),
         },
     };
-    write_piece(path, piece, compress)
+    write_piece(path, piece, compress, COMPONENT_NAMES)
 }
 
 fn xml_escape(s: &str) -> String {
@@ -1007,9 +1063,9 @@ mod tests {
             (5, 3, false),
         ] {
             let p = piece(np, nc, cd);
-            let want = vtkio_bytes(p.clone(), false).unwrap();
+            let want = vtkio_bytes(p.clone(), false, COMPONENT_NAMES).unwrap();
             let mut got = vec![];
-            stream_piece(&mut got, &p).unwrap();
+            stream_piece(&mut got, &p, COMPONENT_NAMES).unwrap();
             assert!(
                 got == want,
                 "np {np} nc {nc}:\n{}\n{}",
@@ -1019,7 +1075,7 @@ mod tests {
         }
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("p.vtu");
-        write_piece(&path, piece(9, 4, true), false).unwrap();
+        write_piece(&path, piece(9, 4, true), false, COMPONENT_NAMES).unwrap();
         bulk_with_parts_is_the_same_file(dir.path());
         let back = read_vtu_arrays(&path).unwrap();
         assert_eq!((back.num_points, back.num_cells), (9, 4));
@@ -1039,6 +1095,7 @@ mod tests {
             material: vec![0, 1],
             material_names: vec!["a".into(), "b".into()],
             plane_strain: true,
+            axisymmetric: false,
             contact: Default::default(),
         };
         let mut step = StepOutput {

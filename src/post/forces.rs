@@ -125,10 +125,7 @@ pub struct Forces {
 fn internal_forces(model: &Model, problem: &Problem, u: &[[f64; 2]]) -> Vec<[f64; 2]> {
     let t = &model.topo;
     let f = &problem.file;
-    let th = match model.plane {
-        crate::problem::Plane::Stress => model.thickness,
-        crate::problem::Plane::Strain => 1.0,
-    };
+    let th = model.t_eff();
     let dmats: Vec<[[f64; 3]; 3]> = t
         .material_names
         .iter()
@@ -143,7 +140,8 @@ fn internal_forces(model: &Model, problem: &Problem, u: &[[f64; 2]]) -> Vec<[f64
             .zip(t.tri_material.par_iter())
             .map(|(tri, &mi)| {
                 let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
-                let ke = element::stiffness(&p, &dmats[mi as usize], th);
+                let m = &f.materials[&t.material_names[mi as usize]];
+                let ke = element::stiffness_in(&p, m, &dmats[mi as usize], model.plane, th);
                 let ue = [
                     u[tri[0]][0],
                     u[tri[0]][1],

@@ -36,7 +36,9 @@ pub fn out_mesh(model: &Model, mesh: &crate::mesh::Mesh) -> OutMesh {
         triangles: t.triangles.clone(),
         material: t.tri_material.clone(),
         material_names: t.material_names.clone(),
-        plane_strain: model.plane == crate::problem::Plane::Strain,
+        // Axisymmetric stresses have four components too (σθθ the 4th).
+        plane_strain: model.plane != crate::problem::Plane::Stress,
+        axisymmetric: model.plane.is_axisymmetric(),
         contact,
     }
 }
@@ -129,7 +131,11 @@ pub fn step_output_with_forces(
         reaction: std::mem::take(&mut forces.point_reaction),
         von_mises: {
             use rayon::prelude::*;
-            stress.par_iter().map(element::von_mises).collect()
+            if model.plane.is_axisymmetric() {
+                stress.par_iter().map(element::von_mises_axi).collect()
+            } else {
+                stress.par_iter().map(element::von_mises).collect()
+            }
         },
         principal: {
             use rayon::prelude::*;

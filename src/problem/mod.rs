@@ -90,6 +90,25 @@ pub enum Plane {
     #[default]
     Strain,
     Stress,
+    /// Axisymmetric about the y axis: mesh x = r ≥ 0, y = z; every
+    /// integral is per radian, ∫ · r dr dz (docs/methods.md §10).
+    Axisymmetric,
+}
+
+impl Plane {
+    /// Whether the model is axisymmetric (x = r, y = z).
+    pub fn is_axisymmetric(self) -> bool {
+        self == Plane::Axisymmetric
+    }
+
+    /// The effective thickness of forces → pressures: t_h in plane stress,
+    /// 1 in plane strain. Axisymmetric models weight by r instead (1 here).
+    pub fn t_eff(self, thickness: f64) -> f64 {
+        match self {
+            Plane::Stress => thickness,
+            Plane::Strain | Plane::Axisymmetric => 1.0,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -103,6 +122,14 @@ pub struct ModelSection {
     /// Gravity vector: body force F = ρ·gravity (methods.md §1.2).
     #[serde(default, deserialize_with = "opt_pair")]
     pub gravity: Option<[f64; 2]>,
+    /// Angular velocity ω [rad/s] about the axis (axisymmetric only): the
+    /// centrifugal body force ρω²r along r (docs/methods.md §10).
+    #[serde(default)]
+    pub omega: Option<f64>,
+    /// The load factor of the step on the centrifugal load ρω²r (set by
+    /// [`ProblemFile::at_step`], like the factor on gravity; None = 1).
+    #[serde(skip)]
+    pub centrifugal_factor: Option<f64>,
 }
 
 fn one() -> f64 {
@@ -115,6 +142,8 @@ impl Default for ModelSection {
             plane: Plane::Strain,
             thickness: 1.0,
             gravity: None,
+            omega: None,
+            centrifugal_factor: None,
         }
     }
 }
@@ -257,6 +286,10 @@ pub struct NonMatchingPair {
     /// slave node that projects onto the master).
     pub max_gap: Option<f64>,
     pub discretization: Discretization,
+    /// `interference = true`: an initial overlap of the slave into the
+    /// master is intended (a shrink or press fit); the negative gap enters
+    /// g and is resolved in the first step (docs/problem-format.md §5).
+    pub interference: bool,
 }
 
 /// The rows of a non-matching pair (`discretization`).
@@ -378,6 +411,7 @@ impl ProblemFile {
             fo.f = [fo.f[0] * lf, fo.f[1] * lf];
         }
         f.model.gravity = f.model.gravity.map(|g| [g[0] * lf, g[1] * lf]);
+        f.model.centrifugal_factor = Some(lf);
         for d in f.dirichlet.iter_mut() {
             d.value = match st.dirichlet.get(&d.on) {
                 Some(u) => d.value.replaced(*u),

@@ -59,6 +59,7 @@ pub(super) struct RawContact {
     pub friction: Option<f64>,
     pub tresca: Option<f64>,
     pub discretization: Option<String>,
+    pub interference: Option<bool>,
 }
 
 impl RawContact {

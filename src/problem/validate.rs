@@ -6,7 +6,7 @@
 
 use super::raw::{RawContact, RawDirichlet, RawFile, RawTraction};
 use super::{
-    shorten, Contact, ContactPair, Dirichlet, Discretization, FrictionLaw, NonMatchingPair,
+    shorten, Contact, ContactPair, Dirichlet, Discretization, FrictionLaw, NonMatchingPair, Plane,
     Prescribed, ProblemFile, Traction, TractionLoad, MAX_MAGNITUDE, MAX_NAME,
 };
 
@@ -191,6 +191,23 @@ fn check_model(f: &RawFile) -> Check {
         if !g.iter().all(|v| v.is_finite()) {
             return Err("[model] gravity must be finite".into());
         }
+        if f.model.plane == Plane::Axisymmetric && g[0] != 0.0 {
+            return Err(format!(
+                "[model] gravity = [{}, {}]: an axisymmetric model (x = r, y = z) takes gravity along z only; give [0, gz]",
+                g[0], g[1]
+            ));
+        }
+    }
+    if let Some(w) = f.model.omega {
+        if !w.is_finite() || beyond(w) {
+            return Err(format!("[model] omega = {w} must be finite"));
+        }
+        if f.model.plane != Plane::Axisymmetric {
+            return Err(
+                "[model] omega (a spin about the axis) applies to plane = \"axisymmetric\" only"
+                    .into(),
+            );
+        }
     }
     Ok(())
 }
@@ -283,6 +300,7 @@ fn contact(i: usize, c: &RawContact) -> Check<Contact> {
             master: master.clone(),
             max_gap: c.max_gap,
             discretization: Discretization::Nts,
+            interference: c.interference.unwrap_or(false),
         }),
         _ => {
             return Err(format!(
@@ -307,6 +325,7 @@ fn contact(i: usize, c: &RawContact) -> Check<Contact> {
             let other = [
                 ("discretization", c.discretization.is_some()),
                 ("max_gap", c.max_gap.is_some()),
+                ("interference", c.interference.is_some()),
             ];
             if let Some((key, _)) = other.iter().find(|k| k.1) {
                 return Err(format!(
@@ -514,6 +533,7 @@ mod tests {
                     master: "m".into(),
                     max_gap: Some(0.5),
                     discretization: Discretization::Mortar,
+                    interference: false,
                 }),
                 friction: FrictionLaw::Coulomb(2.0),
             },
@@ -523,6 +543,7 @@ mod tests {
                     master: "m".into(),
                     max_gap: None,
                     discretization: Discretization::Nts,
+                    interference: false,
                 }),
                 friction: FrictionLaw::Coulomb(0.25),
             },

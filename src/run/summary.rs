@@ -49,6 +49,11 @@ pub struct Summary {
     /// `[output] reference_step`: the step the `*_change` fields refer to.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reference_step: Option<usize>,
+    /// Axisymmetric models only: "N/rad", the unit of every force
+    /// (loads, reactions, contact forces) — per radian of the ring
+    /// (docs/problem-format.md §11).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub force_unit: Option<&'static str>,
 }
 
 /// The KKT residuals of the last step (the one [`Kkt`] type, its keys
@@ -206,6 +211,7 @@ impl Summary {
             triangles: model.topo.triangles.len(),
             bodies: model.topo.nbodies,
             rigid_modes: model.qp.kernel.len(),
+            force_unit: model.plane.is_axisymmetric().then_some("N/rad"),
             dofs: model.qp.n(),
             constraints: model.qp.m(),
             active: res.active.iter().filter(|a| **a).count(),
