@@ -499,8 +499,9 @@ impl VtuMeshParts {
             if let Attribute::DataArray(d) = a {
                 // Writing into memory cannot fail; the types are the ones
                 // stream_array takes.
-                let _ = Slice::of(&d.data)
-                    .and_then(|s| stream_array(&mut buf, &d.name, d.elem.num_comp(), s, COMPONENT_NAMES));
+                let _ = Slice::of(&d.data).and_then(|s| {
+                    stream_array(&mut buf, &d.name, d.elem.num_comp(), s, COMPONENT_NAMES)
+                });
             }
             buf
         };
