@@ -452,30 +452,7 @@ pub fn extent(t: &crate::fem::Topology, lambda: &[f64], iface: u32) -> Option<Ex
         let (p, q) = (x(a), x(b));
         (q[0] - p[0]).hypot(q[1] - p[1])
     };
-    // Adjacency (row → neighbours), edges once each.
-    let mut adj: std::collections::BTreeMap<usize, Vec<usize>> =
-        rows.iter().map(|&r| (r, vec![])).collect();
-    let mut link = |a: usize, b: usize| {
-        if a != b && adj.contains_key(&a) && adj.contains_key(&b) && !adj[&a].contains(&b) {
-            adj.get_mut(&a).unwrap().push(b);
-            adj.get_mut(&b).unwrap().push(a);
-        }
-    };
-    for &[a, b] in &t.contact_segments {
-        link(a, b);
-    }
-    let mut at_point: std::collections::BTreeMap<usize, usize> = Default::default();
-    for &r in &rows {
-        match at_point.get(&t.contact[r].first) {
-            Some(&q) => link(q, r),
-            None => {
-                at_point.insert(t.contact[r].first, r);
-            }
-        }
-    }
-    for v in adj.values_mut() {
-        v.sort_unstable();
-    }
+    let adj = adjacency(t, &rows);
     let mut seen: std::collections::BTreeSet<usize> = Default::default();
     let mut pieces: Vec<Extent> = vec![];
     for &r0 in &rows {
@@ -542,74 +519,8 @@ pub fn extent(t: &crate::fem::Topology, lambda: &[f64], iface: u32) -> Option<Ex
             None
         };
         match order {
-            Some(path) => {
-                let first = path.iter().position(|&r| on(r)).unwrap();
-                let last = path.iter().rposition(|&r| on(r)).unwrap();
-                let (mut length, mut active_length, mut zones) = (0.0, 0.0, 1);
-                for i in first..last {
-                    let d = dist(path[i], path[i + 1]);
-                    length += d;
-                    match (on(path[i]), on(path[i + 1])) {
-                        (true, true) => active_length += d,
-                        (false, true) => zones += 1,
-                        _ => {}
-                    }
-                }
-                pieces.push(Extent {
-                    start: x(path[first]),
-                    end: x(path[last]),
-                    length,
-                    zones,
-                    active_length,
-                });
-            }
-            None => {
-                // Branching: prune open leaves, then sum what is left.
-                let mut deg: std::collections::BTreeMap<usize, usize> =
-                    comp.iter().map(|&r| (r, adj[&r].len())).collect();
-                let mut gone: std::collections::BTreeSet<usize> = Default::default();
-                let mut stack: Vec<usize> = comp
-                    .iter()
-                    .copied()
-                    .filter(|&r| !on(r) && deg[&r] <= 1)
-                    .collect();
-                while let Some(r) = stack.pop() {
-                    if !gone.insert(r) {
-                        continue;
-                    }
-                    for &q in &adj[&r] {
-                        if !gone.contains(&q) {
-                            let d = deg.get_mut(&q).unwrap();
-                            *d -= 1;
-                            if *d <= 1 && !on(q) {
-                                stack.push(q);
-                            }
-                        }
-                    }
-                }
-                let (mut length, mut active_length) = (0.0, 0.0);
-                let mut zone_links = 0;
-                for &a in &comp {
-                    for &b in &adj[&a] {
-                        if a < b && !gone.contains(&a) && !gone.contains(&b) {
-                            length += dist(a, b);
-                            if on(a) && on(b) {
-                                active_length += dist(a, b);
-                                zone_links += 1;
-                            }
-                        }
-                    }
-                }
-                let act: Vec<usize> = comp.iter().copied().filter(|&r| on(r)).collect();
-                pieces.push(Extent {
-                    start: x(act[0]),
-                    end: x(act[act.len() - 1]),
-                    length,
-                    // Exact on a forest of active rows; a lower bound else.
-                    zones: act.len().saturating_sub(zone_links).max(1),
-                    active_length,
-                });
-            }
+            Some(path) => pieces.push(path_extent(&path, &on, &x)),
+            None => pieces.push(branch_extent(&comp, &adj, &on, &x)),
         }
     }
     let (first, last) = (pieces.first()?, pieces.last()?);
@@ -620,6 +531,129 @@ pub fn extent(t: &crate::fem::Topology, lambda: &[f64], iface: u32) -> Option<Ex
         zones: pieces.iter().map(|p| p.zones).sum(),
         active_length: pieces.iter().map(|p| p.active_length).sum(),
     })
+}
+
+/// The rows of `rows` as a graph: contact segments, and rows at one point
+/// (a corner's two normals); neighbours ascending, edges once each.
+fn adjacency(t: &crate::fem::Topology, rows: &[usize]) -> Adjacency {
+    // Adjacency (row → neighbours), edges once each.
+    let mut adj: Adjacency = rows.iter().map(|&r| (r, vec![])).collect();
+    let mut link = |a: usize, b: usize| {
+        if a != b && adj.contains_key(&a) && adj.contains_key(&b) && !adj[&a].contains(&b) {
+            adj.get_mut(&a).unwrap().push(b);
+            adj.get_mut(&b).unwrap().push(a);
+        }
+    };
+    for &[a, b] in &t.contact_segments {
+        link(a, b);
+    }
+    let mut at_point: std::collections::BTreeMap<usize, usize> = Default::default();
+    for &r in rows {
+        match at_point.get(&t.contact[r].first) {
+            Some(&q) => link(q, r),
+            None => {
+                at_point.insert(t.contact[r].first, r);
+            }
+        }
+    }
+    for v in adj.values_mut() {
+        v.sort_unstable();
+    }
+    adj
+}
+
+/// Row → its neighbours ([`adjacency`]).
+type Adjacency = std::collections::BTreeMap<usize, Vec<usize>>;
+
+/// The extent of a path of rows (in order): from its first active row to
+/// its last, the zones being the runs of active rows.
+fn path_extent(
+    path: &[usize],
+    on: &dyn Fn(usize) -> bool,
+    x: &dyn Fn(usize) -> [f64; 2],
+) -> Extent {
+    let dist = |a: usize, b: usize| {
+        let (p, q) = (x(a), x(b));
+        (q[0] - p[0]).hypot(q[1] - p[1])
+    };
+    let first = path.iter().position(|&r| on(r)).unwrap();
+    let last = path.iter().rposition(|&r| on(r)).unwrap();
+    let (mut length, mut active_length, mut zones) = (0.0, 0.0, 1);
+    for i in first..last {
+        let d = dist(path[i], path[i + 1]);
+        length += d;
+        match (on(path[i]), on(path[i + 1])) {
+            (true, true) => active_length += d,
+            (false, true) => zones += 1,
+            _ => {}
+        }
+    }
+    Extent {
+        start: x(path[first]),
+        end: x(path[last]),
+        length,
+        zones,
+        active_length,
+    }
+}
+
+/// The extent of a branching piece (never built by the pairs of
+/// docs/problem-format.md §4, kept for safety): open leaves pruned, the
+/// edges left summed.
+fn branch_extent(
+    comp: &[usize],
+    adj: &Adjacency,
+    on: &dyn Fn(usize) -> bool,
+    x: &dyn Fn(usize) -> [f64; 2],
+) -> Extent {
+    let dist = |a: usize, b: usize| {
+        let (p, q) = (x(a), x(b));
+        (q[0] - p[0]).hypot(q[1] - p[1])
+    };
+    let mut deg: std::collections::BTreeMap<usize, usize> =
+        comp.iter().map(|&r| (r, adj[&r].len())).collect();
+    let mut gone: std::collections::BTreeSet<usize> = Default::default();
+    let mut stack: Vec<usize> = comp
+        .iter()
+        .copied()
+        .filter(|&r| !on(r) && deg[&r] <= 1)
+        .collect();
+    while let Some(r) = stack.pop() {
+        if !gone.insert(r) {
+            continue;
+        }
+        for &q in &adj[&r] {
+            if !gone.contains(&q) {
+                let d = deg.get_mut(&q).unwrap();
+                *d -= 1;
+                if *d <= 1 && !on(q) {
+                    stack.push(q);
+                }
+            }
+        }
+    }
+    let (mut length, mut active_length) = (0.0, 0.0);
+    let mut zone_links = 0;
+    for &a in comp {
+        for &b in &adj[&a] {
+            if a < b && !gone.contains(&a) && !gone.contains(&b) {
+                length += dist(a, b);
+                if on(a) && on(b) {
+                    active_length += dist(a, b);
+                    zone_links += 1;
+                }
+            }
+        }
+    }
+    let act: Vec<usize> = comp.iter().copied().filter(|&r| on(r)).collect();
+    Extent {
+        start: x(act[0]),
+        end: x(act[act.len() - 1]),
+        length,
+        // Exact on a forest of active rows; a lower bound else.
+        zones: act.len().saturating_sub(zone_links).max(1),
+        active_length,
+    }
 }
 
 /// The rows of a path or ring (every row of degree ≤ 2) from `start`: each
