@@ -253,15 +253,7 @@ impl Amg {
                 dense[i * nc + j] = x;
             }
         }
-        // A stiffness contrast of 10¹⁵ between bodies (1 kPa on 1 PPa)
-        // leaves the soft body's part of K_c below the rounding of the
-        // stiff one's: then the coarse solve is made on the equilibrated
-        // matrix with a relative shift, a nearby SPD operator, which is all
-        // a preconditioner needs (CG still solves K). Only then: the bits of
-        // every model the plain factor takes are unchanged.
-        let coarse = SeqChol::new(&dense, nc)
-            .or_else(|| SeqChol::equilibrated(&dense, nc))
-            .ok_or(AmgError::CoarseSingular { n: nc })?;
+        let coarse = SeqChol::new(&dense, nc).ok_or(AmgError::CoarseSingular { n: nc })?;
         Ok(Amg {
             levels,
             coarse,
@@ -426,15 +418,8 @@ fn gs_backward(lev: &Level, b: &[f64], x: &mut [f64]) {
 /// calling thread (`Par::Seq`): faer's global parallelism splits blocked
 /// kernels by the thread count, and the bits of the answer must not depend
 /// on it (`qp::ssn` tests it on 1 and 2 threads).
-/// The relative shift of an equilibrated coarsest factor: far below any
-/// tolerance CG is asked for, far above the rounding of the equilibrated
-/// matrix's unit diagonal.
-const EQUILIBRATED_SHIFT: f64 = 1e-10;
-
 struct SeqChol {
     l: Mat<f64>,
-    /// D^{-1/2} of an equilibrated factor ([`SeqChol::equilibrated`]).
-    scale: Option<Vec<f64>>,
 }
 
 impl SeqChol {
@@ -467,33 +452,7 @@ impl SeqChol {
                 l[(i, j)] = 0.0; // the strict upper part is not L
             }
         }
-        l.is_all_finite().then_some(SeqChol { l, scale: None })
-    }
-
-    /// The factor of D^{-1/2} a D^{-1/2} + ε I (D = diag a, ε =
-    /// [`EQUILIBRATED_SHIFT`]): every diagonal entry 1, so a body 10¹⁵
-    /// times softer than its neighbour keeps its pivots; the shift keeps a
-    /// pivot lost to rounding positive. None if a diagonal entry is not
-    /// positive or the factor fails anyway.
-    fn equilibrated(a: &[f64], n: usize) -> Option<SeqChol> {
-        let mut scale = Vec::with_capacity(n);
-        for i in 0..n {
-            let d = a[i * n + i];
-            if !(d > 0.0 && d.is_finite()) {
-                return None;
-            }
-            scale.push(1.0 / d.sqrt());
-        }
-        let mut b = vec![0.0; n * n];
-        for i in 0..n {
-            for j in 0..n {
-                b[i * n + j] = scale[i] * a[i * n + j] * scale[j];
-            }
-            b[i * n + i] += EQUILIBRATED_SHIFT;
-        }
-        let mut f = SeqChol::new(&b, n)?;
-        f.scale = Some(scale);
-        Some(f)
+        l.is_all_finite().then_some(SeqChol { l })
     }
 
     /// b ← (LLᵀ)⁻¹ b.
@@ -501,15 +460,9 @@ impl SeqChol {
         use faer::linalg::triangular_solve::{
             solve_lower_triangular_in_place, solve_upper_triangular_in_place,
         };
-        if let Some(s) = &self.scale {
-            b.iter_mut().zip(s).for_each(|(v, s)| *v *= s);
-        }
         let mut col = faer::MatMut::from_column_major_slice_mut(b, self.l.nrows(), 1);
         solve_lower_triangular_in_place(self.l.as_ref(), col.as_mut(), Par::Seq);
         solve_upper_triangular_in_place(self.l.transpose(), col.as_mut(), Par::Seq);
-        if let Some(s) = &self.scale {
-            b.iter_mut().zip(s).for_each(|(v, s)| *v *= s);
-        }
     }
 }
 

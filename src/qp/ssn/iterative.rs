@@ -252,7 +252,7 @@ impl<'a> State<'a> {
                 // above): say what failed instead of blaming the bodies.
                 Err(e) => {
                     return Kkt::Stalled(format!(
-                        "ssn iterative: no multigrid of K_J ({e}); ssn_path = \"auto\" factors K_J instead"
+                        "ssn iterative: no multigrid of K_J ({e}; at a large stiffness contrast rounding makes it so); ssn_path = \"auto\" factors K_J instead"
                     ))
                 }
             };
