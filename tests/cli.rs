@@ -445,6 +445,34 @@ fn the_iterative_path_never_blames_a_held_body() {
     }
 }
 
+/// `signorini methods`: one line per method, its name first (the benchmark
+/// parses that), then what it declares; ssn is marked as the default
+/// (`auto`); the last line lists cgc's preconditioners.
+#[test]
+fn methods_lists_every_method_with_its_capabilities() {
+    let (rc, out, err) = signorini(&["methods"]);
+    assert_eq!(rc, 0, "{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    let (last, methods) = lines.split_last().unwrap();
+    assert!(
+        last.starts_with("preconditioners (cgc): none, jacobi"),
+        "{last}"
+    );
+    let names: Vec<&str> = methods
+        .iter()
+        .map(|l| l.split_whitespace().next().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        ["cgc", "preelim", "penalty", "uzawa", "dual", "asm", "asm-cgh", "mprgp", "ssn"]
+    );
+    for l in methods {
+        let friction = l.starts_with("mprgp") || l.starts_with("ssn");
+        assert_eq!(l.contains("[friction yes"), friction, "{l}");
+        assert_eq!(l.contains("the default"), l.starts_with("ssn"), "{l}");
+    }
+}
+
 #[test]
 fn bad_body_without_support() {
     // No Dirichlet at all and no contact: both halves are free.

@@ -108,27 +108,27 @@ pub fn run(cli: Cli) -> i32 {
         Command::Export(a) => export::run(&a, cli.quiet, &cli.build),
         Command::Limit(a) => limit::run(&a, cli.quiet, &cli.build),
         Command::Methods => {
-            println!("method     friction floating factor    summary");
-            println!(
-                "{:<10} {:<8} {:<8} {:<9} ssn for every problem (the default)",
-                "auto", "yes", "yes", "-"
-            );
+            // One line per method, its name first (scripts parse it), then
+            // what it declares; `auto`, the default, is ssn.
             for id in crate::qp::MethodId::ALL {
                 let m = id.method();
                 let c = m.capabilities();
-                let yes = |b: bool| if b { "yes" } else { "no" };
                 let factor = match c.factor {
                     crate::qp::method::Factor::Always => "always",
                     crate::qp::method::Factor::Never => "never",
-                    crate::qp::method::Factor::BySettings => "settings",
+                    crate::qp::method::Factor::BySettings => "by settings",
                 };
                 println!(
-                    "{:<10} {:<8} {:<8} {:<9} {}",
+                    "{:<10} {} [friction {}, floating bodies {}, factor {factor}{}]",
                     id.name(),
-                    yes(c.friction),
-                    yes(c.semicoercive),
-                    factor,
-                    m.summary()
+                    m.summary(),
+                    if c.friction { "yes" } else { "no" },
+                    if c.semicoercive { "yes" } else { "no" },
+                    if id == crate::qp::MethodChoice::Auto.resolve() {
+                        "; the default, method = \"auto\""
+                    } else {
+                        ""
+                    }
                 );
             }
             let pcs: Vec<&str> = crate::qp::precond::PrecondKind::ALL
