@@ -479,8 +479,9 @@ pub fn extent(t: &crate::fem::Topology, lambda: &[f64], iface: u32) -> Option<Ex
         let deg2 = comp.iter().all(|r| adj[r].len() <= 2);
         let order = if deg2 && edges + 1 == comp.len() {
             // A path: from its end of lower row index.
-            let start = *comp.iter().find(|r| adj[*r].len() <= 1).unwrap();
-            Some(walk(&adj, start, comp.len()))
+            comp.iter()
+                .find(|r| adj[*r].len() <= 1)
+                .map(|&start| walk(&adj, start, comp.len()))
         } else if deg2 && edges == comp.len() {
             // A ring: cut at the longest stretch between active rows that
             // holds an open row (all active: one zone round the ring).
@@ -540,8 +541,8 @@ fn adjacency(t: &crate::fem::Topology, rows: &[usize]) -> Adjacency {
     let mut adj: Adjacency = rows.iter().map(|&r| (r, vec![])).collect();
     let mut link = |a: usize, b: usize| {
         if a != b && adj.contains_key(&a) && adj.contains_key(&b) && !adj[&a].contains(&b) {
-            adj.get_mut(&a).unwrap().push(b);
-            adj.get_mut(&b).unwrap().push(a);
+            adj.entry(a).or_default().push(b);
+            adj.entry(b).or_default().push(a);
         }
     };
     for &[a, b] in &t.contact_segments {
@@ -576,8 +577,9 @@ fn path_extent(
         let (p, q) = (x(a), x(b));
         (q[0] - p[0]).hypot(q[1] - p[1])
     };
-    let first = path.iter().position(|&r| on(r)).unwrap();
-    let last = path.iter().rposition(|&r| on(r)).unwrap();
+    // A piece reaches here only with an active row (extent skips others).
+    let first = path.iter().position(|&r| on(r)).unwrap_or(0);
+    let last = path.iter().rposition(|&r| on(r)).unwrap_or(0);
     let (mut length, mut active_length, mut zones) = (0.0, 0.0, 1);
     for i in first..last {
         let d = dist(path[i], path[i + 1]);
@@ -624,8 +626,8 @@ fn branch_extent(
         }
         for &q in &adj[&r] {
             if !gone.contains(&q) {
-                let d = deg.get_mut(&q).unwrap();
-                *d -= 1;
+                let d = deg.entry(q).or_insert(1);
+                *d = d.saturating_sub(1);
                 if *d <= 1 && !on(q) {
                     stack.push(q);
                 }
@@ -662,7 +664,7 @@ fn walk(adj: &std::collections::BTreeMap<usize, Vec<usize>>, start: usize, n: us
     let mut path = vec![start];
     let mut prev = usize::MAX;
     while path.len() < n {
-        let cur = *path.last().unwrap();
+        let Some(&cur) = path.last() else { break };
         match adj[&cur].iter().find(|&&q| q != prev) {
             Some(&q) => {
                 prev = cur;
