@@ -2,6 +2,7 @@
 //! tangential traction, the slip of the step and the state open / stick /
 //! slip, from the solution of a frictional problem (docs/methods.md §9).
 
+use crate::fem::friction::on_symmetry_line;
 use crate::fem::Model;
 use crate::qp::QpResult;
 
@@ -55,9 +56,12 @@ pub fn friction_output(model: &Model, res: &QpResult) -> Option<FrictionOutput> 
         };
         out.slip[r] = v[qi];
         let in_contact = res.active.get(qi).copied().unwrap_or(false) || res.lambda[qi] > 0.0;
+        // A mortar row on a line of symmetry has no tangential row (bound 0):
+        // the line holds its slave point, so it sticks (docs/methods.md §9).
+        let held = on_symmetry_line(&model.topo, &model.dofs, r);
         out.state[r] = if !in_contact {
             0
-        } else if lt.abs() >= (1.0 - STICK_MARGIN) * s[qi] {
+        } else if !held && lt.abs() >= (1.0 - STICK_MARGIN) * s[qi] {
             out.slip_count += 1;
             2
         } else {
