@@ -49,7 +49,9 @@ min ½xᵀKx − fᵀx, Ax ≤ g is solved by Clarabel (interior point, handles 
 positive semidefinite K of floating bodies), then polished by a primal-dual
 active-set iteration that solves the equality-constrained KKT system of the
 active rows exactly (sparse LU).  Compared with `signorini solve TOML`:
-displacements, stresses and multipliers.
+displacements, stresses, multipliers, initial gaps and contact pressures
+(λ/(trib × thickness), trib = ∫N ds of the row's node on the contact
+segments; the mortar weight D_jj on a mortar pair).
 
 Axisymmetric models (`[model] plane = "axisymmetric"`, x = r ≥ 0, y = z,
 docs/methods.md §10): every form carries r (per radian),
@@ -66,8 +68,7 @@ difference goes down like h). Loads are integrated
 exactly (degree 4 and 2), as signorini does; a step's load factor scales
 ρω²r. u_r = 0 is added on every node with r ≤ 1e-9 max r, the only rigid
 motion is the axial translation, contact rows keep their pointwise form,
-mortar integrals (D, M, g̃) carry r, and for node-to-segment and conforming
-rows the initial gap and the pressure λ/∫N r ds are compared as well. An
+mortar integrals (D, M, g̃) and tributary weights (∫N r ds) carry r. An
 `interference = true` pair keeps its negative gap.
 
 Exit code: 0 all comparisons within --tol, 1 a difference above it (or a
@@ -1026,7 +1027,7 @@ def stresses(prob: Problem, u: np.ndarray, tris_pts: np.ndarray) -> np.ndarray:
         if prob.axi:
             # (σrr, σzz, σrz, σθθ) at the centroid: hoop strain u_r(c)/r̄ (methods.md §10)
             fct = E / ((1 + nu) * (1 - 2 * nu))
-            ett = ue[:, 0].sum() / (3 * x[:, 0].sum() / 3)
+            ett = (ue[:, 0].sum() / 3) / (x[:, 0].sum() / 3)  # u_r(c) / r̄
             sxx = fct * ((1 - nu) * exx + nu * (eyy + ett))
             syy = fct * ((1 - nu) * eyy + nu * (exx + ett))
             sxy = fct * (1 - 2 * nu) / 2 * gxy
@@ -1100,12 +1101,13 @@ def compare(prob, u_ref, sig, tol, label, lam_ref=None, rows=None):
                              for j in perm])
             res["mortar pressure"] = rel(sig["contact_pressure"][mortar], pref[mortar],
                                          1e-6 * fl["force"] / L)
-        if prob.axi and (~mortar).any():
+        if (~mortar).any():
             # node-to-segment and conforming rows: the initial gap (negative for an
-            # interference fit) and the pressure λ/trib, trib = ∫N r ds per radian
+            # interference fit) and the pressure λ/(trib × thickness), trib = ∫N ds
+            # (∫N r ds per radian when axisymmetric)
             nm = ~mortar
             res["gap0"] = rel(sig["contact_gap0"][nm], gref[nm], 1e-12 * L)
-            pref = np.array([lam_ref[j] / rows[j]["w"] if rows[j].get("w") else 0.0 for j in perm])
+            pref = np.array([lam_ref[j] / (rows[j]["w"] * te) if rows[j].get("w") else 0.0 for j in perm])
             res["pressure"] = rel(sig["contact_pressure"][nm], pref[nm], 1e-6 * fl["force"] / L)
     worst = max(res.values())
     line = "  ".join(f"{k} {v:.2e}" for k, v in res.items())
