@@ -188,7 +188,8 @@ for t in hertz_mortar punch_mortar; do
 done
 
 # Axisymmetric models (docs/methods.md §10), r-weighted forms in FEniCSx:
-# a cup with its bottom on the axis (pressure, gravity, spin, two steps),
+# a cup with its bottom on the axis (pressure, gravity, spin, two steps)
+# and a plug on a conforming seat,
 # a half-ball on a block (NTS; mortar rows, part b only) and a shrink fit
 # with interference = true (NTS and mortar sleeves).
 for t in axi_cup/axi_cup axi_sphere/axi_sphere axi_sphere/axi_sphere_mortar:b axi_shrink/axi_shrink; do
