@@ -49,7 +49,26 @@ min ½xᵀKx − fᵀx, Ax ≤ g is solved by Clarabel (interior point, handles 
 positive semidefinite K of floating bodies), then polished by a primal-dual
 active-set iteration that solves the equality-constrained KKT system of the
 active rows exactly (sparse LU).  Compared with `signorini solve TOML`:
-displacements, stresses and multipliers.
+displacements, stresses, multipliers, initial gaps and contact pressures
+(λ/(trib × thickness), trib = ∫N ds of the row's node on the contact
+segments; the mortar weight D_jj on a mortar pair).
+
+Axisymmetric models (`[model] plane = "axisymmetric"`, x = r ≥ 0, y = z,
+docs/methods.md §10): every form carries r (per radian),
+
+    a(u, v) = ∫ 2μ (ε(u):ε(v) + u_r v_r/r²) + λ (div u + u_r/r)(div v + v_r/r) r dx₁
+    L(v)    = ∫ ρ (g·v + ω² r v_r) r dx + ∫_Γτ (P + pn n)·v r ds
+
+with dx₁ the one-point (centroid) rule: signorini's element evaluates the
+hoop strain u_r/r at the centroid (r̄|T| B4ᵀD4B4) and its in-plane strains
+are constant, so dx₁ is its quadrature exactly (with FEniCSx's default,
+estimated quadrature degree the displacements differ by O(h²): 8.3e-3,
+2.5e-3, 6.1e-4, 1.7e-4 on tests/data/axi_cup at h = 0.3 … 0.0375,
+multipliers 2.1e-3 … 3.7e-5). Loads are integrated exactly (degree 4 and
+2), as signorini does; a step's load factor scales ρω²r. u_r = 0 is added on every node with r ≤ 1e-9 max r, the only rigid
+motion is the axial translation, contact rows keep their pointwise form,
+mortar integrals (D, M, g̃) and tributary weights (∫N r ds) carry r. An
+`interference = true` pair keeps its negative gap.
 
 Exit code: 0 all comparisons within --tol, 1 a difference above it (or a
 failed self-check), 2 usage or setup error.
@@ -310,9 +329,28 @@ class Assembler:
         self.PN = C(msh, 0.0)
         u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
         eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
-        self.a = dolfinx.fem.form(self.t * (2 * self.mu * ufl.inner(eps(u), eps(v))
-                                            + self.lam * ufl.tr(eps(u)) * ufl.tr(eps(v))) * ufl.dx)
-        self.Lg = dolfinx.fem.form(self.t * self.rho * ufl.dot(self.g, v) * ufl.dx)
+        self.axi = plane == "axisymmetric"
+        self.omega2 = C(msh, 0.0)  # ω² × the step's load factor (axisymmetric)
+        if self.axi:
+            # x = r, y = z; every integral carries r (per radian, methods.md §10).
+            r = ufl.SpatialCoordinate(msh)[0]
+            self.r = r
+            # Stiffness: the hoop strain u_r/r at the one-point centroid rule,
+            # as signorini's element (r̄|T| B4ᵀD4B4); the in-plane strains are
+            # constant on a P1 triangle, so that rule is the element's exactly.
+            dx1 = ufl.dx(metadata={"quadrature_degree": 1})
+            tr4 = lambda w: ufl.tr(eps(w)) + w[0] / r  # noqa: E731
+            self.a = dolfinx.fem.form((2 * self.mu * (ufl.inner(eps(u), eps(v)) + u[0] / r * v[0] / r)
+                                       + self.lam * tr4(u) * tr4(v)) * r * dx1)
+            # Body loads are polynomials of degree ≤ 3 on a triangle: exact at degree 4.
+            dx4 = ufl.dx(metadata={"quadrature_degree": 4})
+            self.Lg = dolfinx.fem.form(self.rho * (ufl.dot(self.g, v) + self.omega2 * r * v[0]) * r * dx4)
+            self.wr = r
+        else:
+            self.a = dolfinx.fem.form(self.t * (2 * self.mu * ufl.inner(eps(u), eps(v))
+                                                + self.lam * ufl.tr(eps(u)) * ufl.tr(eps(v))) * ufl.dx)
+            self.Lg = dolfinx.fem.form(self.t * self.rho * ufl.dot(self.g, v) * ufl.dx)
+            self.wr = self.t
         self.v = v
         self.n = ufl.FacetNormal(msh)
         # material data per cell
@@ -363,7 +401,9 @@ class Assembler:
         ds = ufl.Measure("ds", domain=self.msh, subdomain_data=mt)
         self.P.value = np.array(p if p is not None else [0.0, 0.0], dtype=float)
         self.PN.value = float(pn if pn is not None else 0.0)
-        L = dolfinx.fem.form(self.t * (ufl.dot(self.P, self.v) + self.PN * ufl.dot(self.n, self.v)) * ds(1))
+        # wr: thickness t (plane), r (axisymmetric: ∫ N P r ds, exact at degree 2)
+        L = dolfinx.fem.form(self.wr * (ufl.dot(self.P, self.v) + self.PN * ufl.dot(self.n, self.v))
+                             * ds(1, metadata={"quadrature_degree": 2}))
         return self._vector(L)
 
 
@@ -424,6 +464,7 @@ def at_step(cfg: dict, s: int) -> dict:
     if "gravity" in out.get("model", {}):
         g = out["model"]["gravity"]
         out["model"]["gravity"] = [g[0] * lf, g[1] * lf]
+    out.setdefault("model", {})["_load_factor"] = lf  # scales ρω²r (axisymmetric omega)
     explicit = st.get("dirichlet", {})
     for d in out.get("dirichlet", []):
         if d["on"] in explicit:
@@ -456,6 +497,7 @@ class Problem:
         self.topo = Topology(self.m, [c["on"] for c in contacts if "on" in c])
         self.with_contact = with_contact
         self.point_force_thickness = point_force_thickness
+        self.axi = cfg.get("model", {}).get("plane", "strain") == "axisymmetric"
 
     # --- conditions per point (signorini's order: dirichlet entries, then slip lines)
     def conditions(self):
@@ -501,6 +543,13 @@ class Problem:
                 ln = np.linalg.norm(n)
                 if ln > 1e-12:
                     conds[p].append(((n[0] / ln, n[1] / ln), 0.0))
+        if self.axi:
+            # the axis: u_r = 0 on every point with r ≤ 1e-9 max|r| (problem-format.md §11)
+            tol = 1e-9 * np.abs(tp.x[:, 0]).max()
+            if (tp.x[:, 0] < -tol).any():
+                raise SetupError("axisymmetric: a node lies at x = r < 0")
+            for p in np.where(tp.x[:, 0] <= tol)[0]:
+                conds[p].append(((1.0, 0.0), 0.0))
         return conds
 
     def reduction(self):
@@ -538,9 +587,13 @@ class Problem:
                 for r, _ in conds[p]:
                     r = np.asarray(r) / np.linalg.norm(r)
                     G.append(z @ r)
+            if self.axi:
+                # a body of revolution moves rigidly along the axis only (methods.md §10)
+                G = [[g[1]] for g in G]
+            nmodes = 1 if self.axi else 3
             rank = np.linalg.matrix_rank(np.array(G), tol=1e-6) if G else 0
-            if rank < 3:
-                floating.append((b, 3 - rank))
+            if rank < nmodes:
+                floating.append((b, nmodes - rank))
         return T, u0, floating
 
     def assemble(self, asm: Assembler):
@@ -567,8 +620,11 @@ class Problem:
             if abs(lost) > 1e-12 * abs(Kb).sum():
                 raise CheckError(f"body {b}: stiffness entries outside the body ({lost:.3e})")
             K = K + Kc
-            asm.g.value = np.array(self.cfg.get("model", {}).get("gravity", [0.0, 0.0]), dtype=float)
-            if any(float(x) != 0.0 for x in asm.g.value):
+            model = self.cfg.get("model", {})
+            asm.g.value = np.array(model.get("gravity", [0.0, 0.0]), dtype=float)
+            # centrifugal ρω²r (axisymmetric): a step's load factor scales ρω²r, not ω
+            asm.omega2.value = float(model.get("omega", 0.0)) ** 2 * float(model.get("_load_factor", 1.0))
+            if any(float(x) != 0.0 for x in asm.g.value) or float(asm.omega2.value) != 0.0:
                 f += E @ asm.body_gravity(mask)
         # tractions: each segment loads the copies of the body owning it
         for tr in self.cfg.get("traction", []):
@@ -611,21 +667,29 @@ class Problem:
                 tk, tl = (ts[0], ts[1]) if bodies[0] < bodies[1] else (ts[1], ts[0])
                 k, l = int(tp.tri_body[tk]), int(tp.tri_body[tl])
                 n = m.outward_normal(tk, *e)
-                for v in e:
-                    acc.setdefault((v, k, l), {"n": [], "cid": cid})["n"].append(n)
+                for v, o in (e, e[::-1]):
+                    ent = acc.setdefault((v, k, l), {"n": [], "w": [], "cid": cid})
+                    ent["n"].append(n)
+                    ent["w"].append(self.trib_weight(v, o))
             for (v, k, l) in sorted(acc, key=lambda key: (key[1], key[2], int(m.tags[key[0]]))):
                 a = acc[(v, k, l)]
                 first, second = tp.point_of[(v, k)], tp.point_of[(v, l)]
-                normals = []
+                normals, tribs = [], []
                 if kind_of[a["cid"]] == "segment":
-                    for n in a["n"]:
-                        if not any(np.abs(q - n).sum() < 1e-12 for q in normals):
+                    for n, w in zip(a["n"], a["w"]):
+                        same = [i for i, q in enumerate(normals) if np.abs(q - n).sum() < 1e-12]
+                        if same:
+                            tribs[same[0]] += w
+                        else:
                             normals.append(n)
+                            tribs.append(w)
                 else:
                     s = np.sum(a["n"], axis=0)
                     normals.append(s / np.linalg.norm(s))
-                for n in normals:
-                    rows.append({"coef": {first: n, second: -n}, "g": 0.0, "n": n, "first": first, "second": second})
+                    tribs.append(sum(a["w"]))
+                for n, w in zip(normals, tribs):
+                    rows.append({"coef": {first: n, second: -n}, "g": 0.0, "n": n, "first": first, "second": second,
+                                 "w": w})
         for c in self.contacts:
             if "slave" not in c:
                 continue
@@ -638,13 +702,14 @@ class Problem:
                 if len(ts) != 1:
                     raise SetupError(f"master segment {(a, b)} is not on the boundary of one body")
                 msegs.append((a, b, int(tp.tri_body[ts[0]]), m.outward_normal(ts[0], a, b)))
-            slave = set()
+            slave = {}  # (node, body) -> tributary weight ∫N ds (∫N r ds axisymmetric)
             for a, b in m.lines(c["slave"]):
                 ts = m.edge_tris.get((min(a, b), max(a, b)), [])
                 if len(ts) != 1:
                     raise SetupError(f"slave segment {(a, b)} is not on the boundary of one body")
                 sb = int(tp.tri_body[ts[0]])
-                slave |= {(a, sb), (b, sb)}
+                slave[(a, sb)] = slave.get((a, sb), 0.0) + self.trib_weight(a, b)
+                slave[(b, sb)] = slave.get((b, sb), 0.0) + self.trib_weight(b, a)
             for v, sb in sorted(slave, key=lambda s: (s[1], int(m.tags[s[0]]))):
                 xs = m.x[v]
                 best = None
@@ -673,9 +738,20 @@ class Problem:
                     if w != 0.0:
                         q = tp.point_of[(node, mb)]
                         coef[q] = coef.get(q, 0) + w * n
-                rows.append({"coef": coef, "g": max(g, 0.0), "n": n, "first": tp.point_of[(v, sb)],
-                             "second": tp.point_of[(a, mb)]})
+                # an intended interference keeps its overlap (g < 0, problem-format.md §5)
+                if g < -1e-6 * np.linalg.norm(m.x[b] - m.x[a]) and not c.get("interference", False):
+                    raise SetupError(f"slave node {int(m.tags[v])} penetrates the master by {-g:.3e}")
+                rows.append({"coef": coef, "g": g if c.get("interference", False) else max(g, 0.0), "n": n,
+                             "first": tp.point_of[(v, sb)], "second": tp.point_of[(a, mb)],
+                             "w": slave[(v, sb)]})
         return rows
+
+    def trib_weight(self, v, o):
+        """∫ N_v ds over the segment (v, o): ℓ/2, or ∫ N_v r ds = ℓ(2r_v + r_o)/6 per
+        radian when axisymmetric (methods.md §10)."""
+        xv, xo = self.m.x[v], self.m.x[o]
+        ln = float(np.linalg.norm(xo - xv))
+        return ln * (2 * xv[0] + xo[0]) / 6 if self.axi else ln / 2
 
     def boundary_segments(self, name):
         """(a, b, body, outward unit normal) of each segment of curve `name`."""
@@ -751,7 +827,11 @@ class Problem:
             if not pieces:
                 continue
             # mass matrix and lumped weights on the seen part -> dual basis Phi = A N
-            quad = [(p0 + t * (p1 - p0), w * (p1 - p0) * L, mi) for p0, p1, mi in pieces for t, w in zip(gx, gw)]
+            # axisymmetric: every integral carries r (the dual basis is biorthogonal
+            # in the r-weighted product, methods.md §10)
+            rw = (lambda s: X(s)[0]) if self.axi else (lambda s: 1.0)  # noqa: E731
+            quad = [(p0 + t * (p1 - p0), w * (p1 - p0) * L * rw(p0 + t * (p1 - p0)), mi)
+                    for p0, p1, mi in pieces for t, w in zip(gx, gw)]
             Nv = np.array([[1 - s, s] for s, _, _ in quad])
             W = np.array([w for _, w, _ in quad])
             Me = (Nv * W[:, None]).T @ Nv
@@ -762,7 +842,7 @@ class Problem:
             for (s, w, mi), nv in zip(quad, Nv):
                 ma, mb, mbody, _ = msegs[mi]
                 xi, g = ray(s, m.x[ma], m.x[mb])
-                if g < -1e-6 * L:
+                if g < -1e-6 * L and not c.get("interference", False):
                     raise SetupError(f"mortar: initial penetration {g:.3e} on slave segment {(a, b)}")
                 phi = A @ nv
                 for i, key in enumerate(((a, sb), (b, sb))):
@@ -943,7 +1023,15 @@ def stresses(prob: Problem, u: np.ndarray, tris_pts: np.ndarray) -> np.ndarray:
         ue = U[tri]
         exx, eyy = bb @ ue[:, 0], cc @ ue[:, 1]
         gxy = cc @ ue[:, 0] + bb @ ue[:, 1]
-        if stress_plane:
+        if prob.axi:
+            # (σrr, σzz, σrz, σθθ) at the centroid: hoop strain u_r(c)/r̄ (methods.md §10)
+            fct = E / ((1 + nu) * (1 - 2 * nu))
+            ett = (ue[:, 0].sum() / 3) / (x[:, 0].sum() / 3)  # u_r(c) / r̄
+            sxx = fct * ((1 - nu) * exx + nu * (eyy + ett))
+            syy = fct * ((1 - nu) * eyy + nu * (exx + ett))
+            sxy = fct * (1 - 2 * nu) / 2 * gxy
+            szz = fct * ((1 - nu) * ett + nu * (exx + eyy))
+        elif stress_plane:
             fct = E / (1 - nu * nu)
             sxx, syy, sxy = fct * (exx + nu * eyy), fct * (nu * exx + eyy), fct * (1 - nu) / 2 * gxy
             szz = 0.0
@@ -1001,17 +1089,25 @@ def compare(prob, u_ref, sig, tol, label, lam_ref=None, rows=None):
         res["normals"] = rel(sig["contact_normal"], normals)
         res["multipliers"] = rel(sig["multipliers"], lam_ref[perm], 1e-6 * fl["force"])
         mortar = np.array([rows[j].get("trib") is not None for j in perm])
+        L = float(np.ptp(prob.topo.x, axis=0).max())
+        model = prob.cfg.get("model", {})
+        te = float(model.get("thickness", 1.0)) if model.get("plane", "strain") == "stress" else 1.0
+        gref = np.array([rows[j]["g"] for j in perm])
         if mortar.any():
             # mortar rows: the weighted gaps g~/D and the pressure λ/D (the mortar traction)
-            L = float(np.ptp(prob.topo.x, axis=0).max())
-            model = prob.cfg.get("model", {})
-            te = float(model.get("thickness", 1.0)) if model.get("plane", "strain") == "stress" else 1.0
-            gref = np.array([rows[j]["g"] for j in perm])
             res["mortar gap0"] = rel(sig["contact_gap0"][mortar], gref[mortar], 1e-12 * L)
             pref = np.array([lam_ref[j] / (rows[j]["trib"] * te) if rows[j].get("trib") else 0.0
                              for j in perm])
             res["mortar pressure"] = rel(sig["contact_pressure"][mortar], pref[mortar],
                                          1e-6 * fl["force"] / L)
+        if (~mortar).any():
+            # node-to-segment and conforming rows: the initial gap (negative for an
+            # interference fit) and the pressure λ/(trib × thickness), trib = ∫N ds
+            # (∫N r ds per radian when axisymmetric)
+            nm = ~mortar
+            res["gap0"] = rel(sig["contact_gap0"][nm], gref[nm], 1e-12 * L)
+            pref = np.array([lam_ref[j] / (rows[j]["w"] * te) if rows[j].get("w") else 0.0 for j in perm])
+            res["pressure"] = rel(sig["contact_pressure"][nm], pref[nm], 1e-6 * fl["force"] / L)
     worst = max(res.values())
     line = "  ".join(f"{k} {v:.2e}" for k, v in res.items())
     ok = worst <= tol

@@ -8,7 +8,8 @@
 #      python3-dolfinx-real, python3-gmsh, python3-scipy, python3-h5py and
 #      Clarabel from PyPI in .venv/debian-site): linear elastic and contact solutions
 #      of an independent FEniCSx model against signorini's, including two
-#      mortar pairs (hertz, the hard punch) whose rows are built in python.
+#      mortar pairs (hertz, the hard punch) whose rows are built in python,
+#      and the axisymmetric models tests/data/axi_* (r-weighted forms).
 #
 # Usage: bash scripts/python_checks.sh [NAME ...]   (default: the examples below)
 #   SIGNORINI_WITH_PARAVIEW=1  also install Debian's python3-paraview (it provides
@@ -184,6 +185,19 @@ for t in hertz_mortar punch_mortar; do
         echo "FAIL $t: the mortar variant was not written (sed did not match)" >&2
         record "crosscheck $t" 1
     fi
+done
+
+# Axisymmetric models (docs/methods.md §10), r-weighted forms in FEniCSx:
+# a cup with its bottom on the axis (pressure, gravity, spin, two steps)
+# and a plug on a conforming seat,
+# a half-ball on a block (NTS; mortar rows, part b only) and a shrink fit
+# with interference = true (NTS and mortar sleeves).
+for t in axi_cup/axi_cup axi_sphere/axi_sphere axi_sphere/axi_sphere_mortar:b axi_shrink/axi_shrink; do
+    part=both
+    case $t in *:b) part=b; t=${t%:b} ;; esac
+    stamp "fenicsx_crosscheck.py tests/data/$t.toml (axisymmetric, part $part)"
+    SIGNORINI="$EXE" SIGNORINI_PYDEPS="$PYDEPS" /usr/bin/python3 scripts/fenicsx_crosscheck.py "tests/data/$t.toml" --tol 1e-8 --part $part
+    record "crosscheck ${t#*/}" $?
 done
 
 stamp "finished"
