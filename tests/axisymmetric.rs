@@ -270,6 +270,12 @@ fn shrink_fit_pressure_matches_lame_and_methods_agree() {
         let mut us: Vec<Vec<f64>> = vec![];
         for method in ["ssn", "cgc", "mprgp"] {
             let (prep, _res, step) = solve_with(&path, Some(method));
+            // Tubes: no node on the axis, so no axis condition is reported.
+            assert!(
+                prep.model.cond_groups.iter().all(|(k, _)| *k != "axis"),
+                "{:?}",
+                prep.model.cond_groups
+            );
             let rows = &prep.model.topo.contact;
             let ps: Vec<f64> = rows
                 .iter()

@@ -119,6 +119,7 @@ impl Conditions {
         self.src
             .push("the axis r = 0 (axisymmetric: u_r = 0)".into());
         self.groups.push(("axis", "r = 0".into()));
+        let mut on_axis = false;
         for (p, x) in topo.points.iter().enumerate() {
             if x[0] < -tol {
                 return Err(FemError::new(
@@ -131,12 +132,18 @@ impl Conditions {
                 ));
             }
             if x[0] <= tol {
+                on_axis = true;
                 self.at[p].push(Cond {
                     r: [1.0, 0.0],
                     v: 0.0,
                     src,
                 });
             }
+        }
+        if !on_axis {
+            // No node on the axis (a tube): no condition, no reaction group.
+            self.src.pop();
+            self.groups.pop();
         }
         Ok(())
     }
