@@ -568,3 +568,81 @@ fn contact_plot_with_friction_draws_tangential_traction_stick_and_slip() {
     let text = std::fs::read_to_string(&plain).unwrap();
     assert!(!text.contains("tangential") && text.contains("contact pressure [Pa]"));
 }
+
+/// Issue 35: an axisymmetric checkpoint's stress is (σrr, σzz, σrz, σθθ)
+/// (docs/problem-format.md §11): `--field stt` draws and labels the hoop
+/// stress (the fourth component, which `szz` used to draw and label as
+/// σzz), `szz` the axial stress (the second, the same values as `syy`),
+/// `srr`/`srz` the first and third; the axisymmetric names on a plane
+/// checkpoint are exit 2, naming the plane field.
+#[test]
+fn axisymmetric_fields_are_named_srr_szz_srz_stt() {
+    let dir = out_dir();
+    let text = std::fs::read_to_string(root().join("meshes/two_blocks_eccentric.toml")).unwrap();
+    let msh = root().join("meshes/two_blocks_eccentric.msh");
+    let text = text
+        .replace("plane = \"strain\"", "plane = \"axisymmetric\"")
+        .replace(
+            "file = \"two_blocks_eccentric.msh\"",
+            &format!("file = \"{}\"", msh.display()),
+        );
+    assert!(text.contains("axisymmetric") && text.contains(msh.to_str().unwrap()));
+    let toml = dir.path().join("axi_blocks.toml");
+    std::fs::write(&toml, text).unwrap();
+    let (code, so, se) = signorini(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{so}\n{se}");
+    let ck = dir.path().join("axi_blocks.h5");
+    // (stdout, svg text) of one field.
+    let plot = |field: &str| {
+        let svg = dir.path().join(format!("{field}.svg"));
+        let (code, so, se) = signorini(&[
+            "plot",
+            ck.to_str().unwrap(),
+            "--field",
+            field,
+            "-o",
+            svg.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{field}: {so}\n{se}");
+        (so, std::fs::read_to_string(&svg).unwrap())
+    };
+    let range = |so: &str| {
+        so.lines()
+            .find(|l| l.starts_with("range: "))
+            .unwrap_or_else(|| panic!("no range in {so}"))
+            .to_string()
+    };
+    let (stt_out, stt_svg) = plot("stt");
+    assert!(stt_svg.contains("stt [Pa]"), "hoop stress not labelled stt");
+    assert!(stt_svg.contains("axi_blocks — step 1 — stt"));
+    assert!(stt_out.contains("stt"), "{stt_out}");
+    let (szz_out, szz_svg) = plot("szz");
+    assert!(szz_svg.contains("szz [Pa]"));
+    // szz is the axial stress: syy's values, not the hoop stress's.
+    let (syy_out, syy_svg) = plot("syy");
+    assert_eq!(range(&szz_out), range(&syy_out));
+    assert_ne!(range(&szz_out), range(&stt_out));
+    assert!(syy_svg.contains("szz [Pa]"), "syy not labelled szz");
+    let (srr_out, srr_svg) = plot("srr");
+    let (sxx_out, _) = plot("sxx");
+    assert!(srr_svg.contains("srr [Pa]"));
+    assert_eq!(range(&srr_out), range(&sxx_out));
+    let (srz_out, srz_svg) = plot("srz");
+    let (sxy_out, _) = plot("sxy");
+    assert!(srz_svg.contains("srz [Pa]"));
+    assert_eq!(range(&srz_out), range(&sxy_out));
+    // The axisymmetric names on the plane checkpoint.
+    for (axi, plane) in [("stt", "szz"), ("srr", "sxx"), ("srz", "sxy")] {
+        let e = fails(&["--field", axi], "fig.png");
+        assert!(
+            e.contains(axi) && e.contains(&format!("\"{plane}\"")),
+            "{e}"
+        );
+    }
+}

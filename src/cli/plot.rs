@@ -23,7 +23,8 @@ pub struct PlotArgs {
     /// Step to draw (1-based; default: the last one).
     #[arg(long)]
     pub step: Option<usize>,
-    /// von_mises | ux | uy | umag | sxx | syy | sxy | szz | s1 | s2 | material | body.
+    /// von_mises | ux | uy | umag | sxx | syy | sxy | szz | s1 | s2 | material | body;
+    /// axisymmetric models: srr | szz (axial) | srz | stt (hoop).
     #[arg(long, default_value = "von_mises")]
     pub field: String,
     /// Displacement magnification (default: the largest displacement drawn
@@ -114,7 +115,7 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                 } else if a.contact {
                     "contact pressure".to_string()
                 } else {
-                    field.name().to_string()
+                    s.field.name().to_string()
                 };
                 let what = if a.change {
                     format!("{what} change since the reference step")

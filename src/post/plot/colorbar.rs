@@ -23,10 +23,10 @@ pub(super) fn field_values(mesh: &OutMesh, step: &StepOutput, field: Field) -> V
     };
     match field {
         Field::VonMises => cell(&|i| step.von_mises[i]),
-        Field::Sxx => cell(&|i| step.stress[i][0]),
-        Field::Syy => cell(&|i| step.stress[i][1]),
-        Field::Sxy => cell(&|i| step.stress[i][2]),
-        Field::Szz => cell(&|i| step.stress[i][3]),
+        Field::Sxx | Field::Srr => cell(&|i| step.stress[i][0]),
+        Field::Syy | Field::SzzAxial => cell(&|i| step.stress[i][1]),
+        Field::Sxy | Field::Srz => cell(&|i| step.stress[i][2]),
+        Field::Szz | Field::Stt => cell(&|i| step.stress[i][3]),
         Field::S1 => cell(&|i| step.principal[i][0]),
         Field::S2 => cell(&|i| step.principal[i][1]),
         Field::Ux => nodal(&|u| u[0]),

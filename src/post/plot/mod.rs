@@ -70,6 +70,17 @@ pub enum Field {
     S2,
     Material,
     Body,
+    /// Axisymmetric σrr (stress component 0, as `sxx`).
+    Srr,
+    /// Axisymmetric σzz, the axial stress (component 1, as `syy`); only
+    /// the resolved form of `szz` on an axisymmetric checkpoint
+    /// ([`Field::for_model`]), never parsed.
+    SzzAxial,
+    /// Axisymmetric σrz (component 2, as `sxy`).
+    Srz,
+    /// Axisymmetric hoop stress σθθ (component 3, where a plane model has
+    /// σzz; docs/problem-format.md §11).
+    Stt,
 }
 
 /// How a field lives on the mesh.
@@ -84,7 +95,9 @@ pub(super) enum Kind {
 }
 
 impl Field {
-    pub const ALL: [Field; 12] = [
+    /// The names `--field` accepts (`szz` is the plane name here; on an
+    /// axisymmetric checkpoint it resolves to the axial stress).
+    pub const ALL: [Field; 15] = [
         Field::VonMises,
         Field::Ux,
         Field::Uy,
@@ -97,6 +110,9 @@ impl Field {
         Field::S2,
         Field::Material,
         Field::Body,
+        Field::Srr,
+        Field::Srz,
+        Field::Stt,
     ];
 
     pub fn name(self) -> &'static str {
@@ -113,7 +129,38 @@ impl Field {
             Field::S2 => "s2",
             Field::Material => "material",
             Field::Body => "body",
+            Field::Srr => "srr",
+            Field::SzzAxial => "szz",
+            Field::Srz => "srz",
+            Field::Stt => "stt",
         }
+    }
+
+    /// The field as the checkpoint's model names it. An axisymmetric
+    /// model's stress is (σrr, σzz, σrz, σθθ) (docs/problem-format.md §11),
+    /// so there `sxx`/`srr` draw σrr, `syy`/`szz` the axial σzz, `sxy`/`srz`
+    /// σrz and `stt` the hoop stress, each labelled by its axisymmetric name
+    /// (`szz` drawing the fourth component would label σθθ as σzz). The
+    /// axisymmetric names on a plane checkpoint are refused, naming the
+    /// plane one.
+    pub fn for_model(self, axisymmetric: bool) -> Result<Field, PlotError> {
+        Ok(match (self, axisymmetric) {
+            (Field::Sxx, true) => Field::Srr,
+            (Field::Syy | Field::Szz, true) => Field::SzzAxial,
+            (Field::Sxy, true) => Field::Srz,
+            (Field::Srr | Field::Srz | Field::Stt, false) => {
+                let plane = match self {
+                    Field::Srr => "sxx",
+                    Field::Srz => "sxy",
+                    _ => "szz",
+                };
+                return Err(err(format!(
+                    "field \"{}\" is a stress of an axisymmetric model; this checkpoint is plane: use \"{plane}\"",
+                    self.name()
+                )));
+            }
+            (f, _) => f,
+        })
     }
 
     /// The field named `s`, or an error listing the known names.
@@ -254,6 +301,9 @@ pub struct PlotSummary {
     /// The contact plot with friction: rows that stick and that slip at
     /// the last step drawn.
     pub stick_slip: Option<(usize, usize)>,
+    /// The field drawn, named as the checkpoint's model names it
+    /// ([`Field::for_model`]).
+    pub field: Field,
 }
 
 /// Reads `h5`, draws the figure and writes it to `out` (format from its
@@ -343,6 +393,11 @@ pub fn render(
         )));
     }
     let mesh = &ck.mesh;
+    let resolved = PlotOptions {
+        field: opts.field.for_model(mesh.axisymmetric)?,
+        ..opts.clone()
+    };
+    let opts = &resolved;
     // The steps drawn (all of them for the contact plot of a sequence), as
     // changes since the reference step with `change`.
     let picked: Vec<usize> = if opts.all_steps {
@@ -381,6 +436,7 @@ pub fn render(
         range: None,
         tangential_range: None,
         stick_slip: None,
+        field: opts.field,
     };
     // The friction data of the drawn steps (contact plot; all or nothing).
     let tangential = if opts.contact {
