@@ -56,6 +56,13 @@ pub trait TrescaStep {
     /// Solve the Tresca problem with `bound`, warm-started from the state
     /// the previous call left (the first call: the method's own start).
     fn solve(&mut self, bound: Bound<'_>) -> Result<Tresca, QpError>;
+
+    /// Fill in what [`TrescaStep::solve`] may leave out of an answer that
+    /// only feeds the next bound (ssn's dual path: x, a sparse solve):
+    /// called once, on the answer the loop returns.
+    fn complete(&mut self, _r: &mut Tresca) -> Result<(), QpError> {
+        Ok(())
+    }
 }
 
 /// Solve the frictional problem of `fr` by `step`: one Tresca solve with
@@ -63,7 +70,9 @@ pub trait TrescaStep {
 /// log follows the last one's (iterations numbered on).
 pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Output, QpError> {
     if let SlipBound::Tresca(s) = &fr.bound {
-        return Ok(into_output(step.solve(Bound::Given(s))?, 0, 0, vec![]));
+        let mut r = step.solve(Bound::Given(s))?;
+        step.complete(&mut r)?;
+        return Ok(into_output(r, 0, 0, vec![]));
     }
     let (mut iterations, mut inner, mut log) = (0, 0, vec![]);
     let mut relax = CoulombRelaxation::default();
@@ -75,6 +84,7 @@ pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Ou
         let bound = s.as_deref().map_or(Bound::Glued, Bound::Given);
         let mut r = step.solve(bound)?;
         if !r.status.converged() {
+            step.complete(&mut r)?;
             return Ok(into_output(r, iterations, inner, log));
         }
         let target = fr.slip_bound(&r.lambda_n);
@@ -90,6 +100,7 @@ pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Ou
             relax.omega()
         );
         if change <= step.resolution() {
+            step.complete(&mut r)?;
             return Ok(into_output(r, iterations, inner, log));
         }
         if outer >= MAX_UPDATES {
@@ -97,6 +108,7 @@ pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Ou
                 outer: MAX_UPDATES,
                 change,
             });
+            step.complete(&mut r)?;
             return Ok(into_output(r, iterations, inner, log));
         }
         iterations += r.iterations;
