@@ -177,6 +177,9 @@ fn row_stiffness(b: &Csr, diag: &[f64], fallback: f64, factor: f64) -> Vec<f64> 
 /// bytes, 512 MiB); more take the sparse path.
 const DUAL_ROWS_MAX: usize = 8192;
 
+/// A row of B with H_jj ≤ NULL_ROW · max H holds nothing ([`Dual`]).
+const NULL_ROW: f64 = 1e-14;
+
 /// The working-set solves in the dual space (docs/methods.md §9.2): one
 /// bordered factor of C (+ springs on a floating body's fixing unknowns,
 /// K) with every unknown B = [A; T] touches eliminated last, whose trailing
@@ -201,6 +204,10 @@ struct Dual {
     br: Vec<Vec<f64>>,
     /// e = Rᵀd.
     e: Vec<f64>,
+    /// Rows of B that hold nothing (H_jj = 0: a tangential row on a line
+    /// of symmetry, whose unknown is eliminated): left out of every
+    /// working set's system, their multiplier 0.
+    null: Vec<bool>,
     /// Sparse solves it took (counted as inner iterations).
     solves: usize,
 }
@@ -247,6 +254,8 @@ impl Dual {
             .map(|i| r.iter().map(|rl| b.row_dot(i, rl)).collect())
             .collect();
         let e = r.iter().map(|rl| dot(rl, &qp.d)).collect();
+        let hmax = (0..2 * m).fold(0.0f64, |a, j| a.max(h[(j, j)]));
+        let null = (0..2 * m).map(|j| !(h[(j, j)] > NULL_ROW * hmax)).collect();
         Ok(Some(Dual {
             b,
             fac,
@@ -255,6 +264,7 @@ impl Dual {
             bk0,
             br,
             e,
+            null,
             solves: 1,
         }))
     }
@@ -786,6 +796,7 @@ impl<'a> State<'a> {
             let rows: Vec<usize> = brows
                 .iter()
                 .map(|&(t, i)| if t { m + i } else { i })
+                .filter(|&j| !d.null[j])
                 .collect();
             let mut f = vec![0.0; 2 * m];
             for i in 0..m {
