@@ -1031,6 +1031,16 @@ impl Iterative for State<'_> {
         }
         self.visited.insert((self.in_n.clone(), self.tang.clone()));
         self.last = Some((self.in_n.clone(), self.tang.clone()));
+        log::debug!(
+            "ssn: friction step {it}: |N| = {}, stick {}, slip {}",
+            self.in_n.iter().filter(|b| **b).count(),
+            self.tang.iter().filter(|t| **t == Tangential::Stick).count(),
+            self.tang
+                .iter()
+                .zip(&self.in_n)
+                .filter(|(t, n)| **n && **t != Tangential::Stick)
+                .count()
+        );
         match self.solve_set() {
             Ok(None) => {
                 let rec = self.record(it);
