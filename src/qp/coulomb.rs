@@ -63,45 +63,78 @@ pub trait TrescaStep {
     fn complete(&mut self, _r: &mut Tresca) -> Result<(), QpError> {
         Ok(())
     }
+
+    /// Coulomb's problem with friction coefficients `mu` solved directly,
+    /// the slip bound μλ_n inside the iteration (ssn: the semismooth Newton
+    /// method of Hüeber, Stadler & Wohlmuth 2008 on the Coulomb problem),
+    /// warm-started from the glued answer the last call left; None when
+    /// the method solves Tresca problems only. An answer that is not
+    /// converged sends the loop to the fixed point.
+    fn coulomb(&mut self, _mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+        None
+    }
 }
 
 /// Solve the frictional problem of `fr` by `step`: one Tresca solve with
-/// the given bound, or Coulomb's loop (docs/methods.md §9.1). Each solve's
-/// log follows the last one's (iterations numbered on).
+/// the given bound, or Coulomb's problem (docs/methods.md §9.1): the glued
+/// solve, then the method's direct iteration if it has one
+/// ([`TrescaStep::coulomb`]), else (or if that does not settle) the fixed
+/// point from the glued answer. Each solve's log follows the last one's
+/// (iterations numbered on).
 pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Output, QpError> {
-    if let SlipBound::Tresca(s) = &fr.bound {
-        let mut r = step.solve(Bound::Given(s))?;
+    let mu = match &fr.bound {
+        SlipBound::Tresca(s) => {
+            let mut r = step.solve(Bound::Given(s))?;
+            step.complete(&mut r)?;
+            return Ok(Counts::default().output(r));
+        }
+        SlipBound::Coulomb(mu) => mu,
+    };
+    let mut counts = Counts::default();
+    let mut r = step.solve(Bound::Glued)?;
+    if !r.status.converged() {
         step.complete(&mut r)?;
-        return Ok(into_output(r, 0, 0, vec![]));
+        return Ok(counts.output(r));
     }
-    let (mut iterations, mut inner, mut log) = (0, 0, vec![]);
+    // s = μλ_n of the glued answer: the first bound of the fixed point.
+    let mut s = fr.slip_bound(&r.lambda_n);
+    log::debug!("{name}: Coulomb update 1: change of s inf, ω = 1");
+    counts.add(&mut r);
+    if let Some(direct) = step.coulomb(mu) {
+        let mut d = direct?;
+        if d.status.converged() {
+            step.complete(&mut d)?;
+            return Ok(counts.output(d));
+        }
+        log::debug!(
+            "{name}: the direct Coulomb iteration stopped ({}): the fixed point from the glued answer",
+            d.status.describe()
+        );
+        counts.add(&mut d);
+    }
     let mut relax = CoulombRelaxation::default();
-    // None: glued.
-    let mut s: Option<Vec<f64>> = None;
-    let mut outer = 0;
+    let mut outer = 1;
     loop {
         outer += 1;
-        let bound = s.as_deref().map_or(Bound::Glued, Bound::Given);
-        let mut r = step.solve(bound)?;
+        let mut r = step.solve(Bound::Given(&s))?;
         if !r.status.converged() {
             step.complete(&mut r)?;
-            return Ok(into_output(r, iterations, inner, log));
+            return Ok(counts.output(r));
         }
         let target = fr.slip_bound(&r.lambda_n);
         let smax = norm_inf(&target).max(f64::MIN_POSITIVE);
-        let change = s.as_ref().map_or(f64::INFINITY, |s| {
-            target
-                .iter()
-                .zip(s)
-                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
-        }) / smax;
+        let change = target
+            .iter()
+            .zip(&s)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+            / smax;
         log::debug!(
             "{name}: Coulomb update {outer}: change of s {change:.3e}, ω = {}",
             relax.omega()
         );
         if change <= step.resolution() {
             step.complete(&mut r)?;
-            return Ok(into_output(r, iterations, inner, log));
+            return Ok(counts.output(r));
         }
         if outer >= MAX_UPDATES {
             r.status = Status::Failed(Failure::CoulombUnsettled {
@@ -109,17 +142,37 @@ pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Ou
                 change,
             });
             step.complete(&mut r)?;
-            return Ok(into_output(r, iterations, inner, log));
+            return Ok(counts.output(r));
         }
-        iterations += r.iterations;
-        inner += r.inner_iterations;
-        let at = log.last().map_or(0, |l: &IterRecord| l.iter);
-        log.extend(r.log.into_iter().map(|mut l| {
-            l.iter += at;
-            l
-        }));
-        let glued = s.is_none();
-        s = Some(relax.next(s.as_deref().unwrap_or(&[]), target, glued));
+        counts.add(&mut r);
+        s = relax.next(&s, target, false);
+    }
+}
+
+/// The counts and the log of the solves before the one returned.
+#[derive(Default)]
+struct Counts {
+    iterations: usize,
+    inner: usize,
+    log: Vec<IterRecord>,
+}
+
+impl Counts {
+    /// Add the counts of `r` and move its log after the others.
+    fn add(&mut self, r: &mut Tresca) {
+        self.iterations += r.iterations;
+        self.inner += r.inner_iterations;
+        let at = self.log.last().map_or(0, |l: &IterRecord| l.iter);
+        self.log
+            .extend(std::mem::take(&mut r.log).into_iter().map(|mut l| {
+                l.iter += at;
+                l
+            }));
+    }
+
+    /// The last solve `r` with the counts and the log of those before.
+    fn output(self, r: Tresca) -> Output {
+        into_output(r, self.iterations, self.inner, self.log)
     }
 }
 

@@ -102,6 +102,7 @@ impl TrescaStep for SsnTresca<'_, '_> {
     fn solve(&mut self, bound: Bound<'_>) -> Result<Tresca, QpError> {
         let st = &mut self.st;
         let m = st.qp.m();
+        st.coulomb = None;
         match bound {
             Bound::Glued => {
                 st.s = vec![0.0; m];
@@ -117,6 +118,35 @@ impl TrescaStep for SsnTresca<'_, '_> {
         } else {
             st.fresh = true;
         }
+        self.run()
+    }
+
+    fn coulomb(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+        let st = &mut self.st;
+        st.dual.as_ref()?;
+        st.coulomb = Some(mu.to_vec());
+        st.s = st.fr.slip_bound(&st.ln);
+        st.glued = false;
+        st.fresh = true;
+        st.visited.clear();
+        Some(self.run())
+    }
+
+    fn complete(&mut self, r: &mut Tresca) -> Result<(), QpError> {
+        self.st.ensure_x()?;
+        r.inner_iterations += self.st.inner - self.counted;
+        self.counted = self.st.inner;
+        if r.x.is_empty() {
+            r.x = self.st.x.clone();
+        }
+        Ok(())
+    }
+}
+
+impl SsnTresca<'_, '_> {
+    /// Newton steps from the current state until the sets settle.
+    fn run(&mut self) -> Result<Tresca, QpError> {
+        let st = &mut self.st;
         st.best = (f64::INFINITY, 0);
         let mut exec = self.ctx.executor("ssn");
         exec.max_iter = exec.max_iter.saturating_sub(self.steps);
@@ -137,16 +167,6 @@ impl TrescaStep for SsnTresca<'_, '_> {
             inner_iterations: st.inner - counted,
             log: exec.log,
         })
-    }
-
-    fn complete(&mut self, r: &mut Tresca) -> Result<(), QpError> {
-        self.st.ensure_x()?;
-        r.inner_iterations += self.st.inner - self.counted;
-        self.counted = self.st.inner;
-        if r.x.is_empty() {
-            r.x = self.st.x.clone();
-        }
-        Ok(())
     }
 }
 
@@ -369,6 +389,86 @@ impl Dual {
         Some((w, alpha))
     }
 
+    /// The multipliers of a working set of Coulomb's problem with the slip
+    /// bound inside (docs/methods.md §9.2): the normal rows `normal` (row
+    /// i of A with κᵢ = μᵢσᵢ when its tangential row slips along σᵢ, else
+    /// 0: λ_tᵢ = κᵢλ_nᵢ, a force the unknown λ_nᵢ sets), the stick rows
+    /// `stick` (indices into B) and the rigid motions: (B x)_E = c_E on the
+    /// rows E = normal ∪ stick and the equilibrium Rᵀ(d − Bᵀμ) = 0, a
+    /// nonsymmetric system (the slip forces' columns) solved by LU with
+    /// the coarse unknowns scaled to H's size. Returns μ over every row and
+    /// α; None if the system is singular to working precision.
+    fn solve_coulomb(
+        &self,
+        normal: &[(usize, f64)],
+        stick: &[usize],
+        c: &[f64],
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let m = self.bk0.len() / 2;
+        let k = self.e.len();
+        let (nn, q) = (normal.len(), normal.len() + stick.len());
+        let size = q + k;
+        let h = &self.h;
+        let hs = (0..2 * m)
+            .fold(0.0f64, |a, j| a.max(h[(j, j)]))
+            .max(f64::MIN_POSITIVE);
+        let erow = |e: usize| if e < nn { normal[e].0 } else { stick[e - nn] };
+        // Column p of H P (P: unknowns to multipliers), read by rows.
+        let col = |re: usize, p: usize| -> f64 {
+            if p < nn {
+                let (i, kappa) = normal[p];
+                let mut v = h[(i, re)];
+                if kappa != 0.0 {
+                    v += kappa * h[(m + i, re)];
+                }
+                v
+            } else {
+                h[(stick[p - nn], re)]
+            }
+        };
+        let brp = |p: usize, l: usize| -> f64 {
+            if p < nn {
+                let (i, kappa) = normal[p];
+                self.br[i][l] + kappa * self.br[m + i][l]
+            } else {
+                self.br[stick[p - nn]][l]
+            }
+        };
+        let mut w = vec![0.0; size * size];
+        let mut rhs = vec![0.0; size];
+        for e in 0..q {
+            let re = erow(e);
+            for p in 0..q {
+                w[e * size + p] = col(re, p);
+            }
+            for l in 0..k {
+                w[e * size + q + l] = -self.br[re][l] * hs;
+            }
+            rhs[e] = self.bk0[re] - c[re];
+        }
+        for l in 0..k {
+            for p in 0..q {
+                w[(q + l) * size + p] = brp(p, l) * hs;
+            }
+            rhs[q + l] = self.e[l] * hs;
+        }
+        let lu = crate::linalg::dense::Lu::from_row_major(&w, size)?;
+        lu.solve_in_place(&mut rhs);
+        if !rhs.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let mut mu = vec![0.0; 2 * m];
+        for (p, &(i, kappa)) in normal.iter().enumerate() {
+            mu[i] = rhs[p];
+            mu[m + i] = kappa * rhs[p];
+        }
+        for (p, &t) in stick.iter().enumerate() {
+            mu[t] = rhs[nn + p];
+        }
+        let alpha = rhs[q..].iter().map(|a| a * hs).collect();
+        Some((mu, alpha))
+    }
+
     /// B x for the multipliers `mu` (2m) and α: B K⁻¹(d − Bᵀμ) + BRα.
     fn bx(&self, mu: &[f64], alpha: &[f64]) -> Vec<f64> {
         let mut out = self.bk0.clone();
@@ -459,6 +559,9 @@ struct State<'a> {
     x_stale: bool,
     /// The rows of B in the last dual-space solve's working set.
     rows: Vec<usize>,
+    /// Coulomb's coefficients while the direct iteration runs (the bound
+    /// s = μλ_n of the current iterate, [`TrescaStep::coulomb`]).
+    coulomb: Option<Vec<f64>>,
 }
 
 /// Newton steps without a better residual after which the sets of one
@@ -517,6 +620,7 @@ impl<'a> State<'a> {
             alpha: vec![],
             x_stale: false,
             rows: vec![],
+            coulomb: None,
         }
     }
 
@@ -792,6 +896,36 @@ impl<'a> State<'a> {
                 return Ok(Some(Status::Unbounded { direction: z }));
             }
         }
+        if let (Some(d), Some(mu_c)) = (&self.dual, &self.coulomb) {
+            let normal: Vec<(usize, f64)> = (0..m)
+                .filter(|&i| self.in_n[i] && !d.null[i])
+                .map(|i| match self.tang[i] {
+                    Tangential::Slip(pos) => (i, if pos { mu_c[i] } else { -mu_c[i] }),
+                    Tangential::Stick => (i, 0.0),
+                })
+                .collect();
+            let stick: Vec<usize> = (0..m)
+                .filter(|&i| self.tang[i] == Tangential::Stick && !d.null[m + i])
+                .map(|i| m + i)
+                .collect();
+            let mut c = qp.g.clone();
+            c.extend_from_slice(&self.fr.t0);
+            if let Some((mu, alpha)) = d.solve_coulomb(&normal, &stick, &c) {
+                self.bx = d.bx(&mu, &alpha);
+                self.ln = mu[..m].to_vec();
+                self.lt = mu[m..].to_vec();
+                self.s = self.fr.slip_bound(&self.ln);
+                self.rows = normal.iter().map(|&(i, _)| i).chain(stick).collect();
+                self.mu = mu;
+                self.alpha = alpha;
+                self.x_stale = true;
+                return Ok(None);
+            }
+            log::debug!("ssn: friction: the Coulomb system of the working set is singular");
+            return Ok(Some(Status::Failed(Failure::Breakdown(
+                "ssn: the Coulomb system of a working set is singular".into(),
+            ))));
+        }
         if let Some(d) = &self.dual {
             let rows: Vec<usize> = brows
                 .iter()
@@ -1034,7 +1168,10 @@ impl Iterative for State<'_> {
         log::debug!(
             "ssn: friction step {it}: |N| = {}, stick {}, slip {}",
             self.in_n.iter().filter(|b| **b).count(),
-            self.tang.iter().filter(|t| **t == Tangential::Stick).count(),
+            self.tang
+                .iter()
+                .filter(|t| **t == Tangential::Stick)
+                .count(),
             self.tang
                 .iter()
                 .zip(&self.in_n)
