@@ -15,16 +15,22 @@
 //! 10²–10⁷ times stiffer cycled for 10 000 steps, docs/methods.md §9.2);
 //!
 //! and solves the equality-constrained problem `Cx + Bᵀμ = d − T_Lᵀλ_L,
-//! Bx = b` with B = [A_N; T_S], b = [g_N; t0_S] through K = C + ρBᵀB
-//! (augmented Lagrangian steps μ ← μ + ρ(Bx − b); the multiplier is taken
-//! after the step, so Cx − d + Bᵀμ + T_Lᵀλ_L = 0 holds to the solve's
-//! backward error). The step is repeated until the sets no longer change
+//! Bx = b` with B = [A_N; T_S], b = [g_N; t0_S]: in the dual space on one
+//! bordered factor of C ([`Dual`], docs/methods.md §9.2), or, when the
+//! border of [A; T] is too large for a dense block (or `ssn_path` says
+//! augmented/refactor), through K = C + ρBᵀB (augmented Lagrangian steps
+//! μ ← μ + ρ(Bx − b); the multiplier is taken after the step, so
+//! Cx − d + Bᵀμ + T_Lᵀλ_L = 0 holds to the solve's backward error).
+//! The step is repeated until the sets no longer change
 //! (a KKT point of the Tresca problem); a set seen before, or one that
 //! frees a rigid motion friction can hold, is entered one row at a time.
-//! Coulomb starts glued (S = N) and then moves s towards μλ_n of the last
-//! solution until s is stationary: the outer loop of §9.1 shared with the
-//! dual ([`crate::qp::coulomb`]); each Tresca solve starts from the working
-//! sets the new bound predicts at the last answer.
+//! Coulomb starts glued (S = N); on the dual path it then runs the same
+//! Newton steps on Coulomb's problem itself, s = μλ_n of the current
+//! iterate and λ_t = μσλ_n on the slipping rows ([`Dual::solve_coulomb`]);
+//! otherwise (or if that does not settle) it moves s towards μλ_n of the
+//! last solution until s is stationary: the outer loop of §9.1 shared with
+//! the dual ([`crate::qp::coulomb`]); each Tresca solve starts from the
+//! working sets the new bound predicts at the last answer.
 //!
 //! A working set that leaves a rigid motion z free (B z = 0 for some z in
 //! ker C) is tested: if the loads do more work along ±z than friction can
