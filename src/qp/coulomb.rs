@@ -13,8 +13,8 @@ use crate::qp::{Failure, Friction, IterRecord, Output, QpError, SlipBound, Statu
 
 /// The most Tresca solves of one Coulomb loop (the glued one included).
 /// Both methods settle in far fewer: the keystone of tests/trust.rs, the
-/// hardest model here, in 36–38 Newton steps (ssn) and 17–25 solves
-/// (mprgp). Before the loop was shared, ssn stopped after 500 Newton steps
+/// hardest model here, in 35–37 Newton steps (ssn by this loop; 7–9 by its
+/// direct iteration, [`TrescaStep::coulomb`]) and 17–25 solves (mprgp). Before the loop was shared, ssn stopped after 500 Newton steps
 /// and the dual after 200 Tresca solves.
 pub const MAX_UPDATES: usize = 200;
 
