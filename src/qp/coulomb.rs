@@ -268,6 +268,9 @@ mod tests {
         seen: Vec<Option<f64>>,
         fail_at: Option<usize>,
         slope: f64,
+        /// A direct iteration: Some(converges), None: none.
+        direct: Option<bool>,
+        direct_calls: usize,
     }
 
     impl TrescaStep for Scalar {
@@ -306,6 +309,67 @@ mod tests {
                 ],
             })
         }
+        fn coulomb(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+            let ok = self.direct?;
+            self.direct_calls += 1;
+            // The fixed point λ_n = 1 + a μ λ_n, exactly.
+            let ln = 1.0 / (1.0 - self.slope * mu[0]);
+            Some(Ok(Tresca {
+                x: vec![0.0],
+                lambda_n: vec![ln],
+                lambda_t: vec![mu[0] * ln],
+                active: vec![true],
+                status: if ok {
+                    Status::Converged
+                } else {
+                    Status::Failed(Failure::Cycling {
+                        best: 1.0,
+                        steps: 5,
+                    })
+                },
+                iterations: 5,
+                inner_iterations: 1,
+                log: vec![IterRecord {
+                    iter: 1,
+                    ..Default::default()
+                }],
+            }))
+        }
+    }
+
+    /// A method's direct iteration ends the loop after the glued solve
+    /// when it converges (its answer, the counts of both); when it does
+    /// not, the fixed point runs from the glued answer as before, the
+    /// direct iteration's counts added.
+    #[test]
+    fn a_direct_iteration_is_taken_when_it_settles() {
+        let mut m = Scalar {
+            seen: vec![],
+            fail_at: None,
+            slope: 0.5,
+            direct: Some(true),
+            direct_calls: 0,
+        };
+        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        assert!(out.status.converged(), "{:?}", out.status);
+        assert_eq!((m.seen.clone(), m.direct_calls), (vec![None], 1));
+        assert_eq!((out.iterations, out.inner_iterations), (2 + 5, 3 + 1));
+        assert!((out.lambda[0] - 1.25).abs() < 1e-15, "{:?}", out.lambda);
+        let mut m = Scalar {
+            seen: vec![],
+            fail_at: None,
+            slope: 0.5,
+            direct: Some(false),
+            direct_calls: 0,
+        };
+        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        assert!(out.status.converged(), "{:?}", out.status);
+        assert_eq!((m.seen[0], m.seen[1], m.direct_calls), (None, Some(0.4), 1));
+        let k = m.seen.len();
+        assert_eq!(
+            (out.iterations, out.inner_iterations),
+            (2 * k + 5, 3 * k + 1)
+        );
     }
 
     fn friction(bound: SlipBound) -> Friction {
@@ -325,6 +389,8 @@ mod tests {
             seen: vec![],
             fail_at: None,
             slope: 0.5,
+            direct: None,
+            direct_calls: 0,
         };
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
@@ -341,6 +407,8 @@ mod tests {
             seen: vec![],
             fail_at: None,
             slope: 0.5,
+            direct: None,
+            direct_calls: 0,
         };
         let out = solve(&friction(SlipBound::Tresca(vec![7.0])), &mut m, "t").unwrap();
         assert_eq!(m.seen, vec![Some(7.0)]);
@@ -350,6 +418,8 @@ mod tests {
             seen: vec![],
             fail_at: Some(3),
             slope: 0.5,
+            direct: None,
+            direct_calls: 0,
         };
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert_eq!(out.status, Status::MaxIter);
@@ -364,6 +434,8 @@ mod tests {
             seen: vec![],
             fail_at: None,
             slope: 2.0,
+            direct: None,
+            direct_calls: 0,
         };
         let out = solve(&friction(SlipBound::Coulomb(vec![1.0])), &mut m, "t").unwrap();
         assert!(
