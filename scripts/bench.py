@@ -39,6 +39,17 @@ process ÷ limit against 1.5 + 0.15 (N − 1), peak RSS ÷ limit against 1.3, th
 per-step assembly / solve / write times from `--log-level debug`) to
 --steps-out (default bench/steps.md, raw JSON next to it).
 
+Friction (issue 36): `--friction` runs, instead of the above, the friction
+table: a floating punch held tangentially by Coulomb friction alone
+(tests/data/friction/floating_punch.geo, mu = 0.3, one load step) and NAFEMS 1
+(verification/nafems1, mu = 0.1, 10 load steps) at three mesh sizes each
+(--friction-levels, default 0,1,2: about 2 k / 10 k / 50 k and 8 k / 30 k /
+80 k nodes), by ssn and mprgp with friction and by ssn on the same model
+without it (the punch also without its side load, which nothing would hold):
+whole-process time, the solve time and the Newton steps (iterations) and inner
+iterations summed over the load steps, written to --friction-out (default
+bench/friction.md, raw JSON next to it).
+
 Runs whose median is longer than --long seconds (default 60) are not repeated.
 Exit status: 0 if the benchmark ran (whatever the methods did), 2 on a setup
 error (no binary, no gmsh).
@@ -603,6 +614,125 @@ def run_steps(args, binary, work: Path, size_spec) -> int:
     return 0
 
 
+# ----------------------------------------------------------------- friction
+PUNCH_TOML = """# A floating punch held tangentially by Coulomb friction alone (bench.py --friction).
+[mesh]
+file = "MESH"
+[model]
+plane = "strain"
+[materials.foundation]
+E = 2.0e10
+nu = 0.3
+[materials.punch]
+E = 2.0e11
+nu = 0.3
+[[dirichlet]]
+on = "found_bottom"
+u = [0.0, 0.0]
+[[dirichlet]]
+on = "found_sides"
+ux = 0.0
+[[traction]]
+on = "punch_top"
+pn = -1.0e6
+SIDE[[contact]]
+slave = "punch_bottom"
+master = "found_top"
+FRICTION
+[solver]
+tol = 1.0e-10
+"""
+PUNCH_SIDE = '[[traction]]\non = "punch_left"\np = [2.0e5, 0.0]\n'
+# model: (geo, clscale per level)
+FRICTION_MODELS = {
+    "punch": ("tests/data/friction/floating_punch.geo", [1.0, 0.45, 0.2]),
+    "nafems1": ("verification/nafems1/nafems1.geo", [0.5, 0.25, 0.15]),
+}
+
+
+def friction_toml(model: str, msh: Path, frictional: bool) -> str:
+    if model == "punch":
+        return (PUNCH_TOML.replace("MESH", msh.name)
+                .replace("SIDE", PUNCH_SIDE if frictional else "")
+                .replace("FRICTION", "friction = 0.3" if frictional else ""))
+    text = (ROOT / "verification" / "nafems1" / "nafems1_mu.toml").read_text()
+    text = text.replace('file = "nafems1.msh"', f'file = "{msh.name}"')
+    text = text[: text.index("[[steps]]")] + "".join(f"[[steps]]\nfactor = {k / 10!r}\n\n" for k in range(1, 11))
+    if not frictional:
+        text = text.replace("friction = 0.1\n", "")
+    return text
+
+
+def friction_once(binary, toml: Path, method: str, outdir: Path, timeout):
+    """One `signorini solve`: whole-process wall time, and the solve time,
+    Newton steps and inner iterations summed over the load steps."""
+    if outdir.exists():
+        shutil.rmtree(outdir)
+    rc, _, err, wall = run([binary, "solve", toml, "--out", outdir, "--method", method, "--quiet"], timeout=timeout)
+    r = {"exit": rc, "wall": wall}
+    js = list(outdir.glob("*.json")) if outdir.exists() else []
+    if rc not in (0, 3) or not js:
+        r["status"] = "timeout" if rc is None else f"exit {rc}: {err.strip().splitlines()[-1] if err.strip() else ''}"
+        return r
+    d = json.loads(js[0].read_text())
+    steps = d.get("steps") or [{"iterations": d["iterations"], "inner_iterations": d["inner_iterations"],
+                                "time_solve": d["timings_s"]["solve"]}]
+    r.update(status=d["status"], converged=d["converged"], certified=d["kkt"]["certified"],
+             friction_residual=d["kkt"].get("friction"), dofs=d["dofs"], m=d["constraints"], nodes=d["mesh_nodes"],
+             nsteps=len(steps), newton=sum(s["iterations"] for s in steps),
+             inner=sum(s["inner_iterations"] for s in steps), solve=sum(s["time_solve"] for s in steps),
+             total=d["timings_s"]["total"], energy=d["energy"])
+    return r
+
+
+def run_friction(args, binary, work: Path) -> int:
+    """The friction table (issue 36): ssn vs mprgp vs frictionless ssn."""
+    levels = [int(v) for v in args.friction_levels.split(",") if v.strip()]
+    rows = []
+    for model, (geo, scales) in FRICTION_MODELS.items():
+        for lv in levels:
+            s = scales[lv]
+            msh = work / f"friction_{model}_{lv}.msh"
+            if not msh.exists():
+                rc, _, err, _ = run([args.gmsh, "-2", "-format", "msh41", "-bin", "-clscale", f"{s}", ROOT / geo, "-o", msh])
+                if rc != 0:
+                    raise RuntimeError(f"gmsh failed on {geo}: {err[-500:]}")
+            for method, frictional in (("ssn", True), ("mprgp", True), ("ssn", False)):
+                toml = work / f"friction_{model}_{lv}_{'mu' if frictional else 'nomu'}.toml"
+                toml.write_text(friction_toml(model, msh, frictional))
+                variant = method if frictional else "ssn, frictionless"
+                r = repeated(lambda: friction_once(binary, toml, method, work / "out_friction", max(4 * args.budget, 120.0)),
+                             args.repeats, args.long)
+                row = {"model": model, "level": lv, "clscale": s, "variant": variant, **r}
+                rows.append(row)
+                log(f"friction {model} level {lv} ({r.get('nodes')} nodes) {variant}: {fmt(r.get('wall'))} s, "
+                    f"Newton {r.get('newton')}, inner {r.get('inner')}, {r.get('status')}")
+    out = Path(args.friction_out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.with_suffix(".json").write_text(json.dumps({"machine": machine(), "cmdline": "python3 scripts/bench.py " + " ".join(sys.argv[1:]),
+                                                    "rows": rows}, indent=1, default=str))
+    L = ["Friction (issue 36): a floating punch held by Coulomb friction alone (mu 0.3, 1 step) and NAFEMS 1 "
+         "(mu 0.1, 10 load steps); whole process wall time (median of the repeats), solve time, Newton steps and "
+         "inner iterations summed over the steps; ratio = wall ÷ the frictionless ssn run on the same mesh "
+         "(target ssn ≤ 3, and ssn never slower than mprgp).\n",
+         "| model | nodes | DOFs | rows | variant | wall [s] | solve [s] | Newton | inner | ÷ frictionless | status |",
+         "|---|---|---|---|---|---|---|---|---|---|---|"]
+    base = {(r["model"], r["level"]): r.get("wall") for r in rows if r["variant"] == "ssn, frictionless"}
+    for r in rows:
+        b = base.get((r["model"], r["level"]))
+        ratio = r["wall"] / b if b and r.get("wall") and r.get("converged") else None
+        st = r.get("status", "")
+        if r.get("converged"):
+            st = "certified" if r.get("certified") else "uncertified"
+        L.append(f"| {r['model']} | {r.get('nodes', '–')} | {r.get('dofs', '–')} | {r.get('m', '–')} | {r['variant']} | "
+                 f"{fmt(r.get('wall'))} | {fmt(r.get('solve'))} | {r.get('newton', '–')} | {r.get('inner', '–')} | "
+                 f"{fmt(ratio, 2) if ratio else '–'} | {st} |")
+    out.write_text("\n".join(L) + "\n")
+    print("\n".join(L))
+    log(f"wrote {out} and {out.with_suffix('.json')}")
+    return 0
+
+
 # ----------------------------------------------------------------- main
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -623,6 +753,11 @@ def main() -> int:
     ap.add_argument("--steps", type=int, default=0, metavar="N",
                     help="run the load-step table instead (N steps per model; see the module doc)")
     ap.add_argument("--steps-out", default=str(ROOT / "bench" / "steps.md"))
+    ap.add_argument("--friction", action="store_true",
+                    help="run the friction table instead (see the module doc)")
+    ap.add_argument("--friction-levels", default="0,1,2",
+                    help="mesh levels of the friction table (0, 1, 2: coarse to fine)")
+    ap.add_argument("--friction-out", default=str(ROOT / "bench" / "friction.md"))
     ap.add_argument("--report-only", metavar="JSON",
                     help="run nothing: rewrite --out from the raw results of an earlier run (its JSON)")
     ap.add_argument("--check", action="store_true",
@@ -659,6 +794,8 @@ def main() -> int:
             return 2
     if args.steps > 0:
         return run_steps(args, binary, work, size_spec)
+    if args.friction:
+        return run_friction(args, binary, work)
     vs = variants(binary)
     if args.methods:
         want = [m.strip() for m in args.methods.split(",")]

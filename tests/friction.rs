@@ -628,3 +628,113 @@ fn the_checkpoint_holds_the_friction_arrays() {
         }
     }
 }
+
+/// tests/data/friction/floating_punch.geo meshed by gmsh (2.2 k nodes).
+fn punch_mesh(dir: &Path) -> PathBuf {
+    let geo = root().join("tests/data/friction/floating_punch.geo");
+    std::fs::create_dir_all(dir.join("gmsh")).unwrap();
+    let out = dir.join("gmsh/punch.msh");
+    let (code, log) = run(&["mesh", geo.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{log}");
+    out
+}
+
+/// The punch of issue 36: a steel punch on a softer foundation, pressed by
+/// 1 MPa and pushed sideways by a third of μN, held tangentially by
+/// Coulomb friction (μ = 0.3) alone: no Dirichlet condition touches it.
+const PUNCH: &str = r#"[mesh]
+file = "MESH"
+[model]
+plane = "strain"
+[materials.foundation]
+E = 2.0e10
+nu = 0.3
+[materials.punch]
+E = 2.0e11
+nu = 0.3
+[[dirichlet]]
+on = "found_bottom"
+u = [0.0, 0.0]
+[[dirichlet]]
+on = "found_sides"
+ux = 0.0
+[[traction]]
+on = "punch_top"
+pn = -1.0e6
+[[traction]]
+on = "punch_left"
+p = [2.0e5, 0.0]
+[[contact]]
+slave = "punch_bottom"
+master = "found_top"
+friction = 0.3
+"#;
+
+/// Issue 36: ssn solves Coulomb's problem on one bordered factor, in the
+/// dual space, with the slip bound inside the Newton iteration
+/// (docs/methods.md §9.2). On the floating punch: certified, Coulomb's
+/// law met to rounding (friction residual 2·10⁻¹⁷; the fixed point of
+/// Tresca problems left 1.9·10⁻¹²), in 3 Newton steps (8 before) and 2
+/// sparse solves (40 before: a factor of C + ρBᵀB per Newton step and
+/// augmented Lagrangian sweeps); the sparse path (`ssn_path =
+/// "augmented"`) and mprgp agree with it to 10⁻⁶. The load balances: the
+/// interface carries the side load and the pressure.
+#[test]
+fn a_punch_held_by_friction_alone_is_solved_on_one_factor() {
+    let d = tempfile::tempdir().unwrap();
+    let msh = punch_mesh(d.path());
+    let p = model_file(d.path(), "punch", &msh, PUNCH);
+    let prep = run::prepare(&p, false).unwrap_or_else(|e| panic!("{e}"));
+    let mut results = vec![];
+    for (method, path) in [("ssn", None), ("ssn", Some("augmented")), ("mprgp", None)] {
+        let flags = SolverSection {
+            method: Some(method.into()),
+            ssn_path: path.map(String::from),
+            ..Default::default()
+        };
+        let (m, opts) = run::options(&prep.problem, &flags).unwrap();
+        let out = run::Run::new(&prep, m, &opts)
+            .solve(&mut [], None)
+            .unwrap_or_else(|e| panic!("{method} {path:?}: {e}"));
+        assert!(out.certified, "{method} {path:?}: not certified");
+        let r = out.last.unwrap().result;
+        let s = &r.solution;
+        eprintln!(
+            "{method} {path:?}: {} Newton, {} inner, friction residual {:.2e}",
+            s.iterations, s.inner_iterations, r.kkt.friction
+        );
+        results.push(r);
+    }
+    let ssn = &results[0];
+    assert!(
+        ssn.solution.iterations <= 4 && ssn.solution.inner_iterations <= 3,
+        "{} Newton steps, {} sparse solves",
+        ssn.solution.iterations,
+        ssn.solution.inner_iterations
+    );
+    assert!(ssn.kkt.friction < 1e-14, "{:?}", ssn.kkt);
+    let pn: f64 = ssn.lambda.iter().sum();
+    let pt: f64 = ssn.lambda_t.iter().sum();
+    assert!(
+        (pn.abs() - 1.0e6).abs() < 1e-6 * 1.0e6 && (pt.abs() - 1.0e5).abs() < 1e-6 * 1.0e6,
+        "normal {pn:e}, tangential {pt:e}"
+    );
+    assert!(
+        ssn.lambda_t
+            .iter()
+            .zip(&ssn.lambda)
+            .any(|(t, n)| t.abs() >= 0.3 * n * (1.0 - 1e-9) && *n > 0.0),
+        "no row slips"
+    );
+    for (other, r) in ["ssn (augmented)", "mprgp"].iter().zip(&results[1..]) {
+        let (dx, dn, dt) = (
+            rel_diff(&ssn.x, &r.x),
+            rel_diff(&ssn.lambda, &r.lambda),
+            rel_diff(&ssn.lambda_t, &r.lambda_t),
+        );
+        assert!(
+            dx <= 1e-6 && dn <= 1e-6 && dt <= 1e-6,
+            "{other}: x {dx:e}, λ_n {dn:e}, λ_t {dt:e}"
+        );
+    }
+}

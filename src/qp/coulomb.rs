@@ -13,8 +13,8 @@ use crate::qp::{Failure, Friction, IterRecord, Output, QpError, SlipBound, Statu
 
 /// The most Tresca solves of one Coulomb loop (the glued one included).
 /// Both methods settle in far fewer: the keystone of tests/trust.rs, the
-/// hardest model here, in 36–38 Newton steps (ssn) and 17–25 solves
-/// (mprgp). Before the loop was shared, ssn stopped after 500 Newton steps
+/// hardest model here, in 35–37 Newton steps (ssn by this loop; 7–9 by its
+/// direct iteration, [`TrescaStep::coulomb`]) and 17–25 solves (mprgp). Before the loop was shared, ssn stopped after 500 Newton steps
 /// and the dual after 200 Tresca solves.
 pub const MAX_UPDATES: usize = 200;
 
@@ -56,58 +56,123 @@ pub trait TrescaStep {
     /// Solve the Tresca problem with `bound`, warm-started from the state
     /// the previous call left (the first call: the method's own start).
     fn solve(&mut self, bound: Bound<'_>) -> Result<Tresca, QpError>;
+
+    /// Fill in what [`TrescaStep::solve`] may leave out of an answer that
+    /// only feeds the next bound (ssn's dual path: x, a sparse solve):
+    /// called once, on the answer the loop returns.
+    fn complete(&mut self, _r: &mut Tresca) -> Result<(), QpError> {
+        Ok(())
+    }
+
+    /// Coulomb's problem with friction coefficients `mu` solved directly,
+    /// the slip bound μλ_n inside the iteration (ssn: the semismooth Newton
+    /// method of Hüeber, Stadler & Wohlmuth 2008 on the Coulomb problem),
+    /// warm-started from the glued answer the last call left; None when
+    /// the method solves Tresca problems only. An answer that is not
+    /// converged sends the loop to the fixed point.
+    fn coulomb(&mut self, _mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+        None
+    }
 }
 
 /// Solve the frictional problem of `fr` by `step`: one Tresca solve with
-/// the given bound, or Coulomb's loop (docs/methods.md §9.1). Each solve's
-/// log follows the last one's (iterations numbered on).
+/// the given bound, or Coulomb's problem (docs/methods.md §9.1): the glued
+/// solve, then the method's direct iteration if it has one
+/// ([`TrescaStep::coulomb`]), else (or if that does not settle) the fixed
+/// point from the glued answer. Each solve's log follows the last one's
+/// (iterations numbered on).
 pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Output, QpError> {
-    if let SlipBound::Tresca(s) = &fr.bound {
-        return Ok(into_output(step.solve(Bound::Given(s))?, 0, 0, vec![]));
+    let mu = match &fr.bound {
+        SlipBound::Tresca(s) => {
+            let mut r = step.solve(Bound::Given(s))?;
+            step.complete(&mut r)?;
+            return Ok(Counts::default().output(r));
+        }
+        SlipBound::Coulomb(mu) => mu,
+    };
+    let mut counts = Counts::default();
+    let mut r = step.solve(Bound::Glued)?;
+    if !r.status.converged() {
+        step.complete(&mut r)?;
+        return Ok(counts.output(r));
     }
-    let (mut iterations, mut inner, mut log) = (0, 0, vec![]);
+    // s = μλ_n of the glued answer: the first bound of the fixed point.
+    let mut s = fr.slip_bound(&r.lambda_n);
+    log::debug!("{name}: Coulomb update 1: change of s inf, ω = 1");
+    counts.add(&mut r);
+    if let Some(direct) = step.coulomb(mu) {
+        let mut d = direct?;
+        if d.status.converged() {
+            step.complete(&mut d)?;
+            return Ok(counts.output(d));
+        }
+        log::debug!(
+            "{name}: the direct Coulomb iteration stopped ({}): the fixed point from the glued answer",
+            d.status.describe()
+        );
+        counts.add(&mut d);
+    }
     let mut relax = CoulombRelaxation::default();
-    // None: glued.
-    let mut s: Option<Vec<f64>> = None;
-    let mut outer = 0;
+    let mut outer = 1;
     loop {
         outer += 1;
-        let bound = s.as_deref().map_or(Bound::Glued, Bound::Given);
-        let mut r = step.solve(bound)?;
+        let mut r = step.solve(Bound::Given(&s))?;
         if !r.status.converged() {
-            return Ok(into_output(r, iterations, inner, log));
+            step.complete(&mut r)?;
+            return Ok(counts.output(r));
         }
         let target = fr.slip_bound(&r.lambda_n);
         let smax = norm_inf(&target).max(f64::MIN_POSITIVE);
-        let change = s.as_ref().map_or(f64::INFINITY, |s| {
-            target
-                .iter()
-                .zip(s)
-                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
-        }) / smax;
+        let change = target
+            .iter()
+            .zip(&s)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+            / smax;
         log::debug!(
             "{name}: Coulomb update {outer}: change of s {change:.3e}, ω = {}",
             relax.omega()
         );
         if change <= step.resolution() {
-            return Ok(into_output(r, iterations, inner, log));
+            step.complete(&mut r)?;
+            return Ok(counts.output(r));
         }
         if outer >= MAX_UPDATES {
             r.status = Status::Failed(Failure::CoulombUnsettled {
                 outer: MAX_UPDATES,
                 change,
             });
-            return Ok(into_output(r, iterations, inner, log));
+            step.complete(&mut r)?;
+            return Ok(counts.output(r));
         }
-        iterations += r.iterations;
-        inner += r.inner_iterations;
-        let at = log.last().map_or(0, |l: &IterRecord| l.iter);
-        log.extend(r.log.into_iter().map(|mut l| {
-            l.iter += at;
-            l
-        }));
-        let glued = s.is_none();
-        s = Some(relax.next(s.as_deref().unwrap_or(&[]), target, glued));
+        counts.add(&mut r);
+        s = relax.next(&s, target, false);
+    }
+}
+
+/// The counts and the log of the solves before the one returned.
+#[derive(Default)]
+struct Counts {
+    iterations: usize,
+    inner: usize,
+    log: Vec<IterRecord>,
+}
+
+impl Counts {
+    /// Add the counts of `r` and move its log after the others.
+    fn add(&mut self, r: &mut Tresca) {
+        self.iterations += r.iterations;
+        self.inner += r.inner_iterations;
+        let at = self.log.last().map_or(0, |l: &IterRecord| l.iter);
+        self.log
+            .extend(std::mem::take(&mut r.log).into_iter().map(|mut l| {
+                l.iter += at;
+                l
+            }));
+    }
+
+    /// The last solve `r` with the counts and the log of those before.
+    fn output(self, r: Tresca) -> Output {
+        into_output(r, self.iterations, self.inner, self.log)
     }
 }
 
@@ -203,6 +268,9 @@ mod tests {
         seen: Vec<Option<f64>>,
         fail_at: Option<usize>,
         slope: f64,
+        /// A direct iteration: Some(converges), None: none.
+        direct: Option<bool>,
+        direct_calls: usize,
     }
 
     impl TrescaStep for Scalar {
@@ -241,6 +309,67 @@ mod tests {
                 ],
             })
         }
+        fn coulomb(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+            let ok = self.direct?;
+            self.direct_calls += 1;
+            // The fixed point λ_n = 1 + a μ λ_n, exactly.
+            let ln = 1.0 / (1.0 - self.slope * mu[0]);
+            Some(Ok(Tresca {
+                x: vec![0.0],
+                lambda_n: vec![ln],
+                lambda_t: vec![mu[0] * ln],
+                active: vec![true],
+                status: if ok {
+                    Status::Converged
+                } else {
+                    Status::Failed(Failure::Cycling {
+                        best: 1.0,
+                        steps: 5,
+                    })
+                },
+                iterations: 5,
+                inner_iterations: 1,
+                log: vec![IterRecord {
+                    iter: 1,
+                    ..Default::default()
+                }],
+            }))
+        }
+    }
+
+    /// A method's direct iteration ends the loop after the glued solve
+    /// when it converges (its answer, the counts of both); when it does
+    /// not, the fixed point runs from the glued answer as before, the
+    /// direct iteration's counts added.
+    #[test]
+    fn a_direct_iteration_is_taken_when_it_settles() {
+        let mut m = Scalar {
+            seen: vec![],
+            fail_at: None,
+            slope: 0.5,
+            direct: Some(true),
+            direct_calls: 0,
+        };
+        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        assert!(out.status.converged(), "{:?}", out.status);
+        assert_eq!((m.seen.clone(), m.direct_calls), (vec![None], 1));
+        assert_eq!((out.iterations, out.inner_iterations), (2 + 5, 3 + 1));
+        assert!((out.lambda[0] - 1.25).abs() < 1e-15, "{:?}", out.lambda);
+        let mut m = Scalar {
+            seen: vec![],
+            fail_at: None,
+            slope: 0.5,
+            direct: Some(false),
+            direct_calls: 0,
+        };
+        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        assert!(out.status.converged(), "{:?}", out.status);
+        assert_eq!((m.seen[0], m.seen[1], m.direct_calls), (None, Some(0.4), 1));
+        let k = m.seen.len();
+        assert_eq!(
+            (out.iterations, out.inner_iterations),
+            (2 * k + 5, 3 * k + 1)
+        );
     }
 
     fn friction(bound: SlipBound) -> Friction {
@@ -260,6 +389,8 @@ mod tests {
             seen: vec![],
             fail_at: None,
             slope: 0.5,
+            direct: None,
+            direct_calls: 0,
         };
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
@@ -276,6 +407,8 @@ mod tests {
             seen: vec![],
             fail_at: None,
             slope: 0.5,
+            direct: None,
+            direct_calls: 0,
         };
         let out = solve(&friction(SlipBound::Tresca(vec![7.0])), &mut m, "t").unwrap();
         assert_eq!(m.seen, vec![Some(7.0)]);
@@ -285,6 +418,8 @@ mod tests {
             seen: vec![],
             fail_at: Some(3),
             slope: 0.5,
+            direct: None,
+            direct_calls: 0,
         };
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert_eq!(out.status, Status::MaxIter);
@@ -299,6 +434,8 @@ mod tests {
             seen: vec![],
             fail_at: None,
             slope: 2.0,
+            direct: None,
+            direct_calls: 0,
         };
         let out = solve(&friction(SlipBound::Coulomb(vec![1.0])), &mut m, "t").unwrap();
         assert!(
