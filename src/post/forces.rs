@@ -126,10 +126,14 @@ fn internal_forces(model: &Model, problem: &Problem, u: &[[f64; 2]]) -> Vec<[f64
     let t = &model.topo;
     let f = &problem.file;
     let th = model.t_eff();
-    let dmats: Vec<[[f64; 3]; 3]> = t
+    // Material and D once per material index, not a map lookup per element.
+    let mats: Vec<(&crate::problem::Material, [[f64; 3]; 3])> = t
         .material_names
         .iter()
-        .map(|m| element::d_matrix(&f.materials[m], f.model.plane))
+        .map(|m| {
+            let mat = &f.materials[m];
+            (mat, element::d_matrix(mat, f.model.plane))
+        })
         .collect();
     // K_e u_e per element in parallel, summed into the points in element
     // order: the same bits as the sequential loop on any number of threads.
@@ -140,8 +144,8 @@ fn internal_forces(model: &Model, problem: &Problem, u: &[[f64; 2]]) -> Vec<[f64
             .zip(t.tri_material.par_iter())
             .map(|(tri, &mi)| {
                 let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
-                let m = &f.materials[&t.material_names[mi as usize]];
-                let ke = element::stiffness_in(&p, m, &dmats[mi as usize], model.plane, th);
+                let (m, d) = &mats[mi as usize];
+                let ke = element::stiffness_in(&p, m, d, model.plane, th);
                 let ue = [
                     u[tri[0]][0],
                     u[tri[0]][1],
@@ -195,6 +199,7 @@ pub fn compute_with_friction(
     lambda_t: &[f64],
     pressure: &[f64],
 ) -> Forces {
+    let mut lap = crate::fem::Lap::new("post::forces");
     let t = &model.topo;
     let np = t.points.len();
     let mut contact = vec![[0.0f64; 2]; np];
@@ -211,6 +216,7 @@ pub fn compute_with_friction(
         }
     }
     let ku = internal_forces(model, problem, u);
+    lap.lap("internal forces");
     let mut reaction = vec![[0.0f64; 2]; np];
     let mut groups: Vec<GroupReaction> = vec![];
     let mut group_of = vec![usize::MAX; model.cond_groups.len()];
@@ -309,6 +315,7 @@ pub fn compute_with_friction(
             }
         }
     }
+    lap.lap("reactions");
     let mut interfaces: Vec<InterfaceForce> = t
         .interface_names
         .iter()
@@ -410,6 +417,7 @@ pub fn compute_with_friction(
             .collect::<Vec<_>>()
             .join("+");
     }
+    lap.lap("interfaces");
     let mut loads = Resultant::default();
     let mut reactions = Resultant::default();
     let (mut strain_energy, mut load_work) = (0.0, 0.0);
@@ -419,6 +427,7 @@ pub fn compute_with_friction(
         loads.add(t.points[p], model.loads[p]);
         reactions.add(t.points[p], reaction[p]);
     }
+    lap.lap("totals");
     Forces {
         point_reaction: reaction,
         point_contact: contact,

@@ -56,8 +56,10 @@ pub fn step_output_with_forces(
     res: &QpResult,
     time: f64,
 ) -> (StepOutput, forces::Forces) {
+    let mut lap = crate::fem::Lap::new("post");
     let t = &model.topo;
     let u = model.displacements(&res.x);
+    lap.lap("displacements");
     let f = &problem.file;
     // Material and D once per material; elements in parallel (each its own
     // result, collected in order: the same bits on any number of threads).
@@ -89,6 +91,7 @@ pub fn step_output_with_forces(
             })
             .collect()
     };
+    lap.lap("stresses");
     let nrow = t.contact.len();
     let mut multipliers = vec![0.0; nrow];
     let mut active = vec![0u8; nrow];
@@ -118,6 +121,7 @@ pub fn step_output_with_forces(
     let lambda_t = friction::friction_output(model, res)
         .map(|f| f.lambda_t)
         .unwrap_or_default();
+    lap.lap("contact fields");
     let mut forces = forces::compute_with_friction(
         model,
         problem,
@@ -126,6 +130,7 @@ pub fn step_output_with_forces(
         &lambda_t,
         &contact_pressure,
     );
+    lap.lap("forces");
     let step = StepOutput {
         time,
         reaction: std::mem::take(&mut forces.point_reaction),
@@ -156,6 +161,7 @@ pub fn step_output_with_forces(
             ..Default::default()
         },
     };
+    lap.lap("von Mises, principal stresses");
     (step, forces)
 }
 

@@ -148,10 +148,18 @@ impl Transaction {
 
     /// Moves the staged files `names` into place.
     pub fn commit(&mut self, names: &[String]) -> Result<(), RunError> {
+        let t = std::time::Instant::now();
         let names: Vec<&str> = names.iter().map(String::as_str).collect();
-        self.stage
+        let r = self
+            .stage
             .commit(&names)
-            .map_err(|e| RunError::Output(self.unstage(&e.to_string())))
+            .map_err(|e| RunError::Output(self.unstage(&e.to_string())));
+        log::debug!(
+            "commit of {} files {:.3} s",
+            names.len(),
+            t.elapsed().as_secs_f64()
+        );
+        r
     }
 
     /// `msg` naming the final files instead of their staged copies.
@@ -344,6 +352,7 @@ impl StepObserver for CheckpointWriter<'_> {
             state: f.state,
         });
         let index = step.index + 1;
+        let t = std::time::Instant::now();
         if step.multi {
             let mut names = match self.split {
                 Some(_) => vec![],
@@ -364,6 +373,7 @@ impl StepObserver for CheckpointWriter<'_> {
             names.push(f);
             // The index last: committed after the files it links to.
             names.push(self.write_index()?);
+            log::debug!("checkpoint step {:.3} s", t.elapsed().as_secs_f64());
             return Ok(names);
         }
         // The staged checkpoint: a copy of the one this step extends, or new.
@@ -447,6 +457,7 @@ impl StepObserver for VtuWriter<'_> {
     fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
         let s = step.index;
         let staged = output_paths(&self.stage_dir, &self.name, step.multi.then_some(s + 1));
+        let t = std::time::Instant::now();
         if step.multi && !self.compress && self.parts.is_none() {
             self.parts = Some(io::vtu::VtuMeshParts::new(self.om));
         }
@@ -470,6 +481,7 @@ impl StepObserver for VtuWriter<'_> {
             arrays.as_ref(),
             self.compress,
         )?;
+        log::debug!("VTU pair {:.3} s", t.elapsed().as_secs_f64());
         let mut names = vec![fname(&staged.vtu), fname(&staged.contact_vtu)];
         if step.multi {
             let entries: Vec<(f64, String)> = (0..=s)
