@@ -684,11 +684,24 @@ fn write_step(ctx: &Ctx, g: &Group, s: &StepOutput) -> Result<(), IoError> {
     let n = s.displacement.len();
     let m = s.stress.len();
     let r = s.multipliers.len();
-    write_ds(ctx, g, "displacement", &[n, 2], &flat2(&s.displacement))?;
-    let stress: Vec<f64> = s.stress.iter().flatten().copied().collect();
-    write_ds(ctx, g, "stress", &[m, 4], &stress)?;
+    // Rows of [f64; N] are the row-major [_, N] datasets as they lie in
+    // memory: written without a copy.
+    write_ds(
+        ctx,
+        g,
+        "displacement",
+        &[n, 2],
+        s.displacement.as_flattened(),
+    )?;
+    write_ds(ctx, g, "stress", &[m, 4], s.stress.as_flattened())?;
     write_ds(ctx, g, "von_mises", &[m], &s.von_mises)?;
-    write_ds(ctx, g, "principal_stress", &[m, 2], &flat2(&s.principal))?;
+    write_ds(
+        ctx,
+        g,
+        "principal_stress",
+        &[m, 2],
+        s.principal.as_flattened(),
+    )?;
     write_ds(ctx, g, "multipliers", &[r], &s.multipliers)?;
     write_ds(ctx, g, "contact_pressure", &[r], &s.contact_pressure)?;
     write_ds(ctx, g, "gap", &[r], &s.gap)?;
@@ -699,10 +712,9 @@ fn write_step(ctx: &Ctx, g: &Group, s: &StepOutput) -> Result<(), IoError> {
             g,
             "displacement_change",
             &[n, 2],
-            &flat2(&c.displacement),
+            c.displacement.as_flattened(),
         )?;
-        let ds: Vec<f64> = c.stress.iter().flatten().copied().collect();
-        write_ds(ctx, g, "stress_change", &[m, 4], &ds)?;
+        write_ds(ctx, g, "stress_change", &[m, 4], c.stress.as_flattened())?;
         write_ds(ctx, g, "contact_pressure_change", &[r], &c.contact_pressure)?;
         set_attr_scalar(ctx, g, "reference_step", &(c.reference_step as u64))?;
     }

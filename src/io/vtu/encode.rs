@@ -338,6 +338,13 @@ fn write_block(w: &mut impl Write, data: BlockRef<'_>) -> std::io::Result<()> {
         BlockRef::Values(v) => v,
     };
     w.write_all(&(v.nbytes() as u64).to_le_bytes())?;
+    #[cfg(target_endian = "little")]
+    if let Slice::F64(v) = v {
+        // SAFETY: an f64 slice is v.len() * 8 initialised bytes, aligned
+        // for u8; on a little-endian machine they are the bytes to write.
+        let bytes = unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u8>(), v.len() * 8) };
+        return w.write_all(bytes);
+    }
     let mut chunk: Vec<u8> = Vec::with_capacity(1 << 16);
     macro_rules! put {
         ($v:expr) => {

@@ -239,6 +239,75 @@ pub fn write_vtu_with(
     }
     let vec3 = |v: &[[f64; 2]]| -> Vec<f64> { v.iter().flat_map(|u| [u[0], u[1], 0.0]).collect() };
     let ncomp: usize = if mesh.plane_strain { 4 } else { 3 };
+    let has_reaction = step.reaction.len() == n;
+    if let Some(p) = parts.filter(|p| !compress && p.n == n && p.m == m) {
+        // The step's fields straight from the step where they lie as
+        // written (stress with 4 components, von Mises, principal
+        // stresses); the 3-component vectors padded with z = 0.
+        fn stress_vals(s: &[[f64; 4]], ncomp: usize) -> std::borrow::Cow<'_, [f64]> {
+            if ncomp == 4 {
+                std::borrow::Cow::Borrowed(s.as_flattened())
+            } else {
+                std::borrow::Cow::Owned(s.iter().flat_map(|s| s[..ncomp].to_vec()).collect())
+            }
+        }
+        fn f<'a>(name: &str, k: u32, v: &'a [f64], names: Names, vectors: bool) -> Arr<'a> {
+            Arr::new(name, k, Slice::F64(v), names, vectors)
+        }
+        let u = vec3(&step.displacement);
+        let reaction = has_reaction.then(|| vec3(&step.reaction));
+        let stress = stress_vals(&step.stress, ncomp);
+        let change = step
+            .change
+            .as_ref()
+            .map(|c| (vec3(&c.displacement), stress_vals(&c.stress, ncomp)));
+        let u = f("displacement", 3, &u, names, true);
+        let reaction = reaction.as_ref().map(|r| f("reaction", 3, r, names, true));
+        let stress = f("stress", ncomp as u32, &stress, names, false);
+        let von_mises = f("von_mises", 1, &step.von_mises, names, false);
+        let principal = f(
+            "principal_stress",
+            2,
+            step.principal.as_flattened(),
+            names,
+            false,
+        );
+        let change = change.as_ref().map(|(du, ds)| {
+            (
+                f("displacement_change", 3, du, names, true),
+                f("stress_change", ncomp as u32, ds, names, false),
+            )
+        });
+        let point: Vec<ArrRef> = [
+            Some(u.by_ref()),
+            Some(p.body.by_ref()),
+            Some(p.contact_role.by_ref()),
+            reaction.as_ref().map(Arr::by_ref),
+            change.as_ref().map(|c| c.0.by_ref()),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        let cell: Vec<ArrRef> = [
+            Some(stress.by_ref()),
+            Some(von_mises.by_ref()),
+            Some(principal.by_ref()),
+            Some(p.material.by_ref()),
+            change.as_ref().map(|c| c.1.by_ref()),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        let geometry: Vec<ArrRef> = p.geometry.iter().map(OwnedArr::by_ref).collect();
+        return write_atomic(path, |tmp| {
+            let file = super::atomic::create_new(tmp)
+                .map_err(|e| IoError::io(path, "cannot create", e))?;
+            let mut w = BufWriter::with_capacity(1 << 20, file);
+            stream_appended(&mut w, n, m, &point, &cell, &geometry)
+                .and_then(|()| w.flush())
+                .map_err(|e| IoError::io(path, "cannot write", e))
+        });
+    }
     let stress_of = |s: &[[f64; 4]]| -> Vec<f64> {
         s.iter().flat_map(|s| s[..ncomp].iter().copied()).collect()
     };
@@ -247,97 +316,46 @@ pub fn write_vtu_with(
         ElementType::Vectors,
         IOBuffer::F64(vec3(&step.displacement)),
     );
-    let reaction = (step.reaction.len() == n).then(|| {
-        array(
+    let mut point = vec![
+        displacement,
+        body_array(mesh),
+        i32_array("contact_role", contact_roles(mesh).into_iter()),
+    ];
+    let mut cell = vec![
+        f64_array("stress", ncomp as u32, stress_of(&step.stress)),
+        f64_array("von_mises", 1, step.von_mises.clone()),
+        f64_array(
+            "principal_stress",
+            2,
+            step.principal.iter().flat_map(|p| [p[0], p[1]]).collect(),
+        ),
+        material_array(mesh),
+    ];
+    if has_reaction {
+        point.push(array(
             "reaction",
             ElementType::Vectors,
             IOBuffer::F64(vec3(&step.reaction)),
-        )
-    });
-    let stress = f64_array("stress", ncomp as u32, stress_of(&step.stress));
-    let von_mises = f64_array("von_mises", 1, step.von_mises.clone());
-    let principal = f64_array(
-        "principal_stress",
-        2,
-        step.principal.iter().flat_map(|p| [p[0], p[1]]).collect(),
-    );
-    let change = step.change.as_ref().map(|c| {
-        (
-            array(
-                "displacement_change",
-                ElementType::Vectors,
-                IOBuffer::F64(vec3(&c.displacement)),
-            ),
-            f64_array("stress_change", ncomp as u32, stress_of(&c.stress)),
-        )
-    });
-    match parts.filter(|p| !compress && p.n == n && p.m == m) {
-        Some(p) => {
-            fn arr<'a>(path: &Path, a: &'a Attribute, names: Names) -> Result<Arr<'a>, IoError> {
-                data_arrs(std::slice::from_ref(a), names)
-                    .ok()
-                    .and_then(|mut v| v.pop())
-                    .ok_or_else(|| IoError::format(path, "unsupported VTU array type"))
-            }
-            let field = |a| arr(path, a, names);
-            let displacement = field(&displacement)?;
-            let reaction = reaction.as_ref().map(field).transpose()?;
-            let (stress, von_mises, principal) =
-                (field(&stress)?, field(&von_mises)?, field(&principal)?);
-            let change = match &change {
-                Some((du, ds)) => Some((field(du)?, field(ds)?)),
-                None => None,
-            };
-            let point: Vec<ArrRef> = [
-                Some(displacement.by_ref()),
-                Some(p.body.by_ref()),
-                Some(p.contact_role.by_ref()),
-                reaction.as_ref().map(Arr::by_ref),
-                change.as_ref().map(|c| c.0.by_ref()),
-            ]
-            .into_iter()
-            .flatten()
-            .collect();
-            let cell: Vec<ArrRef> = [
-                Some(stress.by_ref()),
-                Some(von_mises.by_ref()),
-                Some(principal.by_ref()),
-                Some(p.material.by_ref()),
-                change.as_ref().map(|c| c.1.by_ref()),
-            ]
-            .into_iter()
-            .flatten()
-            .collect();
-            let geometry: Vec<ArrRef> = p.geometry.iter().map(OwnedArr::by_ref).collect();
-            write_atomic(path, |tmp| {
-                let file = super::atomic::create_new(tmp)
-                    .map_err(|e| IoError::io(path, "cannot create", e))?;
-                let mut w = BufWriter::with_capacity(1 << 20, file);
-                stream_appended(&mut w, n, m, &point, &cell, &geometry)
-                    .and_then(|()| w.flush())
-                    .map_err(|e| IoError::io(path, "cannot write", e))
-            })
-        }
-        None => {
-            let mut point = vec![
-                displacement,
-                body_array(mesh),
-                i32_array("contact_role", contact_roles(mesh).into_iter()),
-            ];
-            let mut cell = vec![stress, von_mises, principal, material_array(mesh)];
-            point.extend(reaction);
-            if let Some((du, ds)) = change {
-                point.push(du);
-                cell.push(ds);
-            }
-            let piece = UnstructuredGridPiece {
-                points: points3(&mesh.points),
-                cells: bulk_cells(mesh),
-                data: Attributes { point, cell },
-            };
-            write_piece(path, piece, compress, names)
-        }
+        ));
     }
+    if let Some(c) = &step.change {
+        point.push(array(
+            "displacement_change",
+            ElementType::Vectors,
+            IOBuffer::F64(vec3(&c.displacement)),
+        ));
+        cell.push(f64_array(
+            "stress_change",
+            ncomp as u32,
+            stress_of(&c.stress),
+        ));
+    }
+    let piece = UnstructuredGridPiece {
+        points: points3(&mesh.points),
+        cells: bulk_cells(mesh),
+        data: Attributes { point, cell },
+    };
+    write_piece(path, piece, compress, names)
 }
 
 /// Each point's part in the contact: 0 none, 1 a conforming pair, 2 a
