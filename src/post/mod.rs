@@ -60,38 +60,9 @@ pub fn step_output_with_forces(
     let t = &model.topo;
     let u = model.displacements(&res.x);
     lap.lap("displacements");
-    let f = &problem.file;
-    // Material and D once per material; elements in parallel (each its own
-    // result, collected in order: the same bits on any number of threads).
-    let mats: Vec<(&crate::problem::Material, [[f64; 3]; 3])> = t
-        .material_names
-        .iter()
-        .map(|name| {
-            let m = &f.materials[name];
-            (m, element::d_matrix(m, f.model.plane))
-        })
-        .collect();
-    let stress: Vec<_> = {
-        use rayon::prelude::*;
-        t.triangles
-            .par_iter()
-            .zip(t.tri_material.par_iter())
-            .map(|(tri, &k)| {
-                let (m, d) = &mats[k as usize];
-                let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
-                let ue = [
-                    u[tri[0]][0],
-                    u[tri[0]][1],
-                    u[tri[1]][0],
-                    u[tri[1]][1],
-                    u[tri[2]][0],
-                    u[tri[2]][1],
-                ];
-                element::stress(&p, d, m, f.model.plane, &ue)
-            })
-            .collect()
-    };
-    lap.lap("stresses");
+    // Stresses and the element forces of the reactions in one pass.
+    let (stress, ku) = forces::element_pass(model, problem, &u, true);
+    lap.lap("stresses and element forces");
     let nrow = t.contact.len();
     let mut multipliers = vec![0.0; nrow];
     let mut active = vec![0u8; nrow];
@@ -122,14 +93,8 @@ pub fn step_output_with_forces(
         .map(|f| f.lambda_t)
         .unwrap_or_default();
     lap.lap("contact fields");
-    let mut forces = forces::compute_with_friction(
-        model,
-        problem,
-        &u,
-        &multipliers,
-        &lambda_t,
-        &contact_pressure,
-    );
+    let mut forces =
+        forces::compute_from(model, &u, &ku, &multipliers, &lambda_t, &contact_pressure);
     lap.lap("forces");
     let step = StepOutput {
         time,
