@@ -3,6 +3,9 @@
 //!
 //! Every write is crash-safe: the file is built (or copied and extended) in
 //! a private staging directory, closed, fsynced and renamed over the target.
+//! A run with load steps writes the split layout (see [`Checkpoint`]): each
+//! step its own file and a new small index, so no step copies the earlier
+//! ones.
 //! Every read is bounded by the file: a dataset or attribute whose shape
 //! needs more bytes than the file holds is refused before any allocation
 //! (checkpoints are written uncompressed, so a genuine one always fits).
