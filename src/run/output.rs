@@ -1,9 +1,9 @@
 //! The outputs of a run (docs/problem-format.md §6) as observers, and the
 //! transaction that moves them into place: files are written into a staging
 //! directory ([`Stage`]) under the output directory's lock ([`OutputLock`])
-//! and committed per load step (VTU pair, PVD, the grown checkpoint), the
-//! JSON summary last; an error drops the transaction, which puts back what
-//! the directory held before. SIGTERM and SIGINT become such an error
+//! and committed per load step (VTU pair, PVD, the checkpoint's step file and
+//! its index, renamed last), the JSON summary last; an error drops the
+//! transaction, which puts back what the directory held before. SIGTERM and SIGINT become such an error
 //! ([`catch_signals`]).
 
 use super::observe::StepObserver;
