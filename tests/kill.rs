@@ -396,7 +396,13 @@ fn signal_after_first_commit(name: &str, dir: &Path, extra: &[&str], signals: &[
         child.try_wait().unwrap().is_none(),
         "the run ended before the signal: nothing left to interrupt"
     );
-    for &s in signals {
+    for (k, &s) in signals.iter().enumerate() {
+        if k > 0 {
+            // Two signals pending at once are delivered lowest number
+            // first (SIGINT before SIGTERM), whatever order they were
+            // sent in: let the first be taken before the next is sent.
+            std::thread::sleep(Duration::from_millis(50));
+        }
         send(&child, s);
     }
     let status = loop {
