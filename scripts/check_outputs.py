@@ -593,7 +593,13 @@ def main(argv=None) -> int:
     if not d.is_dir():
         print(f"check_outputs: error: {d} is not a directory", file=sys.stderr)
         return 2
-    names = args.names or sorted(p.stem for p in d.glob("*.h5"))
+    # A run with load steps splits its checkpoint: NAME.h5 (the index) links
+    # NAME_mesh.h5 and NAME_NNNN.h5, which are parts of NAME, not problems.
+    stems = {p.stem for p in d.glob("*.h5")}
+    part = re.compile(r"(.+)_(mesh|\d{4,})")
+    names = args.names or sorted(
+        s for s in stems if not ((m := part.fullmatch(s)) and m.group(1) in stems)
+    )
     if not names:
         print(f"check_outputs: error: no NAME.h5 in {d}", file=sys.stderr)
         return 2

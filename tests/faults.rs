@@ -408,6 +408,21 @@ fn a_checkpoint_locked_by_another_program_is_named() {
     drop(held);
 }
 
+/// A copy of the checkpoint `h5` of a run with load steps, with its mesh
+/// and step files (the split layout of docs/problem-format.md §6), as
+/// `dir/NAME.h5`.
+fn copy_checkpoint(h5: &Path, dir: &Path) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let stem = h5.file_stem().unwrap().to_str().unwrap().to_string();
+    for e in std::fs::read_dir(h5.parent().unwrap()).unwrap().flatten() {
+        let n = e.file_name().to_string_lossy().into_owned();
+        if n.starts_with(&stem) && n.ends_with(".h5") {
+            std::fs::copy(e.path(), dir.join(&n)).unwrap();
+        }
+    }
+    dir.join(h5.file_name().unwrap())
+}
+
 #[test]
 fn crafted_checkpoints_are_refused_without_a_crash() {
     let d = tempfile::tempdir().unwrap();
@@ -425,8 +440,7 @@ fn crafted_checkpoints_are_refused_without_a_crash() {
     };
     // A dataset declaring (1e11, 2) values in a small file: refused before
     // any allocation (it used to abort with a 1.6 TB allocation).
-    let huge = d.path().join("huge.h5");
-    std::fs::copy(&good, &huge).unwrap();
+    let huge = copy_checkpoint(&good, &d.path().join("huge"));
     {
         let f = hdf5::File::open_rw(&huge).unwrap();
         let g = f.group("mesh").unwrap();
@@ -452,8 +466,7 @@ fn crafted_checkpoints_are_refused_without_a_crash() {
     assert_bad_input(code, &log, "huge dataset, plot");
 
     // A non-finite warm start.
-    let nan = d.path().join("nan.h5");
-    std::fs::copy(&good, &nan).unwrap();
+    let nan = copy_checkpoint(&good, &d.path().join("nan"));
     {
         let f = hdf5::File::open_rw(&nan).unwrap();
         let ds = f.dataset("steps/0001/displacement").unwrap();
@@ -466,8 +479,7 @@ fn crafted_checkpoints_are_refused_without_a_crash() {
     assert!(line.contains("not finite"), "{line}");
 
     // No fingerprint (another program's file, or an older signorini's).
-    let bare = d.path().join("bare.h5");
-    std::fs::copy(&good, &bare).unwrap();
+    let bare = copy_checkpoint(&good, &d.path().join("bare"));
     {
         let f = hdf5::File::open_rw(&bare).unwrap();
         f.delete_attr("fingerprint").unwrap();
@@ -475,6 +487,17 @@ fn crafted_checkpoints_are_refused_without_a_crash() {
     let (code, log) = restart(&bare);
     let line = assert_bad_input(code, &log, "no fingerprint");
     assert!(line.contains("fingerprint"), "{line}");
+
+    // The index of a split checkpoint copied without its files: refused,
+    // saying that the directory moves as a whole.
+    let alone = d.path().join("alone.h5");
+    std::fs::copy(&good, &alone).unwrap();
+    let (code, log) = restart(&alone);
+    let line = assert_bad_input(code, &log, "index without its files");
+    assert!(
+        line.contains("alone.h5") && line.contains("as a whole"),
+        "{line}"
+    );
 
     // A directory and a FIFO.
     let (code, log) = restart(d.path());

@@ -54,7 +54,11 @@ fn is_output_name(name: &str) -> bool {
             .and_then(|r| r.strip_suffix(suffix))
             .is_some_and(|k| k.len() == 4 && k.bytes().all(|c| c.is_ascii_digit()))
     };
+    // The checkpoint of a run with load steps is split (NAME.h5 the index,
+    // NAME_mesh.h5, NAME_NNNN.h5 one per step; docs/problem-format.md §6).
     name == format!("{NAME}.h5")
+        || name == format!("{NAME}_mesh.h5")
+        || step_file(".h5")
         || name == format!("{NAME}.pvd")
         || name == format!("{NAME}.json")
         || step_file(".vtu")
@@ -101,7 +105,7 @@ fn check_outputs(dir: &Path, when: &str) -> Option<Checkpoint> {
             let j: serde_json::Value = serde_json::from_str(&text)
                 .unwrap_or_else(|e| panic!("{when}: {name} is not complete JSON: {e}"));
             assert!(j.get("converged").is_some(), "{when}: {name}");
-        } else if name.ends_with(".h5") {
+        } else if name == format!("{NAME}.h5") {
             let c = read_checkpoint(&path)
                 .unwrap_or_else(|e| panic!("{when}: checkpoint does not open: {e}"));
             assert!(!c.mesh.points.is_empty(), "{when}: checkpoint without mesh");
@@ -392,7 +396,13 @@ fn signal_after_first_commit(name: &str, dir: &Path, extra: &[&str], signals: &[
         child.try_wait().unwrap().is_none(),
         "the run ended before the signal: nothing left to interrupt"
     );
-    for &s in signals {
+    for (k, &s) in signals.iter().enumerate() {
+        if k > 0 {
+            // Two signals pending at once are delivered lowest number
+            // first (SIGINT before SIGTERM), whatever order they were
+            // sent in: let the first be taken before the next is sent.
+            std::thread::sleep(Duration::from_millis(50));
+        }
         send(&child, s);
     }
     let status = loop {

@@ -133,6 +133,21 @@ pub fn create_new(path: &Path) -> std::io::Result<File> {
         .open(path)
 }
 
+/// Lets the kernel drop the cached pages of `f`, a complete output file
+/// just synced to disk (so they are clean): nothing reads it back, and the
+/// pages freed are what the next step's files are written into. Without
+/// this each load step's ~150 MB (at 400 k nodes) is new page cache the
+/// kernel must find room for, and buffered writes into new pages ran at
+/// 200–400 MB/s here instead of 2–3 GB/s into pages just freed. Advice
+/// only: errors are ignored.
+fn drop_cached(f: &File) {
+    use std::os::fd::AsRawFd;
+    // SAFETY: posix_fadvise on an open descriptor reads no memory of ours.
+    unsafe {
+        libc::posix_fadvise(f.as_raw_fd(), 0, 0, libc::POSIX_FADV_DONTNEED);
+    }
+}
+
 /// fsync a directory; some file systems refuse, and the data itself is
 /// already on disk then, so errors are ignored.
 fn sync_dir(dir: &Path) {
@@ -208,6 +223,7 @@ impl Stage {
                 .map_err(|e| IoError::io(&self.target(n), "cannot reopen staged file", e))?;
             f.sync_all()
                 .map_err(|e| IoError::io(&self.target(n), "cannot sync to disk", e))?;
+            drop_cached(&f);
         }
         let before = self.touched.len();
         for n in names {

@@ -3,6 +3,9 @@
 //!
 //! Every write is crash-safe: the file is built (or copied and extended) in
 //! a private staging directory, closed, fsynced and renamed over the target.
+//! A run with load steps writes the split layout (see [`Checkpoint`]): each
+//! step its own file and a new small index, so no step copies the earlier
+//! ones.
 //! Every read is bounded by the file: a dataset or attribute whose shape
 //! needs more bytes than the file holds is refused before any allocation
 //! (checkpoints are written uncompressed, so a genuine one always fits).
@@ -52,6 +55,15 @@ use super::{Change, ContactGeometry, OutMesh, StepInfo, StepOutput};
 ///     with friction (docs/methods.md §9): multipliers_t f64 [rows],
 ///     tangential_traction f64 [rows], slip f64 [rows], state u8 [rows]
 /// ```
+///
+/// Two layouts hold this tree. A single solve writes it as one file. A run
+/// with load steps writes it split, so that a step writes its own data and
+/// nothing else ([`write_mesh_file`], [`write_step_file`], [`write_index`]):
+/// `NAME_mesh.h5` holds `/mesh`, `NAME_NNNN.h5` holds `/steps/NNNN`, and
+/// `NAME.h5` holds the root attributes and HDF5 external links `/mesh` and
+/// `/steps/NNNN` to them (relative file names, resolved next to `NAME.h5`),
+/// so h5py and [`read_checkpoint`] see the same tree. The small index is
+/// rewritten and renamed into place at each step: it is the step's commit.
 #[derive(Debug, Clone, Default)]
 pub struct Checkpoint {
     pub mesh: OutMesh,
@@ -98,6 +110,21 @@ impl<'a> Ctx<'a> {
                 "{loc}: shape {shape:?} needs more bytes than the file holds ({} bytes); the checkpoint is corrupt",
                 self.limit
             ))),
+        }
+    }
+}
+
+impl<'a> Ctx<'a> {
+    /// The context of reading the object `loc`, which may live in another
+    /// file (an external link of a split checkpoint): the size bound is
+    /// that file's.
+    fn of_file(&self, loc: &Location) -> Ctx<'a> {
+        let limit = std::fs::metadata(loc.filename())
+            .map(|m| m.len())
+            .unwrap_or(self.limit);
+        Ctx {
+            path: self.path,
+            limit,
         }
     }
 }
@@ -350,6 +377,198 @@ pub fn append_step_in_place(path: &Path, index: usize, step: &StepOutput) -> Res
     file.close().map_err(ctx.h5("/"))
 }
 
+// ------------------------------------------------------ the split layout
+
+/// The file of a split checkpoint `NAME.h5` that holds `/mesh`: `NAME_mesh.h5`.
+pub fn mesh_file_name(name: &str) -> String {
+    format!("{name}_mesh.h5")
+}
+
+/// The file of a split checkpoint `NAME.h5` that holds `/steps/NNNN`:
+/// `NAME_NNNN.h5` (the stem of the step's VTU).
+pub fn step_file_name(name: &str, index: usize) -> String {
+    format!("{name}_{}.h5", step_name(index))
+}
+
+/// Writes the mesh file of a split checkpoint at `path` (a new file of a
+/// staging directory: the stage fsyncs and renames it): `/mesh` as in the
+/// single-file layout.
+pub fn write_mesh_file(path: &Path, mesh: &OutMesh) -> Result<(), IoError> {
+    let ctx = Ctx::writing(path);
+    check_mesh(&ctx, mesh)?;
+    let file = File::create(path).map_err(ctx.h5("/"))?;
+    {
+        let g = file.create_group("mesh").map_err(ctx.h5("/mesh"))?;
+        write_mesh(&ctx, &g, mesh)?;
+    }
+    file.close().map_err(ctx.h5("/"))
+}
+
+/// Writes the file of step `index` (1-based) of a split checkpoint at
+/// `path` (a new file of a staging directory): the group `/steps/NNNN` as
+/// in the single-file layout, with the friction arrays when given. Sizes
+/// are checked against `mesh`.
+pub fn write_step_file(
+    path: &Path,
+    mesh: &OutMesh,
+    index: usize,
+    step: &StepOutput,
+    friction: Option<&StepFriction>,
+) -> Result<(), IoError> {
+    let ctx = Ctx::writing(path);
+    if index == 0 {
+        return Err(ctx.format("step indices start at 1"));
+    }
+    let (n, m, r) = (
+        mesh.points.len(),
+        mesh.triangles.len(),
+        mesh.contact.points.len(),
+    );
+    check_step(&ctx, step, n, m, r)?;
+    if let Some(f) = friction {
+        check_friction(&ctx, f, r)?;
+    }
+    let file = File::create(path).map_err(ctx.h5("/"))?;
+    {
+        let steps = file.create_group("steps").map_err(ctx.h5("/steps"))?;
+        let name = step_name(index);
+        let g = steps
+            .create_group(&name)
+            .map_err(ctx.h5(format!("/steps/{name}")))?;
+        write_step(&ctx, &g, step)?;
+        if let Some(f) = friction {
+            write_friction(&ctx, &g, f)?;
+        }
+    }
+    file.close().map_err(ctx.h5("/"))
+}
+
+/// Writes the index `NAME.h5` of a split checkpoint at `path` (a new file
+/// of a staging directory): the root attributes `attrs` (strings),
+/// `plane_strain`, `axisymmetric` and `last_step` as in the single-file
+/// layout, `/mesh` an external link to `/mesh` of `mesh_file`, and
+/// `/steps/NNNN` one external link to `/steps/NNNN` of each `(index,
+/// file)` of `steps`. File names are relative: HDF5 looks for them in the
+/// index's directory first, so the set can be moved as a whole.
+pub fn write_index(
+    path: &Path,
+    mesh: &OutMesh,
+    attrs: &[(&str, String)],
+    mesh_file: &str,
+    steps: &[(usize, String)],
+) -> Result<(), IoError> {
+    let ctx = Ctx::writing(path);
+    for (k, _) in attrs {
+        if RESERVED_ROOT_ATTRS.contains(k) {
+            return Err(ctx.format(format!("root attribute name {k:?} is reserved")));
+        }
+    }
+    let file = File::create(path).map_err(ctx.h5("/"))?;
+    {
+        let root: &Group = &file;
+        for (k, v) in attrs {
+            set_attr_str(&ctx, root, k, v)?;
+        }
+        set_attr_scalar(&ctx, root, "plane_strain", &u8::from(mesh.plane_strain))?;
+        if mesh.axisymmetric {
+            set_attr_scalar(&ctx, root, "axisymmetric", &1u8)?;
+        }
+        root.link_external(mesh_file, "/mesh", "mesh")
+            .map_err(ctx.h5("/mesh"))?;
+        let g = file.create_group("steps").map_err(ctx.h5("/steps"))?;
+        for (index, f) in steps {
+            let name = step_name(*index);
+            g.link_external(f, &format!("/steps/{name}"), &name)
+                .map_err(ctx.h5(format!("/steps/{name}")))?;
+        }
+        if let Some(last) = steps.iter().map(|s| s.0).max() {
+            set_attr_scalar(&ctx, root, "last_step", &(last as u64))?;
+        }
+    }
+    file.close().map_err(ctx.h5("/"))
+}
+
+/// Where the parts of a checkpoint are stored: the file holding `/mesh`
+/// and the file of each step group (in index order), as HDF5 resolved
+/// them; each is `path` itself in the single-file layout.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CheckpointFiles {
+    pub mesh: std::path::PathBuf,
+    /// (step index, group name, file).
+    pub steps: Vec<(usize, String, std::path::PathBuf)>,
+}
+
+/// The [`CheckpointFiles`] of the checkpoint at `path` (no dataset is read).
+pub fn checkpoint_files(path: &Path) -> Result<CheckpointFiles, IoError> {
+    let ctx = Ctx::writing(path);
+    let file = File::open(path).map_err(ctx.h5("/"))?;
+    if !file.link_exists("mesh") {
+        return Err(ctx.missing("group /mesh"));
+    }
+    let mesh = file.group("mesh").map_err(ctx.h5("/mesh"))?;
+    let mut out = CheckpointFiles {
+        mesh: std::path::PathBuf::from(mesh.filename()),
+        steps: vec![],
+    };
+    if file.link_exists("steps") {
+        let sg = file.group("steps").map_err(ctx.h5("/steps"))?;
+        let mut names: Vec<(usize, String)> = sg
+            .member_names()
+            .map_err(ctx.h5("/steps"))?
+            .into_iter()
+            .filter_map(|nm| parse_step_name(&nm).map(|i| (i, nm)))
+            .collect();
+        names.sort();
+        for (i, name) in names {
+            let g = sg
+                .group(&name)
+                .map_err(|e| linked(&ctx, &format!("/steps/{name}"), e))?;
+            out.steps
+                .push((i, name, std::path::PathBuf::from(g.filename())));
+        }
+    }
+    Ok(out)
+}
+
+/// An HDF5 error opening `loc`, with a hint when it is an external link of
+/// a split checkpoint whose file is missing.
+fn linked(ctx: &Ctx, loc: &str, cause: ::hdf5::Error) -> IoError {
+    let text = cause.to_string();
+    if text.contains("external") {
+        let stem = ctx
+            .path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        return ctx.format(format!(
+            "{loc}: the file it links to cannot be opened ({text}); a checkpoint written with load steps keeps /mesh in {} and each step in {stem}_NNNN.h5 next to it: copy or move the directory as a whole",
+            mesh_file_name(&stem)
+        ));
+    }
+    IoError::Hdf5 {
+        path: ctx.path.to_path_buf(),
+        location: loc.to_string(),
+        cause,
+    }
+}
+
+/// Reads the step group `NNNN` of the checkpoint at `path` (either layout)
+/// with its friction arrays, sizes checked against `mesh`.
+pub fn read_step_of(
+    path: &Path,
+    mesh: &OutMesh,
+    name: &str,
+) -> Result<(StepOutput, Option<StepFriction>), IoError> {
+    let ctx = Ctx::writing(path);
+    let file = File::open(path).map_err(ctx.h5("/"))?;
+    let loc = format!("/steps/{name}");
+    let g = file.group(&loc).map_err(|e| linked(&ctx, &loc, e))?;
+    let gctx = ctx.of_file(&g);
+    let step = read_step(&gctx, &g, mesh)?;
+    let friction = read_step_friction(&gctx, &g, mesh.contact.points.len())?;
+    Ok((step, friction))
+}
+
 /// The friction arrays of a step, per contact row (docs/problem-format.md
 /// §6): λ_t (N), the tangential traction (Pa), the slip of the step (m) and
 /// the state 0 open, 1 stick, 2 slip.
@@ -370,7 +589,18 @@ pub fn append_step_with_friction_in_place(
 ) -> Result<(), IoError> {
     append_step_in_place(path, index, step)?;
     let ctx = Ctx::writing(path);
-    let r = step.multipliers.len();
+    check_friction(&ctx, friction, step.multipliers.len())?;
+    let file = File::open_rw(path).map_err(ctx.h5("/"))?;
+    {
+        let loc = format!("/steps/{}", step_name(index));
+        let g = file.group(&loc).map_err(ctx.h5(loc.clone()))?;
+        write_friction(&ctx, &g, friction)?;
+    }
+    file.close().map_err(ctx.h5("/"))
+}
+
+/// Refuses friction arrays that are not one value per contact row.
+fn check_friction(ctx: &Ctx, friction: &StepFriction, r: usize) -> Result<(), IoError> {
     for (what, got) in [
         ("multipliers_t", friction.multipliers_t.len()),
         ("tangential_traction", friction.tangential_traction.len()),
@@ -383,22 +613,22 @@ pub fn append_step_with_friction_in_place(
             )));
         }
     }
-    let file = File::open_rw(path).map_err(ctx.h5("/"))?;
-    {
-        let loc = format!("/steps/{}", step_name(index));
-        let g = file.group(&loc).map_err(ctx.h5(loc.clone()))?;
-        write_ds(&ctx, &g, "multipliers_t", &[r], &friction.multipliers_t)?;
-        write_ds(
-            &ctx,
-            &g,
-            "tangential_traction",
-            &[r],
-            &friction.tangential_traction,
-        )?;
-        write_ds(&ctx, &g, "slip", &[r], &friction.slip)?;
-        write_ds(&ctx, &g, "state", &[r], &friction.state)?;
-    }
-    file.close().map_err(ctx.h5("/"))
+    Ok(())
+}
+
+/// The friction arrays in the step group `g`.
+fn write_friction(ctx: &Ctx, g: &Group, friction: &StepFriction) -> Result<(), IoError> {
+    let r = friction.multipliers_t.len();
+    write_ds(ctx, g, "multipliers_t", &[r], &friction.multipliers_t)?;
+    write_ds(
+        ctx,
+        g,
+        "tangential_traction",
+        &[r],
+        &friction.tangential_traction,
+    )?;
+    write_ds(ctx, g, "slip", &[r], &friction.slip)?;
+    write_ds(ctx, g, "state", &[r], &friction.state)
 }
 
 /// The friction arrays of the step group `g`, if it has them (all four).
@@ -457,11 +687,24 @@ fn write_step(ctx: &Ctx, g: &Group, s: &StepOutput) -> Result<(), IoError> {
     let n = s.displacement.len();
     let m = s.stress.len();
     let r = s.multipliers.len();
-    write_ds(ctx, g, "displacement", &[n, 2], &flat2(&s.displacement))?;
-    let stress: Vec<f64> = s.stress.iter().flatten().copied().collect();
-    write_ds(ctx, g, "stress", &[m, 4], &stress)?;
+    // Rows of [f64; N] are the row-major [_, N] datasets as they lie in
+    // memory: written without a copy.
+    write_ds(
+        ctx,
+        g,
+        "displacement",
+        &[n, 2],
+        s.displacement.as_flattened(),
+    )?;
+    write_ds(ctx, g, "stress", &[m, 4], s.stress.as_flattened())?;
     write_ds(ctx, g, "von_mises", &[m], &s.von_mises)?;
-    write_ds(ctx, g, "principal_stress", &[m, 2], &flat2(&s.principal))?;
+    write_ds(
+        ctx,
+        g,
+        "principal_stress",
+        &[m, 2],
+        s.principal.as_flattened(),
+    )?;
     write_ds(ctx, g, "multipliers", &[r], &s.multipliers)?;
     write_ds(ctx, g, "contact_pressure", &[r], &s.contact_pressure)?;
     write_ds(ctx, g, "gap", &[r], &s.gap)?;
@@ -472,10 +715,9 @@ fn write_step(ctx: &Ctx, g: &Group, s: &StepOutput) -> Result<(), IoError> {
             g,
             "displacement_change",
             &[n, 2],
-            &flat2(&c.displacement),
+            c.displacement.as_flattened(),
         )?;
-        let ds: Vec<f64> = c.stress.iter().flatten().copied().collect();
-        write_ds(ctx, g, "stress_change", &[m, 4], &ds)?;
+        write_ds(ctx, g, "stress_change", &[m, 4], c.stress.as_flattened())?;
         write_ds(ctx, g, "contact_pressure_change", &[r], &c.contact_pressure)?;
         set_attr_scalar(ctx, g, "reference_step", &(c.reference_step as u64))?;
     }
@@ -658,8 +900,8 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
     if !file.link_exists("mesh") {
         return Err(ctx.missing("group /mesh"));
     }
-    let g = file.group("mesh").map_err(ctx.h5("/mesh"))?;
-    let mut mesh = read_mesh(&ctx, &g)?;
+    let g = file.group("mesh").map_err(|e| linked(&ctx, "/mesh", e))?;
+    let mut mesh = read_mesh(&ctx.of_file(&g), &g)?;
     mesh.plane_strain = plane_strain;
     mesh.axisymmetric = axisymmetric;
 
@@ -676,9 +918,12 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
             .collect();
         names.sort();
         for (_, name) in names {
-            let g = sg.group(&name).map_err(ctx.h5(format!("/steps/{name}")))?;
-            steps.push(read_step(&ctx, &g, &mesh)?);
-            friction.push(read_step_friction(&ctx, &g, mesh.contact.points.len())?);
+            let g = sg
+                .group(&name)
+                .map_err(|e| linked(&ctx, &format!("/steps/{name}"), e))?;
+            let gctx = ctx.of_file(&g);
+            steps.push(read_step(&gctx, &g, &mesh)?);
+            friction.push(read_step_friction(&gctx, &g, mesh.contact.points.len())?);
             step_groups.push(name);
         }
     }

@@ -123,25 +123,48 @@ pub struct Forces {
 
 /// (K u)_p per point: the element forces C_e u_e summed at each vertex.
 fn internal_forces(model: &Model, problem: &Problem, u: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    element_pass(model, problem, u, false).1
+}
+
+/// Elements per chunk of [`element_pass`]: its per-element results (a few
+/// MB) are reused from chunk to chunk while still in cache, instead of one
+/// array over all the elements allocated at every step.
+const CHUNK: usize = 1 << 15;
+
+/// One pass over the elements: the stress of each (σ = D B u_e, with
+/// `stresses`; else empty) and (K u)_p per point, the element forces
+/// C_e u_e summed at each vertex. Elements are computed in parallel chunk
+/// by chunk and summed into the points in element order: the same bits as
+/// the sequential loop on any number of threads, and as
+/// [`element::stress`] and [`element::stiffness_in`] element by element.
+pub(crate) fn element_pass(
+    model: &Model,
+    problem: &Problem,
+    u: &[[f64; 2]],
+    stresses: bool,
+) -> (Vec<[f64; 4]>, Vec<[f64; 2]>) {
+    use rayon::prelude::*;
     let t = &model.topo;
     let f = &problem.file;
     let th = model.t_eff();
-    let dmats: Vec<[[f64; 3]; 3]> = t
+    // Material and D once per material index, not a map lookup per element.
+    let mats: Vec<(&crate::problem::Material, [[f64; 3]; 3])> = t
         .material_names
         .iter()
-        .map(|m| element::d_matrix(&f.materials[m], f.model.plane))
+        .map(|m| {
+            let mat = &f.materials[m];
+            (mat, element::d_matrix(mat, f.model.plane))
+        })
         .collect();
-    // K_e u_e per element in parallel, summed into the points in element
-    // order: the same bits as the sequential loop on any number of threads.
-    let fe: Vec<[[f64; 2]; 3]> = {
-        use rayon::prelude::*;
-        t.triangles
-            .par_iter()
-            .zip(t.tri_material.par_iter())
+    let mut stress = Vec::with_capacity(if stresses { t.triangles.len() } else { 0 });
+    let mut ku = vec![[0.0f64; 2]; t.points.len()];
+    let mut buf: Vec<([f64; 4], [[f64; 2]; 3])> = Vec::with_capacity(CHUNK);
+    for (tris, tmat) in t.triangles.chunks(CHUNK).zip(t.tri_material.chunks(CHUNK)) {
+        tris.par_iter()
+            .zip(tmat.par_iter())
             .map(|(tri, &mi)| {
+                let (m, d) = &mats[mi as usize];
                 let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
-                let m = &f.materials[&t.material_names[mi as usize]];
-                let ke = element::stiffness_in(&p, m, &dmats[mi as usize], model.plane, th);
                 let ue = [
                     u[tri[0]][0],
                     u[tri[0]][1],
@@ -150,25 +173,33 @@ fn internal_forces(model: &Model, problem: &Problem, u: &[[f64; 2]]) -> Vec<[f64
                     u[tri[2]][0],
                     u[tri[2]][1],
                 ];
-                let mut f = [[0.0f64; 2]; 3];
-                for (a, fa) in f.iter_mut().enumerate() {
+                let s = if stresses {
+                    element::stress(&p, d, m, f.model.plane, &ue)
+                } else {
+                    [0.0; 4]
+                };
+                let ke = element::stiffness_in(&p, m, d, model.plane, th);
+                let mut fe = [[0.0f64; 2]; 3];
+                for (a, fa) in fe.iter_mut().enumerate() {
                     for (k, fak) in fa.iter_mut().enumerate() {
                         *fak = (0..6).map(|j| ke[2 * a + k][j] * ue[j]).sum::<f64>();
                     }
                 }
-                f
+                (s, fe)
             })
-            .collect()
-    };
-    let mut ku = vec![[0.0f64; 2]; t.points.len()];
-    for (tri, f) in t.triangles.iter().zip(&fe) {
-        for (a, &v) in tri.iter().enumerate() {
-            for k in 0..2 {
-                ku[v][k] += f[a][k];
+            .collect_into_vec(&mut buf);
+        for (tri, (s, fe)) in tris.iter().zip(&buf) {
+            if stresses {
+                stress.push(*s);
+            }
+            for (a, &v) in tri.iter().enumerate() {
+                for k in 0..2 {
+                    ku[v][k] += fe[a][k];
+                }
             }
         }
     }
-    ku
+    (stress, ku)
 }
 
 /// Reactions and interface resultants of a solved step: `u` the point
@@ -195,6 +226,21 @@ pub fn compute_with_friction(
     lambda_t: &[f64],
     pressure: &[f64],
 ) -> Forces {
+    let ku = internal_forces(model, problem, u);
+    compute_from(model, u, &ku, lambda, lambda_t, pressure)
+}
+
+/// [`compute_with_friction`] from `ku` = (K u)_p per point
+/// ([`element_pass`]).
+pub(crate) fn compute_from(
+    model: &Model,
+    u: &[[f64; 2]],
+    ku: &[[f64; 2]],
+    lambda: &[f64],
+    lambda_t: &[f64],
+    pressure: &[f64],
+) -> Forces {
+    let mut lap = crate::fem::Lap::new("post::forces");
     let t = &model.topo;
     let np = t.points.len();
     let mut contact = vec![[0.0f64; 2]; np];
@@ -210,7 +256,7 @@ pub fn compute_with_friction(
             contact[p][1] -= l * c[1];
         }
     }
-    let ku = internal_forces(model, problem, u);
+
     let mut reaction = vec![[0.0f64; 2]; np];
     let mut groups: Vec<GroupReaction> = vec![];
     let mut group_of = vec![usize::MAX; model.cond_groups.len()];
@@ -309,6 +355,7 @@ pub fn compute_with_friction(
             }
         }
     }
+    lap.lap("reactions");
     let mut interfaces: Vec<InterfaceForce> = t
         .interface_names
         .iter()
@@ -410,6 +457,7 @@ pub fn compute_with_friction(
             .collect::<Vec<_>>()
             .join("+");
     }
+    lap.lap("interfaces");
     let mut loads = Resultant::default();
     let mut reactions = Resultant::default();
     let (mut strain_energy, mut load_work) = (0.0, 0.0);
@@ -419,6 +467,7 @@ pub fn compute_with_friction(
         loads.add(t.points[p], model.loads[p]);
         reactions.add(t.points[p], reaction[p]);
     }
+    lap.lap("totals");
     Forces {
         point_reaction: reaction,
         point_contact: contact,

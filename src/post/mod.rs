@@ -56,39 +56,13 @@ pub fn step_output_with_forces(
     res: &QpResult,
     time: f64,
 ) -> (StepOutput, forces::Forces) {
+    let mut lap = crate::fem::Lap::new("post");
     let t = &model.topo;
     let u = model.displacements(&res.x);
-    let f = &problem.file;
-    // Material and D once per material; elements in parallel (each its own
-    // result, collected in order: the same bits on any number of threads).
-    let mats: Vec<(&crate::problem::Material, [[f64; 3]; 3])> = t
-        .material_names
-        .iter()
-        .map(|name| {
-            let m = &f.materials[name];
-            (m, element::d_matrix(m, f.model.plane))
-        })
-        .collect();
-    let stress: Vec<_> = {
-        use rayon::prelude::*;
-        t.triangles
-            .par_iter()
-            .zip(t.tri_material.par_iter())
-            .map(|(tri, &k)| {
-                let (m, d) = &mats[k as usize];
-                let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
-                let ue = [
-                    u[tri[0]][0],
-                    u[tri[0]][1],
-                    u[tri[1]][0],
-                    u[tri[1]][1],
-                    u[tri[2]][0],
-                    u[tri[2]][1],
-                ];
-                element::stress(&p, d, m, f.model.plane, &ue)
-            })
-            .collect()
-    };
+    lap.lap("displacements");
+    // Stresses and the element forces of the reactions in one pass.
+    let (stress, ku) = forces::element_pass(model, problem, &u, true);
+    lap.lap("stresses and element forces");
     let nrow = t.contact.len();
     let mut multipliers = vec![0.0; nrow];
     let mut active = vec![0u8; nrow];
@@ -118,14 +92,10 @@ pub fn step_output_with_forces(
     let lambda_t = friction::friction_output(model, res)
         .map(|f| f.lambda_t)
         .unwrap_or_default();
-    let mut forces = forces::compute_with_friction(
-        model,
-        problem,
-        &u,
-        &multipliers,
-        &lambda_t,
-        &contact_pressure,
-    );
+    lap.lap("contact fields");
+    let mut forces =
+        forces::compute_from(model, &u, &ku, &multipliers, &lambda_t, &contact_pressure);
+    lap.lap("forces");
     let step = StepOutput {
         time,
         reaction: std::mem::take(&mut forces.point_reaction),
@@ -156,6 +126,7 @@ pub fn step_output_with_forces(
             ..Default::default()
         },
     };
+    lap.lap("von Mises, principal stresses");
     (step, forces)
 }
 

@@ -1,9 +1,9 @@
 //! The outputs of a run (docs/problem-format.md §6) as observers, and the
 //! transaction that moves them into place: files are written into a staging
 //! directory ([`Stage`]) under the output directory's lock ([`OutputLock`])
-//! and committed per load step (VTU pair, PVD, the grown checkpoint), the
-//! JSON summary last; an error drops the transaction, which puts back what
-//! the directory held before. SIGTERM and SIGINT become such an error
+//! and committed per load step (VTU pair, PVD, the checkpoint's step file and
+//! its index, renamed last), the JSON summary last; an error drops the
+//! transaction, which puts back what the directory held before. SIGTERM and SIGINT become such an error
 //! ([`catch_signals`]).
 
 use super::observe::StepObserver;
@@ -148,10 +148,18 @@ impl Transaction {
 
     /// Moves the staged files `names` into place.
     pub fn commit(&mut self, names: &[String]) -> Result<(), RunError> {
+        let t = std::time::Instant::now();
         let names: Vec<&str> = names.iter().map(String::as_str).collect();
-        self.stage
+        let r = self
+            .stage
             .commit(&names)
-            .map_err(|e| RunError::Output(self.unstage(&e.to_string())))
+            .map_err(|e| RunError::Output(self.unstage(&e.to_string())));
+        log::debug!(
+            "commit of {} files {:.3} s",
+            names.len(),
+            t.elapsed().as_secs_f64()
+        );
+        r
     }
 
     /// `msg` naming the final files instead of their staged copies.
@@ -188,16 +196,25 @@ pub fn create_checkpoint(
     io::hdf5::create_checkpoint(h5, om, &attrs)
 }
 
-/// The checkpoint `NAME.h5`: created at the first step (or copied from the
-/// checkpoint of a restart), each step appended in place.
+/// The checkpoint `NAME.h5`. A single solve writes one file (created at
+/// the step, or copied from the checkpoint of a restart and extended). A
+/// run with load steps writes the split layout of [`io::hdf5::Checkpoint`]:
+/// the mesh file once, each step's own file, and the small index `NAME.h5`
+/// rewritten at every step, which the commit renames last; so a step
+/// writes its own data and the index, never the earlier steps again.
 pub struct CheckpointWriter<'a> {
     prep: &'a Prepared,
     om: &'a OutMesh,
     fingerprint: String,
+    stage_dir: PathBuf,
+    dir: PathBuf,
     staged: PathBuf,
     target: PathBuf,
     /// The checkpoint the next step extends (None: a new one).
     base: Option<PathBuf>,
+    /// Split layout: the step files the index lists, (index, file name in
+    /// `dir`), once the mesh file is written or found (None before).
+    split: Option<Vec<(usize, String)>>,
 }
 
 impl<'a> CheckpointWriter<'a> {
@@ -215,9 +232,12 @@ impl<'a> CheckpointWriter<'a> {
             prep,
             om,
             fingerprint: fingerprint(prep, prep.no_contact),
+            stage_dir: stage_dir.to_path_buf(),
+            dir: dir.to_path_buf(),
             staged: output_paths(stage_dir, name, None).h5,
             target: output_paths(dir, name, None).h5,
             base: restart.map(|r| r.path.clone()),
+            split: None,
         }
     }
 
@@ -229,10 +249,133 @@ impl<'a> CheckpointWriter<'a> {
             ))
         })
     }
+
+    fn name(&self) -> &str {
+        &self.prep.problem.name
+    }
+
+    /// The root attributes of the checkpoint.
+    fn attrs(&self) -> [(&'static str, String); 4] {
+        [
+            ("problem", self.prep.problem.name.clone()),
+            ("problem_toml", self.prep.problem.text.clone()),
+            ("fingerprint", self.fingerprint.clone()),
+            (
+                "program",
+                format!("signorini {}", env!("CARGO_PKG_VERSION")),
+            ),
+        ]
+    }
+
+    /// Whether `found` (a file HDF5 opened) is `name` in the output directory.
+    fn is_in_dir(&self, found: &Path, name: &str) -> bool {
+        let here = self.dir.join(name);
+        match (found.canonicalize(), here.canonicalize()) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        }
+    }
+
+    /// The split layout's mesh and step files of the run's start, written
+    /// into the stage as needed: new (no restart), or those of the restart
+    /// checkpoint: kept where they already are the output directory's
+    /// files of this name, copied from another directory, or taken out of
+    /// a single-file checkpoint. Returns the staged file names.
+    fn start_split(&mut self) -> Result<Vec<String>, RunError> {
+        let name = self.name().to_string();
+        let mesh_file = io::hdf5::mesh_file_name(&name);
+        let mut staged = vec![];
+        let mut steps = vec![];
+        let files = match &self.base {
+            Some(b) => Some((b.clone(), io::hdf5::checkpoint_files(b)?)),
+            None => None,
+        };
+        let mesh_kept = files
+            .as_ref()
+            .is_some_and(|(_, f)| self.is_in_dir(&f.mesh, &mesh_file));
+        if !mesh_kept {
+            io::hdf5::write_mesh_file(&self.stage_dir.join(&mesh_file), self.om)?;
+            staged.push(mesh_file);
+        }
+        if let Some((base, files)) = files {
+            let single = base.canonicalize().ok();
+            for (i, group, found) in &files.steps {
+                let f = io::hdf5::step_file_name(&name, *i);
+                if self.is_in_dir(found, &f) {
+                    steps.push((*i, f));
+                    continue;
+                }
+                let to = self.stage_dir.join(&f);
+                if found.canonicalize().ok() == single {
+                    // A single-file checkpoint: the step group taken out.
+                    let (s, fr) = io::hdf5::read_step_of(&base, self.om, group)?;
+                    io::hdf5::write_step_file(&to, self.om, *i, &s, fr.as_ref())?;
+                } else {
+                    std::fs::copy(found, &to).map_err(|e| {
+                        RunError::Output(format!(
+                            "{}: cannot copy the checkpoint's step file: {e}",
+                            found.display()
+                        ))
+                    })?;
+                }
+                staged.push(f.clone());
+                steps.push((*i, f));
+            }
+        }
+        self.split = Some(steps);
+        Ok(staged)
+    }
+
+    /// The index of the split layout, staged (its name).
+    fn write_index(&self) -> Result<String, RunError> {
+        let steps = self.split.as_deref().unwrap_or_default();
+        let attrs = self.attrs();
+        let attrs: Vec<(&str, String)> = attrs.iter().map(|(k, v)| (*k, v.clone())).collect();
+        io::hdf5::write_index(
+            &self.staged,
+            self.om,
+            &attrs,
+            &io::hdf5::mesh_file_name(self.name()),
+            steps,
+        )?;
+        Ok(fname(&self.staged))
+    }
 }
 
 impl StepObserver for CheckpointWriter<'_> {
     fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
+        let fo = crate::post::friction::friction_output(step.model, step.result);
+        let friction = fo.map(|f| io::hdf5::StepFriction {
+            multipliers_t: f.lambda_t,
+            tangential_traction: f.tangential_traction,
+            slip: f.slip,
+            state: f.state,
+        });
+        let index = step.index + 1;
+        let t = std::time::Instant::now();
+        if step.multi {
+            let mut names = match self.split {
+                Some(_) => vec![],
+                None => self.start_split()?,
+            };
+            let f = io::hdf5::step_file_name(self.name(), index);
+            io::hdf5::write_step_file(
+                &self.stage_dir.join(&f),
+                self.om,
+                index,
+                step.output,
+                friction.as_ref(),
+            )?;
+            // A restart from an earlier step rewrites the history after it.
+            let steps = self.split.get_or_insert_with(Vec::new);
+            steps.retain(|s| s.0 < index);
+            steps.push((index, f.clone()));
+            names.push(f);
+            // The index last: committed after the files it links to.
+            names.push(self.write_index()?);
+            log::debug!("checkpoint step {:.3} s", t.elapsed().as_secs_f64());
+            return Ok(names);
+        }
         // The staged checkpoint: a copy of the one this step extends, or new.
         if !self.staged.exists() {
             match &self.base {
@@ -240,35 +383,35 @@ impl StepObserver for CheckpointWriter<'_> {
                 None => create_checkpoint(self.prep, &self.staged, self.om, &self.fingerprint)?,
             }
         }
-        match crate::post::friction::friction_output(step.model, step.result) {
-            Some(f) => io::hdf5::append_step_with_friction_in_place(
-                &self.staged,
-                step.index + 1,
-                step.output,
-                &io::hdf5::StepFriction {
-                    multipliers_t: f.lambda_t,
-                    tangential_traction: f.tangential_traction,
-                    slip: f.slip,
-                    state: f.state,
-                },
-            )?,
-            None => io::hdf5::append_step_in_place(&self.staged, step.index + 1, step.output)?,
-        }
-        if step.multi {
-            // Committed with this step: the next one extends the committed file.
-            self.base = Some(self.target.clone());
+        match &friction {
+            Some(f) => {
+                io::hdf5::append_step_with_friction_in_place(&self.staged, index, step.output, f)?
+            }
+            None => io::hdf5::append_step_in_place(&self.staged, index, step.output)?,
         }
         Ok(vec![fname(&self.staged)])
     }
 
     /// A checkpoint restarted from elsewhere is still copied to the output
-    /// directory, as a run would have left it.
+    /// directory, as a run would have left it (a split one with its files).
     fn on_nothing_to_do(&mut self, restart: &Restart) -> Result<Vec<String>, RunError> {
         if restart.path.canonicalize().ok() == self.target.canonicalize().ok() {
             return Ok(vec![]);
         }
-        self.copy_base(&restart.path)?;
-        Ok(vec![fname(&self.staged)])
+        let files = io::hdf5::checkpoint_files(&restart.path)?;
+        let single = restart.path.canonicalize().ok();
+        let is_single = files.mesh.canonicalize().ok() == single
+            && files
+                .steps
+                .iter()
+                .all(|s| s.2.canonicalize().ok() == single);
+        if is_single {
+            self.copy_base(&restart.path)?;
+            return Ok(vec![fname(&self.staged)]);
+        }
+        let mut names = self.start_split()?;
+        names.push(self.write_index()?);
+        Ok(names)
     }
 }
 
@@ -314,6 +457,7 @@ impl StepObserver for VtuWriter<'_> {
     fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
         let s = step.index;
         let staged = output_paths(&self.stage_dir, &self.name, step.multi.then_some(s + 1));
+        let t = std::time::Instant::now();
         if step.multi && !self.compress && self.parts.is_none() {
             self.parts = Some(io::vtu::VtuMeshParts::new(self.om));
         }
@@ -337,6 +481,7 @@ impl StepObserver for VtuWriter<'_> {
             arrays.as_ref(),
             self.compress,
         )?;
+        log::debug!("VTU pair {:.3} s", t.elapsed().as_secs_f64());
         let mut names = vec![fname(&staged.vtu), fname(&staged.contact_vtu)];
         if step.multi {
             let entries: Vec<(f64, String)> = (0..=s)
