@@ -14,7 +14,9 @@ use std::path::{Path, PathBuf};
 /// A checkpoint to continue from.
 #[derive(Debug, Clone)]
 pub struct Restart {
-    /// The checkpoint file (copied, then extended, by the next steps).
+    /// The checkpoint file: its steps are kept (in place, or copied once
+    /// from another folder) and the next steps are added beside them
+    /// (docs/problem-format.md §6, the split layout).
     pub path: PathBuf,
     /// Load steps it holds (the run continues with the next one).
     pub steps_done: usize,
