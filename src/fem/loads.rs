@@ -226,12 +226,12 @@ fn is_free(pd: &PointDofs) -> bool {
 }
 
 /// The element part of d, Σ T_eᵀ(f_e − C_e u0_e), without C: the same
-/// terms as `stiffness::assemble` adds, in the same order (each point's in
-/// increasing triangle order from 0), so the same bits; C_e is computed
-/// only for the triangles with a prescribed vertex.
+/// terms as `stiffness::assemble` adds (`Materials::body_load` and
+/// `Materials::stiffness_rows`, r-weighted when axisymmetric), in the same
+/// order (each point's in increasing triangle order from 0), so the same
+/// bits; C_e is computed only for the triangles with a prescribed vertex.
 fn element_d(topo: &Topology, dofs: &[PointDofs], n: usize, mats: &Materials) -> Vec<f64> {
     let mut d = vec![0.0f64; n];
-    let th = mats.th;
     for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
         let mi = mi as usize;
         let pts = [
@@ -240,16 +240,14 @@ fn element_d(topo: &Topology, dofs: &[PointDofs], n: usize, mats: &Materials) ->
             topo.points[tri[2]],
         ];
         let free = tri.map(|p| is_free(&dofs[p]));
-        let area = element::area2(&pts) / 2.0;
-        let fb = mats.bforce[mi];
         for (a, &p) in tri.iter().enumerate() {
             let pd = &dofs[p];
             if pd.ndof == 0 {
                 continue;
             }
-            let mut fe = [th * area / 3.0 * fb[0], th * area / 3.0 * fb[1]];
+            let mut fe = mats.body_load(&pts, mi, a);
             if free.iter().any(|f| !f) {
-                let ke = element::stiffness_rows(&pts, &mats.dmats[mi], th, a);
+                let ke = mats.stiffness_rows(&pts, mi, a);
                 for (k, fk) in fe.iter_mut().enumerate() {
                     for b in 0..3 {
                         if free[b] {

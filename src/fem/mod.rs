@@ -208,12 +208,6 @@ pub fn step_model_reusing(
     opts: &BuildOptions,
 ) -> Result<Model, FemError> {
     let mut lap = Lap::new("fem::step_model");
-    // The reused loads are those of the plane element (loads::element_d);
-    // an axisymmetric model weights them by r (docs/methods.md §10):
-    // assembled in full until element_d learns the weight.
-    if problem.file.model.plane.is_axisymmetric() {
-        return build_with(mesh, problem, opts);
-    }
     let Some(s) = loads::step_loads(base, mesh, problem)? else {
         log::debug!("fem::step_model: the DOFs changed, full assembly");
         return build_with(mesh, problem, opts);

@@ -26,7 +26,7 @@ mod memory;
 mod workspace;
 
 pub use border::Forward;
-pub use workspace::Workspace;
+pub use workspace::{matrix_key, Workspace};
 
 use crate::linalg::error::LinalgError;
 use crate::linalg::rotation::Rotation;
@@ -37,6 +37,8 @@ use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, SymbolicCholeskyR
 use faer::{Conj, MatMut};
 use std::sync::Arc;
 
+/// A factor; a clone shares the values (load steps keep it, `qp::ssn`).
+#[derive(Clone)]
 pub struct Cholesky {
     n: usize,
     llt: Arc<Factor>,
