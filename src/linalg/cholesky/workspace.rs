@@ -280,8 +280,11 @@ impl Workspace {
             });
         }
         let t_prep = t0.elapsed().as_secs_f64();
-        // Drop the kept factor before allocating a new one (peak memory).
+        // Drop the kept factor before allocating a new one (peak memory),
+        // and what a method kept of it (`Workspace::keep`): a new factor
+        // is another matrix's, and the kept data would hold the old one.
         self.last.replace(None);
+        self.kept.replace(None);
         let (symbolic, reused) = self.symbolic_of(&sym, hp, border)?;
         if reused {
             self.symbolic_reused.set(self.symbolic_reused.get() + 1);
