@@ -529,3 +529,105 @@ fn bad_axisymmetric_input_is_refused() {
         assert!(err.contains(want), "{name}: {err}");
     }
 }
+
+/// An axisymmetric load step reuses the prepared C and A (issue 36): its
+/// d — body loads weighted by r, spin ρω²r, tractions, prescribed radial
+/// displacements through C_e — is computed by the assembly's own element
+/// load (`fem::step_model_reusing`), and equals a full build of the step
+/// bit for bit, as do g, u0, the nodal loads and the ssn answer.
+#[test]
+fn axisymmetric_step_model_reuses_c_and_equals_the_full_build() {
+    use signorini::linalg::cholesky::Workspace;
+    use signorini::qp::{registry, SolveOptions};
+    use signorini::run;
+    let dir = tempfile::tempdir().unwrap();
+    let (a, c, b, h, delta) = (0.5, 1.0, 1.5, 0.25, 1.0e-4);
+    let blocks = [
+        Block {
+            name: "inner",
+            r: [a, c + delta],
+            z: [0.0, h],
+            n: [8, 4],
+        },
+        Block {
+            name: "outer",
+            r: [c, b],
+            z: [0.0, h],
+            n: [8, 4],
+        },
+    ];
+    let mut body = format!(
+        r#"[model]
+plane = "axisymmetric"
+gravity = [0.0, -9.81]
+omega = 200.0
+[materials.inner]
+E = {E:e}
+nu = {NU}
+rho = 7800.0
+[materials.outer]
+E = {E:e}
+nu = {NU}
+rho = 2700.0
+[[dirichlet]]
+on = "inner_inner"
+ux = 2.0e-4
+[[traction]]
+on = "outer_outer"
+pn = -1.0e7
+[[traction]]
+on = "inner_top"
+p = [0.0, -1.0e6]
+"#
+    );
+    for g in ["inner_bottom", "outer_bottom"] {
+        writeln!(body, "[[dirichlet]]\non = \"{g}\"\nuy = 0.0").unwrap();
+    }
+    body.push_str(
+        "[[contact]]\nslave = \"inner_outer\"\nmaster = \"outer_inner\"\ndiscretization = \"mortar\"\ninterference = true\n",
+    );
+    for (t, step) in [
+        (1.0, "factor = 0.25"),
+        (2.0, "factor = 0.5"),
+        (3.0, "load = 1.0\ndisplacement = 0.75"),
+    ] {
+        writeln!(body, "[[steps]]\nt = {t}\n{step}").unwrap();
+    }
+    let path = write_model(dir.path(), "axi_steps", &blocks, &body);
+    let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let (ws_reused, ws_fresh) = (Workspace::new(), Workspace::new());
+    let mut prev = None;
+    for s in 0..prep.problem.file.nsteps() {
+        let reused = run::step_model_reusing(&prep, s, prev.take()).unwrap();
+        let mut p = prep.problem.clone();
+        p.file = prep.problem.file.at_step(s);
+        let fresh = signorini::fem::build_with(&prep.mesh, &p, &prep.build).unwrap();
+        let at = format!("step {}", s + 1);
+        // Reused, not rebuilt: the prepared model's arrays, no copy.
+        assert!(reused.qp.c.data.ptr_eq(&prep.model.qp.c.data), "C, {at}");
+        assert_eq!(reused.qp.c, fresh.qp.c, "C, {at}");
+        assert_eq!(reused.qp.a, fresh.qp.a, "A, {at}");
+        assert!(reused.qp.d.iter().any(|v| *v != 0.0), "{at}");
+        assert_eq!(bits(&reused.qp.d), bits(&fresh.qp.d), "d, {at}");
+        assert_eq!(bits(&reused.qp.g), bits(&fresh.qp.g), "g, {at}");
+        let u0 = |m: &signorini::fem::Model| {
+            m.dofs
+                .iter()
+                .flat_map(|p| [p.u0[0].to_bits(), p.u0[1].to_bits(), p.start as u64])
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(u0(&reused), u0(&fresh), "u0, {at}");
+        let flat =
+            |m: &signorini::fem::Model| m.loads.iter().flatten().copied().collect::<Vec<_>>();
+        assert_eq!(bits(&flat(&reused)), bits(&flat(&fresh)), "loads, {at}");
+        let mut xs = vec![];
+        for (model, ws) in [(&reused, &ws_reused), (&fresh, &ws_fresh)] {
+            let r = registry::solve_in("ssn", &model.qp, &SolveOptions::default(), ws).unwrap();
+            assert!(r.status.converged(), "{at}");
+            xs.push(r.solution.x);
+        }
+        assert_eq!(bits(&xs[0]), bits(&xs[1]), "x, {at}");
+        prev = Some(reused);
+    }
+}

@@ -226,3 +226,43 @@ fn reused_assembly_gives_the_answers_of_a_fresh_one_bit_for_bit() {
         }
     }
 }
+
+/// ssn keeps what it derives from C and A alone across load steps (the
+/// bordered factor, A K⁻¹Aᵀ, the factors of S_J: `qp::ssn::Kept`): every
+/// step solved with the run's one workspace gives the answer, the working
+/// set and the counts that a fresh workspace gives for that step, bit for
+/// bit, so a step's answer does not depend on the steps before it.
+#[test]
+fn ssn_kept_across_steps_gives_each_steps_fresh_answer_bit_for_bit() {
+    use signorini::linalg::cholesky::Workspace;
+    use signorini::qp::{registry, SolveOptions};
+    use signorini::run;
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for name in ["three_bodies_steps", "geodynamic_steps"] {
+        let path = common::example(name);
+        let prep = run::prepare(std::path::Path::new(&path), false).unwrap();
+        let opts = SolveOptions::default();
+        let ws = Workspace::new();
+        let mut prev = None;
+        for s in 0..prep.problem.file.nsteps() {
+            let model = run::step_model_reusing(&prep, s, prev.take()).unwrap();
+            let kept = registry::solve_in("ssn", &model.qp, &opts, &ws).unwrap();
+            let fresh = registry::solve_in("ssn", &model.qp, &opts, &Workspace::new()).unwrap();
+            let at = format!("{name} step {}", s + 1);
+            assert!(kept.status.converged(), "{at}");
+            assert_eq!(bits(&kept.solution.x), bits(&fresh.solution.x), "x, {at}");
+            assert_eq!(
+                bits(&kept.solution.lambda),
+                bits(&fresh.solution.lambda),
+                "λ, {at}"
+            );
+            assert_eq!(kept.solution.active, fresh.solution.active, "{at}");
+            assert_eq!(kept.solution.iterations, fresh.solution.iterations, "{at}");
+            assert_eq!(
+                kept.solution.inner_iterations, fresh.solution.inner_iterations,
+                "{at}"
+            );
+            prev = Some(model);
+        }
+    }
+}

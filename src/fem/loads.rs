@@ -193,20 +193,26 @@ pub(super) fn step_loads(
     mesh: &Mesh,
     problem: &Problem,
 ) -> Result<Option<StepLoads>, FemError> {
+    let mut lap = super::Lap::new("fem::step_loads");
     let topo = &base.topo;
     let conds = super::conditions::Conditions::collect(mesh, topo, problem)?;
     let dofs = conds.eliminate(mesh, topo, &base.body_names, problem)?;
     if !same_dofs(&dofs, &base.dofs) {
         return Ok(None);
     }
+    lap.lap("conditions");
     let n = base.qp.n();
     let mats = Materials::new(topo, problem);
     let mut d = element_d(topo, &dofs, n, &mats);
+    lap.lap("element loads");
     let loads = nodal_loads(mesh, topo, &dofs, problem, &mats, &mut d)?;
-    check_scale(&base.qp.c, &d, &dofs, topo, mesh, problem)?;
+    lap.lap("nodal loads");
+    // C is the base's, checked when it was built: only d is checked here.
+    check_d(&base.qp.c, &d, &dofs, topo, mesh, problem)?;
     // The rows of A are the same (same T); g and the check of the rows
     // whose points are all fixed depend on u0.
     let (_, g, _) = super::contact::reduced_rows(mesh, topo, &dofs, n, problem)?;
+    lap.lap("checks and gaps");
     Ok(Some(StepLoads { dofs, d, g, loads }))
 }
 
@@ -226,12 +232,17 @@ fn is_free(pd: &PointDofs) -> bool {
 }
 
 /// The element part of d, Σ T_eᵀ(f_e − C_e u0_e), without C: the same
-/// terms as `stiffness::assemble` adds, in the same order (each point's in
-/// increasing triangle order from 0), so the same bits; C_e is computed
-/// only for the triangles with a prescribed vertex.
+/// terms as `stiffness::assemble` adds (`Materials::body_load` and
+/// `Materials::stiffness_rows`, r-weighted when axisymmetric), in the same
+/// order (each point's in increasing triangle order from 0), so the same
+/// bits; C_e is computed only for the triangles with a prescribed vertex.
 fn element_d(topo: &Topology, dofs: &[PointDofs], n: usize, mats: &Materials) -> Vec<f64> {
     let mut d = vec![0.0f64; n];
-    let th = mats.th;
+    // Per point, compact: whether it is free (ndof 2, T = I, u0 = 0) and
+    // its first unknown. The triangles visit their points in no order, and
+    // a 64-byte PointDofs per visit was most of the time of a load step's d.
+    let free_at: Vec<bool> = dofs.iter().map(is_free).collect();
+    let start: Vec<usize> = dofs.iter().map(|pd| pd.start).collect();
     for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
         let mi = mi as usize;
         let pts = [
@@ -239,25 +250,27 @@ fn element_d(topo: &Topology, dofs: &[PointDofs], n: usize, mats: &Materials) ->
             topo.points[tri[1]],
             topo.points[tri[2]],
         ];
-        let free = tri.map(|p| is_free(&dofs[p]));
-        let area = element::area2(&pts) / 2.0;
-        let fb = mats.bforce[mi];
+        let free = tri.map(|p| free_at[p]);
+        let constrained = free.iter().any(|f| !f);
         for (a, &p) in tri.iter().enumerate() {
+            let mut fe = mats.body_load(&pts, mi, a);
+            if free[a] && !constrained {
+                d[start[p]] += fe[0];
+                d[start[p] + 1] += fe[1];
+                continue;
+            }
             let pd = &dofs[p];
             if pd.ndof == 0 {
                 continue;
             }
-            let mut fe = [th * area / 3.0 * fb[0], th * area / 3.0 * fb[1]];
-            if free.iter().any(|f| !f) {
-                let ke = element::stiffness_rows(&pts, &mats.dmats[mi], th, a);
-                for (k, fk) in fe.iter_mut().enumerate() {
-                    for b in 0..3 {
-                        if free[b] {
-                            continue;
-                        }
-                        let u0 = dofs[tri[b]].u0;
-                        *fk -= ke[k][2 * b] * u0[0] + ke[k][2 * b + 1] * u0[1];
+            let ke = mats.stiffness_rows(&pts, mi, a);
+            for (k, fk) in fe.iter_mut().enumerate() {
+                for b in 0..3 {
+                    if free[b] {
+                        continue;
                     }
+                    let u0 = dofs[tri[b]].u0;
+                    *fk -= ke[k][2 * b] * u0[0] + ke[k][2 * b + 1] * u0[1];
                 }
             }
             if free[a] {
@@ -306,6 +319,33 @@ pub(super) fn check_scale(
             at(row)
         )));
     }
+    check_d(c, d, dofs, topo, mesh, problem)
+}
+
+/// The part of [`check_scale`] on d (C finite already).
+fn check_d(
+    c: &Csr,
+    d: &[f64],
+    dofs: &[PointDofs],
+    topo: &Topology,
+    mesh: &Mesh,
+    problem: &Problem,
+) -> Result<(), FemError> {
+    let err = |msg: String| FemError::new(&problem.path, msg);
+    let point_of = |j: usize| {
+        dofs.iter()
+            .position(|p| j >= p.start && j < p.start + p.ndof)
+    };
+    let at = |j: usize| {
+        point_of(j)
+            .map(|p| {
+                format!(
+                    "node {} (body {})",
+                    mesh.node_tags[topo.point_node[p]], topo.point_body[p]
+                )
+            })
+            .unwrap_or_default()
+    };
     if let Some(j) = d.iter().position(|v| !v.is_finite()) {
         return Err(err(format!(
             "the load vector d is not finite at {}: the loads overflow; change the units",

@@ -49,7 +49,8 @@ impl Default for BuildOptions {
 /// The assembled problem with the maps back to the mesh.
 #[derive(Clone)]
 pub struct Model {
-    pub topo: Topology,
+    /// Shared by the models of every load step (same mesh, same topology).
+    pub topo: std::sync::Arc<Topology>,
     pub dofs: Vec<PointDofs>,
     pub qp: QpProblem,
     /// QP row → contact row (rows whose points are all fixed are left out).
@@ -152,7 +153,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let near = rigid::near_kernel(&topo, &dofs, n);
     let f = &problem.file;
     let model = Model {
-        topo,
+        topo: std::sync::Arc::new(topo),
         dofs,
         qp: QpProblem {
             c,
@@ -208,12 +209,6 @@ pub fn step_model_reusing(
     opts: &BuildOptions,
 ) -> Result<Model, FemError> {
     let mut lap = Lap::new("fem::step_model");
-    // The reused loads are those of the plane element (loads::element_d);
-    // an axisymmetric model weights them by r (docs/methods.md §10):
-    // assembled in full until element_d learns the weight.
-    if problem.file.model.plane.is_axisymmetric() {
-        return build_with(mesh, problem, opts);
-    }
     let Some(s) = loads::step_loads(base, mesh, problem)? else {
         log::debug!("fem::step_model: the DOFs changed, full assembly");
         return build_with(mesh, problem, opts);

@@ -63,6 +63,35 @@ impl Materials {
     }
 }
 
+impl Materials {
+    /// The body load of vertex `a` of a triangle `pts` of material `mi`:
+    /// th |T|/3 ρg, or ∫ N_a (ρg r + ρω² r² e_r) dA per radian when
+    /// axisymmetric (docs/methods.md §2.2, §10). The one definition of the
+    /// assembly and of a load step's d (`loads::element_d`).
+    pub(super) fn body_load(&self, pts: &[[f64; 2]; 3], mi: usize, a: usize) -> [f64; 2] {
+        match &self.axi {
+            None => {
+                let area = element::area2(pts) / 2.0;
+                let fb = self.bforce[mi];
+                [self.th * area / 3.0 * fb[0], self.th * area / 3.0 * fb[1]]
+            }
+            Some((_, rw2)) => element::axi_body_load(pts, a, self.bforce[mi], rw2[mi]),
+        }
+    }
+
+    /// Rows 2a and 2a + 1 of the element stiffness of a triangle `pts` of
+    /// material `mi` (per radian when axisymmetric).
+    pub(super) fn stiffness_rows(&self, pts: &[[f64; 2]; 3], mi: usize, a: usize) -> [[f64; 6]; 2] {
+        match &self.axi {
+            None => element::stiffness_rows(pts, &self.dmats[mi], self.th, a),
+            Some((d4, _)) => {
+                let k = element::axi_stiffness(pts, &d4[mi]);
+                [k[2 * a], k[2 * a + 1]]
+            }
+        }
+    }
+}
+
 /// Points per parallel work item of the assembly.
 const CHUNK_POINTS: usize = 2048;
 
@@ -448,7 +477,6 @@ impl Gather<'_> {
             dr,
         } = row;
         let pr = rp[r];
-        let th = mats.th;
         let pp = if pr.free {
             None
         } else {
@@ -466,19 +494,8 @@ impl Gather<'_> {
             };
             let mi = rec.mat as usize;
             let pts = [vx[0].x, vx[1].x, vx[2].x];
-            let (ke, mut fe) = match &mats.axi {
-                None => {
-                    let ke = element::stiffness_rows(&pts, &mats.dmats[mi], th, a);
-                    let area = element::area2(&pts) / 2.0;
-                    let fb = mats.bforce[mi];
-                    (ke, [th * area / 3.0 * fb[0], th * area / 3.0 * fb[1]])
-                }
-                Some((d4, rw2)) => {
-                    let k = element::axi_stiffness(&pts, &d4[mi]);
-                    let fe = element::axi_body_load(&pts, a, mats.bforce[mi], rw2[mi]);
-                    ([k[2 * a], k[2 * a + 1]], fe)
-                }
-            };
+            let ke = mats.stiffness_rows(&pts, mi, a);
+            let mut fe = mats.body_load(&pts, mi, a);
             // fe − Ke u0
             for (k, fk) in fe.iter_mut().enumerate() {
                 for b in 0..3 {
@@ -671,9 +688,9 @@ pub(super) fn assemble(
     let c = Csr {
         nrows: n,
         ncols: n,
-        indptr,
-        indices,
-        data,
+        indptr: indptr.into(),
+        indices: indices.into(),
+        data: data.into(),
     };
     (c, d)
 }

@@ -60,9 +60,9 @@ impl AugPattern {
         let k = Csr {
             nrows: n,
             ncols: n,
-            indptr,
-            indices,
-            data,
+            indptr: indptr.into(),
+            indices: indices.into(),
+            data: data.into(),
         };
         let rows = (0..a.nrows)
             .map(|j| {
@@ -79,7 +79,7 @@ impl AugPattern {
             })
             .collect();
         AugPattern {
-            base: k.data.clone(),
+            base: k.data.to_vec(),
             k,
             rows,
         }

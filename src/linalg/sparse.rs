@@ -3,13 +3,66 @@
 //! as the report's CSR of §3).
 
 /// A real sparse matrix in CSR form with sorted, unique column indices.
+/// A clone shares the arrays ([`Shared`]): the model of every load step
+/// holds the prepared C without a copy (docs/methods.md §8.5).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Csr {
     pub nrows: usize,
     pub ncols: usize,
-    pub indptr: Vec<usize>,
-    pub indices: Vec<usize>,
-    pub data: Vec<f64>,
+    pub indptr: Shared<usize>,
+    pub indices: Shared<usize>,
+    pub data: Shared<f64>,
+}
+
+/// A vector shared by its clones and copied on the first write through
+/// one of them (`Arc::make_mut`): reads see a `Vec`, writes too.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Shared<T>(std::sync::Arc<Vec<T>>);
+
+impl<T> From<Vec<T>> for Shared<T> {
+    fn from(v: Vec<T>) -> Shared<T> {
+        Shared(std::sync::Arc::new(v))
+    }
+}
+
+impl<T> std::ops::Deref for Shared<T> {
+    type Target = Vec<T>;
+    fn deref(&self) -> &Vec<T> {
+        &self.0
+    }
+}
+
+impl<T: Clone> std::ops::DerefMut for Shared<T> {
+    fn deref_mut(&mut self) -> &mut Vec<T> {
+        std::sync::Arc::make_mut(&mut self.0)
+    }
+}
+
+impl<'a, T> IntoIterator for &'a Shared<T> {
+    type Item = &'a T;
+    type IntoIter = std::slice::Iter<'a, T>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.iter()
+    }
+}
+
+impl<T: PartialEq> PartialEq<Vec<T>> for Shared<T> {
+    fn eq(&self, other: &Vec<T>) -> bool {
+        *self.0 == *other
+    }
+}
+
+impl<T: PartialEq> PartialEq<Shared<T>> for Vec<T> {
+    fn eq(&self, other: &Shared<T>) -> bool {
+        *self == *other.0
+    }
+}
+
+impl<T> Shared<T> {
+    /// Whether `self` and `other` hold the same array (not a copy).
+    pub fn ptr_eq(&self, other: &Shared<T>) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0)
+    }
 }
 
 impl Csr {
@@ -17,9 +70,9 @@ impl Csr {
         Csr {
             nrows,
             ncols,
-            indptr: vec![0; nrows + 1],
-            indices: vec![],
-            data: vec![],
+            indptr: vec![0; nrows + 1].into(),
+            indices: vec![].into(),
+            data: vec![].into(),
         }
     }
 
@@ -68,9 +121,9 @@ impl Csr {
         Csr {
             nrows,
             ncols,
-            indptr,
-            indices,
-            data,
+            indptr: indptr.into(),
+            indices: indices.into(),
+            data: data.into(),
         }
     }
 
@@ -189,9 +242,9 @@ mod tests {
     #[test]
     fn triplets_sum_duplicates_and_sort() {
         let m = Csr::from_triplets(2, 3, &[(1, 2, 1.0), (0, 1, 2.0), (1, 0, 3.0), (1, 2, 4.0)]);
-        assert_eq!(m.indptr, vec![0, 1, 3]);
-        assert_eq!(m.indices, vec![1, 0, 2]);
-        assert_eq!(m.data, vec![2.0, 3.0, 5.0]);
+        assert_eq!(*m.indptr, vec![0, 1, 3]);
+        assert_eq!(*m.indices, vec![1, 0, 2]);
+        assert_eq!(*m.data, vec![2.0, 3.0, 5.0]);
         assert_eq!(m.mul(&[1.0, 1.0, 1.0]), vec![2.0, 8.0]);
         assert_eq!(m.mul_t(&[1.0, 2.0]), vec![6.0, 2.0, 10.0]);
         assert_eq!(m.transpose().transpose(), m);

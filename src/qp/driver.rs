@@ -544,9 +544,9 @@ pub fn check_problem(qp: &QpProblem) -> Result<(), QpError> {
         )));
     }
     for (what, v) in [
-        ("the stiffness matrix C", &qp.c.data),
+        ("the stiffness matrix C", &*qp.c.data),
         ("the load vector d", &qp.d),
-        ("the contact matrix A", &qp.a.data),
+        ("the contact matrix A", &*qp.a.data),
         ("the gaps g", &qp.g),
     ] {
         if let Some(i) = v.iter().position(|e| !e.is_finite()) {
@@ -568,7 +568,7 @@ pub fn check_problem(qp: &QpProblem) -> Result<(), QpError> {
             )));
         }
         for (w, v) in [
-            ("the tangential matrix T", &f.t.data),
+            ("the tangential matrix T", &*f.t.data),
             ("the slip offset t0", &f.t0),
         ] {
             if let Some(i) = v.iter().position(|e| !e.is_finite()) {

@@ -124,9 +124,9 @@ impl Mat32 {
         }
         Ok(Mat32 {
             nrows: m.nrows,
-            indptr: m.indptr.clone(),
+            indptr: m.indptr.to_vec(),
             indices: m.indices.iter().map(|&j| j as u32).collect(),
-            data: m.data.clone(),
+            data: m.data.to_vec(),
         })
     }
 

@@ -224,9 +224,9 @@ pub(super) fn tentative(
     let t = Csr {
         nrows: n,
         ncols: nc,
-        indptr,
-        indices,
-        data,
+        indptr: indptr.into(),
+        indices: indices.into(),
+        data: data.into(),
     };
 
     let mut cmodes = vec![vec![0.0f64; nc]; nm];
@@ -421,8 +421,8 @@ pub(super) fn transpose(m: &Csr) -> Csr {
     Csr {
         nrows: m.ncols,
         ncols: m.nrows,
-        indptr,
-        indices,
-        data,
+        indptr: indptr.into(),
+        indices: indices.into(),
+        data: data.into(),
     }
 }

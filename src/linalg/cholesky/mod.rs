@@ -26,7 +26,7 @@ mod memory;
 mod workspace;
 
 pub use border::Forward;
-pub use workspace::Workspace;
+pub use workspace::{matrix_key, Workspace};
 
 use crate::linalg::error::LinalgError;
 use crate::linalg::rotation::Rotation;
@@ -37,6 +37,8 @@ use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, SymbolicCholeskyR
 use faer::{Conj, MatMut};
 use std::sync::Arc;
 
+/// A factor; a clone shares the values (load steps keep it, `qp::ssn`).
+#[derive(Clone)]
 pub struct Cholesky {
     n: usize,
     llt: Arc<Factor>,
@@ -155,14 +157,15 @@ pub fn fixing_dofs(kernel: &[Vec<f64>], n: usize) -> Vec<usize> {
     if k == 0 {
         return vec![];
     }
-    // rows[i] = R[i, :] (length k), orthogonalised in place.
-    let mut rows: Vec<Vec<f64>> = (0..n)
-        .map(|i| kernel.iter().map(|z| z[i]).collect())
+    // rows[i·k..(i + 1)·k] = R[i, :], orthogonalised in place (one array:
+    // n small vectors were n allocations, kept by the allocator after).
+    let mut rows: Vec<f64> = (0..n)
+        .flat_map(|i| kernel.iter().map(move |z| z[i]))
         .collect();
     let mut chosen = Vec::with_capacity(k);
     for _ in 0..k {
         let (best, bn) = rows
-            .iter()
+            .chunks_exact(k)
             .enumerate()
             .filter(|(i, _)| !chosen.contains(i))
             .map(|(i, r)| (i, r.iter().map(|v| v * v).sum::<f64>()))
@@ -174,8 +177,11 @@ pub fn fixing_dofs(kernel: &[Vec<f64>], n: usize) -> Vec<usize> {
             break;
         }
         chosen.push(best);
-        let q: Vec<f64> = rows[best].iter().map(|v| v / bn.sqrt()).collect();
-        for r in rows.iter_mut() {
+        let q: Vec<f64> = rows[best * k..(best + 1) * k]
+            .iter()
+            .map(|v| v / bn.sqrt())
+            .collect();
+        for r in rows.chunks_exact_mut(k) {
             let p: f64 = r.iter().zip(&q).map(|(a, b)| a * b).sum();
             for (a, b) in r.iter_mut().zip(&q) {
                 *a -= p * b;

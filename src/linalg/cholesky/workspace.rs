@@ -16,7 +16,9 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::Side;
+use std::any::Any;
 use std::cell::{Cell, RefCell};
+use std::rc::Rc;
 use std::sync::Arc;
 
 /// How many symbolic analyses a [`Workspace`] keeps (C and C + AᵀA for ssn).
@@ -37,6 +39,10 @@ pub struct Workspace {
     /// At most this many bytes for one numeric factor, below what the
     /// machine reports (`None`: the machine's figure alone).
     memory_limit: Option<u64>,
+    /// What a method derived from the matrices alone, under the key of
+    /// those matrices ([`matrix_key`]): the next solve of the same C and A
+    /// (a load step) takes it instead of deriving it again.
+    kept: RefCell<Option<(u64, Rc<dyn Any>)>>,
 }
 
 impl Default for Workspace {
@@ -62,7 +68,22 @@ impl Workspace {
             numeric_reused: Cell::new(0),
             symbolic_reused: Cell::new(0),
             memory_limit: None,
+            kept: RefCell::new(None),
         }
+    }
+
+    /// The data kept under `key` by [`Workspace::keep`], if it is a `T`.
+    pub fn kept<T: Any>(&self, key: u64) -> Option<Rc<T>> {
+        let kept = self.kept.borrow();
+        let (k, v) = kept.as_ref()?;
+        (*k == key)
+            .then(|| v.clone().downcast::<T>().ok())
+            .flatten()
+    }
+
+    /// Keep `value` under `key` (one slot: what was kept before is dropped).
+    pub fn keep<T: Any>(&self, key: u64, value: Rc<T>) {
+        self.kept.replace(Some((key, value)));
     }
 
     pub fn ordering(&self) -> Ordering {
@@ -81,6 +102,7 @@ impl Workspace {
     pub fn clear(&self) {
         self.last.replace(None);
         self.symbolic.borrow_mut().clear();
+        self.kept.replace(None);
     }
 
     /// How often this workspace reused a numeric factor and a symbolic analysis.
@@ -258,8 +280,11 @@ impl Workspace {
             });
         }
         let t_prep = t0.elapsed().as_secs_f64();
-        // Drop the kept factor before allocating a new one (peak memory).
+        // Drop the kept factor before allocating a new one (peak memory),
+        // and what a method kept of it (`Workspace::keep`): a new factor
+        // is another matrix's, and the kept data would hold the old one.
         self.last.replace(None);
+        self.kept.replace(None);
         let (symbolic, reused) = self.symbolic_of(&sym, hp, border)?;
         if reused {
             self.symbolic_reused.set(self.symbolic_reused.get() + 1);
@@ -384,6 +409,23 @@ struct SymbolicEntry {
     n: usize,
     pattern: u64,
     symbolic: Arc<SymbolicCholesky<usize>>,
+}
+
+/// A key for data derived from the matrices `mats` and the vectors `vecs`
+/// alone ([`Workspace::keep`]): their sizes, patterns and value bits.
+pub fn matrix_key(mats: &[&Csr], vecs: &[Vec<f64>]) -> u64 {
+    let words =
+        mats.iter()
+            .flat_map(|c| {
+                [c.nrows as u64, c.ncols as u64, c.data.len() as u64]
+                    .into_iter()
+                    .chain(c.indptr.iter().chain(&c.indices).map(|&i| i as u64))
+                    .chain(c.data.iter().map(|v| v.to_bits()))
+            })
+            .chain(vecs.iter().flat_map(|v| {
+                std::iter::once(v.len() as u64).chain(v.iter().map(|x| x.to_bits()))
+            }));
+    hash_words(words)
 }
 
 /// The hash of a lower CSC pattern.

@@ -518,9 +518,9 @@ fn permuted(qp: &QpProblem, perm: &[usize]) -> (QpProblem, AugPattern) {
         Csr {
             nrows: indptr.len() - 1,
             ncols: m.ncols,
-            indptr,
-            indices,
-            data,
+            indptr: indptr.into(),
+            indices: indices.into(),
+            data: data.into(),
         }
     };
     let gather = |v: &[f64]| -> Vec<f64> { perm.iter().map(|&o| v[o]).collect() };
@@ -544,9 +544,9 @@ fn permuted(qp: &QpProblem, perm: &[usize]) -> (QpProblem, AugPattern) {
     let empty = Csr {
         nrows: n,
         ncols: n,
-        indptr: vec![0; n + 1],
-        indices: vec![],
-        data: vec![],
+        indptr: vec![0; n + 1].into(),
+        indices: vec![].into(),
+        data: vec![].into(),
     };
     let qpp = QpProblem {
         c: empty,

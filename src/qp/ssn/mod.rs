@@ -137,31 +137,56 @@ pub(crate) fn solve_traced(
     path: Path,
 ) -> Result<(Output, Vec<bool>), QpError> {
     // A small border: the Schur path on a bordered factor of C, which gives
-    // every column of A K⁻¹Aᵀ at once (no cost model needed).
-    let border = matches!(path, Path::Auto | Path::Schur)
-        .then(|| small_border(qp))
-        .flatten();
-    let augmented = path != Path::Schur && border.is_none();
+    // every column of A K⁻¹Aᵀ at once (no cost model needed). What that
+    // path derives from C, A and ker C alone is kept in the workspace for
+    // the next solve of the same matrices (a load step, [`Kept`]).
+    let keeps = matches!(path, Path::Auto | Path::Schur);
+    let kernel_key = crate::linalg::cholesky::matrix_key(&[], &qp.kernel);
+    let kept = keeps
+        .then(|| ctx.ws.kept::<Kept>(KEPT_TAG))
+        .flatten()
+        .filter(|k| k.matches(qp, kernel_key));
+    let border = match &kept {
+        Some(_) => None,
+        None if keeps => small_border(qp),
+        None => None,
+    };
+    let bordered = kept
+        .as_ref()
+        .map_or(border.is_some(), |k| k.dense.is_some());
+    let augmented = path != Path::Schur && !bordered;
     let t0 = Instant::now();
-    let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
+    let r = match kept.as_ref().and_then(|k| k.dense.as_ref()) {
+        Some(kd) => kd.r.clone(),
+        None => orthonormal_kernel(&qp.c, &qp.kernel)?,
+    };
     let mut st = Ssn::new(qp, r, ctx.settings.tol, augmented, ctx.ws);
     st.target = ctx.settings.kkt_target;
     st.border = border;
     st.auto = path == Path::Auto;
     st.lowrank = path != Path::Refactor;
+    if let Some(kd) = kept.as_ref().and_then(|k| k.dense.as_ref()) {
+        log::debug!("ssn: the bordered factor and A K⁻¹Aᵀ of the last solve reused");
+        st.fac = Some(kd.fac.clone());
+        st.h = kd.h.clone();
+        st.sj_cache = kd.sj_cache.clone();
+    }
     if st.aug.is_some() {
         st.costs = Costs::new(qp, st.aug.as_ref(), ctx.ws)?;
     }
     if !augmented {
         st.ensure_dense()?;
     }
-    if st.border.is_some() {
+    if bordered {
         st.dense_start();
     }
     let mut exec = ctx.executor("ssn");
     let (status, iters) = exec.run(&mut st);
     if let Some(e) = st.error.take() {
         return Err(e);
+    }
+    if keeps && kept.is_none() {
+        st.keep(kernel_key);
     }
     let t_all = t0.elapsed().as_secs_f64();
     let t_factor = st.t_factor;
@@ -198,6 +223,55 @@ pub(crate) fn small_border(qp: &QpProblem) -> Option<RowBorder> {
         rb.rotated()
     );
     (nb <= BORDER_RATIO * (qp.n() as f64).sqrt() && rb.len() <= BORDER_MAX).then_some(rb)
+}
+
+/// What ssn derives from C, A and ker C alone, kept in the workspace
+/// ([`Workspace::keep`]) under the key of those matrices: a load step
+/// changes only d, g and the prescribed values (docs/methods.md §8.5), so
+/// its solve is the forward half of K⁻¹d, the dual-space steps on the
+/// kept H (with the factors of S_J of the sets the last solves visited),
+/// one backward pass and the certificate. Every kept value is the one a
+/// fresh solve computes (same inputs, same bits), so a step's answer does
+/// not depend on the steps before it.
+pub(crate) struct Kept {
+    /// C and A (clones share their arrays, [`crate::linalg::sparse::Shared`]).
+    c: crate::linalg::sparse::Csr,
+    a: crate::linalg::sparse::Csr,
+    /// [`crate::linalg::cholesky::matrix_key`] of ker C's basis.
+    kernel_key: u64,
+    /// None: the border was too large ([`small_border`]); nothing else kept.
+    dense: Option<KeptDense>,
+}
+
+/// The workspace slot of [`Kept`].
+const KEPT_TAG: u64 = 0x7373_6e5f_6b65_7074;
+
+impl Kept {
+    /// Whether `qp` has the matrices the data were derived from: the same
+    /// arrays (a load step's model shares them), else equal values.
+    fn matches(&self, qp: &QpProblem, kernel_key: u64) -> bool {
+        let same = |x: &crate::linalg::sparse::Csr, y: &crate::linalg::sparse::Csr| {
+            (x.nrows == y.nrows
+                && x.ncols == y.ncols
+                && x.indptr.ptr_eq(&y.indptr)
+                && x.indices.ptr_eq(&y.indices)
+                && x.data.ptr_eq(&y.data))
+                || x == y
+        };
+        self.kernel_key == kernel_key && same(&self.c, &qp.c) && same(&self.a, &qp.a)
+    }
+}
+
+/// The bordered path's data ([`Kept`]).
+struct KeptDense {
+    /// The orthonormal basis of ker C.
+    r: Vec<Vec<f64>>,
+    /// The bordered factor of C (+ springs).
+    fac: Cholesky,
+    /// Every column of H = A K⁻¹Aᵀ.
+    h: Rc<Vec<Option<Vec<f64>>>>,
+    /// The factors of S_J made by the solves so far.
+    sj_cache: Rc<std::cell::RefCell<schur::SjCache>>,
 }
 
 /// The largest KKT residual of (x, λ) as the driver computes it
@@ -244,15 +318,20 @@ struct Ssn<'a> {
     e: Vec<f64>,
     /// A K⁻¹d, every row.
     ax0: Vec<f64>,
+    /// Whether `ax0` (and `fwd_d`) are computed (the factor may be kept).
+    ax0_done: bool,
     /// The forward half of K⁻¹d on a bordered factor.
     fwd_d: Option<crate::linalg::cholesky::Forward>,
-    /// Cached columns hⱼ = A K⁻¹aⱼ (length m) of the dual Hessian.
-    h: Vec<Option<Vec<f64>>>,
+    /// Cached columns hⱼ = A K⁻¹aⱼ (length m) of the dual Hessian (shared
+    /// with [`Kept`] on the bordered path).
+    h: Rc<Vec<Option<Vec<f64>>>>,
     /// The last dense Schur solve (`schur::DenseMemo`).
     dense_memo: std::cell::RefCell<Option<schur::DenseMemo>>,
     /// The factor of S over every row, once a working set held them all
     /// (`schur::SjSolver`).
     s_full: std::cell::RefCell<Option<Rc<SpdFactor>>>,
+    /// The solvers of S_J made so far (shared with [`Kept`]).
+    sj_cache: Rc<std::cell::RefCell<schur::SjCache>>,
     tol: f64,
     /// The certificate's target (`Settings::kkt_target`).
     target: f64,
@@ -538,10 +617,12 @@ impl<'a> Ssn<'a> {
             e,
             x: vec![0.0; qp.n()],
             ax0: vec![],
+            ax0_done: false,
             fwd_d: None,
-            h: vec![None; m],
+            h: Rc::new(vec![None; m]),
             dense_memo: Default::default(),
             s_full: Default::default(),
+            sj_cache: Default::default(),
             tol,
             target: crate::qp::settings::DEFAULT_KKT_TARGET,
             cpar,
@@ -575,11 +656,16 @@ impl<'a> Ssn<'a> {
                 );
             }
             if let Some(h) = h {
-                for (j, hj) in self.h.iter_mut().enumerate() {
+                for (j, hj) in Rc::make_mut(&mut self.h).iter_mut().enumerate() {
                     *hj = Some(h.col(j).iter().copied().collect());
                 }
             }
             self.t_factor += t.elapsed().as_secs_f64();
+            self.fac = Some(fac);
+        }
+        if !self.ax0_done {
+            self.ax0_done = true;
+            let fac = self.fac.as_ref().expect("factored above");
             // On a bordered factor A K⁻¹d needs only the forward half of the
             // solve; the KKT answer finishes it (`Cholesky::forward`).
             let half = fac
@@ -598,7 +684,6 @@ impl<'a> Ssn<'a> {
                         .collect();
                 }
             }
-            self.fac = Some(fac);
         }
         Ok(())
     }
@@ -801,6 +886,28 @@ impl<'a> Ssn<'a> {
             .fold(0.0f64, f64::max)
             / scale;
         (next, fval, residual, ax)
+    }
+
+    /// Keep in the workspace what this solve derived from the matrices
+    /// ([`Kept`]; `kernel_key` that of ker C's basis).
+    fn keep(&self, kernel_key: u64) {
+        let dense = match (&self.border, &self.fac) {
+            (Some(_), Some(fac)) if self.h.iter().all(Option::is_some) => Some(KeptDense {
+                r: self.r.clone(),
+                fac: fac.clone(),
+                h: self.h.clone(),
+                sj_cache: self.sj_cache.clone(),
+            }),
+            (Some(_), _) => return,
+            (None, _) => None,
+        };
+        let kept = Kept {
+            c: self.qp.c.clone(),
+            a: self.qp.a.clone(),
+            kernel_key,
+            dense,
+        };
+        self.ws.keep(KEPT_TAG, Rc::new(kept));
     }
 
     fn n_active(&self) -> usize {

@@ -103,7 +103,7 @@ impl Ssn<'_> {
         }
         let new_rows = in_j
             .iter()
-            .zip(&self.h)
+            .zip(self.h.iter())
             .filter(|(j, h)| **j && h.is_none())
             .count();
         let schur = if self.fac.is_some() { 0.0 } else { c.fac_c } + new_rows as f64 * c.col_c();

@@ -54,7 +54,7 @@ impl Ssn<'_> {
                 .solve_many_in_place(&mut buf, chunk.len());
             self.solves += chunk.len();
             for (c, &j) in chunk.iter().enumerate() {
-                self.h[j] = Some(self.qp.a.mul(&buf[c * n..(c + 1) * n]));
+                Rc::make_mut(&mut self.h)[j] = Some(self.qp.a.mul(&buf[c * n..(c + 1) * n]));
             }
         }
     }
@@ -115,39 +115,60 @@ impl Ssn<'_> {
         }
     }
 
-    /// The solver of S_J = A_J K⁻¹A_Jᵀ, by flop count (never by time).
-    fn sj_solver(&self, jset: &[usize], exact: bool) -> Option<SjSolver> {
+    /// The solver of S_J = A_J K⁻¹A_Jᵀ, by flop count (never by time);
+    /// one made before for the same J and kind is taken from [`SjCache`].
+    fn sj_solver(&self, jset: &[usize], exact: bool) -> Option<Rc<SjSolver>> {
         let m = self.qp.m();
         let nj = jset.len();
         let k = self.r.len();
+        let cap = SJ_CACHE_FACTORS * m * m * 8;
         let full = self.s_full.borrow().clone();
         if let (false, Some(full)) = (exact, full) {
             let nn = m - nj;
             let (mf, njf, nnf) = (m as f64, nj as f64, nn as f64);
             // |N| + 1 + k solves with the full factor against one factor of S_J.
             if 2.0 * (nnf + 1.0 + k as f64) * mf * mf + nnf.powi(3) < njf.powi(3) / 3.0 {
+                if let Some(c) = self.sj_cache.borrow().get(true, jset) {
+                    return Some(c);
+                }
                 if let Some(c) = SjSolver::complement(full, jset, m) {
+                    let c = Rc::new(c);
+                    self.sj_cache.borrow_mut().put(true, jset, c.clone(), cap);
                     return Some(c);
                 }
             }
         }
-        let hs: Vec<&Vec<f64>> = jset
-            .iter()
-            .map(|&j| self.h[j].as_ref().expect("column cached"))
-            .collect();
-        // S_J (symmetrised; the lower triangle is read) and its factor.
-        let s = Mat::from_fn(nj, nj, |a, b| {
-            if b <= a {
-                0.5 * (hs[b][jset[a]] + hs[a][jset[b]])
-            } else {
-                0.0
+        let kept = self.sj_cache.borrow().get(false, jset);
+        let (solver, s) = match kept {
+            Some(solver) => match &*solver {
+                SjSolver::Direct(s) => (solver.clone(), s.clone()),
+                SjSolver::Complement { .. } => unreachable!("kept under the direct kind"),
+            },
+            None => {
+                let hs: Vec<&Vec<f64>> = jset
+                    .iter()
+                    .map(|&j| self.h[j].as_ref().expect("column cached"))
+                    .collect();
+                // S_J (symmetrised; the lower triangle is read) and its factor.
+                let s = Mat::from_fn(nj, nj, |a, b| {
+                    if b <= a {
+                        0.5 * (hs[b][jset[a]] + hs[a][jset[b]])
+                    } else {
+                        0.0
+                    }
+                });
+                let s = Rc::new(SpdFactor::new(s.as_ref())?);
+                let solver = Rc::new(SjSolver::Direct(s.clone()));
+                self.sj_cache
+                    .borrow_mut()
+                    .put(false, jset, solver.clone(), cap);
+                (solver, s)
             }
-        });
-        let s = Rc::new(SpdFactor::new(s.as_ref())?);
+        };
         if nj == m && m > 0 {
-            self.s_full.replace(Some(s.clone()));
+            self.s_full.replace(Some(s));
         }
-        Some(SjSolver::Direct(s))
+        Some(solver)
     }
 
     fn schur_dense_with(
@@ -342,6 +363,43 @@ fn coarse_pseudo_solve(f: &[f64], k: usize, b: &mut [f64], scale: f64) -> bool {
 /// 1e-14 on the three-body crust.
 const COMPLEMENT_RESIDUAL: f64 = 1e-10;
 
+/// At most this many m×m dense factors' worth of bytes in an [`SjCache`].
+const SJ_CACHE_FACTORS: usize = 2;
+
+/// The solvers of S_J made so far, by kind (complement or not) and J, most
+/// recent first: the same J gives the same matrix and the same bits, so a
+/// working set seen again (within a solve, or in the next load step's
+/// dual-space steps, which retrace the last one's, `super::Kept`) is not
+/// factored again. Bounded in bytes, the oldest dropped first.
+#[derive(Default)]
+pub(super) struct SjCache {
+    entries: Vec<(bool, Vec<usize>, Rc<SjSolver>)>,
+}
+
+impl SjCache {
+    fn get(&self, complement: bool, jset: &[usize]) -> Option<Rc<SjSolver>> {
+        self.entries
+            .iter()
+            .find(|e| e.0 == complement && e.1 == jset)
+            .map(|e| e.2.clone())
+    }
+
+    fn put(&mut self, complement: bool, jset: &[usize], s: Rc<SjSolver>, cap: usize) {
+        self.entries.insert(0, (complement, jset.to_vec(), s));
+        let mut bytes = 0;
+        let keep = self
+            .entries
+            .iter()
+            .take_while(|e| {
+                bytes += e.2.bytes();
+                bytes <= cap
+            })
+            .count()
+            .max(1);
+        self.entries.truncate(keep);
+    }
+}
+
 /// λ_J and the coarse α of a dual-space solve.
 type DualAnswer = (Vec<f64>, Vec<f64>);
 
@@ -362,6 +420,16 @@ enum SjSolver {
 }
 
 impl SjSolver {
+    /// The bytes it holds (its dense matrices).
+    fn bytes(&self) -> usize {
+        8 * match self {
+            SjSolver::Direct(f) => f.l().nrows() * f.l().nrows(),
+            SjSolver::Complement { pos, p_n, p_nn, .. } => {
+                pos.len() + p_n.nrows() * p_n.ncols() + p_nn.l().nrows() * p_nn.l().nrows()
+            }
+        }
+    }
+
     fn complement(full: Rc<SpdFactor>, jset: &[usize], m: usize) -> Option<SjSolver> {
         let mut pos = vec![usize::MAX; m];
         for (t, &j) in jset.iter().enumerate() {
