@@ -791,7 +791,14 @@ impl<'a> State<'a> {
         let n_set: Vec<bool> = (0..qp.m())
             .map(|i| self.ln[i] + self.cn[i] * (ax[i] - qp.g[i]) > 0.0)
             .collect();
-        let tang = (0..qp.m())
+        let m = qp.m();
+        // A tangential row the dual path leaves out (no free unknown: both
+        // sides' tangential motion prescribed, or a line of symmetry) cannot
+        // respond: its slip v = −t0 is given, so it sticks only where that
+        // is zero and otherwise slips with it (at the end of a tube pushed
+        // through a fit, its forced slip was taken for a stick).
+        let forced = |i: usize| self.dual.as_ref().is_some_and(|d| d.null[m + i]);
+        let tang = (0..m)
             .map(|i| {
                 let z = self.lt[i] + self.ct[i] * v[i];
                 if self.glued {
@@ -799,6 +806,12 @@ impl<'a> State<'a> {
                         Tangential::Stick
                     } else {
                         Tangential::Slip(true)
+                    }
+                } else if forced(i) {
+                    if self.fr.t0[i] == 0.0 {
+                        Tangential::Stick
+                    } else {
+                        Tangential::Slip(v[i] > 0.0)
                     }
                 } else if self.s[i] > 0.0 && z.abs() <= self.s[i] {
                     Tangential::Stick
