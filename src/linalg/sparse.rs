@@ -2,6 +2,11 @@
 //! row is a whole row for Gauss–Seidel) and A (rows accessed one at a time,
 //! as the report's CSR of §3).
 
+/// Below this many stored entries a product runs on one thread.
+pub const PAR_MIN_NNZ: usize = 1 << 16;
+/// Rows per parallel chunk of a product.
+pub const PAR_ROWS: usize = 4096;
+
 /// A real sparse matrix in CSR form with sorted, unique column indices.
 /// A clone shares the arrays ([`Shared`]): the model of every load step
 /// holds the prepared C without a copy (docs/methods.md §8.5).
@@ -139,11 +144,31 @@ impl Csr {
     }
 
     /// y = M x
+    /// y = M x. Rows are summed one by one in their stored order, in
+    /// parallel chunks of rows when M is large: the same bits on any
+    /// number of threads (a load step's certificate and refinement
+    /// multiply by C several times).
     pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
-        for (i, yi) in y.iter_mut().enumerate().take(self.nrows) {
+        use rayon::prelude::*;
+        let n = self.nrows.min(y.len());
+        let row = |i: usize| -> f64 {
             let (c, v) = self.row(i);
-            *yi = c.iter().zip(v).map(|(&j, &a)| a * x[j]).sum();
+            c.iter().zip(v).map(|(&j, &a)| a * x[j]).sum()
+        };
+        if self.nnz() < PAR_MIN_NNZ {
+            for (i, yi) in y.iter_mut().enumerate().take(n) {
+                *yi = row(i);
+            }
+            return;
         }
+        y[..n]
+            .par_chunks_mut(PAR_ROWS)
+            .enumerate()
+            .for_each(|(k, ys)| {
+                for (o, yi) in ys.iter_mut().enumerate() {
+                    *yi = row(k * PAR_ROWS + o);
+                }
+            });
     }
 
     pub fn mul(&self, x: &[f64]) -> Vec<f64> {

@@ -13,6 +13,7 @@
 
 use crate::linalg::sparse::{norm, norm_inf};
 use crate::qp::{Kkt, QpProblem};
+use rayon::prelude::*;
 
 /// A rounding floor above this (relative) certifies nothing: rounding alone
 /// could then move the force balance by more than 10⁻⁴ (docs/methods.md §8.4).
@@ -85,7 +86,9 @@ pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda
         return Kkt::not_finite();
     }
     // Cx and |C||x| in one pass (Cx summed as Csr::mul does: the same bits).
+    // Rows in parallel, each summed alone: the same bits on any thread count.
     let (cx, c_abs_x): (Vec<f64>, Vec<f64>) = (0..qp.n())
+        .into_par_iter()
         .map(|i| {
             let (cols, vals) = qp.c.row(i);
             let s: f64 = cols.iter().zip(vals).map(|(&j, &a)| a * x[j]).sum();
