@@ -286,6 +286,19 @@ fn element_d(topo: &Topology, dofs: &[PointDofs], n: usize, mats: &Materials) ->
     d
 }
 
+/// "node N (body B)" of unknown `j`, for messages (empty if no point has it).
+fn unknown_at(j: usize, dofs: &[PointDofs], topo: &Topology, mesh: &Mesh) -> String {
+    dofs.iter()
+        .position(|p| j >= p.start && j < p.start + p.ndof)
+        .map(|p| {
+            format!(
+                "node {} (body {})",
+                mesh.node_tags[topo.point_node[p]], topo.point_body[p]
+            )
+        })
+        .unwrap_or_default()
+}
+
 /// Refuses a C or d that is not finite, or whose displacement scale
 /// max|d| / max C_ii is so large that energies would overflow (a NaN in the
 /// solver otherwise). Names the body and node of the largest load.
@@ -298,20 +311,7 @@ pub(super) fn check_scale(
     problem: &Problem,
 ) -> Result<(), FemError> {
     let err = |msg: String| FemError::new(&problem.path, msg);
-    let point_of = |j: usize| {
-        dofs.iter()
-            .position(|p| j >= p.start && j < p.start + p.ndof)
-    };
-    let at = |j: usize| {
-        point_of(j)
-            .map(|p| {
-                format!(
-                    "node {} (body {})",
-                    mesh.node_tags[topo.point_node[p]], topo.point_body[p]
-                )
-            })
-            .unwrap_or_default()
-    };
+    let at = |j: usize| unknown_at(j, dofs, topo, mesh);
     if let Some(k) = c.data.iter().position(|v| !v.is_finite()) {
         let row = c.indptr.partition_point(|&s| s <= k).saturating_sub(1);
         return Err(err(format!(
@@ -332,20 +332,7 @@ fn check_d(
     problem: &Problem,
 ) -> Result<(), FemError> {
     let err = |msg: String| FemError::new(&problem.path, msg);
-    let point_of = |j: usize| {
-        dofs.iter()
-            .position(|p| j >= p.start && j < p.start + p.ndof)
-    };
-    let at = |j: usize| {
-        point_of(j)
-            .map(|p| {
-                format!(
-                    "node {} (body {})",
-                    mesh.node_tags[topo.point_node[p]], topo.point_body[p]
-                )
-            })
-            .unwrap_or_default()
-    };
+    let at = |j: usize| unknown_at(j, dofs, topo, mesh);
     if let Some(j) = d.iter().position(|v| !v.is_finite()) {
         return Err(err(format!(
             "the load vector d is not finite at {}: the loads overflow; change the units",

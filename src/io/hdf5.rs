@@ -510,15 +510,7 @@ pub fn checkpoint_files(path: &Path) -> Result<CheckpointFiles, IoError> {
         mesh: std::path::PathBuf::from(mesh.filename()),
         steps: vec![],
     };
-    if file.link_exists("steps") {
-        let sg = file.group("steps").map_err(ctx.h5("/steps"))?;
-        let mut names: Vec<(usize, String)> = sg
-            .member_names()
-            .map_err(ctx.h5("/steps"))?
-            .into_iter()
-            .filter_map(|nm| parse_step_name(&nm).map(|i| (i, nm)))
-            .collect();
-        names.sort();
+    if let Some((sg, names)) = step_names(&ctx, &file)? {
         for (i, name) in names {
             let g = sg
                 .group(&name)
@@ -532,6 +524,23 @@ pub fn checkpoint_files(path: &Path) -> Result<CheckpointFiles, IoError> {
 
 /// An HDF5 error opening `loc`, with a hint when it is an external link of
 /// a split checkpoint whose file is missing.
+/// The group /steps and its step groups (index, name) in step order; None
+/// without /steps.
+fn step_names(ctx: &Ctx, file: &File) -> Result<Option<(Group, Vec<(usize, String)>)>, IoError> {
+    if !file.link_exists("steps") {
+        return Ok(None);
+    }
+    let sg = file.group("steps").map_err(ctx.h5("/steps"))?;
+    let mut names: Vec<(usize, String)> = sg
+        .member_names()
+        .map_err(ctx.h5("/steps"))?
+        .into_iter()
+        .filter_map(|nm| parse_step_name(&nm).map(|i| (i, nm)))
+        .collect();
+    names.sort();
+    Ok(Some((sg, names)))
+}
+
 fn linked(ctx: &Ctx, loc: &str, cause: ::hdf5::Error) -> IoError {
     let text = cause.to_string();
     if text.contains("external") {
@@ -908,15 +917,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
     let mut steps = Vec::new();
     let mut friction = Vec::new();
     let mut step_groups = Vec::new();
-    if file.link_exists("steps") {
-        let sg = file.group("steps").map_err(ctx.h5("/steps"))?;
-        let mut names: Vec<(usize, String)> = sg
-            .member_names()
-            .map_err(ctx.h5("/steps"))?
-            .into_iter()
-            .filter_map(|nm| parse_step_name(&nm).map(|i| (i, nm)))
-            .collect();
-        names.sort();
+    if let Some((sg, names)) = step_names(&ctx, &file)? {
         for (_, name) in names {
             let g = sg
                 .group(&name)
