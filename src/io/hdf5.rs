@@ -524,9 +524,11 @@ pub fn checkpoint_files(path: &Path) -> Result<CheckpointFiles, IoError> {
 
 /// An HDF5 error opening `loc`, with a hint when it is an external link of
 /// a split checkpoint whose file is missing.
-/// The group /steps and its step groups (index, name) in step order; None
-/// without /steps.
-fn step_names(ctx: &Ctx, file: &File) -> Result<Option<(Group, Vec<(usize, String)>)>, IoError> {
+/// The group /steps and its step groups (index, name) in step order.
+type StepNames = (Group, Vec<(usize, String)>);
+
+/// The [`StepNames`] of `file`; None without /steps.
+fn step_names(ctx: &Ctx, file: &File) -> Result<Option<StepNames>, IoError> {
     if !file.link_exists("steps") {
         return Ok(None);
     }
