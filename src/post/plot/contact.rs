@@ -28,16 +28,14 @@ pub fn interface_chains(c: &ContactGeometry, iface: u32) -> Vec<Vec<usize>> {
     }
     let mut used = vec![false; segs.len()];
     // Extends `path` from its last point through unused segments.
-    let walk = |path: &mut Vec<usize>, used: &mut Vec<bool>| loop {
-        let end = *path.last().unwrap();
-        let next = adj[&end].iter().copied().find(|&k| !used[k]);
-        match next {
-            Some(k) => {
-                used[k] = true;
-                let [a, b] = segs[k];
-                path.push(if a == end { b } else { a });
-            }
-            None => break,
+    let walk = |path: &mut Vec<usize>, used: &mut Vec<bool>| {
+        while let Some(&end) = path.last() {
+            let Some(k) = adj[&end].iter().copied().find(|&k| !used[k]) else {
+                break;
+            };
+            used[k] = true;
+            let [a, b] = segs[k];
+            path.push(if a == end { b } else { a });
         }
     };
     let mut chains = Vec::new();

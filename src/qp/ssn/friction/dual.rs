@@ -1,0 +1,313 @@
+//! ssn's frictional working sets in the dual space on one bordered factor
+//! of C ([`Dual`], docs/methods.md §9.2).
+
+use super::*;
+
+/// The most rows of B = [A; T] whose dense H = B K⁻¹Bᵀ is formed (8·8192²
+/// bytes, 512 MiB); more take the sparse path.
+pub(super) const DUAL_ROWS_MAX: usize = 8192;
+
+/// A row of B with H_jj ≤ NULL_ROW · max H holds nothing ([`Dual`]).
+pub(super) const NULL_ROW: f64 = 1e-14;
+
+/// The working-set solves in the dual space (docs/methods.md §9.2): one
+/// bordered factor of C (+ springs on a floating body's fixing unknowns,
+/// K) with every unknown B = [A; T] touches eliminated last, whose trailing
+/// block gives all of H = B K⁻¹Bᵀ at once (§7). A working set's
+/// equality-constrained problem is then a dense system on its rows, with
+/// the FETI coarse problem for the rigid motions; x is one backward pass
+/// (`Cholesky::finish`), formed only for an answer that is returned. The
+/// factor does not change between Newton steps, Tresca solves or load
+/// steps (the workspace keeps it), where K = C + ρBᵀB was refactored at
+/// every Newton step and solved by augmented Lagrangian sweeps.
+pub(super) struct Dual {
+    /// B = [A; T], 2m × n.
+    pub(super) b: Csr,
+    pub(super) fac: Cholesky,
+    /// The forward half of K⁻¹d.
+    pub(super) fwd: Forward,
+    /// H = B K⁻¹Bᵀ, 2m × 2m.
+    pub(super) h: Mat<f64>,
+    /// B K⁻¹d.
+    pub(super) bk0: Vec<f64>,
+    /// (B R)ᵢₗ by rows, 2m × k.
+    pub(super) br: Vec<Vec<f64>>,
+    /// e = Rᵀd.
+    pub(super) e: Vec<f64>,
+    /// Rows of B that hold nothing (H_jj = 0: a tangential row on a line
+    /// of symmetry, whose unknown is eliminated): left out of every
+    /// working set's system, their multiplier 0.
+    pub(super) null: Vec<bool>,
+    /// Sparse solves it took (counted as inner iterations).
+    pub(super) solves: usize,
+}
+
+impl Dual {
+    /// The dual form of `qp`, or None when the border of B is too large for
+    /// a dense trailing block (the limits of the frictionless path,
+    /// [`super::small_border`]) or H would be.
+    pub(super) fn new(
+        qp: &QpProblem,
+        fr: &Friction,
+        r: &[Vec<f64>],
+        ws: &crate::linalg::cholesky::Workspace,
+    ) -> Result<Option<Dual>, QpError> {
+        let (n, m) = (qp.n(), qp.m());
+        if m == 0 || 2 * m > DUAL_ROWS_MAX {
+            return Ok(None);
+        }
+        let mut trip = Vec::with_capacity(qp.a.nnz() + fr.t.nnz());
+        for (off, mat) in [(0, &qp.a), (m, &fr.t)] {
+            for i in 0..m {
+                let (cols, vals) = mat.row(i);
+                trip.extend(cols.iter().zip(vals).map(|(&j, &v)| (off + i, j, v)));
+            }
+        }
+        let b = Csr::from_triplets(2 * m, n, &trip);
+        let rb = RowBorder::new(&qp.c, &qp.kernel, &b);
+        let nb = rb.len();
+        log::debug!("ssn: friction: border of B = [A; T]: {nb} unknowns");
+        if nb as f64 > super::super::BORDER_RATIO * (n as f64).sqrt()
+            || nb > super::super::BORDER_MAX
+        {
+            return Ok(None);
+        }
+        let fac = ws.cholesky_rows(&qp.c, &qp.kernel, &rb)?;
+        let Some(h) = fac.border_inverse(&b) else {
+            return Ok(None);
+        };
+        let Some(fwd) = fac.forward(&qp.d) else {
+            return Ok(None);
+        };
+        let Some(bk0) = fac.border_product(&fwd, &b) else {
+            return Ok(None);
+        };
+        let br = (0..2 * m)
+            .map(|i| r.iter().map(|rl| b.row_dot(i, rl)).collect())
+            .collect();
+        let e = r.iter().map(|rl| dot(rl, &qp.d)).collect();
+        let hmax = (0..2 * m).fold(0.0f64, |a, j| a.max(h[(j, j)]));
+        let null = (0..2 * m).map(|j| !(h[(j, j)] > NULL_ROW * hmax)).collect();
+        Ok(Some(Dual {
+            b,
+            fac,
+            fwd,
+            h,
+            bk0,
+            br,
+            e,
+            null,
+            solves: 1,
+        }))
+    }
+
+    /// The multipliers of the working set `rows` (indices into B's rows)
+    /// with the known forces `f` (2m; zero on `rows`): μ_J and α from
+    /// H_JJ μ_J − (BR)_J α = (BK⁻¹b − c − H f)_J and (BR)_Jᵀμ_J = Rᵀb −
+    /// (BR)ᵀf, given `bkb` = BK⁻¹b and `e` = Rᵀb (b = d and c = [g; t0]
+    /// for a step; the residuals for a refinement). A rigid motion the rows
+    /// leave free (a singular coarse matrix) gets no α: the step is solved
+    /// as if it were held, as the sparse path regularises K along it. None
+    /// if H_JJ is singular.
+    pub(super) fn solve(
+        &self,
+        rows: &[usize],
+        f: &[f64],
+        bkb: &[f64],
+        c: &[f64],
+        e: &[f64],
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let nj = rows.len();
+        let k = e.len();
+        let h = &self.h;
+        let fl: Vec<(usize, f64)> = f
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| **v != 0.0)
+            .map(|(l, &v)| (l, v))
+            .collect();
+        let hjj = Mat::from_fn(
+            nj,
+            nj,
+            |a, b| {
+                if b <= a {
+                    h[(rows[a], rows[b])]
+                } else {
+                    0.0
+                }
+            },
+        );
+        let fac = SpdFactor::new(hjj.as_ref())?;
+        let mut rhs = Mat::from_fn(nj, 1 + k, |t, col| {
+            let j = rows[t];
+            if col == 0 {
+                // H is symmetric: read column j.
+                bkb[j] - c[j] - fl.iter().map(|&(l, v)| h[(l, j)] * v).sum::<f64>()
+            } else {
+                self.br[j][col - 1]
+            }
+        });
+        fac.solve_mat_in_place(rhs.as_mut());
+        let mut w: Vec<f64> = rhs.col(0).iter().copied().collect();
+        let mut alpha = vec![0.0; k];
+        if k > 0 {
+            // F = (BR)_Jᵀ Y, Y = H_JJ⁻¹(BR)_J; F α = e − (BR)ᵀf − (BR)_Jᵀw.
+            let mut fm = vec![vec![0.0; k]; k];
+            for (a, row) in fm.iter_mut().enumerate() {
+                for (b, v) in row.iter_mut().enumerate() {
+                    *v = rows
+                        .iter()
+                        .enumerate()
+                        .map(|(t, &j)| self.br[j][a] * rhs[(t, 1 + b)])
+                        .sum();
+                }
+            }
+            for a in 0..k {
+                for b in 0..a {
+                    let v = 0.5 * (fm[a][b] + fm[b][a]);
+                    fm[a][b] = v;
+                    fm[b][a] = v;
+                }
+            }
+            let mut q: Vec<f64> = (0..k)
+                .map(|l| {
+                    let known: f64 = fl.iter().map(|&(j, v)| self.br[j][l] * v).sum();
+                    let bw: f64 = rows.iter().zip(&w).map(|(&j, wt)| self.br[j][l] * wt).sum();
+                    e[l] - known - bw
+                })
+                .collect();
+            // α = F⁺q: the motions null F leaves free get none.
+            let (vals, vecs) = sym_eigen(&fm);
+            let top = vals.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let mut out = vec![0.0; k];
+            for (lam, v) in vals.iter().zip(&vecs) {
+                if !(lam.abs() > 1e-12 * top) {
+                    continue;
+                }
+                let p = dot(v, &q) / lam;
+                for (o, vi) in out.iter_mut().zip(v) {
+                    *o += p * vi;
+                }
+            }
+            q = out;
+            for (t, wt) in w.iter_mut().enumerate() {
+                *wt += (0..k).map(|l| rhs[(t, 1 + l)] * q[l]).sum::<f64>();
+            }
+            alpha = q;
+        }
+        if !w.iter().chain(&alpha).all(|v| v.is_finite()) {
+            return None;
+        }
+        Some((w, alpha))
+    }
+
+    /// The multipliers of a working set of Coulomb's problem with the slip
+    /// bound inside (docs/methods.md §9.2): the normal rows `normal` (row
+    /// i of A with κᵢ = μᵢσᵢ when its tangential row slips along σᵢ, else
+    /// 0: λ_tᵢ = κᵢλ_nᵢ, a force the unknown λ_nᵢ sets), the stick rows
+    /// `stick` (indices into B) and the rigid motions: (B x)_E = c_E on the
+    /// rows E = normal ∪ stick and the equilibrium Rᵀ(d − Bᵀμ) = 0, a
+    /// nonsymmetric system (the slip forces' columns) solved by LU with
+    /// the coarse unknowns scaled to H's size. Returns μ over every row and
+    /// α; None if the system is singular to working precision.
+    pub(super) fn solve_coulomb(
+        &self,
+        normal: &[(usize, f64)],
+        stick: &[usize],
+        c: &[f64],
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let m = self.bk0.len() / 2;
+        let k = self.e.len();
+        let (nn, q) = (normal.len(), normal.len() + stick.len());
+        let size = q + k;
+        let h = &self.h;
+        let hs = (0..2 * m)
+            .fold(0.0f64, |a, j| a.max(h[(j, j)]))
+            .max(f64::MIN_POSITIVE);
+        let erow = |e: usize| if e < nn { normal[e].0 } else { stick[e - nn] };
+        // Column p of H P (P: unknowns to multipliers), read by rows.
+        let col = |re: usize, p: usize| -> f64 {
+            if p < nn {
+                let (i, kappa) = normal[p];
+                let mut v = h[(i, re)];
+                if kappa != 0.0 {
+                    v += kappa * h[(m + i, re)];
+                }
+                v
+            } else {
+                h[(stick[p - nn], re)]
+            }
+        };
+        let brp = |p: usize, l: usize| -> f64 {
+            if p < nn {
+                let (i, kappa) = normal[p];
+                self.br[i][l] + kappa * self.br[m + i][l]
+            } else {
+                self.br[stick[p - nn]][l]
+            }
+        };
+        let mut w = vec![0.0; size * size];
+        let mut rhs = vec![0.0; size];
+        for e in 0..q {
+            let re = erow(e);
+            for p in 0..q {
+                w[e * size + p] = col(re, p);
+            }
+            for l in 0..k {
+                w[e * size + q + l] = -self.br[re][l] * hs;
+            }
+            rhs[e] = self.bk0[re] - c[re];
+        }
+        for l in 0..k {
+            for p in 0..q {
+                w[(q + l) * size + p] = brp(p, l) * hs;
+            }
+            rhs[q + l] = self.e[l] * hs;
+        }
+        let lu = crate::linalg::dense::Lu::from_row_major(&w, size)?;
+        lu.solve_in_place(&mut rhs);
+        if !rhs.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let mut mu = vec![0.0; 2 * m];
+        for (p, &(i, kappa)) in normal.iter().enumerate() {
+            mu[i] = rhs[p];
+            mu[m + i] = kappa * rhs[p];
+        }
+        for (p, &t) in stick.iter().enumerate() {
+            mu[t] = rhs[nn + p];
+        }
+        let alpha = rhs[q..].iter().map(|a| a * hs).collect();
+        Some((mu, alpha))
+    }
+
+    /// B x for the multipliers `mu` (2m) and α: B K⁻¹(d − Bᵀμ) + BRα.
+    pub(super) fn bx(&self, mu: &[f64], alpha: &[f64]) -> Vec<f64> {
+        let mut out = self.bk0.clone();
+        for (l, &v) in mu.iter().enumerate().filter(|(_, v)| **v != 0.0) {
+            for (o, hv) in out.iter_mut().zip(self.h.col(l).iter()) {
+                *o -= v * hv;
+            }
+        }
+        for (o, row) in out.iter_mut().zip(&self.br) {
+            *o += row.iter().zip(alpha).map(|(a, b)| a * b).sum::<f64>();
+        }
+        out
+    }
+
+    /// x = K⁻¹(d − Bᵀμ) + Rα: one backward pass.
+    pub(super) fn x(&self, mu: &[f64], alpha: &[f64], r: &[Vec<f64>]) -> Option<Vec<f64>> {
+        let mut x = self.fac.finish(&self.fwd, &self.b, mu)?;
+        for (rl, &al) in r.iter().zip(alpha) {
+            for (xi, ri) in x.iter_mut().zip(rl) {
+                *xi += al * ri;
+            }
+        }
+        Some(x)
+    }
+}
+
+/// A bordered factor that cannot finish a solve (it always can: B is its border).
+pub(super) fn unfinished() -> QpError {
+    QpError::BadParameter("ssn: the bordered factor of B = [A; T] cannot finish a solve".into())
+}
