@@ -236,47 +236,62 @@ fn is_free(pd: &PointDofs) -> bool {
 /// `Materials::stiffness_rows`, r-weighted when axisymmetric), in the same
 /// order (each point's in increasing triangle order from 0), so the same
 /// bits; C_e is computed only for the triangles with a prescribed vertex.
+/// The terms of a chunk of triangles are computed on rayon's threads, then
+/// added in triangle order: the same bits on any number of threads.
 fn element_d(topo: &Topology, dofs: &[PointDofs], n: usize, mats: &Materials) -> Vec<f64> {
+    use rayon::prelude::*;
+    /// Triangles per chunk: the terms of one chunk (48 bytes a triangle)
+    /// stay in cache between the parallel pass and the sums.
+    const CHUNK: usize = 1 << 14;
     let mut d = vec![0.0f64; n];
     // Per point, compact: whether it is free (ndof 2, T = I, u0 = 0) and
     // its first unknown. The triangles visit their points in no order, and
     // a 64-byte PointDofs per visit was most of the time of a load step's d.
     let free_at: Vec<bool> = dofs.iter().map(is_free).collect();
     let start: Vec<usize> = dofs.iter().map(|pd| pd.start).collect();
-    for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
-        let mi = mi as usize;
-        let pts = [
-            topo.points[tri[0]],
-            topo.points[tri[1]],
-            topo.points[tri[2]],
-        ];
-        let free = tri.map(|p| free_at[p]);
-        let constrained = free.iter().any(|f| !f);
-        for (a, &p) in tri.iter().enumerate() {
-            let mut fe = mats.body_load(&pts, mi, a);
-            if free[a] && !constrained {
-                d[start[p]] += fe[0];
-                d[start[p] + 1] += fe[1];
-                continue;
-            }
-            let pd = &dofs[p];
-            if pd.ndof == 0 {
-                continue;
-            }
-            let ke = mats.stiffness_rows(&pts, mi, a);
-            for (k, fk) in fe.iter_mut().enumerate() {
-                for b in 0..3 {
-                    if free[b] {
-                        continue;
-                    }
-                    let u0 = dofs[tri[b]].u0;
-                    *fk -= ke[k][2 * b] * u0[0] + ke[k][2 * b + 1] * u0[1];
+    // The load of triangle t on its vertex a, f_e − C_e u0_e.
+    let term = |t: usize, a: usize, free: [bool; 3], constrained: bool| -> [f64; 2] {
+        let tri = topo.triangles[t];
+        let mi = topo.tri_material[t] as usize;
+        let pts = tri.map(|p| topo.points[p]);
+        let mut fe = mats.body_load(&pts, mi, a);
+        if !constrained || dofs[tri[a]].ndof == 0 {
+            return fe;
+        }
+        let ke = mats.stiffness_rows(&pts, mi, a);
+        for (k, fk) in fe.iter_mut().enumerate() {
+            for b in 0..3 {
+                if free[b] {
+                    continue;
                 }
+                let u0 = dofs[tri[b]].u0;
+                *fk -= ke[k][2 * b] * u0[0] + ke[k][2 * b + 1] * u0[1];
             }
-            if free[a] {
-                d[pd.start] += fe[0];
-                d[pd.start + 1] += fe[1];
-            } else {
+        }
+        fe
+    };
+    let mut terms = vec![[[0.0f64; 2]; 3]; CHUNK.min(topo.triangles.len())];
+    for c0 in (0..topo.triangles.len()).step_by(CHUNK) {
+        let c1 = (c0 + CHUNK).min(topo.triangles.len());
+        terms[..c1 - c0]
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(i, out)| {
+                let t = c0 + i;
+                let free = topo.triangles[t].map(|p| free_at[p]);
+                let constrained = free.iter().any(|f| !f);
+                for (a, o) in out.iter_mut().enumerate() {
+                    *o = term(t, a, free, constrained);
+                }
+            });
+        for (t, fes) in (c0..c1).zip(&terms) {
+            for (&p, fe) in topo.triangles[t].iter().zip(fes) {
+                if free_at[p] {
+                    d[start[p]] += fe[0];
+                    d[start[p] + 1] += fe[1];
+                    continue;
+                }
+                let pd = &dofs[p];
                 for (k, ta) in pd.t[..pd.ndof].iter().enumerate() {
                     d[pd.start + k] += ta[0] * fe[0] + ta[1] * fe[1];
                 }

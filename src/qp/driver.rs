@@ -51,6 +51,8 @@ pub struct Context<'a> {
     pub ws: &'a Workspace,
     /// The warm start, checked by the driver (finite, plausible size).
     pub x0: Option<&'a [f64]>,
+    /// The working-set warm start, one flag per row (checked by the driver).
+    pub active0: Option<&'a [bool]>,
     opts: &'a SolveOptions,
     timings: Vec<(String, f64)>,
 }
@@ -61,6 +63,7 @@ impl<'a> Context<'a> {
             settings: &opts.settings,
             ws,
             x0: opts.x0.as_deref(),
+            active0: opts.active0.as_deref(),
             opts,
             timings: vec![],
         }
@@ -73,6 +76,7 @@ impl<'a> Context<'a> {
             settings,
             ws: self.ws,
             x0: None,
+            active0: None,
             opts: self.opts,
             timings: vec![],
         }
@@ -292,27 +296,37 @@ fn check_capabilities(method: &dyn Method, qp: &QpProblem) -> Result<(), QpError
     Ok(())
 }
 
-/// The warm start if it passes [`check_warm_start`]; else the options
-/// without it, said in `notes`.
+/// The warm starts if they pass [`check_warm_start`] (x0) and have one
+/// flag per row (active0); else the options without them, said in `notes`.
 fn checked_start<'a>(
     qp: &QpProblem,
     opts: &'a SolveOptions,
     notes: &mut Vec<Note>,
 ) -> Cow<'a, SolveOptions> {
-    let Some(x0) = &opts.x0 else {
+    let bad_x0 = opts
+        .x0
+        .as_ref()
+        .and_then(|x0| check_warm_start(qp, x0).err());
+    let bad_active0 = opts
+        .active0
+        .as_ref()
+        .filter(|a| a.len() != qp.m())
+        .map(|a| format!("{} working-set flags for {} contact rows", a.len(), qp.m()));
+    if bad_x0.is_none() && bad_active0.is_none() {
         return Cow::Borrowed(opts);
-    };
-    match check_warm_start(qp, x0) {
-        Ok(()) => Cow::Borrowed(opts),
-        Err(why) => {
-            let note = Note::WarmStartUnused(why);
-            log::warn!("{note}");
-            notes.push(note);
-            let mut o = opts.clone();
-            o.x0 = None;
-            Cow::Owned(o)
+    }
+    let mut o = opts.clone();
+    for (why, drop) in [(bad_x0, 0), (bad_active0, 1)] {
+        let Some(why) = why else { continue };
+        let note = Note::WarmStartUnused(why);
+        log::warn!("{note}");
+        notes.push(note);
+        match drop {
+            0 => o.x0 = None,
+            _ => o.active0 = None,
         }
     }
+    Cow::Owned(o)
 }
 
 /// Run `method` on `qp`: check the problem and the settings, decide
@@ -445,7 +459,7 @@ fn certify(
     mut notes: Vec<Note>,
 ) -> QpResult {
     let target = settings.kkt_target;
-    let mut kkt = kkt::residuals_with_friction(qp, &r.x, &r.lambda, &r.lambda_t);
+    let (mut kkt, mut cx) = kkt::residuals_and_cx(qp, &r.x, &r.lambda, &r.lambda_t);
     // Motions free on the rows carrying a force (docs/methods.md §1.7): the
     // move keeps Cx, those rows (and their slip) and dᵀx. It is taken only
     // from a certified answer and only if it keeps the certificate (a gap
@@ -459,10 +473,11 @@ fn certify(
             t_settle.elapsed().as_secs_f64()
         );
         if rolled > 0 {
-            let moved = kkt::residuals_with_friction(qp, &settled, &r.lambda, &r.lambda_t);
+            let (moved, moved_cx) = kkt::residuals_and_cx(qp, &settled, &r.lambda, &r.lambda_t);
             if moved.within(target) {
                 r.x = settled;
                 kkt = moved;
+                cx = moved_cx;
                 notes.push(Note::SettledOnActive { count: rolled });
             } else {
                 // The move would lose the certificate: the method's answer
@@ -473,7 +488,10 @@ fn certify(
             }
         }
     }
-    let energy = qp.energy_with_friction(&r.x, &r.lambda);
+    let energy = match &cx {
+        Some(cx) => qp.energy_with_friction_cx(&r.x, cx, &r.lambda),
+        None => qp.energy_with_friction(&r.x, &r.lambda),
+    };
     if !energy.is_finite() {
         kkt = Kkt::not_finite();
     }
@@ -608,9 +626,12 @@ pub fn check_problem(qp: &QpProblem) -> Result<(), QpError> {
     Ok(())
 }
 
-/// A warm start must be finite, of the right size, and of a plausible scale:
-/// its energy must be finite and no larger than 10¹² times the size of the
-/// load's work at the start x = 0 would allow (a checkpoint holding 1e300).
+/// A warm start must be finite, of the right size, and of a plausible scale
+/// (docs/methods.md §8.3), judged in O(n) from bounds, with no product by C:
+/// its energy bound ½‖x‖∞²·max Cᵢᵢ·nnz(C) (|Cᵢⱼ| ≤ max Cᵢᵢ for C ⪰ 0) must
+/// be finite, and the force scale ‖x‖∞·max Cᵢᵢ at most 10¹² times the
+/// loads' ‖d‖∞ (a checkpoint holding 1e300; a load step's own answer is
+/// within a few times its loads).
 pub fn check_warm_start(qp: &QpProblem, x0: &[f64]) -> Result<(), String> {
     if x0.len() != qp.n() {
         return Err(format!("{} values for {} unknowns", x0.len(), qp.n()));
@@ -618,18 +639,17 @@ pub fn check_warm_start(qp: &QpProblem, x0: &[f64]) -> Result<(), String> {
     if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
         return Err(format!("value {i} is {}", x0[i]));
     }
-    let e = qp.energy(x0);
-    if !e.is_finite() {
+    let xmax = crate::linalg::sparse::norm_inf(x0);
+    let cmax = crate::linalg::sparse::norm_inf(&qp.c.diag());
+    if !(0.5 * xmax * xmax * cmax * qp.c.data.len() as f64).is_finite() {
         return Err("its energy is not finite".into());
     }
-    let cx = qp.c.mul(x0);
-    let r: Vec<f64> = cx.iter().zip(&qp.d).map(|(c, d)| c - d).collect();
-    let dn = crate::linalg::sparse::norm(&qp.d);
-    let rn = crate::linalg::sparse::norm(&r);
-    if dn > 0.0 && rn > 1e12 * dn {
+    let force = xmax * cmax;
+    let dmax = crate::linalg::sparse::norm_inf(&qp.d);
+    if dmax > 0.0 && force > 1e12 * dmax {
         return Err(format!(
-            "its residual ‖Cx − d‖ is {rn:.3e}, {:.1e} times the loads",
-            rn / dn
+            "its force scale ‖x‖∞·max Cᵢᵢ is {force:.3e}, {:.1e} times the loads",
+            force / dmax
         ));
     }
     Ok(())
@@ -683,6 +703,47 @@ mod tests {
             assert_eq!(c.records, r.iterations, "{name}");
             assert_eq!(c.last_iter, r.iterations, "{name}");
             assert_eq!(c.finished, 1, "{name}");
+        }
+    }
+
+    /// A working-set warm start (docs/methods.md §8.3): its own answer's
+    /// active set gives ssn the same working set and the answer to rounding,
+    /// any set (none, every row) still the certified answer; one of the
+    /// wrong length is not used, and the note says why.
+    #[test]
+    fn a_working_set_warm_start_is_checked_and_starts_ssn() {
+        let qp = two_blocks(8, 4, true);
+        let cold =
+            crate::qp::registry::solve(MethodId::Ssn, &qp, &SolveOptions::default()).unwrap();
+        assert!(cold.status.converged() && cold.kkt.within(1e-10));
+        let m = qp.m();
+        let starts = [
+            cold.solution.active.clone(),
+            vec![false; m],
+            vec![true; m],
+            vec![true; m + 1],
+        ];
+        for (k, a0) in starts.into_iter().enumerate() {
+            let opts = SolveOptions {
+                active0: Some(a0),
+                ..Default::default()
+            };
+            let r = crate::qp::registry::solve(MethodId::Ssn, &qp, &opts).unwrap();
+            assert!(r.status.converged() && r.kkt.within(1e-10), "start {k}");
+            assert_eq!(r.solution.active, cold.solution.active, "start {k}");
+            let dx = r
+                .solution
+                .x
+                .iter()
+                .zip(&cold.solution.x)
+                .fold(0.0f64, |mx, (a, b)| mx.max((a - b).abs()));
+            let xmax = crate::linalg::sparse::norm_inf(&cold.solution.x);
+            assert!(dx <= 1e-12 * xmax, "start {k}: {dx:e}");
+            let refused = r
+                .notes
+                .iter()
+                .any(|n| matches!(n, Note::WarmStartUnused(w) if w.contains("working-set flags")));
+            assert_eq!(refused, k == 3, "start {k}: {:?}", r.notes);
         }
     }
 }

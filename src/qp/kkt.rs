@@ -74,6 +74,18 @@ pub fn residuals(qp: &QpProblem, x: &[f64], lambda: &[f64]) -> Kkt {
 /// rounding level into a residual of 4·10⁻⁵ (mprgp). Without friction
 /// `lambda_t` must be empty and the result is [`residuals`]'s.
 pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda_t: &[f64]) -> Kkt {
+    residuals_and_cx(qp, x, lambda, lambda_t).0
+}
+
+/// [`residuals_with_friction`] and the product Cx it formed (the same bits
+/// as `Csr::mul`; None when x was refused before it), so that the caller's
+/// energy takes no second pass over C.
+pub(crate) fn residuals_and_cx(
+    qp: &QpProblem,
+    x: &[f64],
+    lambda: &[f64],
+    lambda_t: &[f64],
+) -> (Kkt, Option<Vec<f64>>) {
     let finite = |v: &[f64]| v.iter().all(|e| e.is_finite());
     let mt = if qp.friction.is_some() { qp.m() } else { 0 };
     if x.len() != qp.n()
@@ -83,7 +95,7 @@ pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda
         || !finite(lambda)
         || !finite(lambda_t)
     {
-        return Kkt::not_finite();
+        return (Kkt::not_finite(), None);
     }
     // Cx and |C||x| in one pass (Cx summed as Csr::mul does: the same bits).
     // Rows in parallel, each summed alone: the same bits on any thread count.
@@ -217,9 +229,9 @@ pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda
         balance_floor,
     };
     if k.max().is_finite() {
-        k
+        (k, Some(cx))
     } else {
-        Kkt::not_finite()
+        (Kkt::not_finite(), Some(cx))
     }
 }
 

@@ -133,7 +133,11 @@ impl QpProblem {
     /// The energy with the friction dissipation Σ sᵢ|vᵢ| at the normal forces
     /// `lambda_n` (the Tresca functional; [`QpProblem::energy`] without friction).
     pub fn energy_with_friction(&self, x: &[f64], lambda_n: &[f64]) -> f64 {
-        let e = self.energy(x);
+        self.energy_with_friction_cx(x, &self.c.mul(x), lambda_n)
+    }
+    /// [`QpProblem::energy_with_friction`] with `cx` = Cx already formed.
+    pub fn energy_with_friction_cx(&self, x: &[f64], cx: &[f64], lambda_n: &[f64]) -> f64 {
+        let e = 0.5 * sparse::dot(x, cx) - sparse::dot(x, &self.d);
         match &self.friction {
             None => e,
             Some(f) => {
@@ -372,6 +376,10 @@ pub struct SolveOptions {
     pub stop: Option<&'static std::sync::atomic::AtomicI32>,
     /// Warm start (load steps, restart): used by methods that can, when feasible.
     pub x0: Option<Vec<f64>>,
+    /// Working-set warm start (load steps, restart): the rows expected in
+    /// contact, e.g. the last step's active set; methods that start from a
+    /// working set (ssn) start from it (docs/methods.md §8.3).
+    pub active0: Option<Vec<bool>>,
     /// Observers of every iteration record, besides the progress bar.
     pub observers: Vec<SharedObserver>,
 }
@@ -385,6 +393,7 @@ impl std::fmt::Debug for SolveOptions {
             .field("deadline", &self.deadline)
             .field("stop", &self.stop.is_some())
             .field("x0", &self.x0.as_ref().map(|x| x.len()))
+            .field("active0", &self.active0.as_ref().map(|a| a.len()))
             .field("observers", &self.observers.len())
             .finish()
     }

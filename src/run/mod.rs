@@ -30,8 +30,8 @@ pub use output::{
     Outputs, SummaryWriter, Transaction, VtuWriter,
 };
 pub use prepare::{
-    fingerprint, fingerprint_diff, fnv1a, options, prepare, prepare_with, probes, reduce, solve,
-    solve_model, solve_model_in, step_model, step_model_reusing, Prepared,
+    fingerprint, fingerprint_diff, fnv1a, options, prepare, prepare_with, probes, reduce,
+    reduce_active, solve, solve_model, solve_model_in, step_model, step_model_reusing, Prepared,
 };
 pub use restart::Restart;
 pub use steps::{preconditioner_label, Outcome, Run, Solved, Step, Verdict};

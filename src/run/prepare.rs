@@ -246,6 +246,16 @@ pub fn reduce(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
     x
 }
 
+/// The QP rows' flags of per-contact-row `active` flags (a working-set
+/// warm start); None if they are not this model's rows.
+pub fn reduce_active(model: &Model, active: &[u8]) -> Option<Vec<bool>> {
+    let rows = &model.qp_rows;
+    rows.iter()
+        .map(|&r| active.get(r).map(|a| *a != 0))
+        .collect::<Option<Vec<bool>>>()
+        .filter(|_| active.len() == model.topo.contact.len())
+}
+
 /// The method and the options of a solve: the problem's `[solver]` with
 /// `flags` (the command line) laid over it, validated once
 /// ([`Settings::from_section`]).

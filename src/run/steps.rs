@@ -7,7 +7,7 @@
 
 use super::observe::StepObserver;
 use super::output::{check_interrupt, Transaction};
-use super::prepare::{reduce, solve_model_in, step_model_reusing, Prepared};
+use super::prepare::{reduce, reduce_active, solve_model_in, step_model_reusing, Prepared};
 use super::restart::Restart;
 use super::summary::{StepRow, Summary, Timings};
 use super::RunError;
@@ -261,6 +261,10 @@ impl<'a> Run<'a> {
         };
         let mut o = self.opts.clone();
         o.x0 = carry.u_prev.as_ref().map(|u| reduce(model_ref, u));
+        o.active0 = carry
+            .active_prev
+            .as_deref()
+            .and_then(|a| reduce_active(model_ref, a));
         o.stop = Some(&super::output::SIGNAL);
         let t_solve0 = Instant::now();
         let res = solve_model_in(prep, model_ref, method, &o, ws);

@@ -3,8 +3,9 @@
 //! λ − max(0, λ + c(Ax − g)) = 0. One step (`Executor` step) solves the KKT
 //! system of the working set J (`Cx + A_Jᵀλ_J = d, A_J x = g_J, λ_{J^c} = 0`),
 //! predicts `J ← {i : λᵢ + c(Ax − g)ᵢ > τ}` and stops when J did not change.
-//! Start: the glued set {gᵢ = 0}; c = mean diag C (a stiffness), and
-//! τ = tol·(‖λ‖∞ + c·max(‖x‖∞, ‖g‖∞)).
+//! Start: the working-set warm start if given (the last load step's
+//! active rows, `Context::active0`), else the glued set {gᵢ = 0};
+//! c = mean diag C (a stiffness), and τ = tol·(‖λ‖∞ + c·max(‖x‖∞, ‖g‖∞)).
 //!
 //! The KKT solve takes, per step and from counts only (`path`), the
 //! augmented factor C + A_JᵀΡA_J (`augmented`, Woodbury updates in
@@ -168,6 +169,11 @@ pub(crate) fn solve_traced(
     st.border = border;
     st.auto = path == Path::Auto;
     st.lowrank = path != Path::Refactor;
+    // A working-set warm start (the last load step's active rows) replaces
+    // the glued start: the dense start then confirms it in one step.
+    if let Some(a) = ctx.active0.filter(|a| a.len() == qp.m()) {
+        st.in_j = a.to_vec();
+    }
     if let Some(kd) = kept.as_ref().and_then(|k| k.dense.as_ref()) {
         log::debug!("ssn: the bordered factor and A K⁻¹Aᵀ of the last solve reused");
         st.fac = Some(kd.fac.clone());
@@ -770,7 +776,6 @@ impl Iterative for Ssn<'_> {
         self.history.insert(jused.clone());
         self.lam = lam;
         self.x = x;
-
         let (mut new_j, mut fval, mut residual, mut ax) = self.predict();
         if new_j == self.in_j {
             // J has settled: certify (x, λ), refining the solve if needed.
