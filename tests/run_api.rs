@@ -262,6 +262,86 @@ fn the_writers_and_a_transaction_leave_every_output() {
     assert_eq!(ck.steps.len(), nsteps);
 }
 
+/// Sees each step after the writers and records where the committed files
+/// stand: which steps' VTUs are in the output directory, and the thread.
+struct Committed {
+    out: std::path::PathBuf,
+    name: String,
+    /// Per step seen: (index, VTUs committed so far, on the caller's thread).
+    seen: Vec<(usize, Vec<usize>, bool)>,
+    caller: std::thread::ThreadId,
+}
+
+impl StepObserver for Committed {
+    fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
+        let committed = (1..=step.nsteps)
+            .filter(|k| self.out.join(format!("{}_{k:04}.vtu", self.name)).exists())
+            .collect();
+        let here = std::thread::current().id() == self.caller;
+        self.seen.push((step.index, committed, here));
+        Ok(vec![])
+    }
+}
+
+/// A load step's files are written beside the next step's solve
+/// (`Run::solve`): every step but the last is handed to the observers on
+/// the writer thread, in order; when step k + 1 is, step k's files are
+/// committed and no later step's are; the last step is written on the
+/// caller's thread with the summary. A write error of a middle step stops
+/// the run with that error, and nothing after it is committed.
+#[test]
+fn a_step_is_written_beside_the_next_one_in_order_and_committed_first() {
+    use signorini::run::{Transaction, VtuWriter};
+    let (prep, method, opts) = prepared();
+    let nsteps = prep.problem.file.nsteps();
+    assert!(nsteps >= 3);
+    let name = prep.problem.name.clone();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let om = post::out_mesh(&prep.model, &prep.mesh);
+    let mut tx = Transaction::open(&out, &name).unwrap_or_else(|e| panic!("{e}"));
+    let (sdir, fdir) = (tx.stage_dir().to_path_buf(), tx.dir().to_path_buf());
+    let mut vtu = VtuWriter::new(&prep, &om, &sdir, &fdir, false);
+    let mut spy = Committed {
+        out: out.clone(),
+        name: name.clone(),
+        seen: vec![],
+        caller: std::thread::current().id(),
+    };
+    Run::new(&prep, method, &opts)
+        .solve(&mut [&mut vtu, &mut spy], Some(&mut tx))
+        .unwrap_or_else(|e| panic!("{e}"));
+    tx.finish();
+    let order: Vec<usize> = spy.seen.iter().map(|s| s.0).collect();
+    assert_eq!(order, (0..nsteps).collect::<Vec<_>>());
+    for (k, committed, here) in &spy.seen {
+        // Step k + 1 (1-based) is seen after the writer of this step
+        // staged its VTU: the steps before it are committed, it is not.
+        assert_eq!(committed, &(1..=*k).collect::<Vec<_>>(), "step {}", k + 1);
+        assert_eq!(*here, k + 1 == nsteps, "step {}: thread", k + 1);
+    }
+    // A writer that fails at step 2 of the steps: the run returns its
+    // error, step 1 was committed and rolled back with the run, nothing of
+    // step 2 or later is left.
+    let out2 = dir.path().join("out2");
+    let mut tx2 = Transaction::open(&out2, &name).unwrap_or_else(|e| panic!("{e}"));
+    let mut count = Count {
+        fail_at: Some(1),
+        ..Default::default()
+    };
+    let err = Run::new(&prep, method, &opts)
+        .solve(&mut [&mut count], Some(&mut tx2))
+        .err()
+        .expect("the writer's error");
+    assert!(err.to_string().contains("refused step 2"), "{err}");
+    assert_eq!(count.steps, vec![0]);
+    drop(tx2);
+    let left: Vec<_> = std::fs::read_dir(&out2)
+        .map(|d| d.filter_map(Result::ok).map(|e| e.file_name()).collect())
+        .unwrap_or_default();
+    assert!(left.is_empty(), "{left:?}");
+}
+
 /// `[solver] ordering = "nested-dissection"` (docs/methods.md §3) changes
 /// the factor, not the answer: on a floating wedge (ssn's bordered factor,
 /// springs on the rigid modes) and on non-matching rollers, every method

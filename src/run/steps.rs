@@ -163,9 +163,18 @@ impl<'a> Run<'a> {
     /// Solves the steps, each handed to `observers` in order; with `tx`,
     /// the files they stage are committed per load step (without steps,
     /// all at the end with the summary's).
+    ///
+    /// A load step's files are written and committed on a second thread
+    /// while the next step is assembled and solved (docs/performance.md,
+    /// "Load steps"): the observers see the steps in order, one at a time,
+    /// and step k's commit is complete before step k + 1's files are
+    /// written; an error of a write is returned after the step being solved
+    /// meanwhile, and the run stops there (its transaction rolls back to
+    /// the last commit, as before). The last step is written with the
+    /// summary, on the calling thread.
     pub fn solve(
         self,
-        observers: &mut [&mut dyn StepObserver],
+        observers: &mut [&mut (dyn StepObserver + Send)],
         mut tx: Option<&mut Transaction>,
     ) -> Result<Outcome, RunError> {
         self.check()?;
@@ -176,10 +185,55 @@ impl<'a> Run<'a> {
         let mut carry = Carry::from_restart(self.restart.as_ref());
         // One workspace for every step: C is the same, its factor is reused.
         let ws = self.opts.settings.workspace();
-        for s in steps.clone() {
-            self.one_step(s, &ws, &mut carry, observers, tx.as_deref_mut())?;
-        }
-        self.finish(carry, observers, tx)
+        let multi = !self.prep.problem.file.steps.is_empty();
+        std::thread::scope(|sc| {
+            let mut writing: Option<std::thread::ScopedJoinHandle<'_, Written<'_, '_, '_>>> = None;
+            let mut observers = Some(observers);
+            for s in steps.clone() {
+                let done = self.one_step(s, &ws, &mut carry)?;
+                // The last step's files are committed before this step's
+                // are written; its model serves the step after this one.
+                if let Some(h) = writing.take() {
+                    let w = match h.join() {
+                        Ok(w) => w,
+                        Err(panic) => std::panic::resume_unwind(panic),
+                    };
+                    tx = w.tx;
+                    observers = Some(w.observers);
+                    w.result?;
+                    carry.spare = w.solved.model;
+                }
+                let Some(obs) = observers.take() else {
+                    unreachable!("the observers are back from the last writer");
+                };
+                if multi && s + 1 < steps.end && done.solved.model.is_some() {
+                    let t = tx.take();
+                    writing = Some(sc.spawn(move || write_step(done, obs, t)));
+                    continue;
+                }
+                // The last step (or a single solve): its files wait for
+                // the summary, in the last commit.
+                let t_w = Instant::now();
+                let step = done.view.step(done.solved.model(self.prep), &done.solved);
+                let last = done.view.index + 1 >= steps.end;
+                observe(&step, obs, tx.as_deref_mut(), !last, &mut carry.pending)?;
+                let write = done.timings.write + t_w.elapsed().as_secs_f64();
+                log::debug!("step {}: writing {write:.3} s", s + 1);
+                carry.last = Some((
+                    done.solved,
+                    done.view.verdict,
+                    Timings {
+                        write,
+                        ..done.timings
+                    },
+                ));
+                observers = Some(obs);
+            }
+            let Some(obs) = observers.take() else {
+                unreachable!("the last step is written on this thread");
+            };
+            self.finish(carry, obs, tx)
+        })
     }
 
     /// The settings and the step count, before anything is solved.
@@ -199,7 +253,7 @@ impl<'a> Run<'a> {
     /// (a checkpoint copied into place) are the one commit.
     fn nothing_to_do(
         &self,
-        observers: &mut [&mut dyn StepObserver],
+        observers: &mut [&mut (dyn StepObserver + Send)],
         tx: Option<&mut Transaction>,
     ) -> Result<Outcome, RunError> {
         let mut names = vec![];
@@ -225,22 +279,17 @@ impl<'a> Run<'a> {
     }
 
     /// Load step `s`: its model, the solve warm-started from the previous
-    /// step, the post-processing, the observers and the step's commit.
-    fn one_step(
-        &self,
-        s: usize,
-        ws: &Workspace,
-        carry: &mut Carry,
-        observers: &mut [&mut dyn StepObserver],
-        tx: Option<&mut Transaction>,
-    ) -> Result<(), RunError> {
+    /// step, the post-processing and the step's row; the files are written
+    /// by the caller. Returns the step solved, its times (`write` so far:
+    /// the post-processing) and what the observers see of it.
+    fn one_step(&self, s: usize, ws: &Workspace, carry: &mut Carry) -> Result<Done, RunError> {
         check_interrupt()?;
         let (prep, method) = (self.prep, self.method);
         let file = &prep.problem.file;
         let multi = !file.steps.is_empty();
-        // The last step's model becomes this step's (its C is kept, its
-        // loads replaced): one copy of C for all the steps.
-        let prev = carry.last.take().and_then(|(solved, _, _)| solved.model);
+        // A model of an earlier step whose files are written becomes this
+        // step's (its C is kept, its loads replaced): no copy of C.
+        let prev = carry.spare.take();
         let ts = Instant::now();
         // Without [[steps]] the prepared model is the problem; with steps
         // every step (the first included) gets its own loads.
@@ -277,48 +326,45 @@ impl<'a> Run<'a> {
             "step {}: assembly {t_assemble:.3} s, solve {t_solve:.3} s",
             s + 1
         );
-        let t_w = Instant::now();
+        let t_p = Instant::now();
         let (output, forces) =
             self.post_process(s, model_ref, &res, carry, [t_assemble, t_solve], ts);
         let verdict = Verdict::of(method, &res, self.opts.settings.kkt_target, self.strict);
-        let step = Step {
-            index: s,
-            nsteps: file.nsteps(),
-            multi,
-            time: file.step_time(s),
-            method,
-            kkt_target: self.opts.settings.kkt_target,
-            model: model_ref,
-            result: &res,
-            output: &output,
-            forces: &forces,
-            verdict,
-            started: ts,
-        };
-        self.observe(&step, observers, tx, &mut carry.pending)?;
-        let t_write = t_w.elapsed().as_secs_f64();
-        log::debug!("step {}: writing {t_write:.3} s", s + 1);
-        carry
-            .rows
-            .push(step_row(&step, carry.active_prev.as_deref(), t_solve));
-        carry.active_prev = Some(output.active.clone());
-        carry.certified &= verdict.certified();
-        carry.u_prev = Some(output.displacement.clone());
-        let timings = Timings {
-            read: prep.t_read,
-            assemble: t_assemble,
-            solve: t_solve,
-            write: t_write,
-            ..Default::default()
-        };
         let solved = Solved {
             model,
             result: res,
             output,
             forces,
         };
-        carry.last = Some((solved, verdict, timings));
-        Ok(())
+        let view = View {
+            index: s,
+            nsteps: file.nsteps(),
+            multi,
+            time: file.step_time(s),
+            method,
+            kkt_target: self.opts.settings.kkt_target,
+            verdict,
+            started: ts,
+        };
+        let step = view.step(solved.model(prep), &solved);
+        carry
+            .rows
+            .push(step_row(&step, carry.active_prev.as_deref(), t_solve));
+        carry.active_prev = Some(solved.output.active.clone());
+        carry.certified &= verdict.certified();
+        carry.u_prev = Some(solved.output.displacement.clone());
+        let timings = Timings {
+            read: prep.t_read,
+            assemble: t_assemble,
+            solve: t_solve,
+            write: t_p.elapsed().as_secs_f64(),
+            ..Default::default()
+        };
+        Ok(Done {
+            solved,
+            timings,
+            view,
+        })
     }
 
     /// The step's fields, forces and change from the reference step, with
@@ -361,42 +407,12 @@ impl<'a> Run<'a> {
         (output, forces)
     }
 
-    /// Hands the step to the observers; with `tx`, a load step is one
-    /// commit: its VTU pair, the time series and the checkpoint grown by
-    /// this step. The last step's files wait for the summary
-    /// ([`Run::finish`]), as do all of a single solve's.
-    fn observe(
-        &self,
-        step: &Step<'_>,
-        observers: &mut [&mut dyn StepObserver],
-        tx: Option<&mut Transaction>,
-        pending: &mut Vec<String>,
-    ) -> Result<(), RunError> {
-        let mut names = vec![];
-        for ob in observers.iter_mut() {
-            let t = Instant::now();
-            names.extend(ob.on_step(step).map_err(|e| unstage(&tx, e))?);
-            log::debug!(
-                "step {}: output {:?} {:.3} s",
-                step.index + 1,
-                names.last(),
-                t.elapsed().as_secs_f64()
-            );
-        }
-        check_interrupt()?;
-        match tx {
-            Some(t) if step.multi && step.index + 1 < self.steps().end => t.commit(&names)?,
-            _ => pending.extend(names),
-        }
-        Ok(())
-    }
-
     /// The summary of the last step, the observers' last files and the
     /// last commit.
     fn finish(
         &self,
         carry: Carry,
-        observers: &mut [&mut dyn StepObserver],
+        observers: &mut [&mut (dyn StepObserver + Send)],
         tx: Option<&mut Transaction>,
     ) -> Result<Outcome, RunError> {
         let prep = self.prep;
@@ -451,10 +467,122 @@ impl<'a> Run<'a> {
     }
 }
 
+/// What the observers see of a step besides its [`Solved`] (the scalars
+/// of a [`Step`]).
+#[derive(Clone, Copy)]
+struct View {
+    index: usize,
+    nsteps: usize,
+    multi: bool,
+    time: f64,
+    method: MethodId,
+    kkt_target: f64,
+    verdict: Verdict,
+    started: Instant,
+}
+
+impl View {
+    fn step<'a>(&self, model: &'a Model, solved: &'a Solved) -> Step<'a> {
+        Step {
+            index: self.index,
+            nsteps: self.nsteps,
+            multi: self.multi,
+            time: self.time,
+            method: self.method,
+            kkt_target: self.kkt_target,
+            model,
+            result: &solved.result,
+            output: &solved.output,
+            forces: &solved.forces,
+            verdict: self.verdict,
+            started: self.started,
+        }
+    }
+}
+
+/// A solved, post-processed step whose files are not yet written.
+struct Done {
+    solved: Solved,
+    timings: Timings,
+    view: View,
+}
+
+/// What a step's writer hands back: the observers and the transaction it
+/// borrowed, the step (its model serves a later step) and its outcome.
+struct Written<'a, 'b, 't> {
+    observers: &'a mut [&'b mut (dyn StepObserver + Send)],
+    tx: Option<&'t mut Transaction>,
+    solved: Solved,
+    result: Result<(), RunError>,
+}
+
+/// Writes and commits the files of a step that is not the last (on the
+/// writer thread of [`Run::solve`]).
+fn write_step<'a, 'b, 't>(
+    done: Done,
+    observers: &'a mut [&'b mut (dyn StepObserver + Send)],
+    mut tx: Option<&'t mut Transaction>,
+) -> Written<'a, 'b, 't> {
+    let t_w = Instant::now();
+    let result = match &done.solved.model {
+        Some(model) => {
+            let step = done.view.step(model, &done.solved);
+            let mut pending = vec![];
+            observe(&step, observers, tx.as_deref_mut(), true, &mut pending)
+        }
+        None => Err(RunError::Settings(
+            "a load step's files are written with its own model".into(),
+        )),
+    };
+    log::debug!(
+        "step {}: writing {:.3} s (beside the next step)",
+        done.view.index + 1,
+        done.timings.write + t_w.elapsed().as_secs_f64()
+    );
+    Written {
+        observers,
+        tx,
+        solved: done.solved,
+        result,
+    }
+}
+
+/// Hands the step to the observers; with `tx`, a load step that is not the
+/// last (`commit`) is one commit: its VTU pair, the time series and the
+/// checkpoint grown by this step. The last step's files wait for the
+/// summary ([`Run::finish`]), as do all of a single solve's (`pending`).
+fn observe(
+    step: &Step<'_>,
+    observers: &mut [&mut (dyn StepObserver + Send)],
+    tx: Option<&mut Transaction>,
+    commit: bool,
+    pending: &mut Vec<String>,
+) -> Result<(), RunError> {
+    let mut names = vec![];
+    for ob in observers.iter_mut() {
+        let t = Instant::now();
+        names.extend(ob.on_step(step).map_err(|e| unstage(&tx, e))?);
+        log::debug!(
+            "step {}: output {:?} {:.3} s",
+            step.index + 1,
+            names.last(),
+            t.elapsed().as_secs_f64()
+        );
+    }
+    check_interrupt()?;
+    match tx {
+        Some(t) if step.multi && commit => t.commit(&names)?,
+        _ => pending.extend(names),
+    }
+    Ok(())
+}
+
 /// What one step hands the next, and the run's end: the warm start, the
 /// active set (for the flips), the reference state, the files waiting for
 /// the last commit, the step table, the verdict so far, the last step.
 struct Carry {
+    /// The model of a step whose files are written, for a later step.
+    spare: Option<Model>,
     u_prev: Option<Vec<[f64; 2]>>,
     active_prev: Option<Vec<u8>>,
     reference: Option<StepOutput>,
@@ -467,6 +595,7 @@ struct Carry {
 impl Carry {
     fn from_restart(r: Option<&Restart>) -> Carry {
         Carry {
+            spare: None,
             u_prev: r.and_then(|r| r.displacement.clone()),
             active_prev: r.and_then(|r| r.active.clone()),
             reference: r.and_then(|r| r.reference.clone()),

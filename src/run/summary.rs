@@ -140,8 +140,8 @@ pub struct StepRow {
     /// of a run that does not continue a checkpoint.
     pub opened: Option<usize>,
     pub closed: Option<usize>,
-    /// Wall time of the solve and of the whole step (assemble, solve,
-    /// post-process, write) \[s\].
+    /// Wall time of the solve and of the step (assemble, solve,
+    /// post-process; its files are written beside the next step) \[s\].
     pub time_solve: f64,
     pub time_step: f64,
 }
