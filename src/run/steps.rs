@@ -190,9 +190,10 @@ impl<'a> Run<'a> {
             let mut writing: Option<std::thread::ScopedJoinHandle<'_, Written<'_, '_, '_>>> = None;
             let mut observers = Some(observers);
             for s in steps.clone() {
-                let done = self.one_step(s, &ws, &mut carry)?;
-                // The last step's files are committed before this step's
-                // are written; its model serves the step after this one.
+                let solving = self.one_step(s, &ws, &mut carry)?;
+                // The last step's files are committed, and its fields
+                // freed, before this step's are made (peak memory: one
+                // step's fields at a time) and written.
                 if let Some(h) = writing.take() {
                     let w = match h.join() {
                         Ok(w) => w,
@@ -201,8 +202,9 @@ impl<'a> Run<'a> {
                     tx = w.tx;
                     observers = Some(w.observers);
                     w.result?;
-                    carry.spare = w.solved.model;
+                    release_freed_memory();
                 }
+                let done = self.finish_step(s, solving, &mut carry);
                 let Some(obs) = observers.take() else {
                     unreachable!("the observers are back from the last writer");
                 };
@@ -278,18 +280,17 @@ impl<'a> Run<'a> {
         })
     }
 
-    /// Load step `s`: its model, the solve warm-started from the previous
-    /// step, the post-processing and the step's row; the files are written
-    /// by the caller. Returns the step solved, its times (`write` so far:
-    /// the post-processing) and what the observers see of it.
-    fn one_step(&self, s: usize, ws: &Workspace, carry: &mut Carry) -> Result<Done, RunError> {
+    /// Load step `s`: its model and the solve warm-started from the
+    /// previous step ([`Run::finish_step`] post-processes it; the caller
+    /// writes the files).
+    fn one_step(&self, s: usize, ws: &Workspace, carry: &mut Carry) -> Result<Solving, RunError> {
         check_interrupt()?;
         let (prep, method) = (self.prep, self.method);
         let file = &prep.problem.file;
         let multi = !file.steps.is_empty();
-        // A model of an earlier step whose files are written becomes this
-        // step's (its C is kept, its loads replaced): no copy of C.
-        let prev = carry.spare.take();
+        // The last step's model, unless its files are being written (then
+        // the prepared model's copy: C and the topology are shared, not copied).
+        let prev = carry.last.take().and_then(|(solved, _, _)| solved.model);
         let ts = Instant::now();
         // Without [[steps]] the prepared model is the problem; with steps
         // every step (the first included) gets its own loads.
@@ -326,6 +327,29 @@ impl<'a> Run<'a> {
             "step {}: assembly {t_assemble:.3} s, solve {t_solve:.3} s",
             s + 1
         );
+        Ok(Solving {
+            model,
+            res,
+            t_assemble,
+            t_solve,
+            started: ts,
+        })
+    }
+
+    /// Step `s` after its solve: the post-processing, the verdict and the
+    /// step's row.
+    fn finish_step(&self, s: usize, solving: Solving, carry: &mut Carry) -> Done {
+        let (prep, method) = (self.prep, self.method);
+        let file = &prep.problem.file;
+        let multi = !file.steps.is_empty();
+        let Solving {
+            model,
+            res,
+            t_assemble,
+            t_solve,
+            started: ts,
+        } = solving;
+        let model_ref = model.as_ref().unwrap_or(&prep.model);
         let t_p = Instant::now();
         let (output, forces) =
             self.post_process(s, model_ref, &res, carry, [t_assemble, t_solve], ts);
@@ -360,11 +384,11 @@ impl<'a> Run<'a> {
             write: t_p.elapsed().as_secs_f64(),
             ..Default::default()
         };
-        Ok(Done {
+        Done {
             solved,
             timings,
             view,
-        })
+        }
     }
 
     /// The step's fields, forces and change from the reference step, with
@@ -500,6 +524,15 @@ impl View {
     }
 }
 
+/// A solved step before its post-processing.
+struct Solving {
+    model: Option<Model>,
+    res: QpResult,
+    t_assemble: f64,
+    t_solve: f64,
+    started: Instant,
+}
+
 /// A solved, post-processed step whose files are not yet written.
 struct Done {
     solved: Solved,
@@ -508,11 +541,10 @@ struct Done {
 }
 
 /// What a step's writer hands back: the observers and the transaction it
-/// borrowed, the step (its model serves a later step) and its outcome.
+/// borrowed, and its outcome (the step's fields are freed when written).
 struct Written<'a, 'b, 't> {
     observers: &'a mut [&'b mut (dyn StepObserver + Send)],
     tx: Option<&'t mut Transaction>,
-    solved: Solved,
     result: Result<(), RunError>,
 }
 
@@ -539,11 +571,23 @@ fn write_step<'a, 'b, 't>(
         done.view.index + 1,
         done.timings.write + t_w.elapsed().as_secs_f64()
     );
+    drop(done);
     Written {
         observers,
         tx,
-        solved: done.solved,
         result,
+    }
+}
+
+/// Gives the pages of freed blocks back to the system (glibc `malloc_trim`):
+/// a step's fields, freed by its writer thread, sit in that thread's malloc
+/// arena otherwise, and each step's would add to the run's peak RSS.
+fn release_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only returns free memory of the allocator to the
+    // system; it reads and writes no memory of ours.
+    unsafe {
+        libc::malloc_trim(0);
     }
 }
 
@@ -581,8 +625,6 @@ fn observe(
 /// active set (for the flips), the reference state, the files waiting for
 /// the last commit, the step table, the verdict so far, the last step.
 struct Carry {
-    /// The model of a step whose files are written, for a later step.
-    spare: Option<Model>,
     u_prev: Option<Vec<[f64; 2]>>,
     active_prev: Option<Vec<u8>>,
     reference: Option<StepOutput>,
@@ -595,7 +637,6 @@ struct Carry {
 impl Carry {
     fn from_restart(r: Option<&Restart>) -> Carry {
         Carry {
-            spare: None,
             u_prev: r.and_then(|r| r.displacement.clone()),
             active_prev: r.and_then(|r| r.active.clone()),
             reference: r.and_then(|r| r.reference.clone()),
