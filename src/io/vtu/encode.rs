@@ -302,6 +302,14 @@ fn array_head(name: &str, ncomp: u32, buf: &Slice<'_>, names_of: Names) -> Vec<u
     }
     let (ty, range) = match buf {
         Slice::F64(v) => ("Float64", range(v)),
+        Slice::Xy0(v) => {
+            // The same fold, in the same order, as over the padded copy.
+            let mut it = v.iter().flat_map(|p| [p[0], p[1], 0.0]);
+            let r = it
+                .next()
+                .map(|first| it.fold((first, first), |(a, b), x| (a.min(x), b.max(x))));
+            ("Float64", r)
+        }
         Slice::I32(v) => ("Int32", range(v)),
         Slice::U64(v) => (
             "UInt64",
@@ -359,6 +367,17 @@ fn write_block(w: &mut impl Write, data: BlockRef<'_>) -> std::io::Result<()> {
     }
     match v {
         Slice::F64(v) => put!(v),
+        Slice::Xy0(v) => {
+            for part in v.chunks(1 << 12) {
+                chunk.clear();
+                for p in part {
+                    for x in [p[0], p[1], 0.0] {
+                        chunk.extend_from_slice(&x.to_le_bytes());
+                    }
+                }
+                w.write_all(&chunk)?;
+            }
+        }
         Slice::I32(v) => put!(v),
         Slice::U64(v) => put!(v),
         Slice::U8(v) => w.write_all(v)?,
@@ -492,6 +511,9 @@ pub(super) fn stream_head(w: &mut impl Write, np: usize, nc: usize) -> std::io::
 /// The values of an array, borrowed.
 pub(super) enum Slice<'a> {
     F64(&'a [f64]),
+    /// Plane vectors written as 3-component Float64 with z = 0, straight
+    /// from the step's arrays (no padded copy while a step is written).
+    Xy0(&'a [[f64; 2]]),
     I32(&'a [i32]),
     U64(&'a [u64]),
     U8(&'a [u8]),
@@ -502,6 +524,7 @@ impl Slice<'_> {
     pub(super) fn nbytes(&self) -> usize {
         match self {
             Slice::F64(v) => v.len() * 8,
+            Slice::Xy0(v) => v.len() * 24,
             Slice::I32(v) => v.len() * 4,
             Slice::U64(v) => v.len() * 8,
             Slice::U8(v) => v.len(),

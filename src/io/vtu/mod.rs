@@ -254,15 +254,16 @@ pub fn write_vtu_with(
         fn f<'a>(name: &str, k: u32, v: &'a [f64], names: Names, vectors: bool) -> Arr<'a> {
             Arr::new(name, k, Slice::F64(v), names, vectors)
         }
-        let u = vec3(&step.displacement);
-        let reaction = has_reaction.then(|| vec3(&step.reaction));
         let stress = stress_vals(&step.stress, ncomp);
         let change = step
             .change
             .as_ref()
             .map(|c| (vec3(&c.displacement), stress_vals(&c.stress, ncomp)));
-        let u = f("displacement", 3, &u, names, true);
-        let reaction = reaction.as_ref().map(|r| f("reaction", 3, r, names, true));
+        fn xy0<'a>(name: &str, v: &'a [[f64; 2]], names: Names) -> Arr<'a> {
+            Arr::new(name, 3, Slice::Xy0(v), names, true)
+        }
+        let u = xy0("displacement", &step.displacement, names);
+        let reaction = has_reaction.then(|| xy0("reaction", &step.reaction, names));
         let stress = f("stress", ncomp as u32, &stress, names, false);
         let von_mises = f("von_mises", 1, &step.von_mises, names, false);
         let principal = f(
