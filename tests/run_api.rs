@@ -49,6 +49,15 @@ impl StepObserver for Count {
     }
 }
 
+/// A transaction on the output name `name` in `out`, a new directory of a
+/// temporary one (kept alive by the first value).
+fn transaction(name: &str) -> (tempfile::TempDir, PathBuf, signorini::run::Transaction) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let tx = signorini::run::Transaction::open(&out, name).unwrap_or_else(|e| panic!("{e}"));
+    (dir, out, tx)
+}
+
 fn bits(v: &[[f64; 2]]) -> Vec<[u64; 2]> {
     v.iter().map(|p| [p[0].to_bits(), p[1].to_bits()]).collect()
 }
@@ -218,15 +227,13 @@ fn bad_run_settings_are_bad_input() {
 /// complete files and no staging directory.
 #[test]
 fn the_writers_and_a_transaction_leave_every_output() {
-    use signorini::run::{SummaryWriter, Transaction, VtuWriter};
+    use signorini::run::{SummaryWriter, VtuWriter};
     let (prep, method, opts) = prepared();
     let nsteps = prep.problem.file.nsteps();
     let name = prep.problem.name.clone();
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out");
-    let om = post::out_mesh(&prep.model, &prep.mesh);
-    let mut tx = Transaction::open(&out, &name).unwrap_or_else(|e| panic!("{e}"));
+    let (_dir, out, mut tx) = transaction(&name);
     let (sdir, fdir) = (tx.stage_dir().to_path_buf(), tx.dir().to_path_buf());
+    let om = post::out_mesh(&prep.model, &prep.mesh);
     assert_ne!(sdir, fdir);
     let mut vtu = VtuWriter::new(&prep, &om, &sdir, &fdir, false);
     let mut ck = CheckpointWriter::new(&prep, &om, &sdir, &fdir, None);
@@ -296,11 +303,9 @@ fn a_step_is_written_beside_the_next_one_in_order_and_committed_first() {
     let nsteps = prep.problem.file.nsteps();
     assert!(nsteps >= 3);
     let name = prep.problem.name.clone();
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out");
-    let om = post::out_mesh(&prep.model, &prep.mesh);
-    let mut tx = Transaction::open(&out, &name).unwrap_or_else(|e| panic!("{e}"));
+    let (dir, out, mut tx) = transaction(&name);
     let (sdir, fdir) = (tx.stage_dir().to_path_buf(), tx.dir().to_path_buf());
+    let om = post::out_mesh(&prep.model, &prep.mesh);
     let mut vtu = VtuWriter::new(&prep, &om, &sdir, &fdir, false);
     let mut spy = Committed {
         out: out.clone(),

@@ -316,15 +316,18 @@ fn checked_start<'a>(
         return Cow::Borrowed(opts);
     }
     let mut o = opts.clone();
-    for (why, drop) in [(bad_x0, 0), (bad_active0, 1)] {
-        let Some(why) = why else { continue };
+    let mut refuse = |why: String| {
         let note = Note::WarmStartUnused(why);
         log::warn!("{note}");
         notes.push(note);
-        match drop {
-            0 => o.x0 = None,
-            _ => o.active0 = None,
-        }
+    };
+    if let Some(why) = bad_x0 {
+        o.x0 = None;
+        refuse(why);
+    }
+    if let Some(why) = bad_active0 {
+        o.active0 = None;
+        refuse(why);
     }
     Cow::Owned(o)
 }

@@ -208,19 +208,31 @@ impl<'a> Run<'a> {
                 let Some(obs) = observers.take() else {
                     unreachable!("the observers are back from the last writer");
                 };
-                if multi && s + 1 < steps.end && done.solved.model.is_some() {
-                    let t = tx.take();
-                    writing = Some(sc.spawn(move || write_step(done, obs, t)));
+                let prep = self.prep;
+                if multi && s + 1 < steps.end {
+                    let mut t = tx.take();
+                    writing = Some(sc.spawn(move || {
+                        let result =
+                            write_step(prep, &done, &mut *obs, t.as_deref_mut(), &mut vec![]);
+                        // The step's fields are freed on this thread.
+                        drop(done);
+                        Written {
+                            observers: obs,
+                            tx: t,
+                            result: result.map(|_| ()),
+                        }
+                    }));
                     continue;
                 }
                 // The last step (or a single solve): its files wait for
                 // the summary, in the last commit.
-                let t_w = Instant::now();
-                let step = done.view.step(done.solved.model(self.prep), &done.solved);
-                let last = done.view.index + 1 >= steps.end;
-                observe(&step, obs, tx.as_deref_mut(), !last, &mut carry.pending)?;
-                let write = done.timings.write + t_w.elapsed().as_secs_f64();
-                log::debug!("step {}: writing {write:.3} s", s + 1);
+                let write = write_step(
+                    prep,
+                    &done,
+                    &mut *obs,
+                    tx.as_deref_mut(),
+                    &mut carry.pending,
+                )?;
                 carry.last = Some((
                     done.solved,
                     done.view.verdict,
@@ -362,6 +374,7 @@ impl<'a> Run<'a> {
         };
         let view = View {
             index: s,
+            end: self.steps().end,
             nsteps: file.nsteps(),
             multi,
             time: file.step_time(s),
@@ -496,6 +509,8 @@ impl<'a> Run<'a> {
 #[derive(Clone, Copy)]
 struct View {
     index: usize,
+    /// One past the last step this run solves.
+    end: usize,
     nsteps: usize,
     multi: bool,
     time: f64,
@@ -548,35 +563,25 @@ struct Written<'a, 'b, 't> {
     result: Result<(), RunError>,
 }
 
-/// Writes and commits the files of a step that is not the last (on the
-/// writer thread of [`Run::solve`]).
-fn write_step<'a, 'b, 't>(
-    done: Done,
-    observers: &'a mut [&'b mut (dyn StepObserver + Send)],
-    mut tx: Option<&'t mut Transaction>,
-) -> Written<'a, 'b, 't> {
+/// Hands a step to the observers and, with `tx`, commits its files unless
+/// it is the last of the run (whose files wait in `pending` for the
+/// summary, [`Run::finish`]). Returns the step's write time (its
+/// post-processing included). Runs on the writer thread of [`Run::solve`]
+/// for every step but the last.
+fn write_step(
+    prep: &Prepared,
+    done: &Done,
+    observers: &mut [&mut (dyn StepObserver + Send)],
+    tx: Option<&mut Transaction>,
+    pending: &mut Vec<String>,
+) -> Result<f64, RunError> {
     let t_w = Instant::now();
-    let result = match &done.solved.model {
-        Some(model) => {
-            let step = done.view.step(model, &done.solved);
-            let mut pending = vec![];
-            observe(&step, observers, tx.as_deref_mut(), true, &mut pending)
-        }
-        None => Err(RunError::Settings(
-            "a load step's files are written with its own model".into(),
-        )),
-    };
-    log::debug!(
-        "step {}: writing {:.3} s (beside the next step)",
-        done.view.index + 1,
-        done.timings.write + t_w.elapsed().as_secs_f64()
-    );
-    drop(done);
-    Written {
-        observers,
-        tx,
-        result,
-    }
+    let step = done.view.step(done.solved.model(prep), &done.solved);
+    let commit = done.view.index + 1 < done.view.end;
+    observe(&step, observers, tx, commit, pending)?;
+    let write = done.timings.write + t_w.elapsed().as_secs_f64();
+    log::debug!("step {}: writing {write:.3} s", done.view.index + 1);
+    Ok(write)
 }
 
 /// Gives the pages of freed blocks back to the system (glibc `malloc_trim`):
