@@ -26,6 +26,26 @@ pub(super) struct Dual {
     pub(super) fac: Cholesky,
     /// The forward half of K⁻¹d.
     pub(super) fwd: Forward,
+    /// H and what the working-set solves read with it.
+    pub(super) dense: DenseDual,
+    /// Sparse solves it took (counted as inner iterations).
+    pub(super) solves: usize,
+}
+
+/// A Dual is its dense part (what every working-set solve reads) and the
+/// factor that forms x.
+impl std::ops::Deref for Dual {
+    type Target = DenseDual;
+    fn deref(&self) -> &DenseDual {
+        &self.dense
+    }
+}
+
+/// The dual form of a frictional problem without its sparse factor: H,
+/// B K⁻¹d, B R and Rᵀd over the rows of B = [A; T] (the first half normal
+/// rows, the second their tangential rows). The problem's own rows come
+/// from [`Dual::new`]; a coarse level's ([`super::nested`]) are sums of them.
+pub(super) struct DenseDual {
     /// H = B K⁻¹Bᵀ, 2m × 2m.
     pub(super) h: Mat<f64>,
     /// B K⁻¹d.
@@ -38,8 +58,26 @@ pub(super) struct Dual {
     /// of symmetry, whose unknown is eliminated): left out of every
     /// working set's system, their multiplier 0.
     pub(super) null: Vec<bool>,
-    /// Sparse solves it took (counted as inner iterations).
-    pub(super) solves: usize,
+}
+
+/// The law a working set is solved under ([`DenseDual::set_solve`]).
+#[derive(Clone, Copy)]
+pub(super) enum Law<'a> {
+    /// Coulomb's problem with its bound inside: a slipping row's force is
+    /// μᵢσᵢλ_nᵢ (these μ).
+    Coulomb(&'a [f64]),
+    /// A Tresca problem with these bounds; glued: the slipping (open) rows
+    /// carry no force.
+    Tresca { s: &'a [f64], glued: bool },
+}
+
+/// The multipliers of a working set solved in the dual space.
+pub(super) struct SetSolution {
+    /// [λ_n; λ_t] over every row.
+    pub(super) mu: Vec<f64>,
+    pub(super) alpha: Vec<f64>,
+    /// The rows of B in the working set's system.
+    pub(super) rows: Vec<usize>,
 }
 
 impl Dual {
@@ -92,13 +130,85 @@ impl Dual {
             b,
             fac,
             fwd,
-            h,
-            bk0,
-            br,
-            e,
-            null,
+            dense: DenseDual {
+                h,
+                bk0,
+                br,
+                e,
+                null,
+            },
             solves: 1,
         }))
+    }
+
+    /// x = K⁻¹(d − Bᵀμ) + Rα: one backward pass.
+    pub(super) fn x(&self, mu: &[f64], alpha: &[f64], r: &[Vec<f64>]) -> Option<Vec<f64>> {
+        let mut x = self.fac.finish(&self.fwd, &self.b, mu)?;
+        for (rl, &al) in r.iter().zip(alpha) {
+            for (xi, ri) in x.iter_mut().zip(rl) {
+                *xi += al * ri;
+            }
+        }
+        Some(x)
+    }
+}
+
+impl DenseDual {
+    /// Rows of B (half of them normal).
+    pub(super) fn m(&self) -> usize {
+        self.bk0.len() / 2
+    }
+
+    /// Solve the working set (`in_n`, `tang`) under `law` with c = [g; t0]:
+    /// the normal rows in N and the sticking tangential rows are held, a
+    /// slipping row carries its known force (docs/methods.md §9.2). None
+    /// if its system is singular.
+    pub(super) fn set_solve(
+        &self,
+        in_n: &[bool],
+        tang: &[Tangential],
+        law: Law<'_>,
+        c: &[f64],
+    ) -> Option<SetSolution> {
+        let m = self.m();
+        let stick = (0..m)
+            .filter(|&i| tang[i] == Tangential::Stick && !self.null[m + i])
+            .map(|i| m + i);
+        match law {
+            Law::Coulomb(mu_c) => {
+                let normal: Vec<(usize, f64)> = (0..m)
+                    .filter(|&i| in_n[i] && !self.null[i])
+                    .map(|i| match tang[i] {
+                        Tangential::Slip(pos) => (i, if pos { mu_c[i] } else { -mu_c[i] }),
+                        Tangential::Stick => (i, 0.0),
+                    })
+                    .collect();
+                let stick: Vec<usize> = stick.collect();
+                let (mu, alpha) = self.solve_coulomb(&normal, &stick, c)?;
+                let rows = normal.iter().map(|&(i, _)| i).chain(stick).collect();
+                Some(SetSolution { mu, alpha, rows })
+            }
+            Law::Tresca { s, glued } => {
+                let rows: Vec<usize> = (0..m)
+                    .filter(|&i| in_n[i] && !self.null[i])
+                    .chain(stick)
+                    .collect();
+                let mut f = vec![0.0; 2 * m];
+                if !glued {
+                    for i in 0..m {
+                        if let Tangential::Slip(pos) = tang[i] {
+                            f[m + i] = if pos { s[i] } else { -s[i] };
+                        }
+                    }
+                }
+                let (w, alpha) = self.solve(&rows, &f, &self.bk0, c, &self.e)?;
+                let mut mu = f;
+                for (&j, wj) in rows.iter().zip(w) {
+                    mu[j] = wj;
+                }
+                Some(SetSolution { mu, alpha, rows })
+            }
+        }
     }
 
     /// The multipliers of the working set `rows` (indices into B's rows)
@@ -293,17 +403,6 @@ impl Dual {
             *o += row.iter().zip(alpha).map(|(a, b)| a * b).sum::<f64>();
         }
         out
-    }
-
-    /// x = K⁻¹(d − Bᵀμ) + Rα: one backward pass.
-    pub(super) fn x(&self, mu: &[f64], alpha: &[f64], r: &[Vec<f64>]) -> Option<Vec<f64>> {
-        let mut x = self.fac.finish(&self.fwd, &self.b, mu)?;
-        for (rl, &al) in r.iter().zip(alpha) {
-            for (xi, ri) in x.iter_mut().zip(rl) {
-                *xi += al * ri;
-            }
-        }
-        Some(x)
     }
 }
 

@@ -51,7 +51,7 @@ use faer::Mat;
 use std::collections::HashSet;
 
 mod dual;
-use dual::{unfinished, Dual};
+use dual::{unfinished, Dual, Law};
 
 use crate::qp::{Context, Friction, IterRecord, Output, QpError, QpProblem, Status};
 
@@ -208,6 +208,68 @@ enum Tangential {
     Stick,
     /// Slips with λ_t = s·sign (the sign as a bool: true = positive).
     Slip(bool),
+}
+
+/// What the working-set rule reads of the rows of one level: the
+/// problem's own, or a coarse level's ([`nested`]).
+struct Rule<'a> {
+    g: &'a [f64],
+    t0: &'a [f64],
+    /// cᵢ of the normal prediction.
+    cn: &'a [f64],
+    /// c_tᵢ of the slip prediction.
+    ct: &'a [f64],
+    /// Tangential rows that cannot respond (the dual path's null rows).
+    forced: Option<&'a [bool]>,
+}
+
+impl Rule<'_> {
+    /// The sets predicted at B x = `bx` ([A x; T x]), the multipliers
+    /// and the bound s (the rule of the module's head).
+    fn predict(
+        &self,
+        bx: &[f64],
+        ln: &[f64],
+        lt: &[f64],
+        s: &[f64],
+        glued: bool,
+    ) -> (Vec<bool>, Vec<Tangential>) {
+        let m = self.g.len();
+        let (ax, tx) = bx.split_at(m);
+        let n_set: Vec<bool> = (0..m)
+            .map(|i| ln[i] + self.cn[i] * (ax[i] - self.g[i]) > 0.0)
+            .collect();
+        // A tangential row the dual path leaves out (no free unknown: both
+        // sides' tangential motion prescribed, or a line of symmetry) cannot
+        // respond: its slip v = −t0 is given, so it sticks only where that
+        // is zero and otherwise slips with it (at the end of a tube pushed
+        // through a fit, its forced slip was taken for a stick).
+        let forced = |i: usize| self.forced.is_some_and(|f| f[i]);
+        let tang = (0..m)
+            .map(|i| {
+                let v = tx[i] - self.t0[i];
+                let z = lt[i] + self.ct[i] * v;
+                if glued {
+                    if n_set[i] {
+                        Tangential::Stick
+                    } else {
+                        Tangential::Slip(true)
+                    }
+                } else if forced(i) {
+                    if self.t0[i] == 0.0 {
+                        Tangential::Stick
+                    } else {
+                        Tangential::Slip(v > 0.0)
+                    }
+                } else if s[i] > 0.0 && z.abs() <= s[i] {
+                    Tangential::Stick
+                } else {
+                    Tangential::Slip(z > 0.0)
+                }
+            })
+            .collect();
+        (n_set, tang)
+    }
 }
 
 struct State<'a> {
@@ -482,41 +544,15 @@ impl<'a> State<'a> {
 
     /// The sets predicted at the current (x, λ_n, λ_t).
     fn predict(&self) -> (Vec<bool>, Vec<Tangential>) {
-        let qp = self.qp;
-        let (ax, v) = self.ax_v();
-        let n_set: Vec<bool> = (0..qp.m())
-            .map(|i| self.ln[i] + self.cn[i] * (ax[i] - qp.g[i]) > 0.0)
-            .collect();
-        let m = qp.m();
-        // A tangential row the dual path leaves out (no free unknown: both
-        // sides' tangential motion prescribed, or a line of symmetry) cannot
-        // respond: its slip v = −t0 is given, so it sticks only where that
-        // is zero and otherwise slips with it (at the end of a tube pushed
-        // through a fit, its forced slip was taken for a stick).
-        let forced = |i: usize| self.dual.as_ref().is_some_and(|d| d.null[m + i]);
-        let tang = (0..m)
-            .map(|i| {
-                let z = self.lt[i] + self.ct[i] * v[i];
-                if self.glued {
-                    if n_set[i] {
-                        Tangential::Stick
-                    } else {
-                        Tangential::Slip(true)
-                    }
-                } else if forced(i) {
-                    if self.fr.t0[i] == 0.0 {
-                        Tangential::Stick
-                    } else {
-                        Tangential::Slip(v[i] > 0.0)
-                    }
-                } else if self.s[i] > 0.0 && z.abs() <= self.s[i] {
-                    Tangential::Stick
-                } else {
-                    Tangential::Slip(z > 0.0)
-                }
-            })
-            .collect();
-        (n_set, tang)
+        let m = self.qp.m();
+        let rule = Rule {
+            g: &self.qp.g,
+            t0: &self.fr.t0,
+            cn: &self.cn,
+            ct: &self.ct,
+            forced: self.dual.as_ref().map(|d| &d.null[m..]),
+        };
+        rule.predict(&self.bx, &self.ln, &self.lt, &self.s, self.glued)
     }
 
     /// Whether the working set `(n_set, tang)` leaves a rigid motion free
@@ -611,61 +647,34 @@ impl<'a> State<'a> {
                 return Ok(Some(Status::Unbounded { direction: z }));
             }
         }
-        if let (Some(d), Some(mu_c)) = (&self.dual, &self.coulomb) {
-            let normal: Vec<(usize, f64)> = (0..m)
-                .filter(|&i| self.in_n[i] && !d.null[i])
-                .map(|i| match self.tang[i] {
-                    Tangential::Slip(pos) => (i, if pos { mu_c[i] } else { -mu_c[i] }),
-                    Tangential::Stick => (i, 0.0),
-                })
-                .collect();
-            let stick: Vec<usize> = (0..m)
-                .filter(|&i| self.tang[i] == Tangential::Stick && !d.null[m + i])
-                .map(|i| m + i)
-                .collect();
-            let mut c = qp.g.clone();
-            c.extend_from_slice(&self.fr.t0);
-            if let Some((mu, alpha)) = d.solve_coulomb(&normal, &stick, &c) {
-                self.bx = d.bx(&mu, &alpha);
-                self.ln = mu[..m].to_vec();
-                self.lt = mu[m..].to_vec();
-                self.s = self.fr.slip_bound(&self.ln);
-                self.rows = normal.iter().map(|&(i, _)| i).chain(stick).collect();
-                self.mu = mu;
-                self.alpha = alpha;
-                self.x_stale = true;
-                return Ok(None);
-            }
-            log::debug!("ssn: friction: the Coulomb system of the working set is singular");
-            return Ok(Some(Status::Failed(Failure::Breakdown(
-                "ssn: the Coulomb system of a working set is singular".into(),
-            ))));
-        }
         if let Some(d) = &self.dual {
-            let rows: Vec<usize> = brows
-                .iter()
-                .map(|&(t, i)| if t { m + i } else { i })
-                .filter(|&j| !d.null[j])
-                .collect();
-            let mut f = vec![0.0; 2 * m];
-            for i in 0..m {
-                f[m + i] = self.slip_force(i, self.tang[i]);
-            }
+            let law = match &self.coulomb {
+                Some(mu_c) => Law::Coulomb(mu_c),
+                None => Law::Tresca {
+                    s: &self.s,
+                    glued: self.glued,
+                },
+            };
             let mut c = qp.g.clone();
             c.extend_from_slice(&self.fr.t0);
-            if let Some((w, alpha)) = d.solve(&rows, &f, &d.bk0, &c, &d.e) {
-                let mut mu = f;
-                for (&j, wj) in rows.iter().zip(w) {
-                    mu[j] = wj;
+            if let Some(sol) = d.set_solve(&self.in_n, &self.tang, law, &c) {
+                self.bx = d.bx(&sol.mu, &sol.alpha);
+                self.ln = sol.mu[..m].to_vec();
+                self.lt = sol.mu[m..].to_vec();
+                if self.coulomb.is_some() {
+                    self.s = self.fr.slip_bound(&self.ln);
                 }
-                self.bx = d.bx(&mu, &alpha);
-                self.ln = mu[..m].to_vec();
-                self.lt = mu[m..].to_vec();
-                self.mu = mu;
-                self.alpha = alpha;
+                self.rows = sol.rows;
+                self.mu = sol.mu;
+                self.alpha = sol.alpha;
                 self.x_stale = true;
-                self.rows = rows;
                 return Ok(None);
+            }
+            if self.coulomb.is_some() {
+                log::debug!("ssn: friction: the Coulomb system of the working set is singular");
+                return Ok(Some(Status::Failed(Failure::Breakdown(
+                    "ssn: the Coulomb system of a working set is singular".into(),
+                ))));
             }
             log::debug!("ssn: friction: H_JJ of the working set is singular: a sparse step");
         }
