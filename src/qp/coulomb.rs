@@ -73,11 +73,22 @@ pub trait TrescaStep {
     fn coulomb(&mut self, _mu: &[f64]) -> Option<Result<Tresca, QpError>> {
         None
     }
+
+    /// Coulomb's problem solved directly as [`TrescaStep::coulomb`], but
+    /// from a start of the method's own instead of the glued answer (ssn:
+    /// the sets of its coarse levels, docs/methods.md §9.2), before any
+    /// glued solve; None when the method has no such start. An answer that
+    /// is not converged sends the loop to the glued start.
+    fn coulomb_first(&mut self, _mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+        None
+    }
 }
 
 /// Solve the frictional problem of `fr` by `step`: one Tresca solve with
-/// the given bound, or Coulomb's problem (docs/methods.md §9.1): the glued
-/// solve, then the method's direct iteration if it has one
+/// the given bound, or Coulomb's problem (docs/methods.md §9.1): the
+/// method's direct iteration from its own start if it has one
+/// ([`TrescaStep::coulomb_first`]); else (or if that does not settle) the
+/// glued solve, then the direct iteration from it if the method has one
 /// ([`TrescaStep::coulomb`]), else (or if that does not settle) the fixed
 /// point from the glued answer. Each solve's log follows the last one's
 /// (iterations numbered on).
@@ -91,6 +102,18 @@ pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Ou
         SlipBound::Coulomb(mu) => mu,
     };
     let mut counts = Counts::default();
+    if let Some(first) = step.coulomb_first(mu) {
+        let mut d = first?;
+        if d.status.converged() {
+            step.complete(&mut d)?;
+            return Ok(counts.output(d));
+        }
+        log::debug!(
+            "{name}: the direct Coulomb iteration from the method's start stopped ({}): the glued start",
+            d.status.describe()
+        );
+        counts.add(&mut d);
+    }
     let mut r = step.solve(Bound::Glued)?;
     if !r.status.converged() {
         step.complete(&mut r)?;

@@ -24,9 +24,13 @@
 //! The step is repeated until the sets no longer change
 //! (a KKT point of the Tresca problem); a set seen before, or one that
 //! frees a rigid motion friction can hold, is entered one row at a time.
-//! Coulomb starts glued (S = N); on the dual path it then runs the same
-//! Newton steps on Coulomb's problem itself, s = μλ_n of the current
-//! iterate and λ_t = μσλ_n on the slipping rows ([`Dual::solve_coulomb`]);
+//! On the dual path the first Newton step starts from the sets of coarser
+//! contact discretisations ([`nested`]: rows summed in pairs, level by
+//! level), so the count does not follow the number of rows a slip zone's
+//! front must cross. There Coulomb runs the Newton steps on Coulomb's
+//! problem itself, s = μλ_n of the current iterate and λ_t = μσλ_n on the
+//! slipping rows ([`dual::DenseDual::solve_coulomb`]), from the coarse
+//! start, or else from the glued answer (S = N);
 //! otherwise (or if that does not settle) it moves s towards μλ_n of the
 //! last solution until s is stationary: the outer loop of §9.1 shared with
 //! the dual ([`crate::qp::coulomb`]); each Tresca solve starts from the
@@ -51,6 +55,7 @@ use faer::Mat;
 use std::collections::HashSet;
 
 mod dual;
+mod nested;
 use dual::{unfinished, Dual, Law};
 
 use crate::qp::{Context, Friction, IterRecord, Output, QpError, QpProblem, Status};
@@ -78,6 +83,7 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
         _ => None,
     };
     let mut st = State::new(qp, fr, r, ctx);
+    st.hold_free_bodies();
     if let Some(d) = dual {
         st.inner += d.solves;
         st.dual = Some(d);
@@ -124,6 +130,9 @@ impl TrescaStep for SsnTresca<'_, '_> {
         }
         if st.last.is_none() {
             st.start_sets();
+            if !st.glued {
+                st.coarse_start();
+            }
         } else {
             st.fresh = true;
         }
@@ -139,6 +148,30 @@ impl TrescaStep for SsnTresca<'_, '_> {
         st.fresh = true;
         st.visited.clear();
         Some(self.run())
+    }
+
+    fn coulomb_first(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+        let st = &mut self.st;
+        st.dual.as_ref()?;
+        st.coulomb = Some(mu.to_vec());
+        st.s = vec![0.0; mu.len()];
+        st.glued = false;
+        st.visited.clear();
+        if !st.coarse_start() {
+            st.coulomb = None;
+            return None;
+        }
+        let r = self.run();
+        if !matches!(&r, Ok(t) if t.status.converged()) {
+            // The glued start that follows starts afresh, as without this try.
+            let st = &mut self.st;
+            st.in_n = st.in_n0.clone();
+            st.last = None;
+            st.predicted = None;
+            st.fresh = false;
+            st.visited.clear();
+        }
+        Some(r)
     }
 
     fn complete(&mut self, r: &mut Tresca) -> Result<(), QpError> {
@@ -301,6 +334,8 @@ struct State<'a> {
     /// The sets the last answer predicts (at the current bound).
     predicted: Option<(Vec<bool>, Vec<Tangential>)>,
     in_n: Vec<bool>,
+    /// The normal set of the start ([`State::hold_free_bodies`]).
+    in_n0: Vec<bool>,
     tang: Vec<Tangential>,
     /// The sets of the last solve (None before the first).
     last: Option<(Vec<bool>, Vec<Tangential>)>,
@@ -371,6 +406,7 @@ impl<'a> State<'a> {
             fresh: false,
             predicted: None,
             tang: vec![Tangential::Stick; m],
+            in_n0: in_n.clone(),
             in_n,
             last: None,
             outer: 0,
@@ -385,6 +421,41 @@ impl<'a> State<'a> {
             x_stale: false,
             rows: vec![],
             coulomb: None,
+        }
+    }
+
+    /// Start from every row in normal contact when the rows closed at the
+    /// start leave free a rigid motion the loads work on (a body pressed
+    /// towards its support across a gap): as the frictionless start does
+    /// (docs/methods.md §4.10, §9.2).
+    /// From the closed rows alone the dual path solves such a step as if
+    /// the motion were held, so the body never moved into contact: a disc
+    /// pressed onto a block across a gap of 5·10⁻⁴ kept N empty, and its
+    /// sideways push was taken for sliding.
+    fn hold_free_bodies(&mut self) {
+        self.in_n0 = self.in_n.clone();
+        if self.r.is_empty() || self.in_n.iter().all(|a| *a) {
+            return;
+        }
+        let m = self.qp.m();
+        let brows: Vec<(bool, usize)> = (0..m)
+            .filter(|&i| self.in_n[i])
+            .flat_map(|i| [(false, i), (true, i)])
+            .collect();
+        // Only a motion the loads work on: one they do not (a plate free to
+        // rock about the node it rests on, under a uniform pressure) is
+        // solved with the pseudo-inverse, at the least motion (§1.7).
+        let loaded = self.free_motions(&brows).iter().any(|z| {
+            let work = dot(&self.qp.d, z);
+            let scale: f64 = self.qp.d.iter().zip(z).map(|(a, b)| (a * b).abs()).sum();
+            work.abs() > 1e-8 * scale
+        });
+        if loaded {
+            log::debug!(
+                "ssn: friction: the closed rows leave a rigid motion free: every row starts in N"
+            );
+            self.in_n = vec![true; m];
+            self.in_n0 = vec![true; m];
         }
     }
 
@@ -535,6 +606,43 @@ impl<'a> State<'a> {
             .collect();
     }
 
+    /// Start the next Newton steps from the sets of the coarse levels
+    /// ([`nested`]) on the dual path: Coulomb's direct iteration before any
+    /// glued solve, or a Tresca problem's first solve. Returns whether it did.
+    fn coarse_start(&mut self) -> bool {
+        let Some(d) = self.dual.as_ref() else {
+            return false;
+        };
+        let (coulomb, bound) = match &self.coulomb {
+            Some(mu) => (true, mu.as_slice()),
+            None => (false, self.s.as_slice()),
+        };
+        let t = std::time::Instant::now();
+        let Some(cs) = nested::coarse_start(&nested::Fine {
+            dense: d,
+            g: &self.qp.g,
+            t0: &self.fr.t0,
+            cn: &self.cn,
+            ct: &self.ct,
+            coulomb,
+            bound,
+            in_n: &self.in_n,
+        }) else {
+            return false;
+        };
+        log::debug!(
+            "ssn: friction: coarse start: (rows, Newton steps) per level {:?}, {:.3} s",
+            cs.levels,
+            t.elapsed().as_secs_f64()
+        );
+        self.in_n = cs.in_n;
+        self.tang = cs.tang;
+        self.last = None;
+        self.predicted = None;
+        self.fresh = false;
+        true
+    }
+
     /// Ax and the slip v = T x − t0 of the current iterate.
     fn ax_v(&self) -> (&[f64], Vec<f64>) {
         let (ax, tx) = self.bx.split_at(self.qp.m());
@@ -640,9 +748,14 @@ impl<'a> State<'a> {
         let mut dp = qp.d.clone();
         let fl: Vec<f64> = (0..m).map(|i| -self.slip_force(i, self.tang[i])).collect();
         self.fr.t.mul_t_add(&fl, &mut dp);
-        // Rigid motions left free by B.
+        // Rigid motions left free by B. Under Coulomb's law inside the
+        // iteration the slipping rows' forces μσλ_n enter the system with
+        // λ_n unknown, so B's rows alone do not tell what holds a body: that
+        // system is singular when nothing does (a breakdown, which sends
+        // the loop to the glued start and then to Tresca problems, whose
+        // bounds make the test below exact).
         let free = self.free_motions(&brows);
-        if !free.is_empty() {
+        if !(free.is_empty() || self.coulomb.is_some() && self.dual.is_some()) {
             if let Some(z) = self.unbounded_along(&free) {
                 return Ok(Some(Status::Unbounded { direction: z }));
             }
@@ -805,6 +918,16 @@ impl<'a> State<'a> {
 
     /// A free rigid motion ±z (z in span `free`) along which the loads do
     /// more work than friction dissipates and no contact row closes.
+    ///
+    /// Under a given bound (a Tresca problem) any such z is a recession
+    /// direction, so the loads projected on the free motions and each basis
+    /// motion are tried. Under Coulomb's law or the glued start the bound
+    /// of a row is set by its normal force, which an iterate that has not
+    /// yet closed a row knows as zero: a disc above a block, pressed down
+    /// and pushed sideways by less than μ times the pressing force, was
+    /// refused as sliding along the push (docs/methods.md §9.3). There only
+    /// the loads' own direction is tried: the body slides only if the loads
+    /// move it without closing a row.
     fn unbounded_along(&self, free: &[Vec<f64>]) -> Option<Vec<f64>> {
         let qp = self.qp;
         // Steepest: the loads projected on the free motions, then each basis vector.
@@ -817,7 +940,8 @@ impl<'a> State<'a> {
             }
         }
         cands.push(p);
-        for z in free {
+        let given_bound = !self.glued && self.coulomb.is_none();
+        for z in free.iter().filter(|_| given_bound) {
             cands.push(z.clone());
             cands.push(z.iter().map(|v| -v).collect());
         }
