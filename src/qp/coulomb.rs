@@ -102,17 +102,29 @@ pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Ou
         SlipBound::Coulomb(mu) => mu,
     };
     let mut counts = Counts::default();
-    if let Some(first) = step.coulomb_first(mu) {
-        let mut d = first?;
+    // A direct iteration's answer: returned if it converged, else counted
+    // and the loop goes on to `next`.
+    let direct = |d: Option<Result<Tresca, QpError>>,
+                  step: &mut dyn TrescaStep,
+                  counts: &mut Counts,
+                  next: &str|
+     -> Result<Option<Tresca>, QpError> {
+        let Some(d) = d else { return Ok(None) };
+        let mut d = d?;
         if d.status.converged() {
             step.complete(&mut d)?;
-            return Ok(counts.output(d));
+            return Ok(Some(d));
         }
         log::debug!(
-            "{name}: the direct Coulomb iteration from the method's start stopped ({}): the glued start",
+            "{name}: the direct Coulomb iteration stopped ({}): {next}",
             d.status.describe()
         );
         counts.add(&mut d);
+        Ok(None)
+    };
+    let first = step.coulomb_first(mu);
+    if let Some(d) = direct(first, step, &mut counts, "the glued start")? {
+        return Ok(counts.output(d));
     }
     let mut r = step.solve(Bound::Glued)?;
     if !r.status.converged() {
@@ -123,17 +135,10 @@ pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Ou
     let mut s = fr.slip_bound(&r.lambda_n);
     log::debug!("{name}: Coulomb update 1: change of s inf, ω = 1");
     counts.add(&mut r);
-    if let Some(direct) = step.coulomb(mu) {
-        let mut d = direct?;
-        if d.status.converged() {
-            step.complete(&mut d)?;
-            return Ok(counts.output(d));
-        }
-        log::debug!(
-            "{name}: the direct Coulomb iteration stopped ({}): the fixed point from the glued answer",
-            d.status.describe()
-        );
-        counts.add(&mut d);
+    let after_glued = step.coulomb(mu);
+    let next = "the fixed point from the glued answer";
+    if let Some(d) = direct(after_glued, step, &mut counts, next)? {
+        return Ok(counts.output(d));
     }
     let mut relax = CoulombRelaxation::default();
     let mut outer = 1;
@@ -294,6 +299,8 @@ mod tests {
         /// A direct iteration: Some(converges), None: none.
         direct: Option<bool>,
         direct_calls: usize,
+        /// A start of the method's own: Some(converges), None: none.
+        first: Option<bool>,
     }
 
     impl TrescaStep for Scalar {
@@ -331,6 +338,14 @@ mod tests {
                     },
                 ],
             })
+        }
+        fn coulomb_first(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+            let ok = self.first?;
+            let (direct, calls) = (self.direct, self.direct_calls);
+            self.direct = Some(ok);
+            let r = self.coulomb(mu);
+            (self.direct, self.direct_calls) = (direct, calls);
+            r
         }
         fn coulomb(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
             let ok = self.direct?;
@@ -372,6 +387,7 @@ mod tests {
             slope: 0.5,
             direct: Some(true),
             direct_calls: 0,
+            first: None,
         };
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
@@ -384,6 +400,7 @@ mod tests {
             slope: 0.5,
             direct: Some(false),
             direct_calls: 0,
+            first: None,
         };
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
@@ -392,6 +409,35 @@ mod tests {
         assert_eq!(
             (out.iterations, out.inner_iterations),
             (2 * k + 5, 3 * k + 1)
+        );
+    }
+
+    /// A direct iteration from the method's own start comes first: taken
+    /// with no glued solve when it settles; when it does not, its counts
+    /// are added and the glued solve and the direct iteration from it
+    /// follow.
+    #[test]
+    fn a_direct_iteration_from_the_methods_start_comes_first() {
+        let mut m = Scalar {
+            seen: vec![],
+            fail_at: None,
+            slope: 0.5,
+            direct: Some(true),
+            direct_calls: 0,
+            first: Some(true),
+        };
+        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        assert!(out.status.converged(), "{:?}", out.status);
+        assert_eq!((m.seen.len(), m.direct_calls), (0, 0));
+        assert_eq!((out.iterations, out.inner_iterations), (5, 1));
+        assert!((out.lambda[0] - 1.25).abs() < 1e-15, "{:?}", out.lambda);
+        m.first = Some(false);
+        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        assert!(out.status.converged(), "{:?}", out.status);
+        assert_eq!((m.seen.clone(), m.direct_calls), (vec![None], 1));
+        assert_eq!(
+            (out.iterations, out.inner_iterations),
+            (5 + 2 + 5, 1 + 3 + 1)
         );
     }
 
@@ -414,6 +460,7 @@ mod tests {
             slope: 0.5,
             direct: None,
             direct_calls: 0,
+            first: None,
         };
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
@@ -432,6 +479,7 @@ mod tests {
             slope: 0.5,
             direct: None,
             direct_calls: 0,
+            first: None,
         };
         let out = solve(&friction(SlipBound::Tresca(vec![7.0])), &mut m, "t").unwrap();
         assert_eq!(m.seen, vec![Some(7.0)]);
@@ -443,6 +491,7 @@ mod tests {
             slope: 0.5,
             direct: None,
             direct_calls: 0,
+            first: None,
         };
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert_eq!(out.status, Status::MaxIter);
@@ -459,6 +508,7 @@ mod tests {
             slope: 2.0,
             direct: None,
             direct_calls: 0,
+            first: None,
         };
         let out = solve(&friction(SlipBound::Coulomb(vec![1.0])), &mut m, "t").unwrap();
         assert!(
