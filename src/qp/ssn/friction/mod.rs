@@ -55,6 +55,7 @@ use faer::Mat;
 use std::collections::HashSet;
 
 mod dual;
+mod motions;
 mod nested;
 use dual::{unfinished, Dual, Law};
 
@@ -424,41 +425,6 @@ impl<'a> State<'a> {
         }
     }
 
-    /// Start from every row in normal contact when the rows closed at the
-    /// start leave free a rigid motion the loads work on (a body pressed
-    /// towards its support across a gap): as the frictionless start does
-    /// (docs/methods.md §4.10, §9.2).
-    /// From the closed rows alone the dual path solves such a step as if
-    /// the motion were held, so the body never moved into contact: a disc
-    /// pressed onto a block across a gap of 5·10⁻⁴ kept N empty, and its
-    /// sideways push was taken for sliding.
-    fn hold_free_bodies(&mut self) {
-        self.in_n0 = self.in_n.clone();
-        if self.r.is_empty() || self.in_n.iter().all(|a| *a) {
-            return;
-        }
-        let m = self.qp.m();
-        let brows: Vec<(bool, usize)> = (0..m)
-            .filter(|&i| self.in_n[i])
-            .flat_map(|i| [(false, i), (true, i)])
-            .collect();
-        // Only a motion the loads work on: one they do not (a plate free to
-        // rock about the node it rests on, under a uniform pressure) is
-        // solved with the pseudo-inverse, at the least motion (§1.7).
-        let loaded = self.free_motions(&brows).iter().any(|z| {
-            let work = dot(&self.qp.d, z);
-            let scale: f64 = self.qp.d.iter().zip(z).map(|(a, b)| (a * b).abs()).sum();
-            work.abs() > 1e-8 * scale
-        });
-        if loaded {
-            log::debug!(
-                "ssn: friction: the closed rows leave a rigid motion free: every row starts in N"
-            );
-            self.in_n = vec![true; m];
-            self.in_n0 = vec![true; m];
-        }
-    }
-
     /// Form x from the last dual-space answer if it is not yet (one
     /// backward pass on the bordered factor).
     fn ensure_x(&mut self) -> Result<(), QpError> {
@@ -663,23 +629,6 @@ impl<'a> State<'a> {
         rule.predict(&self.bx, &self.ln, &self.lt, &self.s, self.glued)
     }
 
-    /// Whether the working set `(n_set, tang)` leaves a rigid motion free
-    /// along which the problem is bounded.
-    fn frees_a_bounded_motion(&self, n_set: &[bool], tang: &[Tangential]) -> bool {
-        let m = self.qp.m();
-        let brows: Vec<(bool, usize)> = (0..m)
-            .filter(|&i| n_set[i])
-            .map(|i| (false, i))
-            .chain(
-                (0..m)
-                    .filter(|&i| tang[i] == Tangential::Stick)
-                    .map(|i| (true, i)),
-            )
-            .collect();
-        let free = self.free_motions(&brows);
-        !free.is_empty() && self.unbounded_along(&free).is_none()
-    }
-
     /// Move the current sets one row towards the prediction `(n_set, tang)`:
     /// the row whose prediction is violated most (normal: |λ_n + c(Ax − g)|,
     /// tangential: ||λ_t + c v| − s|).
@@ -870,105 +819,6 @@ impl<'a> State<'a> {
             }
         }
         Ok(None)
-    }
-
-    /// An orthonormal basis (as vectors of ℝⁿ) of the rigid motions z with
-    /// B z = 0.
-    fn free_motions(&self, brows: &[(bool, usize)]) -> Vec<Vec<f64>> {
-        let k = self.r.len();
-        if k == 0 {
-            return vec![];
-        }
-        let mut g = vec![vec![0.0; k]; k];
-        let mut bnorm = 0.0;
-        for &(t, i) in brows {
-            let (cols, vals) = if t {
-                self.fr.t.row(i)
-            } else {
-                self.qp.a.row(i)
-            };
-            bnorm += vals.iter().map(|v| v * v).sum::<f64>();
-            let br: Vec<f64> = self
-                .r
-                .iter()
-                .map(|rl| cols.iter().zip(vals).map(|(&j, &a)| a * rl[j]).sum())
-                .collect();
-            for a in 0..k {
-                for c in 0..k {
-                    g[a][c] += br[a] * br[c];
-                }
-            }
-        }
-        let (vals, vecs) = sym_eigen(&g);
-        let tol = 1e-9 * bnorm.max(1.0) / self.qp.n().max(1) as f64;
-        vals.iter()
-            .zip(&vecs)
-            .filter(|(e, _)| !(**e > tol))
-            .map(|(_, v)| {
-                let mut z = vec![0.0; self.qp.n()];
-                for (c, rl) in v.iter().zip(&self.r) {
-                    for (zj, rj) in z.iter_mut().zip(rl) {
-                        *zj += c * rj;
-                    }
-                }
-                z
-            })
-            .collect()
-    }
-
-    /// A free rigid motion ±z (z in span `free`) along which the loads do
-    /// more work than friction dissipates and no contact row closes.
-    ///
-    /// Under a given bound (a Tresca problem) any such z is a recession
-    /// direction, so the loads projected on the free motions and each basis
-    /// motion are tried. Under Coulomb's law or the glued start the bound
-    /// of a row is set by its normal force, which an iterate that has not
-    /// yet closed a row knows as zero: a disc above a block, pressed down
-    /// and pushed sideways by less than μ times the pressing force, was
-    /// refused as sliding along the push (docs/methods.md §9.3). There only
-    /// the loads' own direction is tried: the body slides only if the loads
-    /// move it without closing a row.
-    fn unbounded_along(&self, free: &[Vec<f64>]) -> Option<Vec<f64>> {
-        let qp = self.qp;
-        // Steepest: the loads projected on the free motions, then each basis vector.
-        let mut cands: Vec<Vec<f64>> = vec![];
-        let mut p = vec![0.0; qp.n()];
-        for z in free {
-            let w = dot(&qp.d, z);
-            for (pj, zj) in p.iter_mut().zip(z) {
-                *pj += w * zj;
-            }
-        }
-        cands.push(p);
-        let given_bound = !self.glued && self.coulomb.is_none();
-        for z in free.iter().filter(|_| given_bound) {
-            cands.push(z.clone());
-            cands.push(z.iter().map(|v| -v).collect());
-        }
-        for z in cands {
-            let zmax = norm_inf(&z);
-            if !(zmax > 0.0) {
-                continue;
-            }
-            let az = qp.a.mul(&z);
-            let arow: Vec<f64> = (0..qp.m())
-                .map(|i| {
-                    let (_, vals) = qp.a.row(i);
-                    vals.iter().map(|v| v.abs()).sum::<f64>() * zmax
-                })
-                .collect();
-            if az.iter().zip(&arow).any(|(a, s)| *a > 1e-10 * s) {
-                continue;
-            }
-            let tz = self.fr.t.mul(&z);
-            let work = dot(&qp.d, &z);
-            let dissipation: f64 = tz.iter().zip(&self.s).map(|(t, s)| s * t.abs()).sum();
-            let dscale: f64 = qp.d.iter().zip(&z).map(|(d, z)| (d * z).abs()).sum();
-            if work - dissipation > 1e-10 * dscale {
-                return Some(z);
-            }
-        }
-        None
     }
 
     fn record(&self, iter: usize) -> IterRecord {
