@@ -55,7 +55,7 @@ fn solve_writes_all_four_outputs_with_the_contract_arrays() {
     assert_eq!(ck.mesh.points.len(), v.num_points);
     assert_eq!(ck.steps[0].displacement.len(), v.num_points);
     assert!(ck.steps[0].info.converged);
-    assert_eq!(ck.steps[0].info.method, "cgc");
+    assert_eq!(ck.steps[0].info.method, "ssn");
     assert!(ck.steps[0].active.contains(&0) && ck.steps[0].active.contains(&1));
     // The VTU displacement equals the checkpoint's.
     for (i, u) in ck.steps[0].displacement.iter().enumerate() {
@@ -112,6 +112,8 @@ fn not_converged_gives_exit_3_and_flagged_outputs() {
         &example("two_blocks_eccentric"),
         "--out",
         out,
+        "--method",
+        "cgc",
         "--max-iter",
         "1",
         "--quiet",
