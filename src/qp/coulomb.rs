@@ -303,6 +303,24 @@ mod tests {
         first: Option<bool>,
     }
 
+    impl Scalar {
+        fn new(
+            slope: f64,
+            fail_at: Option<usize>,
+            direct: Option<bool>,
+            first: Option<bool>,
+        ) -> Self {
+            Scalar {
+                seen: vec![],
+                fail_at,
+                slope,
+                direct,
+                direct_calls: 0,
+                first,
+            }
+        }
+    }
+
     impl TrescaStep for Scalar {
         fn resolution(&self) -> f64 {
             1e-12
@@ -381,27 +399,13 @@ mod tests {
     /// direct iteration's counts added.
     #[test]
     fn a_direct_iteration_is_taken_when_it_settles() {
-        let mut m = Scalar {
-            seen: vec![],
-            fail_at: None,
-            slope: 0.5,
-            direct: Some(true),
-            direct_calls: 0,
-            first: None,
-        };
+        let mut m = Scalar::new(0.5, None, Some(true), None);
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
         assert_eq!((m.seen.clone(), m.direct_calls), (vec![None], 1));
         assert_eq!((out.iterations, out.inner_iterations), (2 + 5, 3 + 1));
         assert!((out.lambda[0] - 1.25).abs() < 1e-15, "{:?}", out.lambda);
-        let mut m = Scalar {
-            seen: vec![],
-            fail_at: None,
-            slope: 0.5,
-            direct: Some(false),
-            direct_calls: 0,
-            first: None,
-        };
+        let mut m = Scalar::new(0.5, None, Some(false), None);
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
         assert_eq!((m.seen[0], m.seen[1], m.direct_calls), (None, Some(0.4), 1));
@@ -418,14 +422,7 @@ mod tests {
     /// follow.
     #[test]
     fn a_direct_iteration_from_the_methods_start_comes_first() {
-        let mut m = Scalar {
-            seen: vec![],
-            fail_at: None,
-            slope: 0.5,
-            direct: Some(true),
-            direct_calls: 0,
-            first: Some(true),
-        };
+        let mut m = Scalar::new(0.5, None, Some(true), Some(true));
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
         assert_eq!((m.seen.len(), m.direct_calls), (0, 0));
@@ -454,14 +451,7 @@ mod tests {
     /// with that bound; a failed solve ends the loop with its status.
     #[test]
     fn the_loop_starts_glued_and_settles_at_the_fixed_point() {
-        let mut m = Scalar {
-            seen: vec![],
-            fail_at: None,
-            slope: 0.5,
-            direct: None,
-            direct_calls: 0,
-            first: None,
-        };
+        let mut m = Scalar::new(0.5, None, None, None);
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
         assert_eq!(m.seen[0], None);
@@ -473,26 +463,12 @@ mod tests {
         let iters: Vec<usize> = out.log.iter().map(|l| l.iter).collect();
         assert_eq!(iters, (1..=2 * k).collect::<Vec<_>>());
 
-        let mut m = Scalar {
-            seen: vec![],
-            fail_at: None,
-            slope: 0.5,
-            direct: None,
-            direct_calls: 0,
-            first: None,
-        };
+        let mut m = Scalar::new(0.5, None, None, None);
         let out = solve(&friction(SlipBound::Tresca(vec![7.0])), &mut m, "t").unwrap();
         assert_eq!(m.seen, vec![Some(7.0)]);
         assert_eq!(out.iterations, 2);
 
-        let mut m = Scalar {
-            seen: vec![],
-            fail_at: Some(3),
-            slope: 0.5,
-            direct: None,
-            direct_calls: 0,
-            first: None,
-        };
+        let mut m = Scalar::new(0.5, Some(3), None, None);
         let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert_eq!(out.status, Status::MaxIter);
         assert_eq!(m.seen.len(), 3);
@@ -502,14 +478,7 @@ mod tests {
     /// runs away) stops after [`MAX_UPDATES`] solves, said as such.
     #[test]
     fn an_unsettled_loop_stops_at_the_limit() {
-        let mut m = Scalar {
-            seen: vec![],
-            fail_at: None,
-            slope: 2.0,
-            direct: None,
-            direct_calls: 0,
-            first: None,
-        };
+        let mut m = Scalar::new(2.0, None, None, None);
         let out = solve(&friction(SlipBound::Coulomb(vec![1.0])), &mut m, "t").unwrap();
         assert!(
             matches!(

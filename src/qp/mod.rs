@@ -93,6 +93,15 @@ pub struct Friction {
     pub bound: SlipBound,
 }
 
+/// Coulomb's slip bound sᵢ = μᵢ max(λ_nᵢ, 0), an overflow kept at the largest
+/// finite number ([`Friction::slip_bound`]; also ssn's coarse levels).
+pub fn coulomb_bound(mu: &[f64], lambda_n: &[f64]) -> Vec<f64> {
+    mu.iter()
+        .zip(lambda_n)
+        .map(|(m, l)| (m * l.max(0.0)).min(f64::MAX))
+        .collect()
+}
+
 impl Friction {
     /// The slip bound s of each row at the normal forces `lambda_n`; a
     /// Coulomb bound μλ_n that overflows is the largest finite number (a
@@ -101,11 +110,7 @@ impl Friction {
     pub fn slip_bound(&self, lambda_n: &[f64]) -> Vec<f64> {
         match &self.bound {
             SlipBound::Tresca(s) => s.clone(),
-            SlipBound::Coulomb(mu) => mu
-                .iter()
-                .zip(lambda_n)
-                .map(|(m, l)| (m * l.max(0.0)).min(f64::MAX))
-                .collect(),
+            SlipBound::Coulomb(mu) => coulomb_bound(mu, lambda_n),
         }
     }
     /// The slip v = T x − t0.

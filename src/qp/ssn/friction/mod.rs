@@ -244,6 +244,22 @@ enum Tangential {
     Slip(bool),
 }
 
+/// The tangential sets a solve starts from: the rows in N stick, and
+/// (unless glued) every row with a positive bound; the others slip
+/// (docs/methods.md §9.2). For every level of rows ([`nested`] too).
+fn start_tang(in_n: &[bool], s: &[f64], glued: bool) -> Vec<Tangential> {
+    in_n.iter()
+        .zip(s)
+        .map(|(&a, &si)| {
+            if a || (!glued && si > 0.0) {
+                Tangential::Stick
+            } else {
+                Tangential::Slip(true)
+            }
+        })
+        .collect()
+}
+
 /// What the working-set rule reads of the rows of one level: the
 /// problem's own, or a coarse level's ([`nested`]).
 struct Rule<'a> {
@@ -431,10 +447,10 @@ impl<'a> State<'a> {
         if !self.x_stale {
             return Ok(());
         }
-        let d = self
-            .dual
-            .as_ref()
-            .expect("a stale x comes from the dual path");
+        // A stale x comes from the dual path only.
+        let Some(d) = self.dual.as_ref() else {
+            return Err(unfinished());
+        };
         self.x = d.x(&self.mu, &self.alpha, &self.r).ok_or_else(unfinished)?;
         self.inner += 1;
         self.x_stale = false;
@@ -558,18 +574,7 @@ impl<'a> State<'a> {
     /// row with a bound sticks (docs/methods.md §9.2); Coulomb's glued
     /// start sticks the rows in contact.
     fn start_sets(&mut self) {
-        self.tang = self
-            .in_n
-            .iter()
-            .zip(&self.s)
-            .map(|(&a, &si)| {
-                if a || (!self.glued && si > 0.0) {
-                    Tangential::Stick
-                } else {
-                    Tangential::Slip(true)
-                }
-            })
-            .collect();
+        self.tang = start_tang(&self.in_n, &self.s, self.glued);
     }
 
     /// Start the next Newton steps from the sets of the coarse levels

@@ -29,7 +29,8 @@
 //! the problem's own Newton steps start.
 
 use super::dual::{DenseDual, Law};
-use super::{cycle_budget, Rule, Tangential};
+use super::{cycle_budget, start_tang, Rule, Tangential};
+use crate::qp::coulomb_bound;
 use faer::Mat;
 use std::collections::HashSet;
 
@@ -179,30 +180,14 @@ fn settle(
         ct: &rows.ct,
         forced: Some(&dense.null[m..]),
     };
-    let slip_bound = |ln: &[f64]| -> Vec<f64> {
-        rows.bound
-            .iter()
-            .zip(ln)
-            .map(|(mu, l)| (mu * l.max(0.0)).min(f64::MAX))
-            .collect()
-    };
+    let slip_bound = |ln: &[f64]| coulomb_bound(&rows.bound, ln);
     let mut steps = 0;
     let (mut in_n, mut tang) = match start {
         Some(s) => s,
         None if coulomb => {
             // Coulomb's glued start, then s = μλ_n of its answer.
-            let tang: Vec<Tangential> = rows
-                .in_n
-                .iter()
-                .map(|&a| {
-                    if a {
-                        Tangential::Stick
-                    } else {
-                        Tangential::Slip(true)
-                    }
-                })
-                .collect();
             let zero = vec![0.0; m];
+            let tang = start_tang(&rows.in_n, &zero, true);
             let law = Law::Tresca {
                 s: &zero,
                 glued: true,
@@ -213,21 +198,10 @@ fn settle(
             let bx = dense.bx(&sol.mu, &sol.alpha);
             rule.predict(&bx, ln, lt, &slip_bound(ln), false)
         }
-        None => {
-            let tang = rows
-                .in_n
-                .iter()
-                .zip(&rows.bound)
-                .map(|(&a, &s)| {
-                    if a || s > 0.0 {
-                        Tangential::Stick
-                    } else {
-                        Tangential::Slip(true)
-                    }
-                })
-                .collect();
-            (rows.in_n.clone(), tang)
-        }
+        None => (
+            rows.in_n.clone(),
+            start_tang(&rows.in_n, &rows.bound, false),
+        ),
     };
     let law = if coulomb {
         Law::Coulomb(&rows.bound)
