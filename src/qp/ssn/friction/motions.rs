@@ -28,8 +28,7 @@ impl State<'_> {
         // rock about the node it rests on, under a uniform pressure) is
         // solved with the pseudo-inverse, at the least motion (§1.7).
         let loaded = self.free_motions(&brows).iter().any(|z| {
-            let work = dot(&self.qp.d, z);
-            let scale: f64 = self.qp.d.iter().zip(z).map(|(a, b)| (a * b).abs()).sum();
+            let (work, scale) = self.work_of_loads(z);
             work.abs() > 1e-8 * scale
         });
         if loaded {
@@ -147,13 +146,19 @@ impl State<'_> {
                 continue;
             }
             let tz = self.fr.t.mul(&z);
-            let work = dot(&qp.d, &z);
+            let (work, dscale) = self.work_of_loads(&z);
             let dissipation: f64 = tz.iter().zip(&self.s).map(|(t, s)| s * t.abs()).sum();
-            let dscale: f64 = qp.d.iter().zip(&z).map(|(d, z)| (d * z).abs()).sum();
             if work - dissipation > 1e-10 * dscale {
                 return Some(z);
             }
         }
         None
+    }
+
+    /// dᵀz, the loads' work along z, and Σ|dⱼzⱼ|, the scale it is judged
+    /// against (scale-invariant tests: a 10⁸ stiffness contrast moves both).
+    fn work_of_loads(&self, z: &[f64]) -> (f64, f64) {
+        let d = &self.qp.d;
+        (dot(d, z), d.iter().zip(z).map(|(a, b)| (a * b).abs()).sum())
     }
 }
