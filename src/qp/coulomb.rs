@@ -92,7 +92,20 @@ pub trait TrescaStep {
 /// ([`TrescaStep::coulomb`]), else (or if that does not settle) the fixed
 /// point from the glued answer. Each solve's log follows the last one's
 /// (iterations numbered on).
-pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Output, QpError> {
+///
+/// The fixed point stops as soon as an iterate passes `proven` (the
+/// driver's KKT certificate of Coulomb's problem, docs/methods.md §9.4),
+/// whatever its change of s: a sticking row's bound may move without
+/// moving the answer, and the change of s cannot fall below the rounding of
+/// λ_n in the Tresca solves (docs/methods.md §9.1, "When the loop stops").
+/// A change of s at the method's resolution also ends it; the driver then
+/// certifies the answer as any other.
+pub fn solve(
+    fr: &Friction,
+    step: &mut impl TrescaStep,
+    name: &str,
+    proven: &dyn Fn(&Tresca) -> bool,
+) -> Result<Output, QpError> {
     let mu = match &fr.bound {
         SlipBound::Tresca(s) => {
             let mut r = step.solve(Bound::Given(s))?;
@@ -131,6 +144,13 @@ pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Ou
         step.complete(&mut r)?;
         return Ok(counts.output(r));
     }
+    // The glued answer is Coulomb's when every closed row's force is
+    // within μλ_n (a large μ).
+    step.complete(&mut r)?;
+    if proven(&r) {
+        log::debug!("{name}: the glued answer passes the certificate");
+        return Ok(counts.output(r));
+    }
     // s = μλ_n of the glued answer: the first bound of the fixed point.
     let mut s = fr.slip_bound(&r.lambda_n);
     log::debug!("{name}: Coulomb update 1: change of s inf, ω = 1");
@@ -160,8 +180,14 @@ pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Ou
             "{name}: Coulomb update {outer}: change of s {change:.3e}, ω = {}",
             relax.omega()
         );
+        step.complete(&mut r)?;
         if change <= step.resolution() {
-            step.complete(&mut r)?;
+            return Ok(counts.output(r));
+        }
+        if proven(&r) {
+            log::debug!(
+                "{name}: Coulomb update {outer} passes the certificate (change of s {change:.3e})"
+            );
             return Ok(counts.output(r));
         }
         if outer >= MAX_UPDATES {
@@ -169,7 +195,6 @@ pub fn solve(fr: &Friction, step: &mut impl TrescaStep, name: &str) -> Result<Ou
                 outer: MAX_UPDATES,
                 change,
             });
-            step.complete(&mut r)?;
             return Ok(counts.output(r));
         }
         counts.add(&mut r);
@@ -400,13 +425,13 @@ mod tests {
     #[test]
     fn a_direct_iteration_is_taken_when_it_settles() {
         let mut m = Scalar::new(0.5, None, Some(true), None);
-        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        let out = solve_(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
         assert_eq!((m.seen.clone(), m.direct_calls), (vec![None], 1));
         assert_eq!((out.iterations, out.inner_iterations), (2 + 5, 3 + 1));
         assert!((out.lambda[0] - 1.25).abs() < 1e-15, "{:?}", out.lambda);
         let mut m = Scalar::new(0.5, None, Some(false), None);
-        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        let out = solve_(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
         assert_eq!((m.seen[0], m.seen[1], m.direct_calls), (None, Some(0.4), 1));
         let k = m.seen.len();
@@ -423,19 +448,25 @@ mod tests {
     #[test]
     fn a_direct_iteration_from_the_methods_start_comes_first() {
         let mut m = Scalar::new(0.5, None, Some(true), Some(true));
-        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        let out = solve_(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
         assert_eq!((m.seen.len(), m.direct_calls), (0, 0));
         assert_eq!((out.iterations, out.inner_iterations), (5, 1));
         assert!((out.lambda[0] - 1.25).abs() < 1e-15, "{:?}", out.lambda);
         m.first = Some(false);
-        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        let out = solve_(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
         assert_eq!((m.seen.clone(), m.direct_calls), (vec![None], 1));
         assert_eq!(
             (out.iterations, out.inner_iterations),
             (5 + 2 + 5, 1 + 3 + 1)
         );
+    }
+
+    /// The loop with a certificate nothing passes (the change of s alone
+    /// stops it).
+    fn solve_(fr: &Friction, step: &mut Scalar, name: &str) -> Result<Output, QpError> {
+        solve(fr, step, name, &|_| false)
     }
 
     fn friction(bound: SlipBound) -> Friction {
@@ -452,7 +483,7 @@ mod tests {
     #[test]
     fn the_loop_starts_glued_and_settles_at_the_fixed_point() {
         let mut m = Scalar::new(0.5, None, None, None);
-        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        let out = solve_(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert!(out.status.converged(), "{:?}", out.status);
         assert_eq!(m.seen[0], None);
         assert_eq!(m.seen[1], Some(0.4));
@@ -464,12 +495,12 @@ mod tests {
         assert_eq!(iters, (1..=2 * k).collect::<Vec<_>>());
 
         let mut m = Scalar::new(0.5, None, None, None);
-        let out = solve(&friction(SlipBound::Tresca(vec![7.0])), &mut m, "t").unwrap();
+        let out = solve_(&friction(SlipBound::Tresca(vec![7.0])), &mut m, "t").unwrap();
         assert_eq!(m.seen, vec![Some(7.0)]);
         assert_eq!(out.iterations, 2);
 
         let mut m = Scalar::new(0.5, Some(3), None, None);
-        let out = solve(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
+        let out = solve_(&friction(SlipBound::Coulomb(vec![0.4])), &mut m, "t").unwrap();
         assert_eq!(out.status, Status::MaxIter);
         assert_eq!(m.seen.len(), 3);
     }
@@ -479,7 +510,7 @@ mod tests {
     #[test]
     fn an_unsettled_loop_stops_at_the_limit() {
         let mut m = Scalar::new(2.0, None, None, None);
-        let out = solve(&friction(SlipBound::Coulomb(vec![1.0])), &mut m, "t").unwrap();
+        let out = solve_(&friction(SlipBound::Coulomb(vec![1.0])), &mut m, "t").unwrap();
         assert!(
             matches!(
                 out.status,

@@ -151,11 +151,14 @@ pub enum Note {
     /// As [`Note::SettledOnActive`], but moving the answer would have lost
     /// its certificate: it is one point of the set of solutions.
     NotSettled { count: usize },
-    /// `method` stopped on `failure`, but its answer meets the certificate
-    /// at `target`, so it counts as converged (docs/methods.md §8.4).
+    /// `method` stopped without converging (`stopped`: its iteration
+    /// limit, stagnation, an unsettled Coulomb loop, cycling, a
+    /// breakdown), but its answer meets the certificate at `target`, so it
+    /// counts as converged: the certificate, not a method's stopping rule,
+    /// decides (docs/methods.md §8.4).
     StalledButCertified {
         method: MethodId,
-        failure: Failure,
+        stopped: Status,
         target: f64,
     },
 }
@@ -213,12 +216,18 @@ impl std::fmt::Display for Note {
             ),
             Note::StalledButCertified {
                 method,
-                failure,
+                stopped,
                 target,
-            } => write!(
-                f,
-                "{method} stopped on {failure}; its answer meets the KKT certificate (≤ {target:e}, docs/methods.md §8.4), so it counts as converged"
-            ),
+            } => {
+                let how = match stopped {
+                    Status::Failed(failure) => failure.to_string(),
+                    other => other.describe(),
+                };
+                write!(
+                    f,
+                    "{method} stopped on {how}; its answer meets the KKT certificate (≤ {target:e}, docs/methods.md §8.4), so it counts as converged"
+                )
+            }
         }
     }
 }
@@ -392,7 +401,15 @@ pub fn run(
         Claim::Answer(r) => r,
     };
     if let Status::Failed(failure @ Failure::Cycling { .. }) = &r.status {
-        if let Some(to) = method.fallback(FallbackCause::Cycling) {
+        // An answer the certificate proves is kept whatever the sets did
+        // ([`certify`] says so in a note); only an unproven one falls back.
+        let proven = {
+            let mut x = r.x.clone();
+            recession::without_free(&mut x, &free);
+            kkt::residuals_with_friction(qp, &x, &r.lambda, &r.lambda_t)
+                .within(opts.settings.kkt_target)
+        };
+        if let (false, Some(to)) = (proven, method.fallback(FallbackCause::Cycling)) {
             let failure = failure.clone();
             r = fallback.run(
                 method.id(),
@@ -498,24 +515,44 @@ fn certify(
     if !energy.is_finite() {
         kkt = Kkt::not_finite();
     }
-    // A method that stalls above its own tolerance may still have an answer
-    // the certificate proves (the dual family on a body free to roll): the
-    // certificate decides, and the note says how the method stopped.
-    if let Status::Failed(failure @ Failure::Stagnation { .. }) = &r.status {
-        if kkt.within(target) {
-            notes.push(Note::StalledButCertified {
-                method: id,
-                failure: failure.clone(),
-                target,
-            });
-            r.status = Status::Converged;
-        }
+    // A method that stops above its own tolerance may still have an answer
+    // the certificate proves (the dual family stalling on a body free to
+    // roll, a Coulomb loop whose change of s sits at the Tresca solves'
+    // rounding, an exact start a relative stopping rule cannot measure):
+    // the certificate decides, and the note says how the method stopped.
+    // The caller's own stops (a time limit, a signal) stand.
+    if promotable(&r.status) && kkt.within(target) {
+        notes.push(Note::StalledButCertified {
+            method: id,
+            stopped: std::mem::replace(&mut r.status, Status::Converged),
+            target,
+        });
     }
     QpResult {
         solution: r,
         kkt,
         energy,
         notes,
+    }
+}
+
+/// Whether a method's unconverged `status` is judged by the certificate
+/// alone ([`certify`]): every stop of the method's own (MAXIT, stagnation,
+/// cycling, an unsettled Coulomb loop, its own refinement's miss, a
+/// breakdown), not a stop the caller made (a time limit, a signal), nor an
+/// answer that is not one (NaN, an unbounded claim).
+fn promotable(status: &Status) -> bool {
+    match status {
+        Status::Converged | Status::Unbounded { .. } => false,
+        Status::MaxIter => true,
+        Status::Failed(f) => matches!(
+            f,
+            Failure::Stagnation { .. }
+                | Failure::Cycling { .. }
+                | Failure::CoulombUnsettled { .. }
+                | Failure::Uncertified { .. }
+                | Failure::Breakdown(_)
+        ),
     }
 }
 

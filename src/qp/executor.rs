@@ -139,7 +139,16 @@ impl Executor {
                 self.push(rec);
                 break Status::Failed(Failure::NotFinite { iteration: n });
             }
-            if rec.residual < best * (1.0 - 1e-9) {
+            // −0 (a sum over no rows) is 0; a zero residual the method
+            // does not stop at measured nothing (a projected gradient with
+            // every row on its bound) and is no best a later iterate can
+            // be held to: the dual method, started exactly, stagnated
+            // against a best of −0 for 10 000 iterations.
+            if rec.residual == 0.0 {
+                rec.residual = 0.0;
+            }
+            let measured = done.is_some() || rec.residual > 0.0;
+            if measured && rec.residual < best * (1.0 - 1e-9) {
                 best = rec.residual;
                 best_at = n;
             }
@@ -219,5 +228,43 @@ mod tests {
             matches!(&s, Status::Failed(Failure::NotFinite { iteration: 1 })) && n == 1,
             "{s:?}"
         );
+    }
+
+    /// −0 first (a projected gradient over no free row), then a residual
+    /// that falls to 0.5 at iteration 50 and stops there.
+    struct ZeroFirst(usize);
+    impl Iterative for ZeroFirst {
+        fn step(&mut self) -> Step {
+            self.0 += 1;
+            let r = |residual| IterRecord {
+                iter: 0,
+                residual,
+                active: 0,
+                inner: 0,
+            };
+            match self.0 {
+                1 => Step::Continue(r(-0.0)),
+                k if k < 50 => Step::Continue(r(1.0 - k as f64 * 0.01)),
+                _ => Step::Continue(r(0.5)),
+            }
+        }
+    }
+
+    /// A zero residual the method goes on from is no best: the run
+    /// stagnates against the best it measured (0.5 at iteration 50), not
+    /// against −0 at iteration 1, and the log holds +0.
+    #[test]
+    fn a_zero_the_method_goes_on_from_is_no_best() {
+        let mut e = Executor::new(1_000_000, None);
+        let (s, n) = e.run(&mut ZeroFirst(0));
+        match &s {
+            Status::Failed(Failure::Stagnation { best, best_at, .. }) => {
+                assert_eq!(*best_at, 50, "{s:?}");
+                assert_eq!(*best, 0.5, "{s:?}");
+            }
+            _ => panic!("{s:?}"),
+        }
+        assert_eq!(n, STALL_WINDOW + 50);
+        assert!(e.log[0].residual.is_sign_positive() && e.log[0].residual == 0.0);
     }
 }

@@ -171,6 +171,9 @@ pub struct Capabilities {
     pub preconditioned: bool,
     pub factor: Factor,
     pub certificate: Certificate,
+    /// Starts from the caller's warm start (`SolveOptions::x0`, `active0`:
+    /// load steps, restart); the others start from their own first iterate.
+    pub warm_start: bool,
 }
 
 impl Default for Capabilities {
@@ -181,6 +184,7 @@ impl Default for Capabilities {
             preconditioned: false,
             factor: Factor::Always,
             certificate: Certificate::Kkt,
+            warm_start: false,
         }
     }
 }

@@ -79,7 +79,11 @@ pub(crate) fn solve_friction<S: BoundStep>(
         name,
         lam0: None,
     };
-    let mut out = coulomb::solve(fr, &mut step, name)?;
+    let target = ctx.settings.kkt_target;
+    let proven = |t: &Tresca| {
+        crate::qp::kkt::residuals_with_friction(qp, &t.x, &t.lambda_n, &t.lambda_t).within(target)
+    };
+    let mut out = coulomb::solve(fr, &mut step, name, &proven)?;
     out.timings = vec![("iterate".into(), t_start.elapsed().as_secs_f64())];
     Ok(out)
 }

@@ -71,6 +71,7 @@ pub fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
         h,
         in_j: vec![true; m],
         ref_norm,
+        response: ref_norm,
         cg_steps: 0,
     };
     let mut exec = ctx.executor("dual");
@@ -111,8 +112,15 @@ pub(crate) struct DualCgc<'a> {
     h: Vec<f64>,
     /// Bound λ_i = 0 in the working set.
     in_j: Vec<bool>,
-    /// Scale of the stopping test, max(‖A x(λ)‖, ‖g‖) at the face start.
+    /// Scale of the stopping test, max(‖A x(λ)‖, ‖g‖, `response`) at the
+    /// face start.
     ref_norm: f64,
+    /// The loads' response at the rows, max(‖A C⁻¹d‖, ‖g‖): the floor of
+    /// `ref_norm`. At an answer whose rows are all closed with g = 0 (a
+    /// punch pressed by a prescribed displacement) A x(λ) = g = 0, and a
+    /// scale taken there alone made rounding over rounding the residual:
+    /// 1.0 at the exact answer, 10 000 iterations to stagnation.
+    response: f64,
     /// CG steps (reported as inner iterations).
     cg_steps: usize,
 }
@@ -225,7 +233,7 @@ impl Iterative for DualCgc<'_> {
             .map(|(d, g)| (g - d) * (g - d))
             .sum::<f64>()
             .sqrt();
-        self.ref_norm = ax.max(norm(&self.qp.g)).max(1e-300);
+        self.ref_norm = ax.max(norm(&self.qp.g)).max(self.response);
         let res = self.proj_norm() / self.ref_norm;
         if res <= self.tol {
             // Face minimum: the multiplier of bound i ∈ J is u_i = θ'_i.

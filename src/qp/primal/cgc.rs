@@ -32,6 +32,7 @@ impl Method for CgcMethod {
         Capabilities {
             preconditioned: true,
             factor: Factor::BySettings,
+            warm_start: true,
             ..Default::default()
         }
     }

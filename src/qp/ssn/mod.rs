@@ -83,6 +83,7 @@ impl Method for SsnMethod {
         Capabilities {
             friction: true,
             factor: Factor::BySettings,
+            warm_start: true,
             ..Default::default()
         }
     }

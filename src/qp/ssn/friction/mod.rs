@@ -95,7 +95,11 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
         steps: 0,
         counted: 0,
     };
-    coulomb::solve(fr, &mut step, "ssn")
+    let target = ctx.settings.kkt_target;
+    let proven = |t: &Tresca| {
+        crate::qp::kkt::residuals_with_friction(qp, &t.x, &t.lambda_n, &t.lambda_t).within(target)
+    };
+    coulomb::solve(fr, &mut step, "ssn", &proven)
 }
 
 /// The Tresca solve of ssn: Newton steps from the working sets of the last
