@@ -112,6 +112,11 @@ class SetupError(Exception):
     """Bad usage or a missing tool (exit 2)."""
 
 
+class NotChecked(Exception):
+    """The reference cannot check this (exit 3): a feature it does not model, or
+    its own solve did not settle. Never a FAIL of signorini."""
+
+
 class Conflict(Exception):
     """Conditions at a point contradict each other (signorini: exit 2)."""
 
@@ -689,7 +694,7 @@ class Problem:
                     tribs.append(sum(a["w"]))
                 for n, w in zip(normals, tribs):
                     rows.append({"coef": {first: n, second: -n}, "g": 0.0, "n": n, "first": first, "second": second,
-                                 "w": w})
+                                 "w": w, "contact": conf[a["cid"]]})
         for c in self.contacts:
             if "slave" not in c:
                 continue
@@ -743,8 +748,66 @@ class Problem:
                     raise SetupError(f"slave node {int(m.tags[v])} penetrates the master by {-g:.3e}")
                 rows.append({"coef": coef, "g": g if c.get("interference", False) else max(g, 0.0), "n": n,
                              "first": tp.point_of[(v, sb)], "second": tp.point_of[(a, mb)],
-                             "w": slave[(v, sb)]})
+                             "w": slave[(v, sb)], "contact": c})
         return rows
+
+    def friction(self, rows):
+        """The friction of the contact rows (docs/methods.md §9.1): the law
+        ("tresca", "coulomb" or None) and per row the tangential row, the
+        row's own coefficients with n turned by +90° (t = (−n_y, n_x)) as a
+        sparse matrix over the 2·np point DOFs, and the Tresca bound
+        s = tresca × tributary weight × thickness (∫N r ds axisymmetric, D on
+        a mortar row) or Coulomb's μ."""
+        laws = set()
+        for c in self.contacts:
+            if "tresca" in c:
+                laws.add("tresca")
+            elif float(c.get("friction", 0.0)) > 0.0:
+                laws.add("coulomb")
+        if not laws:
+            return None, None, None
+        if len(laws) > 1:
+            raise NotChecked("Tresca and Coulomb pairs in one problem: the reference models one law per "
+                             "problem (signorini refuses the mix, methods.md §9)")
+        law = laws.pop()
+        model = self.cfg.get("model", {})
+        te = float(model.get("thickness", 1.0)) if model.get("plane", "strain") == "stress" else 1.0
+        ti, tj, tv, bound = [], [], [], []
+        for i, r in enumerate(rows):
+            n = r["n"]
+            t = np.array([-n[1], n[0]])
+            for p, cv in r["coef"].items():
+                a = float(np.asarray(cv) @ n)  # every coefficient is a multiple of n
+                for k in range(2):
+                    if a * t[k] != 0.0:
+                        ti.append(i)
+                        tj.append(2 * p + k)
+                        tv.append(a * t[k])
+            c = r["contact"]
+            trib = r["trib"] if r.get("trib") is not None else r["w"]
+            bound.append(float(c.get("tresca", 0.0)) * trib * te if law == "tresca"
+                         else float(c.get("friction", 0.0)))
+        Tt = sp.csr_matrix((tv, (ti, tj)), shape=(len(rows), 2 * self.topo.np))
+        return law, Tt, np.array(bound)
+
+    def held_rows(self, rows, T, u0):
+        """Mortar rows on a line of symmetry (docs/methods.md §9, signorini's
+        fem::friction::on_symmetry_line): the slave point cannot move along the
+        tangent (no free DOF along t, t·u0 = 0) and the row ends its run of
+        rows. By symmetry they carry no tangential force: no tangential row,
+        bound 0, and they stick when in contact."""
+        held = np.zeros(len(rows), dtype=bool)
+        Tc = T.tocsr()
+        for i, r in enumerate(rows):
+            if r.get("trib") is None or not r.get("run_end"):
+                continue
+            n = r["n"]
+            t = np.array([-n[1], n[0]])
+            p = r["first"]
+            free = t[0] * Tc[2 * p] + t[1] * Tc[2 * p + 1]
+            if np.abs(free.data).max(initial=0.0) < 1e-12 and t @ u0[2 * p:2 * p + 2] == 0.0:
+                held[i] = True
+        return held
 
     def trib_weight(self, v, o):
         """∫ N_v ds over the segment (v, o): ℓ/2, or ∫ N_v r ds = ℓ(2r_v + r_o)/6 per
@@ -852,6 +915,7 @@ class Problem:
                         q = tp.point_of[(node, mbody)]
                         mk[q] = mk.get(q, 0.0) + phi[i] * nw * w
         rows = []
+        kept = set()
         for v, sb in sorted(D, key=lambda k: (k[1], int(m.tags[k[0]]))):
             d = D[(v, sb)]
             if not d > 0:
@@ -859,100 +923,225 @@ class Problem:
             g = G.get((v, sb), 0.0) / d
             if "max_gap" in c and g > c["max_gap"]:
                 continue
+            kept.add((v, sb))
             n = -nodal[(v, sb)]  # outward of the master, as signorini writes it
             coef = {tp.point_of[(v, sb)]: -n}
             for q, w in M.get((v, sb), {}).items():
                 coef[q] = coef.get(q, 0) + (w / d) * n
             rows.append({"coef": coef, "g": g, "n": n, "first": tp.point_of[(v, sb)], "second": None,
-                         "trib": d})
+                         "trib": d, "contact": c, "slave": (v, sb)})
+        # a row at the end of its run of rows (one slave segment with rows at both
+        # ends): a friction row on a line of symmetry is one of these (friction_rows)
+        nseg = {}
+        for a, b, sb, _ in ssegs:
+            if (a, sb) in kept and (b, sb) in kept:
+                for key in ((a, sb), (b, sb)):
+                    nseg[key] = nseg.get(key, 0) + 1
+        for r in rows:
+            r["run_end"] = nseg.get(r["slave"], 0) <= 1
         return rows
 
 
 # ------------------------------------------------------------------- QP
 
 
-def solve_qp(K, f, A, g, label):
-    """min ½xᵀKx − fᵀx  s.t.  Ax ≤ g: Clarabel, then an exact active-set polish."""
+def solve_qp(K, f, A, g, label, Tm=None, c=None, s=None, warm=None):
+    """min ½xᵀKx − fᵀx + Σᵢ sᵢ|(Tm x − c)ᵢ|  s.t.  Ax ≤ g (Tm None: the frictionless QP).
+
+    The Tresca problem of docs/methods.md §9.1 as a QP with one auxiliary
+    variable per friction row, wᵢ ≥ ±(Tm x − c)ᵢ and the objective + Σ sᵢwᵢ,
+    solved by Clarabel (interior point), then polished by a primal-dual
+    active-set iteration on the exact KKT conditions: normal rows active
+    (A x = g, λ_n free) or not (λ_n = 0); friction rows stick (Tm x = c,
+    λ_t free) or slip (λ_t = sᵢσᵢ, σᵢ = ±1) until A x ≤ g, λ_n ≥ 0,
+    |λ_t| ≤ s on sticking rows and σᵢ vᵢ ≥ 0 on slipping ones. The multipliers
+    are those of Kx − f + Aᵀλ_n + Tmᵀλ_t = 0 (signorini's signs: λ_n ≥ 0
+    compressive, λ_t = s·sign v where a row slips); λ_t = wᵢ's duals z₊ − z₋.
+    `warm` = (active, stick, sigma) of a previous solve starts the polish
+    there without Clarabel (the Coulomb fixed point); Clarabel runs when that
+    polish fails. Returns x, λ_n, λ_t, info."""
+    n, m = K.shape[0], A.shape[0]
+    if Tm is None:
+        Tm, c, s = sp.csr_matrix((0, n)), np.zeros(0), np.zeros(0)
+    Tm = sp.csr_matrix(Tm)
+    mt = Tm.shape[0]
+    # friction rows that act: a bound s > 0 and a tangential row with unknowns
+    F = np.where((np.asarray(s) > 0) & (np.diff(Tm.indptr) > 0))[0]
+    nf = len(F)
+    # Jacobi scaling of the unknowns, row scaling of the constraints
+    dk = K.diagonal()
+    sc = 1.0 / np.sqrt(np.where(dk > 0, dk, 1.0))
+    S = sp.diags(sc)
+    Ks = (S @ K @ S).tocsc()
+    fs = sc * f
+    As = (A @ S).tocsr()
+    rn = np.sqrt(abs(As).power(2).sum(axis=1)).A1
+    rn[rn == 0] = 1.0
+    As = (sp.diags(1.0 / rn) @ As).tocsc()
+    gs = g / rn
+    Ts = (Tm[F] @ S).tocsr()
+    rt = np.sqrt(abs(Ts).power(2).sum(axis=1)).A1 if nf else np.zeros(0)
+    Ts = (sp.diags(1.0 / rt) @ Ts).tocsr() if nf else sp.csr_matrix((0, n))
+    cs = c[F] / rt if nf else np.zeros(0)
+    ss = s[F] * rt if nf else np.zeros(0)  # s|v| = (s·rt)|vs|, vs = v/rt
+    # Objective scale: the size of the displacements the data cause, in the
+    # scaled unknowns (unit diagonal): the loads, an interference overlap
+    # (g < 0) or the slip offset of the previous step; a load-free
+    # interference fit has f = 0 and is driven by its negative gaps alone.
+    obj = max(np.abs(fs).max(initial=0.0), (-gs).max(initial=0.0), np.abs(cs).max(initial=0.0))
+    if not obj > 0:
+        obj = 1.0  # nothing drives the problem: x = 0
+    t0 = time.time()
+    info = dict(status="warm", ip_iter=0, ip_time=0.0, obj=obj)
+    state = None
+    if warm is not None:
+        try:
+            state = _polish(Ks, fs, As, gs, Ts, cs, ss, warm[0], warm[1][F], warm[2][F], label)
+        except _PolishFailed:
+            state = None
+    if state is None:
+        clarabel = _clarabel()
+        settings = clarabel.DefaultSettings()
+        settings.verbose = False
+        settings.tol_gap_abs = 1e-12
+        settings.tol_gap_rel = 1e-12
+        settings.tol_feas = 1e-12
+        settings.tol_ktratio = 1e-10
+        settings.max_iter = 400
+        # unknowns [y; ω], y = xs/obj, ω = ws/obj (ws ≥ |Ts y·obj − cs|)
+        P = sp.block_diag([sp.triu(Ks), sp.csc_matrix((nf, nf))]).tocsc()
+        q = np.concatenate([-fs / obj, ss / obj])
+        I = sp.identity(nf, format="csc")
+        Acon = sp.vstack([sp.hstack([As, sp.csc_matrix((m, nf))]),
+                          sp.hstack([Ts, -I]), sp.hstack([-Ts, -I])]).tocsc()
+        b = np.concatenate([gs / obj, cs / obj, -cs / obj])
+        solver = clarabel.DefaultSolver(P, q, Acon, b, [clarabel.NonnegativeConeT(m + 2 * nf)], settings)
+        sol = solver.solve()
+        status = str(sol.status)
+        info.update(status=status, ip_iter=sol.iterations, ip_time=time.time() - t0)
+        if "Solved" not in status:
+            raise NotChecked(f"{label}: Clarabel did not solve the reference problem ({status})")
+        xs = np.array(sol.x)[:n] * obj
+        z = np.array(sol.z) * obj
+        lam_s, lt_s = z[:m], z[m:m + nf] - z[m + nf:]
+        slack = gs - As @ xs
+        sc_g = max(np.abs(As @ xs).max(initial=0.0), np.abs(gs).max(initial=0.0), 1e-300)
+        act = (lam_s > 1e-6 * max(lam_s.max(initial=0.0), 1e-300)) | (slack < 1e-8 * sc_g)
+        stick = np.abs(lt_s) < (1 - 1e-6) * ss
+        sigma = np.where(lt_s >= 0, 1.0, -1.0)
+        try:
+            state = _polish(Ks, fs, As, gs, Ts, cs, ss, act, stick, sigma, label)
+        except _PolishFailed as e:
+            raise NotChecked(f"{label}: the reference's active-set polish did not converge ({e})")
+    xs, lam, lts, act, stick_f, sigma_f, it = state
+    x = sc * xs
+    lam_n = lam / rn  # As = R A S: a multiplier of a scaled row is rn × λ
+    lam_t = np.zeros(mt)
+    lam_t[F] = lts / rt
+    stick = np.ones(mt, dtype=bool)  # rows without friction: λ_t = 0 (see compare)
+    stick[F] = stick_f
+    sigma = np.ones(mt)
+    sigma[F] = sigma_f
+    # KKT certificate of the reference solution (unscaled)
+    Kx = K @ x
+    r = Kx - f + A.T @ lam_n + Tm.T @ lam_t
+    stat = np.linalg.norm(r) / max(np.linalg.norm(f), np.linalg.norm(Kx), 1e-300)
+    prim = max(((A @ x - g).clip(min=0)).max(initial=0.0), 0.0) / max(np.abs(x).max(initial=0.0), 1e-300)
+    comp = abs(lam_n @ (A @ x - g)) / max(np.abs(lam_n).max(initial=0.0) * np.abs(x).max(initial=0.0), 1e-300)
+    dual = (-lam_n).clip(min=0).max(initial=0.0) / max(np.abs(lam_n).max(initial=0.0), 1.0)
+    # friction (methods.md §9.4): the bound and the slip rule per row
+    v = Tm @ x - c
+    Fsc = np.maximum.reduce([np.asarray(s, float), np.abs(lam_t),
+                             np.full(mt, max(np.abs(lam_n).max(initial=0.0), np.abs(lam_t).max(initial=0.0), 1e-300))])
+    X = max(np.abs(x).max(initial=0.0), (abs(Tm) @ np.abs(x) + np.abs(c)).max(initial=0.0), 1e-300)
+    fric = max(((np.abs(lam_t) - s).clip(min=0) / Fsc).max(initial=0.0),
+               (np.abs(v) / X * np.abs(s - lam_t * np.sign(v)) / Fsc).max(initial=0.0))
+    info.update(polish_iter=it, active=int(act.sum()), stick=int(stick_f.sum()), slip=int(nf - stick_f.sum()),
+                stationarity=stat, primal=prim, dual=dual, complementarity=comp, friction=fric,
+                warm=(act, stick, sigma))
+    return x, lam_n, lam_t, info
+
+
+class _PolishFailed(Exception):
+    pass
+
+
+def _clarabel():
     try:
         import clarabel
     except ImportError as e:
         raise SetupError(f"clarabel not importable ({e}); install it (python_checks.sh does: "
                          "pip install --target .venv/debian-site clarabel)")
-    n, mrows = K.shape[0], A.shape[0]
-    # Jacobi scaling of the unknowns, row scaling of the constraints, objective scaling
-    dk = K.diagonal()
-    s = 1.0 / np.sqrt(np.where(dk > 0, dk, 1.0))
-    S = sp.diags(s)
-    Ks = (S @ K @ S).tocsc()
-    fs = s * f
-    As = (A @ S).tocsr()
-    rn = np.sqrt(abs(As).power(2).sum(axis=1)).A1
-    rn[rn == 0] = 1.0
-    R = sp.diags(1.0 / rn)
-    As = (R @ As).tocsc()
-    gs = g / rn
-    obj = max(np.abs(fs).max(), 1e-300)
-    # y = x_scaled / obj: then ½yᵀKy − (f/obj)ᵀy with Ay ≤ g/obj
-    t0 = time.time()
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    settings.tol_gap_abs = 1e-12
-    settings.tol_gap_rel = 1e-12
-    settings.tol_feas = 1e-12
-    settings.tol_ktratio = 1e-10
-    settings.max_iter = 400
-    P = sp.triu(Ks).tocsc()
-    solver = clarabel.DefaultSolver(P, -fs / obj, As, gs / obj, [clarabel.NonnegativeConeT(mrows)], settings)
-    sol = solver.solve()
-    status = str(sol.status)
-    y = np.array(sol.x)
-    lam_s = np.array(sol.z)  # multipliers of the scaled rows (objective scaled by obj … see below)
-    t_ip = time.time() - t0
-    if "Solved" not in status:
-        raise CheckError(f"{label}: Clarabel did not solve the QP ({status})")
-    xs = y * obj
-    # polish: primal-dual active set on the scaled problem, exact KKT solves
-    slack = gs - As @ xs
-    sc_g = max(np.abs(As @ xs).max(), np.abs(gs).max(), 1e-300)
-    act = (lam_s > 1e-6 * max(lam_s.max(), 1e-300)) | (slack < 1e-8 * sc_g)
-    lam = np.zeros(mrows)
-    ok = False
-    for it in range(60):
-        idx = np.where(act)[0]
-        Aa = As[idx]
-        KKT = sp.bmat([[Ks, Aa.T], [Aa, None]], format="csc")
-        rhs = np.concatenate([fs, gs[idx]])
+    return clarabel
+
+
+def _polish(Ks, fs, As, gs, Ts, cs, ss, act, stick, sigma, label, max_iter=100):
+    """Primal-dual active set on the scaled problem (solve_qp), exact KKT solves."""
+    n, m, nf = Ks.shape[0], As.shape[0], Ts.shape[0]
+    act, stick, sigma = act.copy(), stick.copy(), sigma.copy()
+    fsc = max(np.abs(fs).max(initial=0.0), 1e-300)
+    for it in range(1, max_iter + 1):
+        ia, ist, isl = np.where(act)[0], np.where(stick)[0], np.where(~stick)[0]
+        Aa, Tst = As[ia], Ts[ist]
+        KKT = sp.bmat([[Ks, Aa.T, Tst.T], [Aa, None, None], [Tst, None, None]], format="csc")
+        rhs = np.concatenate([fs - Ts[isl].T @ (ss[isl] * sigma[isl]), gs[ia], cs[ist]])
         try:
-            z = spla.spsolve(KKT, rhs)
+            with np.errstate(all="ignore"):
+                z = spla.spsolve(KKT, rhs)
         except Exception as e:  # singular (a rigid motion not held by the active rows)
-            raise CheckError(f"{label}: active-set KKT solve failed: {e}")
+            raise _PolishFailed(f"KKT solve failed: {e}")
         if not np.all(np.isfinite(z)):
-            raise CheckError(f"{label}: singular active-set KKT system")
-        xs_new = z[:n]
-        lam = np.zeros(mrows)
-        lam[idx] = z[n:]
-        viol_p = (As @ xs_new - gs) > 1e-12 * sc_g
-        viol_p &= ~act
-        lmax = max(np.abs(lam).max(), 1e-300)
-        viol_d = act & (lam < -1e-12 * lmax)
-        xs = xs_new
-        if not viol_p.any() and not viol_d.any():
-            ok = True
-            break
-        act = (act & ~viol_d) | viol_p
-    if not ok:
-        raise CheckError(f"{label}: active-set polish did not converge")
-    x = s * xs
-    lam_true = lam / rn  # λ for the unscaled rows: As = R A S, multiplier scaled by 1/rn
-    # KKT certificate of the reference solution (unscaled)
-    Kx = K @ x
-    stat = np.linalg.norm(Kx - f + A.T @ lam_true) / max(np.linalg.norm(f), np.linalg.norm(Kx))
-    prim = max(((A @ x - g).clip(min=0)).max(initial=0.0), 0.0) / max(np.abs(x).max(), 1e-300)
-    comp = abs(lam_true @ (A @ x - g)) / max(np.abs(lam_true).max() * np.abs(x).max(), 1e-300)
-    dual = (-lam_true).clip(min=0).max(initial=0.0) / max(np.abs(lam_true).max(), 1.0)
-    info = dict(status=status, ip_time=t_ip, ip_iter=sol.iterations, polish_iter=it + 1,
-                active=int(act.sum()), stationarity=stat, primal=prim, dual=dual, complementarity=comp)
-    return x, lam_true, info
+            raise _PolishFailed("singular active-set KKT system")
+        xs = z[:n]
+        lam = np.zeros(m)
+        lam[ia] = z[n:n + len(ia)]
+        lts = sigma * ss
+        lts[ist] = z[n + len(ia):]
+        Ax = As @ xs
+        sc_g = max(np.abs(Ax).max(initial=0.0), np.abs(gs).max(initial=0.0), 1e-300)
+        lmax = max(np.abs(lam).max(initial=0.0), np.abs(lts).max(initial=0.0), fsc * 1e-300)
+        v = Ts @ xs - cs
+        X = max(np.abs(xs).max(initial=0.0), np.abs(Ts @ xs).max(initial=0.0), np.abs(cs).max(initial=0.0), 1e-300)
+        open_viol = ~act & (Ax - gs > 1e-12 * sc_g)
+        neg = act & (lam < -1e-12 * lmax)
+        over = stick & (np.abs(lts) > ss + 1e-12 * lmax)
+        back = ~stick & (sigma * v < -1e-12 * X)
+        if not (open_viol.any() or neg.any() or over.any() or back.any()):
+            return xs, lam, lts, act, stick, sigma, it
+        act = (act & ~neg) | open_viol
+        sigma = np.where(over, np.sign(lts), sigma)
+        stick = (stick & ~over) | back
+    raise _PolishFailed(f"no consistent active set after {max_iter} solves")
+
+
+def solve_coulomb(K, f, A, g, Tm, c, mu, label, tol=1e-12, max_steps=300):
+    """Coulomb's s = μ λ_n by the reference's own fixed point: Tresca problems
+    (solve_qp) with s from the previous λ_n, s ← s + ω(μλ_n − s), starting from
+    the frictionless solution (s = 0); ω = 1, halved (down to 1/64) whenever the
+    residual ‖μλ_n − s‖ grows. Stops when ‖μλ_n − s‖∞ ≤ tol·max(μλ_n);
+    NotChecked after max_steps (the fixed point does not settle)."""
+    s = np.zeros(Tm.shape[0])
+    omega, rprev, warm = 1.0, None, None
+    t0 = time.time()
+    nclar = 0
+    for k in range(1, max_steps + 1):
+        x, lam_n, lam_t, info = solve_qp(K, f, A, g, label, Tm, c, s, warm)
+        nclar += info["status"] != "warm"
+        warm = info["warm"]
+        target = mu * np.maximum(lam_n, 0.0)
+        r = target - s
+        rn = np.abs(r).max(initial=0.0)
+        if rn <= tol * max(target.max(initial=0.0), 1e-300):
+            info.update(fp_steps=k, fp_change=rn / max(target.max(initial=0.0), 1e-300), fp_clarabel=nclar,
+                        fp_time=time.time() - t0, bound=s)
+            return x, lam_n, lam_t, info
+        if rprev is not None and rn > rprev:
+            omega = max(omega / 2, 1 / 64)
+        rprev = rn
+        s = s + omega * r
+    raise NotChecked(f"{label}: the reference's Coulomb fixed point did not settle in {max_steps} Tresca "
+                     f"solves (last change {rn:.2e} of max μλ_n): the Coulomb problem may have several "
+                     "solutions, or this iteration cannot find one")
 
 
 # ------------------------------------------------------------ comparison
@@ -981,6 +1170,9 @@ def read_signorini(h5path: Path, step: int):
             "contact_pressure": st["contact_pressure"][:],
             "converged": int(st.attrs["converged"]),
         }
+        # friction (methods.md §9.5): absent without friction
+        for k in ("multipliers_t", "slip", "state"):
+            out[k] = st[k][:] if k in st else None
     return out
 
 
@@ -1065,7 +1257,17 @@ def floors(prob, U):
     return {"u": 1e-12 * L, "stress": E * umax / L, "force": E * umax}
 
 
-def compare(prob, u_ref, sig, tol, label, lam_ref=None, rows=None):
+STICK_MARGIN = 1e-6  # a row slips when |λ_t| ≥ (1 − 1e-6) s (problem-format.md §6, methods.md §9.5)
+
+
+def friction_states(in_contact, held, lam_t, s):
+    """0 open, 1 stick, 2 slip by the rule of docs/methods.md §9.5."""
+    st = np.where(in_contact, 1, 0).astype(np.int64)
+    st[in_contact & ~held & (np.abs(lam_t) >= (1 - STICK_MARGIN) * s)] = 2
+    return st
+
+
+def compare(prob, u_ref, sig, tol, label, lam_ref=None, rows=None, fric=None):
     idx = match_points(prob, sig)
     U = u_ref.reshape(-1, 2)[idx]
     fl = floors(prob, U)
@@ -1108,10 +1310,46 @@ def compare(prob, u_ref, sig, tol, label, lam_ref=None, rows=None):
             res["gap0"] = rel(sig["contact_gap0"][nm], gref[nm], 1e-12 * L)
             pref = np.array([lam_ref[j] / (rows[j]["w"] * te) if rows[j].get("w") else 0.0 for j in perm])
             res["pressure"] = rel(sig["contact_pressure"][nm], pref[nm], 1e-6 * fl["force"] / L)
+    states_line, states_ok = "", True
+    if fric is not None:
+        if any(sig[k] is None for k in ("multipliers_t", "slip", "state")):
+            raise CheckError(f"{label}: a frictional problem, but signorini's checkpoint has no "
+                             "multipliers_t / slip / state (problem-format.md §6)")
+        lt = fric["lam_t"][perm]
+        lmax = max(np.abs(lam_ref).max(initial=0.0), np.abs(fric["lam_t"]).max(initial=0.0), 1e-300)
+        res["multipliers_t"] = rel(sig["multipliers_t"], lt, 1e-6 * fl["force"])
+        # the slip of the step, v = T x − t0: a difference of displacements,
+        # compared relative to the larger of max|v| and 1e-6·max|u| (a step
+        # in which every row sticks has v = 0 up to the round-off of u)
+        res["slip"] = rel(sig["slip"], fric["v"][perm], max(1e-6 * float(np.abs(U).max(initial=0.0)), fl["u"]))
+        # states: 0 open, 1 stick, 2 slip, the reference's by signorini's rule
+        # from its own λ_n, λ_t and s (Coulomb: μ max(λ_n, 0))
+        ref_st = friction_states(fric["in_contact"], fric["held"], fric["lam_t"], fric["s"])[perm]
+        sig_st = sig["state"].astype(np.int64)
+        diff = np.where(ref_st != sig_st)[0]
+        # A row may differ only on the boundary of a state, as the reference
+        # sees it, within the comparison tolerance: open/contact where λ_n ≤
+        # 10·tol·max|λ| and the gap left is ≤ 10·tol·max|u| (a grazing row),
+        # stick/slip where |λ_t| is within 10·tol·max|λ| of (1 − 1e-6)s.
+        lam_p, slack_p = lam_ref[perm], fric["slack"][perm]
+        s_p, lt_abs = fric["s"][perm], np.abs(lt)
+        umax = float(np.abs(U).max(initial=0.0))
+        grazing = (lam_p <= 10 * tol * lmax) & (np.abs(slack_p) <= 10 * tol * max(umax, fl["u"]))
+        edge = np.abs(lt_abs - (1 - STICK_MARGIN) * s_p) <= 10 * tol * lmax
+        boundary = np.array([(grazing[i] if 0 in (ref_st[i], sig_st[i]) else edge[i]) for i in diff], dtype=bool)
+        nbad = int((~boundary).sum()) if len(diff) else 0
+        counts = lambda st: "/".join(str(int((st == k).sum())) for k in (0, 1, 2))  # noqa: E731
+        states_line = (f"  states (open/stick/slip) signorini {counts(sig_st)}, reference {counts(ref_st)}: "
+                       f"{len(diff)} differ, {len(diff) - nbad} of them on a state boundary")
+        states_ok = nbad == 0
+        if not states_ok:
+            i = diff[~boundary][0]
+            states_line += (f"; e.g. row {i}: signorini {sig_st[i]}, reference {ref_st[i]} (λ_n {lam_p[i]:.3e}, "
+                            f"λ_t {lt[i]:.3e}, s {s_p[i]:.3e}, signorini λ_t {sig['multipliers_t'][i]:.3e})")
     worst = max(res.values())
     line = "  ".join(f"{k} {v:.2e}" for k, v in res.items())
-    ok = worst <= tol
-    log(f"{label}: max relative difference {line}  -> {'OK' if ok else 'FAIL'} (tol {tol:g})")
+    ok = worst <= tol and states_ok
+    log(f"{label}: max relative difference {line}{states_line}  -> {'OK' if ok else 'FAIL'} (tol {tol:g})")
     return ok, res
 
 
@@ -1251,6 +1489,10 @@ def main(argv=None) -> int:
                     g.append(r["g"])
                 A = sp.csr_matrix((r_v, (r_i, r_j)), shape=(len(rows), 2 * prob.topo.np))
                 g = np.array(g)
+                law, Tt, bound = prob.friction(rows)
+                if law:
+                    log(f"part b: {'Tresca' if law == 'tresca' else 'Coulomb'} friction on {len(rows)} rows")
+                u_prev = np.zeros(2 * prob.topo.np)  # the slip is measured from the previous step
                 for s, cfg_s in enumerate(step_cfgs, start=1):
                     prob.cfg = cfg_s
                     T, u0, floating = prob.reduction()
@@ -1266,21 +1508,61 @@ def main(argv=None) -> int:
                     Kr = (T.T @ K @ T).tocsr()
                     fr = T.T @ (f - K @ u0)
                     tag = f" step {s}" if nsteps > 1 else ""
-                    xi, lam_k, info = solve_qp(Kr, fr, Ar[keep], gr[keep], f"part b{tag}")
+                    kidx = np.where(keep)[0]
+                    fric = None
+                    if law:
+                        # tangential rows in the reduced unknowns; v = Tt u − Tt u_prev
+                        # = Ttr ξ − c with c = Tt (u_prev − u0) (methods.md §9.1)
+                        held = prob.held_rows(rows, T, u0)
+                        Ttr = (Tt @ T).tocsr()
+                        Ttr.data[np.abs(Ttr.data) <= 1e-14] = 0.0
+                        Ttr.eliminate_zeros()
+                        Ttr = (sp.diags((~held).astype(float)) @ Ttr).tocsr()[kidx]
+                        Ttr.eliminate_zeros()
+                        c_off = (Tt @ (u_prev - u0))[kidx]
+                        bk = np.where(held, 0.0, bound)[kidx]
+                        if law == "tresca":
+                            xi, lam_k, lt_k, info = solve_qp(Kr, fr, Ar[keep], gr[keep], f"part b{tag}",
+                                                             Ttr, c_off, bk)
+                            s_k = bk
+                        else:
+                            xi, lam_k, lt_k, info = solve_coulomb(Kr, fr, Ar[keep], gr[keep], Ttr, c_off, bk,
+                                                                  f"part b{tag}")
+                            s_k = bk * np.maximum(lam_k, 0.0)
+                    else:
+                        xi, lam_k, _, info = solve_qp(Kr, fr, Ar[keep], gr[keep], f"part b{tag}")
                     lam = np.zeros(len(rows))
-                    lam[np.where(keep)[0]] = lam_k
+                    lam[kidx] = lam_k
                     u = u0 + T @ xi
+                    if law:
+                        full = lambda a: np.bincount(kidx, weights=a, minlength=len(rows))  # noqa: E731
+                        in_contact = np.zeros(len(rows), dtype=bool)
+                        in_contact[kidx] = info["warm"][0] | (lam_k > 0)
+                        slack = np.zeros(len(rows))
+                        slack[kidx] = gr[keep] - Ar[keep] @ xi
+                        fric = {"lam_t": full(lt_k), "s": full(s_k), "v": Tt @ (u - u_prev), "held": held,
+                                "in_contact": in_contact, "slack": slack}
+                        u_prev = u
                     fl = ", ".join(f"body {b}: {k}" for b, k in floating) or "none"
-                    log(f"part b{tag}: reference QP: {Kr.shape[0]} DOFs, {int(keep.sum())} rows, "
-                        f"free rigid motions {fl}; Clarabel {info['status']} in {info['ip_iter']} it, "
-                        f"active-set polish {info['polish_iter']} solve(s), {info['active']} active; "
-                        f"KKT stat {info['stationarity']:.1e} primal {info['primal']:.1e} "
-                        f"compl {info['complementarity']:.1e} ({time.time() - t0:.1f} s)")
-                    if max(info["stationarity"], info["primal"], info["complementarity"], info["dual"]) > 1e-9:
-                        failures.append(f"b{tag}")
-                        log(f"part b{tag}: the reference QP solution is not accurate -> FAIL")
+                    how = (f"Clarabel {info['status']} in {info['ip_iter']} it, "
+                           f"active-set polish {info['polish_iter']} solve(s)")
+                    if law == "coulomb":
+                        how = (f"Coulomb fixed point s <- mu lambda_n: {info['fp_steps']} Tresca solves "
+                               f"({info['fp_clarabel']} by Clarabel, the rest polish-only), last change "
+                               f"{info['fp_change']:.1e}")
+                    fr_txt = ""
+                    if law:
+                        fr_txt = f", {info['stick']} stick / {info['slip']} slip friction rows"
+                    log(f"part b{tag}: reference {'Tresca problem' if law == 'tresca' else 'Coulomb problem' if law else 'QP'}: "
+                        f"{Kr.shape[0]} DOFs, {int(keep.sum())} rows, free rigid motions {fl}; {how}, "
+                        f"{info['active']} active{fr_txt}; KKT stat {info['stationarity']:.1e} "
+                        f"primal {info['primal']:.1e} compl {info['complementarity']:.1e}"
+                        + (f" friction {info['friction']:.1e}" if law else "") + f" ({time.time() - t0:.1f} s)")
+                    if max(info["stationarity"], info["primal"], info["complementarity"], info["dual"],
+                           info["friction"]) > 1e-9:
+                        raise NotChecked(f"part b{tag}: the reference solution is not accurate (KKT above 1e-9)")
                     ok, _ = compare(prob, u, read_signorini(outb / f"{name}.h5", s), args.tol,
-                                    f"part b{tag} (contact)", lam_ref=lam, rows=rows)
+                                    f"part b{tag} (contact)", lam_ref=lam, rows=rows, fric=fric)
                     if not ok:
                         failures.append(f"b{tag}")
     finally:
@@ -1306,6 +1588,9 @@ if __name__ == "__main__":
     except SetupError as e:
         print(f"fenicsx_crosscheck: error: {e}", file=sys.stderr)
         sys.exit(2)
+    except NotChecked as e:
+        print(f"fenicsx_crosscheck: NOT CHECKED: {e}", file=sys.stderr)
+        sys.exit(3)
     except (CheckError, Conflict) as e:
         print(f"fenicsx_crosscheck: FAIL: {e}", file=sys.stderr)
         sys.exit(1)
