@@ -1042,6 +1042,17 @@ def solve_qp(K, f, A, g, label, Tm=None, c=None, s=None, warm=None):
     stick[F] = stick_f
     sigma = np.ones(mt)
     sigma[F] = sigma_f
+    # A bound s > 0 on a tangential row with no unknowns (both sides held along
+    # t, e.g. a tube end moved by a prescribed displacement): its slip v = −c is
+    # prescribed, λ_t does not enter the balance, and the slip rule alone sets
+    # λ_t = s·sign v where v ≠ 0 (0 where v = 0: any value in [−s, s] would do).
+    E = np.where((np.asarray(s) > 0) & (np.diff(Tm.indptr) == 0))[0]
+    if len(E):
+        vE = -c[E]
+        moving = np.abs(vE) > 1e-12 * max(np.abs(x).max(initial=0.0), np.abs(c).max(initial=0.0), 1e-300)
+        lam_t[E] = np.where(moving, s[E] * np.sign(vE), 0.0)
+        stick[E] = ~moving
+        sigma[E] = np.where(vE >= 0, 1.0, -1.0)
     # KKT certificate of the reference solution (unscaled)
     Kx = K @ x
     r = Kx - f + A.T @ lam_n + Tm.T @ lam_t
@@ -1540,7 +1551,9 @@ def main(argv=None) -> int:
                         in_contact[kidx] = info["warm"][0] | (lam_k > 0)
                         slack = np.zeros(len(rows))
                         slack[kidx] = gr[keep] - Ar[keep] @ xi
-                        fric = {"lam_t": full(lt_k), "s": full(s_k), "v": Tt @ (u - u_prev), "held": held,
+                        # a held row has no tangential row: no slip (signorini writes 0)
+                        v_full = np.where(held, 0.0, Tt @ (u - u_prev))
+                        fric = {"lam_t": full(lt_k), "s": full(s_k), "v": v_full, "held": held,
                                 "in_contact": in_contact, "slack": slack}
                         u_prev = u
                     fl = ", ".join(f"body {b}: {k}" for b, k in floating) or "none"
