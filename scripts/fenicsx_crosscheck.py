@@ -2,6 +2,7 @@
 """Cross-check `signorini` against an independent FEniCSx (dolfinx) model.
 
 Usage:  /usr/bin/python3 scripts/fenicsx_crosscheck.py meshes/NAME.toml [--tol 1e-8]
+        exit 0 OK, 1 FAIL, 2 usage/setup error, 3 NOT CHECKED (see the end)
 
 Runs under Debian's python3 (python3-dolfinx-real 0.5.2, python3-gmsh,
 python3-scipy, python3-h5py); the QP solver Clarabel comes from PyPI and is
@@ -70,8 +71,39 @@ motion is the axial translation, contact rows keep their pointwise form,
 mortar integrals (D, M, g̃) and tributary weights (∫N r ds) carry r. An
 `interference = true` pair keeps its negative gap.
 
-Exit code: 0 all comparisons within --tol, 1 a difference above it (or a
-failed self-check), 2 usage or setup error.
+Friction (`[[contact]] friction = μ` or `tresca = τ`, docs/methods.md §9):
+every contact row gets a tangential row, its own coefficients with n turned
+by +90° (t = (−n_y, n_x)), built here from the same geometry; its slip over a
+load step is v = T u − T u_prev (u_prev: this reference's previous step, 0
+before the first). The Tresca bound is s = τ × tributary weight ×
+thickness (∫N r ds axisymmetric, D on a mortar row), and the problem
+
+    min ½uᵀKu − fᵀu + Σ sᵢ|vᵢ|  s.t.  A u ≤ g
+
+is solved by Clarabel with one auxiliary variable per row (wᵢ ≥ ±vᵢ,
+objective + Σ sᵢwᵢ), λ_n and λ_t = z₊ − z₋ from its duals, then polished by
+an active-set iteration (open/contact, stick/slip) that solves the exact
+KKT system. Coulomb (s = μλ_n) is this reference's own fixed point: Tresca
+solves with s ← s + ω(μλ_n − s), ω = 1 halved while the change grows, from
+the frictionless answer until max|μλ_n − s| ≤ 1e-12 max μλ_n (the count of
+solves is printed). A mortar row on a line of symmetry (its slave point
+held along t, at the end of its run of rows) has no tangential row, and a
+row whose tangential row has no unknowns slips by prescription (λ_t =
+s·sign v), as methods.md §9 says. Compared besides the frictionless
+fields: λ_t (`multipliers_t`), the slip v (`slip`, relative to the larger of
+max|v| and 1e-6 max|u|) and the states 0 open / 1 stick / 2 slip (`state`),
+the reference's by signorini's rule (slip where |λ_t| ≥ (1 − 1e-6) s). A
+state may differ only on a row at a state boundary as the reference sees
+it: open/contact where λ_n ≤ 10·tol·max|λ| and the gap left ≤ 10·tol·max|u|,
+stick/slip where |λ_t| is within 10·tol·max|λ| of (1 − 1e-6) s.
+
+Exit code: 0 all comparisons within --tol; 1 FAIL: a difference above it
+(or a failed self-check, or signorini failing on the problem); 2 usage or
+setup error; 3 NOT CHECKED: the reference cannot check this problem, with
+the reason (a problem-file key it does not model, Tresca and Coulomb pairs
+in one problem, its own Coulomb fixed point not settling in 300 Tresca
+solves, or its own solve failing or not certified to 1e-9): no verdict on
+signorini.
 """
 
 from __future__ import annotations
@@ -444,6 +476,41 @@ def eliminate(cs):
         if abs(res) > 1e-9 * (1 + abs(v) + abs(u[0]) + abs(u[1])):
             raise Conflict(f"more than two independent conditions that disagree (residual {res:.3e})")
     return u, []
+
+
+# The problem-file keys this reference models (docs/problem-format.md); [solver]
+# and [output] choose how signorini solves and writes, not the problem.
+MODELLED = {
+    "mesh": {"file"},
+    "model": {"plane", "thickness", "gravity", "omega"},
+    "materials": {"E", "nu", "rho"},
+    "dirichlet": {"on", "u", "ux", "uy"},
+    "slip": {"on"},
+    "traction": {"on", "p", "pn"},
+    "force": {"on", "f"},
+    "contact": {"on", "normals", "slave", "master", "max_gap", "discretization", "interference", "friction",
+                "tresca"},
+    "steps": {"t", "factor", "load", "displacement", "dirichlet"},
+    "solver": None,
+    "output": None,
+}
+
+
+def unmodelled(cfg: dict) -> list[str]:
+    """Keys of the problem file that the reference does not model."""
+    out = []
+    for sec, val in cfg.items():
+        if sec not in MODELLED:
+            out.append(f"[{sec}]")
+            continue
+        keys = MODELLED[sec]
+        if keys is None:
+            continue
+        entries = val if isinstance(val, list) else (list(val.values()) if sec == "materials" else [val])
+        for e in entries:
+            if isinstance(e, dict):
+                out += [f"{sec}.{k}" for k in e if k not in keys]
+    return sorted(set(out))
 
 
 def at_step(cfg: dict, s: int) -> dict:
@@ -1125,6 +1192,35 @@ def _polish(Ks, fs, As, gs, Ts, cs, ss, act, stick, sigma, label, max_iter=100):
     raise _PolishFailed(f"no consistent active set after {max_iter} solves")
 
 
+def friction_hand_case():
+    """The signs of the friction reference on a hand case: one node of stiffness
+    k (both directions) on a rigid floor, pushed by f = (fx, −fy). As a
+    conforming row with the floor first: n = (0, 1), the normal row −u_y ≤ 0,
+    t = (−1, 0) and the tangential row t·(u_floor − u_node) = u_x, so v = u_x.
+    Then λ_n = fy (compressive positive) and, for a bound s: |fx| ≤ s sticks
+    (u_x = 0, λ_t = fx), |fx| > s slips, u_x = (fx − s sign fx)/k, λ_t = s sign fx
+    = s sign v (Kx − f + Aᵀλ_n + Tᵀλ_t = 0); Coulomb s = μ fy. Returns the
+    largest relative error over five cases (Tresca stick and slip both ways,
+    Coulomb stick and slip)."""
+    k, fy = 2.0, 3.0
+    K = sp.csr_matrix(np.diag([k, k]))
+    A = sp.csr_matrix(np.array([[0.0, -1.0]]))
+    Tm = sp.csr_matrix(np.array([[1.0, 0.0]]))
+    worst = 0.0
+    for fx, s, mu in ((1.0, 2.0, None), (5.0, 2.0, None), (-5.0, 2.0, None), (1.0, None, 0.5), (4.0, None, 0.5)):
+        f = np.array([fx, -fy])
+        if mu is None:
+            x, ln, lt, _ = solve_qp(K, f, A, np.zeros(1), "hand case", Tm, np.zeros(1), np.array([s]))
+        else:
+            x, ln, lt, _ = solve_coulomb(K, f, A, np.zeros(1), Tm, np.zeros(1), np.array([mu]), "hand case")
+            s = mu * fy
+        ux = 0.0 if abs(fx) <= s else (fx - s * np.sign(fx)) / k
+        want = np.array([ux, 0.0, fy, fx if abs(fx) <= s else s * np.sign(fx)])
+        got = np.array([x[0], x[1], ln[0], lt[0]])
+        worst = max(worst, float(np.abs(got - want).max() / np.abs(want).max()))
+    return worst
+
+
 def solve_coulomb(K, f, A, g, Tm, c, mu, label, tol=1e-12, max_steps=300):
     """Coulomb's s = μ λ_n by the reference's own fixed point: Tresca problems
     (solve_qp) with s from the previous λ_n, s ← s + ω(μλ_n − s), starting from
@@ -1374,7 +1470,13 @@ def run_signorini(exe: Path, toml: Path, out: Path, extra: list[str]):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(
+        description=__doc__.split("\n")[0],
+        epilog="exit status: 0 every comparison within --tol; 1 FAIL (a difference above --tol, or signorini "
+               "failing on the problem); 2 usage or setup error; 3 NOT CHECKED: the reference cannot check "
+               "this problem (a problem-file key it does not model, Tresca and Coulomb pairs in one problem, "
+               "its Coulomb fixed point not settling, its own solve failing): the reason is printed, no "
+               "verdict on signorini")
     ap.add_argument("toml", type=Path)
     ap.add_argument("--tol", type=float, default=1e-8, help="max relative difference (default 1e-8)")
     ap.add_argument("--signorini", type=Path, default=None,
@@ -1410,6 +1512,10 @@ def main(argv=None) -> int:
     log(f"== {name}: {toml}")
     try:
         cfg = tomllib.loads(toml.read_text())
+        extra = unmodelled(cfg)
+        if extra:
+            raise NotChecked(f"the reference does not model {', '.join(extra)} (docs/problem-format.md); "
+                             "nothing was compared")
         has_contact = bool(cfg.get("contact"))
         parts = ["a", "b"] if args.part == "both" else [args.part]
         nsteps = max(1, len(cfg.get("steps", [])))
@@ -1502,7 +1608,11 @@ def main(argv=None) -> int:
                 g = np.array(g)
                 law, Tt, bound = prob.friction(rows)
                 if law:
-                    log(f"part b: {'Tresca' if law == 'tresca' else 'Coulomb'} friction on {len(rows)} rows")
+                    hand = friction_hand_case()
+                    log(f"part b: {'Tresca' if law == 'tresca' else 'Coulomb'} friction on {len(rows)} rows; "
+                        f"the reference's signs on the hand case (a node on a floor): error {hand:.1e}")
+                    if hand > 1e-9:
+                        raise NotChecked(f"the friction reference fails its hand case (error {hand:.2e})")
                 u_prev = np.zeros(2 * prob.topo.np)  # the slip is measured from the previous step
                 for s, cfg_s in enumerate(step_cfgs, start=1):
                     prob.cfg = cfg_s
