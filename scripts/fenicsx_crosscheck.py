@@ -97,6 +97,12 @@ state may differ only on a row at a state boundary as the reference sees
 it: open/contact where λ_n ≤ 10·tol·max|λ| and the gap left ≤ 10·tol·max|u|,
 stick/slip where |λ_t| is within 10·tol·max|λ| of (1 − 1e-6) s.
 
+What the problem leaves undetermined is said and not compared as if it were
+determined (uniqueness()): the displacement along a rigid motion that no row
+in contact or sticking holds is compared modulo that motion, and rows whose
+columns are linearly dependent (a slave node of two pairs on one master
+corner) have their multipliers and states left out.
+
 Exit code: 0 all comparisons within --tol; 1 FAIL: a difference above it
 (or a failed self-check, or signorini failing on the problem); 2 usage or
 setup error; 3 NOT CHECKED: the reference cannot check this problem, with
