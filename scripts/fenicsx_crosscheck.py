@@ -85,8 +85,11 @@ objective + Σ sᵢwᵢ), λ_n and λ_t = z₊ − z₋ from its duals, then pol
 an active-set iteration (open/contact, stick/slip) that solves the exact
 KKT system. Coulomb (s = μλ_n) is this reference's own fixed point: Tresca
 solves with s ← s + ω(μλ_n − s), ω = 1 halved while the change grows, from
-the frictionless answer until max|μλ_n − s| ≤ 1e-12 max μλ_n (the count of
-solves is printed). A mortar row on a line of symmetry (its slave point
+the glued answer (s = ∞: every row sticks, so a body held by friction alone
+is held from the start; s¹ = μλ_n of it) until max|μλ_n − s| ≤ 1e-12 max μλ_n
+or the change stalls at the solves' round-off (the count of solves is
+printed). A hand case (a node on a floor) checks the signs against the
+analytic answer on every frictional run. A mortar row on a line of symmetry (its slave point
 held along t, at the end of its run of rows) has no tangential row, and a
 row whose tangential row has no unknowns slips by prescription (λ_t =
 s·sign v), as methods.md §9 says. Compared besides the frictionless
@@ -704,10 +707,12 @@ class Problem:
         if Z.shape[1] == 0:
             return Z
         Z = Z / np.linalg.norm(Z, axis=0)
-        # the combinations c with K Z c = 0 (relative to the K of the body's own scale)
+        # the combinations c with K Z c = 0, relative to the size of the terms
+        # that cancel in K Z (|K||Z|): round-off ~1e-16 on a free motion, ~1e-2
+        # (the supports' share of the body's nodes) on a held one
         KZ = np.column_stack([Kr @ Z[:, j] for j in range(Z.shape[1])])
-        dk = np.sqrt(np.maximum(Kr.diagonal(), 0.0))
-        scale = max(float(np.abs(dk[:, None] * np.abs(Z)).sum(axis=0).max()), 1e-300)
+        aKZ = np.column_stack([abs(Kr) @ np.abs(Z[:, j]) for j in range(Z.shape[1])])
+        scale = max(float(np.linalg.norm(aKZ, axis=0).max()), 1e-300)
         _, sv, vt = np.linalg.svd(KZ / scale, full_matrices=True)
         sv = np.concatenate([sv, np.zeros(vt.shape[0] - len(sv))])
         return Z @ vt[sv < 1e-9].T
@@ -1403,8 +1408,9 @@ def solve_coulomb(K, f, A, g, Tm, c, mu, label, tol=1e-12, max_steps=300):
     halved (down to 1/64) whenever the residual ‖μλ_n − s‖ grows. Stops when
     ‖μλ_n − s‖∞ ≤ tol·max(μλ_n), or when the change has stalled at the
     round-off of the Tresca solves (no new smallest change in 20 solves, the
-    smallest ≤ 1e-6·max μλ_n: a stiffness contrast of 10⁵ leaves ~1e-7; the
-    iterate with the smallest change is returned and the change reported);
+    smallest ≤ 1e-9·max μλ_n: a stiffness contrast of 10⁵ leaves 1e-12 …
+    1e-9; the iterate with the smallest change is returned and the change
+    reported);
     NotChecked after max_steps (the fixed point does not settle)."""
     s = np.where(mu > 0, np.inf, 0.0)
     omega, rprev, warm = 1.0, None, None
@@ -1424,7 +1430,7 @@ def solve_coulomb(K, f, A, g, Tm, c, mu, label, tol=1e-12, max_steps=300):
         rel_change = rn / max(target.max(initial=0.0), 1e-300)
         if best is None or rel_change < best[0]:
             best = (rel_change, k, (x, lam_n, lam_t, info))
-        stalled = k - best[1] >= 20 and best[0] <= 1e-6
+        stalled = k - best[1] >= 20 and best[0] <= 1e-9
         if rel_change <= tol or stalled:
             rel_change, kb, (x, lam_n, lam_t, info) = best
             info.update(fp_steps=k, fp_change=rel_change, fp_clarabel=nclar, fp_time=time.time() - t0,
