@@ -223,8 +223,9 @@ done
 # Cattaneo–Mindlin (verification/cattaneo, coarse hc = 0.02) with a third step
 # that moves the block back, so the slip reverses and the path (the slip
 # measured from the previous step) matters; the pad on two bumps (Coulomb, and
-# Tresca, by ssn and by mprgp); the patch test with mortar rows and Coulomb friction (its row on
-# the line of symmetry has no tangential row). Plane stress: the hip with
+# Tresca by ssn and by mprgp); the patch test with mortar rows and Coulomb
+# friction (its row on the line of symmetry has no tangential row). Plane
+# stress: the hip with
 # Tresca on its conforming joint (bound × thickness). Axisymmetric: the shrink
 # fit (verification/shrinkfit, n = 8; its fit step has no load at all, only the
 # interference) with Coulomb, with Tresca and frictionless, and the half-ball
