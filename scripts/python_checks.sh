@@ -9,7 +9,9 @@
 #      Clarabel from PyPI in .venv/debian-site): linear elastic and contact solutions
 #      of an independent FEniCSx model against signorini's, including two
 #      mortar pairs (hertz, the hard punch) whose rows are built in python,
-#      and the axisymmetric models tests/data/axi_* (r-weighted forms).
+#      the axisymmetric models tests/data/axi_* (r-weighted forms), and
+#      frictional models (Tresca, Coulomb; plane and axisymmetric; λ_t, slip
+#      and stick/slip states compared too).
 #
 # Usage: bash scripts/python_checks.sh [NAME ...]   (default: the examples below)
 #   SIGNORINI_WITH_PARAVIEW=1  also install Debian's python3-paraview (it provides
@@ -19,7 +21,11 @@
 #                              their ComponentName (sxx, ux, ...) as ParaView sees
 #                              them (skipped with a note otherwise)
 #   SIGNORINI_CHECK_OUT=DIR    keep the outputs and PNGs there (default: temp dir)
-# Exit status: 0 when every check passed.
+#   SIGNORINI=PATH             use this signorini binary instead of building
+#                              target/release/signorini (cargo build --release)
+# Exit status: 0 when every check passed; a cross-check that answers NOT
+# CHECKED (exit 3: the reference cannot check the model) is counted apart and
+# also makes the status non-zero, since every model listed here must be checked.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -81,17 +87,27 @@ fi
 stamp "installs ready"
 
 # ------------------------------------------------------------------- build
-cargo build --release 2>&1 | tail -n 3
-[ "${PIPESTATUS[0]}" -eq 0 ] || { echo "python_checks: cargo build --release failed" >&2; exit 2; }
-EXE=$ROOT/target/release/signorini
-stamp "build done"
+if [ -n "${SIGNORINI:-}" ]; then
+    [ -x "$SIGNORINI" ] || { echo "python_checks: SIGNORINI=$SIGNORINI is not an executable" >&2; exit 2; }
+    EXE=$(cd "$(dirname "$SIGNORINI")" && pwd)/$(basename "$SIGNORINI")
+    stamp "using SIGNORINI=$EXE (no build)"
+else
+    cargo build --release 2>&1 | tail -n 3
+    [ "${PIPESTATUS[0]}" -eq 0 ] || { echo "python_checks: cargo build --release failed" >&2; exit 2; }
+    EXE=$ROOT/target/release/signorini
+    stamp "build done"
+fi
 
 # ------------------------------------------------------------------ checks
 passed=0
 failed=0
 failed_names=()
-record() {  # name, status
-    if [ "$2" -eq 0 ]; then passed=$((passed + 1)); else failed=$((failed + 1)); failed_names+=("$1"); fi
+unchecked=0
+unchecked_names=()
+record() {  # name, status (fenicsx_crosscheck.py: 3 = NOT CHECKED)
+    if [ "$2" -eq 0 ]; then passed=$((passed + 1))
+    elif [ "$2" -eq 3 ]; then unchecked=$((unchecked + 1)); unchecked_names+=("$1")
+    else failed=$((failed + 1)); failed_names+=("$1"); fi
 }
 
 if [ -n "${SIGNORINI_CHECK_OUT:-}" ]; then
@@ -200,7 +216,62 @@ for t in axi_cup/axi_cup axi_sphere/axi_sphere axi_sphere/axi_sphere_mortar:b ax
     record "crosscheck ${t#*/}" $?
 done
 
+# Friction (docs/methods.md §9): signorini's Tresca and Coulomb answers
+# against the reference's own (Clarabel on the Tresca problem with auxiliary
+# variables, polished; Coulomb by its own fixed point on s = μλ_n), comparing
+# λ_t, the slip and the open/stick/slip states too. Plane strain:
+# Cattaneo–Mindlin (verification/cattaneo, coarse hc = 0.02) with a third step
+# that moves the block back, so the slip reverses and the path (the slip
+# measured from the previous step) matters; the pad on two bumps (Coulomb, and
+# Tresca by ssn and by mprgp); the patch test with mortar rows and Coulomb
+# friction (its row on the line of symmetry has no tangential row). Plane
+# stress: the hip with
+# Tresca on its conforming joint (bound × thickness). Axisymmetric: the shrink
+# fit (verification/shrinkfit, n = 8; its fit step has no load at all, only the
+# interference) with Coulomb, with Tresca and frictionless, and the half-ball
+# on a block with mortar rows and Coulomb friction (a row on the axis).
+fric_dir=$OUT/friction
+mkdir -p "$fric_dir"
+absmesh() { sed "s#^file *= *\"\(.*\)\"#file = \"$1/\1\"#"; }
+gmsh -2 -format msh41 -v 1 -setnumber hc 0.02 verification/cattaneo/cattaneo.geo -o "$fric_dir/cattaneo.msh" >/dev/null \
+    && gmsh -2 -format msh41 -v 1 -setnumber n 8 verification/shrinkfit/shrinkfit.geo -o "$fric_dir/shrinkfit.msh" >/dev/null \
+    && gmsh -2 -format msh41 -v 1 verification/patch/patch.geo -o "$fric_dir/patch.msh" >/dev/null \
+    || { echo "FAIL gmsh could not mesh the friction models" >&2; record "gmsh friction meshes" 1; }
+{ sed 's#^file = .*#file = "cattaneo.msh"#' verification/cattaneo/cattaneo.toml
+  printf '\n[[steps]]\nfactor = 1.0\ndirichlet = { block_bottom = [2.0e-3, 0.0] }\n'; } > "$fric_dir/cattaneo3.toml"
+absmesh "$ROOT/tests/data/bumps" < tests/data/bumps/bumps.toml > "$fric_dir/bumps.toml"
+sed 's/^friction = 0.4$/tresca = 2.0e5/' "$fric_dir/bumps.toml" > "$fric_dir/bumps_tresca.toml"
+sed 's/^method = "ssn"$/method = "mprgp"/' "$fric_dir/bumps_tresca.toml" > "$fric_dir/bumps_tresca_mprgp.toml"
+sed 's#^file = .*#file = "patch.msh"#; s/^discretization = "mortar"$/discretization = "mortar"\nfriction = 0.3/' \
+    verification/patch/patch_mortar.toml > "$fric_dir/patch_mortar_coulomb.toml"
+absmesh "$ROOT/meshes" < meshes/hip.toml | sed 's/^on = "joint"$/on = "joint"\ntresca = 2.0e5/' > "$fric_dir/hip_tresca.toml"
+sed 's#^file = .*#file = "shrinkfit.msh"#' verification/shrinkfit/shrinkfit.toml > "$fric_dir/shrinkfit.toml"
+sed 's/^friction = 0.2$/tresca = 5.0e6/' "$fric_dir/shrinkfit.toml" > "$fric_dir/shrinkfit_tresca.toml"
+sed '/^friction = 0.2$/d' "$fric_dir/shrinkfit.toml" > "$fric_dir/shrinkfit_frictionless.toml"
+absmesh "$ROOT/tests/data/axi_sphere" < tests/data/axi_sphere/axi_sphere_mortar.toml \
+    | sed 's/^master = "block_top"$/master = "block_top"\nfriction = 0.3/' > "$fric_dir/axi_sphere_mortar_coulomb.toml"
+# name:part:the line the variant must have (a sed that did not match fails
+# here):tolerance. mprgp's Tresca answers are exact to its tolerance, not to
+# rounding (methods.md §9.2): 4.5e-8 in λ_t measured, hence 1e-6.
+for t in cattaneo3:both:friction:1e-8 bumps:b:friction:1e-8 bumps_tresca:b:tresca:1e-8 \
+         bumps_tresca_mprgp:b:method:1e-6 patch_mortar_coulomb:both:friction:1e-8 hip_tresca:b:tresca:1e-8 \
+         shrinkfit:both:friction:1e-8 shrinkfit_tresca:b:tresca:1e-8 shrinkfit_frictionless:b:interference:1e-8 \
+         axi_sphere_mortar_coulomb:b:friction:1e-8; do
+    IFS=: read -r name part key tol <<< "$t"
+    stamp "fenicsx_crosscheck.py $name (friction, part $part)"
+    if ! grep -q "^$key = " "$fric_dir/$name.toml" \
+        || { [ "$name" = shrinkfit_frictionless ] && grep -q '^friction' "$fric_dir/$name.toml"; } \
+        || { [ "$name" = bumps_tresca_mprgp ] && ! grep -q '^method = "mprgp"' "$fric_dir/$name.toml"; }; then
+        echo "FAIL $name: the variant was not written (sed did not match)" >&2
+        record "crosscheck $name" 1
+        continue
+    fi
+    SIGNORINI="$EXE" SIGNORINI_PYDEPS="$PYDEPS" /usr/bin/python3 scripts/fenicsx_crosscheck.py "$fric_dir/$name.toml" --tol "$tol" --part $part
+    record "crosscheck $name" $?
+done
+
 stamp "finished"
 [ $failed -eq 0 ] || echo "python_checks: failed: ${failed_names[*]}" >&2
-echo "python_checks: $passed passed, $failed failed"
-[ $failed -eq 0 ]
+[ $unchecked -eq 0 ] || echo "python_checks: not checked (the reference cannot check them): ${unchecked_names[*]}" >&2
+echo "python_checks: $passed passed, $failed failed, $unchecked not checked"
+[ $failed -eq 0 ] && [ $unchecked -eq 0 ]

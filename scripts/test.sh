@@ -7,7 +7,8 @@
 #   3. doc      cargo doc --no-deps with RUSTDOCFLAGS="-D warnings"
 #   4. tests    cargo test --release --all-targets
 #   5. python   scripts/python_checks.sh (outputs read back with pyvista/h5py,
-#               FEniCSx cross-check on the shipped examples)
+#               FEniCSx cross-check on the shipped examples, with and
+#               without friction)
 #   6. bench    scripts/bench at its smallest size (numbers not kept)
 # Everything builds in release: one build serves the tests, the Python checks
 # and the benchmark, and clippy and rustdoc reuse the release check of the
