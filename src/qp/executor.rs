@@ -15,6 +15,15 @@ pub enum Step {
 
 pub trait Iterative {
     fn step(&mut self) -> Step;
+
+    /// The iterate of the last [`Iterative::step`] has the best residual so
+    /// far: a method that can return to it keeps it (default: nothing).
+    fn best(&mut self) {}
+
+    /// The run stagnated: go back to the iterate of the last
+    /// [`Iterative::best`] call, which the method then returns (its
+    /// residual stood below the last one's; default: nothing).
+    fn back_to_best(&mut self) {}
 }
 
 /// Sees every iteration record.
@@ -151,6 +160,9 @@ impl Executor {
             if measured && rec.residual < best * (1.0 - 1e-9) {
                 best = rec.residual;
                 best_at = n;
+                if done.is_none() {
+                    it.best();
+                }
             }
             let res = rec.residual;
             for o in self.observers.iter_mut() {
@@ -161,6 +173,7 @@ impl Executor {
                 break s;
             }
             if n - best_at >= STALL_WINDOW {
+                it.back_to_best();
                 break Status::Failed(Failure::Stagnation {
                     residual: res,
                     best,

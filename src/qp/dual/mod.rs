@@ -457,6 +457,13 @@ struct Smalbe<'a, S> {
     /// (λ, x) of the current λ̂ as [`Smalbe::certified`] recovered them
     /// (rows scaled), for `into_result` not to recover them again.
     recovered: Option<(Vec<f64>, Vec<f64>)>,
+    /// λ̂ at the best residual so far ([`Iterative::best`]): a run that
+    /// stagnates returns it, not the last λ̂ (on the geodynamic faults'
+    /// dependent rows the last was 10⁻⁷–10⁻³ where the best was 5·10⁻¹⁰).
+    best_lam: Option<Vec<f64>>,
+    /// λ̂ where the current step measured its residual (the record's
+    /// iterate: the step moves λ̂ after measuring).
+    measured_lam: Vec<f64>,
 }
 
 /// The box of a frictional dual (docs/methods.md §9.2): rows `0..m_n` of
@@ -580,6 +587,8 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
             judge: None,
             tightened: 0,
             recovered: None,
+            best_lam: None,
+            measured_lam: vec![],
         })
     }
 
@@ -810,7 +819,27 @@ impl<S: BoundStep> Smalbe<'_, S> {
 }
 
 impl<S: BoundStep> Iterative for Smalbe<'_, S> {
+    fn best(&mut self) {
+        match &mut self.best_lam {
+            Some(b) => b.copy_from_slice(&self.measured_lam),
+            None => self.best_lam = Some(self.measured_lam.clone()),
+        }
+    }
+
+    fn back_to_best(&mut self) {
+        if let Some(b) = self.best_lam.take() {
+            self.s.lam = b;
+            self.s.refresh();
+            self.recovered = None;
+        }
+    }
+
     fn step(&mut self) -> Step {
+        if self.measured_lam.len() == self.s.lam.len() {
+            self.measured_lam.copy_from_slice(&self.s.lam);
+        } else {
+            self.measured_lam = self.s.lam.clone();
+        }
         let (tol, ref_g) = (self.s.tol, self.s.ref_g);
         let mut gp = self.s.gp_norm();
         let (mut fe, mut fe_ref) = self.feas();
