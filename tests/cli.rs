@@ -826,6 +826,16 @@ fn an_output_file_that_is_a_fifo_or_a_device_is_refused_and_kept() {
         assert!(stderr.contains("not a regular file"), "{stderr}");
         assert!(is_fifo(&p), "compare {flag}: the FIFO was replaced");
     }
+    // mesh -o FIFO (with Gmsh installed).
+    if Command::new("gmsh").arg("--version").output().is_ok() {
+        let msh = d.join("m.msh");
+        mkfifo(&msh);
+        let geo = common::meshes().join("two_blocks.geo");
+        let (code, _, stderr) =
+            signorini(&["mesh", geo.to_str().unwrap(), "-o", msh.to_str().unwrap()]);
+        assert_eq!(code, 2, "mesh -o FIFO: {stderr}");
+        assert!(is_fifo(&msh), "mesh: the FIFO was replaced");
+    }
     // A character device (root only: mknod); /dev/full's own numbers.
     let dev = d.join("full");
     let c = std::ffi::CString::new(dev.to_str().unwrap()).unwrap();
@@ -938,8 +948,13 @@ fn export_of_an_uncertified_solution_exits_3() {
 }
 
 /// The three-body model in three steps: step 1 the full load, steps 2 and
-/// 3 a fifth of it (step 3 starts from step 2's answer).
+/// 3 less of it (step 3 starts from step 2's answer); `small_first`
+/// reverses the order (steps 1 and 2 the small load, step 3 the full one).
 fn three_steps(dir: &std::path::Path) -> std::path::PathBuf {
+    three_steps_as(dir, false)
+}
+
+fn three_steps_as(dir: &std::path::Path, small_first: bool) -> std::path::PathBuf {
     let text = std::fs::read_to_string(common::meshes().join("three_bodies_steps.toml")).unwrap();
     let head = &text[..text.find("[[steps]]").unwrap()];
     let mesh = common::meshes().join("three_bodies.msh");
@@ -948,14 +963,72 @@ fn three_steps(dir: &std::path::Path) -> std::path::PathBuf {
         &format!("{:?}", mesh.display().to_string()),
     );
     let p = dir.join("s3.toml");
+    let (full, small) = (
+        "displacement = 1.0\nload = 1.0",
+        "displacement = 0.2\nload = 0.3",
+    );
+    let [a, b, c] = if small_first {
+        [small, small, full]
+    } else {
+        [full, small, small]
+    };
     std::fs::write(
         &p,
         format!(
-            "{head}[[steps]]\nt = 1.0\ndisplacement = 1.0\nload = 1.0\n\n[[steps]]\nt = 2.0\ndisplacement = 0.2\nload = 0.3\n\n[[steps]]\nt = 3.0\ndisplacement = 0.2\nload = 0.3\n"
+            "{head}[[steps]]\nt = 1.0\n{a}\n\n[[steps]]\nt = 2.0\n{b}\n\n[[steps]]\nt = 3.0\n{c}\n"
         ),
     )
     .unwrap();
     p
+}
+
+/// Step 1 of 3 not converged (cgc stopped at 60 iterations; steps 2 and 3
+/// converge and certify): the top level's `converged` is false (it was
+/// the last step's, true), `failed_steps` = [1], the HDF5 step 1 is
+/// flagged, and the report's KKT line (of the last step) still says
+/// certified while the failed line names step 1.
+#[test]
+fn a_failed_first_step_makes_the_run_not_converged() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = three_steps_as(dir.path(), true);
+    let out = dir.path().join("out");
+    let (code, stdout, stderr) = signorini(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--method",
+        "cgc",
+        "--preconditioner",
+        "none",
+        "--tol",
+        "1e-7",
+        "--max-iter",
+        "60",
+    ]);
+    assert_eq!(code, 3, "{stdout}\n{stderr}");
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("s3.json")).unwrap()).unwrap();
+    let conv: Vec<bool> = j["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["converged"] == true)
+        .collect();
+    assert_eq!(conv, [false, true, true]);
+    assert_eq!(j["converged"], false);
+    assert_eq!(j["kkt"]["certified"], false);
+    assert_eq!(j["failed_steps"], serde_json::json!([1]));
+    let ck = signorini::io::hdf5::read_checkpoint(&out.join("s3.h5")).unwrap();
+    let flags: Vec<bool> = ck.steps.iter().map(|s| s.info.converged).collect();
+    assert_eq!(flags, [false, true, true]);
+    assert!(
+        stdout.contains("failed      step 1 of 3 (not converged)"),
+        "{stdout}"
+    );
+    let kkt = stdout.lines().find(|l| l.starts_with("KKT")).unwrap();
+    assert!(kkt.contains("certified (≤"), "{kkt}");
+    assert!(stderr.contains("warning: step 1:"), "{stderr}");
 }
 
 /// Step 2 of 3 not certified (cgc without preconditioner stopped early;
