@@ -646,3 +646,105 @@ fn axisymmetric_fields_are_named_srr_szz_srz_stt() {
         );
     }
 }
+
+/// A model in mm and MPa (`[model] units`) is labelled so: the colour bar,
+/// the axes, the contact plot and the printed range name its units, not m
+/// and Pa. The key is a label only: a checkpoint solved without it is
+/// continued (`--restart`) by the same problem with it, and the bits of the
+/// solution do not change.
+#[test]
+fn model_units_label_the_figures() {
+    let dir = out_dir();
+    let d = dir.path();
+    let plain = common::model_variant(
+        &common::meshes(),
+        "two_blocks_eccentric.toml",
+        &[],
+        &d.join("m.toml"),
+    );
+    let out0 = d.join("o0");
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        plain.to_str().unwrap(),
+        "--out",
+        out0.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let mut text = std::fs::read_to_string(&plain).unwrap();
+    assert!(text.contains("[model]\n"), "{text}");
+    text = text.replace(
+        "[model]\n",
+        "[model]\nunits = { length = \"mm\", stress = \"MPa\" }\n",
+    );
+    std::fs::write(&plain, &text).unwrap();
+    let out1 = d.join("o1");
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        plain.to_str().unwrap(),
+        "--out",
+        out1.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let a = signorini::io::hdf5::read_checkpoint(&out0.join("m.h5")).unwrap();
+    let b = signorini::io::hdf5::read_checkpoint(&out1.join("m.h5")).unwrap();
+    assert_eq!(a.steps[0].displacement, b.steps[0].displacement);
+    let h5 = out1.join("m.h5");
+    let fig = d.join("f.svg");
+    let (code, stdout, stderr) =
+        signorini(&["plot", h5.to_str().unwrap(), "-o", fig.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stderr}");
+    let svg = std::fs::read_to_string(&fig).unwrap();
+    assert!(
+        svg.contains("von_mises [MPa]") && svg.contains("x [mm]"),
+        "labels"
+    );
+    assert!(
+        !svg.contains("[Pa]") && !svg.contains("[m]"),
+        "SI labels left"
+    );
+    let range = stdout.lines().find(|l| l.starts_with("range:")).unwrap();
+    assert!(range.ends_with(" MPa"), "{range}");
+    let scale = stdout
+        .lines()
+        .find(|l| l.starts_with("displacement"))
+        .unwrap();
+    assert!(scale.ends_with(" mm)"), "{scale}");
+    let cfig = d.join("c.svg");
+    let (code, stdout, stderr) = signorini(&[
+        "plot",
+        h5.to_str().unwrap(),
+        "--contact",
+        "-o",
+        cfig.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let svg = std::fs::read_to_string(&cfig).unwrap();
+    assert!(svg.contains("contact pressure [MPa]") && svg.contains("arc length s [mm]"));
+    assert!(stdout.contains(" MPa"), "{stdout}");
+    // The SI checkpoint keeps its labels.
+    let sfig = d.join("s.svg");
+    let (code, _, _) = signorini(&[
+        "plot",
+        out0.join("m.h5").to_str().unwrap(),
+        "-o",
+        sfig.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0);
+    assert!(std::fs::read_to_string(&sfig)
+        .unwrap()
+        .contains("von_mises [Pa]"));
+    // A restart across the added key is the same problem.
+    let out2 = d.join("o2");
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        plain.to_str().unwrap(),
+        "--out",
+        out2.to_str().unwrap(),
+        "--restart",
+        out0.join("m.h5").to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(code, 0, "restart refused: {stderr}");
+}

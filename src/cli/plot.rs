@@ -106,6 +106,8 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
             (_, true) => Some(false),
             _ => None,
         },
+        // Set from the checkpoint's problem by the renderer.
+        units: Default::default(),
     };
     match plot::plot_file(&a.checkpoint, &a.output, &opts) {
         Ok(s) => {
@@ -122,14 +124,12 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                 } else {
                     what
                 };
+                // The units of the checkpoint's problem ([model] units).
+                let u = &s.units;
                 let unit = if a.contact {
-                    " Pa"
+                    format!(" {}", u.stress)
                 } else {
-                    match field.unit() {
-                        Some("Pa") => " Pa",
-                        Some("m") => " m",
-                        _ => "",
-                    }
+                    s.field.unit(u).map(|x| format!(" {x}")).unwrap_or_default()
                 };
                 if a.all_steps {
                     crate::outln!("steps {} to {}, {what}", s.first_step, s.steps);
@@ -160,9 +160,10 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                 }
                 if let Some((lo, hi)) = s.tangential_range {
                     crate::outln!(
-                        "tangential traction: {} to {} Pa",
+                        "tangential traction: {} to {} {}",
                         plot::fmt_num(lo),
-                        plot::fmt_num(hi)
+                        plot::fmt_num(hi),
+                        u.stress
                     );
                 }
                 if let Some((stick, slip)) = s.stick_slip {
@@ -186,9 +187,10 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                         "largest displacement = 5 % of the bounding-box diagonal"
                     };
                     crate::outln!(
-                        "displacement scale: {} ({how}; max |u| = {} m)",
+                        "displacement scale: {} ({how}; max |u| = {} {})",
                         plot::fmt_num(k),
-                        plot::fmt_num(s.max_displacement)
+                        plot::fmt_num(s.max_displacement),
+                        u.length
                     );
                 }
                 crate::outln!("wrote {}", a.output.display());
