@@ -361,6 +361,7 @@ fn step_legend<DB: DrawingBackend>(
 }
 
 /// One interface's panel: its caption, axes and one curve per step.
+#[allow(clippy::too_many_arguments)]
 fn draw_panel<DB: DrawingBackend>(
     panel: &DrawingArea<DB, Shift>,
     (name, start, pieces): &Series,
