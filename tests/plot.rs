@@ -748,3 +748,66 @@ fn model_units_label_the_figures() {
     ]);
     assert_eq!(code, 0, "restart refused: {stderr}");
 }
+
+/// The friction count of `plot --contact --step 1` is step 1's, and the
+/// line says so; it said "(last step drawn)" whatever the step. Two blocks
+/// with Coulomb friction, pressed in step 1 and sheared in steps 2 and 3.
+#[test]
+fn the_friction_count_names_the_step_drawn() {
+    let dir = out_dir();
+    let d = dir.path();
+    let toml = common::model_variant(
+        &common::meshes(),
+        "two_blocks.toml",
+        &[
+            ("on = \"left_upper\"", "on = \"left_lower\""),
+            ("on = \"right_upper\"", "on = \"right_lower\""),
+            ("[[traction]]\non = \"top\"\npn = -1.0e6\n", "[[dirichlet]]\non = \"top\"\nu = [0.0, 0.0]\n"),
+            ("normals = \"averaged\"\n", "normals = \"averaged\"\nfriction = 0.3\n[[steps]]\ndirichlet = { top = [0.0, -2.0e-4] }\n[[steps]]\ndirichlet = { top = [2.0e-5, -2.0e-4] }\n[[steps]]\ndirichlet = { top = [4.0e-5, -2.0e-4] }\n"),
+        ],
+        &d.join("sheared.toml"),
+    );
+    let out = d.join("out");
+    let (code, so, se) = signorini(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(code, 0, "{so}\n{se}");
+    let ck_path = out.join("sheared.h5");
+    let ck = signorini::io::hdf5::read_checkpoint(&ck_path).unwrap();
+    assert_eq!(ck.steps.len(), 3);
+    let counts = |k: usize| {
+        let s = &ck.friction[k].as_ref().expect("friction arrays").state;
+        let n = |v: u8| s.iter().filter(|&&x| x == v).count();
+        (n(1), n(2))
+    };
+    for (step, args) in [
+        ("1", vec!["--step", "1"]),
+        ("3", vec![]),
+        ("3", vec!["--all-steps"]),
+    ] {
+        let fig = d.join(format!("f{step}{}.svg", args.len()));
+        let mut a = vec![
+            "plot",
+            ck_path.to_str().unwrap(),
+            "--contact",
+            "-o",
+            fig.to_str().unwrap(),
+        ];
+        a.extend(args.iter().copied());
+        let (code, so, se) = signorini(&a);
+        assert_eq!(code, 0, "{so}\n{se}");
+        let (stick, slip) = counts(step.parse::<usize>().unwrap() - 1);
+        let line = so.lines().find(|l| l.starts_with("friction:")).unwrap();
+        assert!(
+            line.starts_with(&format!(
+                "friction: {stick} rows stick, {slip} slip (step {step}"
+            )),
+            "{args:?}: {line}"
+        );
+        assert!(!line.contains("last step drawn)"), "{line}");
+    }
+}
