@@ -37,15 +37,17 @@ import subprocess
 import sys
 import tempfile
 
-import h5py
-import numpy as np
+# h5py and numpy are imported by main() once the arguments are checked: a
+# usage error needs neither (and is exit 2 wherever they are missing).
+h5py = None
+np = None
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 VDIR = os.path.join(ROOT, "verification")
 
 
 class Failure(Exception):
-    """A mesh or solve that did not finish: exit 2."""
+    """A mesh or solve that did not finish: exit 3."""
 
 
 # ---------------------------------------------------------------- running
@@ -501,6 +503,13 @@ def main():
     if args.work and os.path.exists(args.work) and not os.path.isdir(args.work):
         print(f"verify: --work {args.work}: exists and is not a directory", file=sys.stderr)
         return EXIT_USAGE
+    global h5py, np
+    try:
+        import h5py
+        import numpy as np
+    except ImportError as e:
+        print(f"verify: {e} (scripts/verify installs h5py and numpy into .venv)", file=sys.stderr)
+        return EXIT_FAILED
     if not os.path.exists(args.exe):
         print(f"verify: {args.exe} not found (cargo build --release)", file=sys.stderr)
         return EXIT_FAILED

@@ -1213,3 +1213,37 @@ fn small_things_of_the_report_and_the_table() {
     assert!(row.ends_with("yes"), "{row}");
     assert!(!stdout.contains("-0.00000e0"), "{stdout}");
 }
+
+/// `scripts/verify` (verify.py): a usage error is one line and exit 2,
+/// whether or not h5py and numpy are there (run with the system's
+/// python3): `--work` naming a regular file, an unknown option, an unknown
+/// case. Before: a traceback and exit 1, which means "outside tolerance".
+#[test]
+fn verify_script_usage_errors_are_exit_2_and_one_line() {
+    if Command::new("python3").arg("--version").output().is_err() {
+        eprintln!("python3 not found: skipped");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("afile");
+    std::fs::write(&file, "x").unwrap();
+    let script = root().join("scripts/verify.py");
+    for args in [
+        vec!["--work", file.to_str().unwrap()],
+        vec!["--bogus"],
+        vec!["--only", "nosuchcase"],
+    ] {
+        let o = Command::new("python3")
+            .arg(&script)
+            .args(&args)
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.starts_with("verify: "), "{args:?}: {stderr}");
+        assert!(!stderr.contains("Traceback"), "{args:?}: {stderr}");
+    }
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
+}
