@@ -15,9 +15,13 @@ Usage:
     --plots  also draw each checkpoint (`signorini plot`, with and without
              --contact) into the work directory
 
-Prints one Markdown table row per compared quantity and exits 0 when every
-error is within its tolerance, 1 when one is not, 2 when a mesh or a solve
-failed (a solve must exit 0: converged and certified).
+Prints one Markdown table row per compared quantity. Exit codes:
+    0  every error is within its tolerance
+    1  an error is outside its tolerance
+    2  a usage error (an unknown option or case, --work naming something
+       that is not a directory or cannot be created): one line on stderr
+    3  a tool is missing (the signorini binary, gmsh) or a mesh or a solve
+       failed (a solve must exit 0: converged and certified)
 
 Needs numpy and h5py (scripts/verify runs this file with the project's venv,
 .venv, and creates it when it is missing).
@@ -33,15 +37,17 @@ import subprocess
 import sys
 import tempfile
 
-import h5py
-import numpy as np
+# h5py and numpy are imported by main() once the arguments are checked: a
+# usage error needs neither (and is exit 2 wherever they are missing).
+h5py = None
+np = None
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 VDIR = os.path.join(ROOT, "verification")
 
 
 class Failure(Exception):
-    """A mesh or solve that did not finish: exit 2."""
+    """A mesh or solve that did not finish: exit 3."""
 
 
 # ---------------------------------------------------------------- running
@@ -463,8 +469,20 @@ CASES = {"nafems1": case_nafems1, "patch": case_patch, "hertz": case_hertz,
          "sneddon": case_sneddon, "nafems2": case_nafems2, "shrinkfit": case_shrinkfit}
 
 
+EXIT_USAGE = 2
+EXIT_FAILED = 3
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse whose usage errors are one line on stderr and exit 2."""
+
+    def error(self, message):
+        print(f"verify: {message} (scripts/verify --help)", file=sys.stderr)
+        sys.exit(EXIT_USAGE)
+
+
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[1])
+    ap = OneLineParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--fine", action="store_true")
     ap.add_argument("--only", default="")
     ap.add_argument("--work", default="")
@@ -472,19 +490,39 @@ def main():
     ap.add_argument("--exe", default=os.path.join(ROOT, "target", "release", "signorini"))
     ap.add_argument("--gmsh", default="gmsh")
     args = ap.parse_args()
+    # Relative paths are the caller's (scripts/verify runs this from the root).
+    caller = os.environ.get("VERIFY_CALLER_DIR", os.getcwd())
+    if args.work:
+        args.work = os.path.abspath(os.path.join(caller, args.work))
+    args.exe = os.path.abspath(os.path.join(caller, args.exe))
     names = [n for n in args.only.split(",") if n] or list(CASES)
     for n in names:
         if n not in CASES:
             print(f"verify: unknown case '{n}' (cases: {', '.join(CASES)})", file=sys.stderr)
-            return 2
+            return EXIT_USAGE
+    if args.work and os.path.exists(args.work) and not os.path.isdir(args.work):
+        print(f"verify: --work {args.work}: exists and is not a directory", file=sys.stderr)
+        return EXIT_USAGE
+    global h5py, np
+    try:
+        import h5py
+        import numpy as np
+    except ImportError as e:
+        print(f"verify: {e} (scripts/verify installs h5py and numpy into .venv)", file=sys.stderr)
+        return EXIT_FAILED
     if not os.path.exists(args.exe):
         print(f"verify: {args.exe} not found (cargo build --release)", file=sys.stderr)
-        return 2
+        return EXIT_FAILED
     if shutil.which(args.gmsh) is None:
         print(f"verify: {args.gmsh} not found", file=sys.stderr)
-        return 2
-    work = args.work or tempfile.mkdtemp(prefix="signorini_verify.")
-    os.makedirs(work, exist_ok=True)
+        return EXIT_FAILED
+    try:
+        work = args.work or tempfile.mkdtemp(prefix="signorini_verify.")
+        os.makedirs(work, exist_ok=True)
+    except OSError as e:
+        print(f"verify: --work {args.work}: cannot create the directory: {e.strerror}",
+              file=sys.stderr)
+        return EXIT_USAGE
     level = "fine" if args.fine else "coarse"
     print(f"verify: {level} meshes, work directory {work}", file=sys.stderr)
     print("| case | quantity | reference | tool | error | tolerance | pass |")
@@ -497,7 +535,7 @@ def main():
             rows = CASES[n](args, sub)
         except Failure as e:
             print(f"verify: {n}: {e}", file=sys.stderr)
-            return 2
+            return EXIT_FAILED
         for r in rows:
             ok = r["error"] <= r["tol"]
             failed += not ok

@@ -96,14 +96,19 @@ fn main() {
             .num_threads(1)
             .build_global()
         {
-            eprintln!(
+            signorini::errln!(
                 "error: out of memory: cannot start a worker thread ({e}); raise the memory limit (ulimit -v)"
             );
             std::process::exit(2);
         }
     }
     signorini::linalg::fix_parallelism();
-    let mut cli = signorini::cli::Cli::parse();
+    // clap's own answers (`--help`, `--version`, a refused flag) with a
+    // checked stdout: a closed pipe is exit 4, not a silent 0.
+    let mut cli = match signorini::cli::Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => std::process::exit(signorini::cli::clap_exit(&e)),
+    };
     cli.build.parallel = threads.is_none_or(|t| t > 1);
     std::process::exit(signorini::cli::run(cli));
 }

@@ -631,3 +631,112 @@ p = [0.0, -1.0e6]
         prev = Some(reused);
     }
 }
+
+/// A block one element wide pressed on a base, both between two lines of
+/// symmetry (`[[slip]]` left and right), mortar with Coulomb friction:
+/// both slave rows sit on a symmetry line, so the friction residual is
+/// exactly 0. The JSON still writes `kkt.friction` (a frictional problem
+/// always does; it was left out, as for a frictionless one).
+#[test]
+fn kkt_friction_is_written_when_every_frictional_row_is_on_a_symmetry_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let blocks = [
+        Block {
+            name: "base",
+            r: [0.0, 1.0],
+            z: [-1.0, 0.0],
+            n: [2, 2],
+        },
+        Block {
+            name: "block",
+            r: [0.0, 1.0],
+            z: [0.0, 1.0],
+            n: [1, 2],
+        },
+    ];
+    let body = r#"[model]
+plane = "strain"
+[materials.base]
+E = 1.0e8
+nu = 0.45
+[materials.block]
+E = 1.0e9
+nu = 0.2
+[[dirichlet]]
+on = "base_bottom"
+uy = 0.0
+[[dirichlet]]
+on = "block_top"
+uy = -0.01
+[[slip]]
+on = "base_inner"
+[[slip]]
+on = "base_outer"
+[[slip]]
+on = "block_inner"
+[[slip]]
+on = "block_outer"
+[[contact]]
+slave = "block_bottom"
+master = "base_top"
+discretization = "mortar"
+friction = 0.3
+"#;
+    let path = write_model(dir.path(), "all_on_symmetry", &blocks, body);
+    let out = dir.path().join("out");
+    let (code, _, stderr) = common::signorini(&[
+        "solve",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("all_on_symmetry.json")).unwrap())
+            .unwrap();
+    assert_eq!(j["kkt"]["friction"], 0.0, "{}", j["kkt"]);
+    assert!(j["contact"]["stick"].is_u64(), "{}", j["contact"]);
+}
+
+/// The checkpoint's root attribute `model` names the kind of model: an
+/// axisymmetric checkpoint said only `plane_strain = 1`.
+#[test]
+fn the_checkpoint_names_the_model_kind() {
+    let dir = tempfile::tempdir().unwrap();
+    let blocks = [Block {
+        name: "ring",
+        r: [1.0, 2.0],
+        z: [0.0, 1.0],
+        n: [2, 2],
+    }];
+    for (plane, kind) in [
+        ("axisymmetric", "axisymmetric"),
+        ("strain", "plane_strain"),
+        ("stress", "plane_stress"),
+    ] {
+        let body = format!(
+            "[model]\nplane = \"{plane}\"\n[materials.ring]\nE = 1.0e9\nnu = 0.3\n[[dirichlet]]\non = \"ring_bottom\"\nu = [0.0, 0.0]\n[[traction]]\non = \"ring_top\"\npn = -1.0e6\n"
+        );
+        let name = format!("kind_{plane}");
+        let path = write_model(dir.path(), &name, &blocks, &body);
+        let out = dir.path().join(&name);
+        let (code, _, stderr) = common::signorini(&[
+            "solve",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "-q",
+        ]);
+        assert_eq!(code, 0, "{plane}: {stderr}");
+        let f = hdf5::File::open(out.join(format!("{name}.h5"))).unwrap();
+        let v: hdf5::types::VarLenUnicode = f.attr("model").unwrap().read_scalar().unwrap();
+        assert_eq!(v.as_str(), kind, "{plane}");
+        // The old attribute keeps its meaning: a fourth stress component.
+        let ps: u8 = f.attr("plane_strain").unwrap().read_scalar().unwrap();
+        assert_eq!(ps, u8::from(plane != "stress"), "{plane}");
+        // Not a user attribute of the checkpoint as read back.
+        let ck = signorini::io::hdf5::read_checkpoint(&out.join(format!("{name}.h5"))).unwrap();
+        assert!(!ck.attrs.iter().any(|(k, _)| k == "model"), "{plane}");
+    }
+}

@@ -640,3 +640,46 @@ fn a_signal_stops_a_long_solve_at_its_next_iteration() {
     let left: Vec<String> = snapshot(&out).into_keys().collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
+
+/// `signorini solve … | head -1`: the reader of stdout goes away after the
+/// first step's line, while the run goes on. The run completes every step,
+/// commits its files (the checkpoint holds all four steps, the JSON is
+/// there and converged) and exits 4 with one line on stderr. Before: the
+/// second step's line panicked (EPIPE), exit 101, and the run stopped.
+#[test]
+fn a_reader_that_goes_away_mid_run_loses_the_report_not_the_run() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let mut child = command()
+        .args(["solve", problem().to_str().unwrap(), "--out"])
+        .arg(&out)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = std::io::BufReader::new(child.stdout.take().unwrap()).lines();
+    let first = lines.next().unwrap().unwrap();
+    assert!(first.starts_with("step    1/4"), "{first}");
+    // `head -1` exits: the pipe's only reader is gone.
+    drop(lines);
+    let o = child.wait_with_output().unwrap();
+    let (code, stderr) = (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    );
+    assert_eq!(code, 4, "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(
+        stderr.contains("error: cannot write to standard output"),
+        "{stderr}"
+    );
+    let ck = read_checkpoint(&out.join(format!("{NAME}.h5"))).unwrap();
+    assert_eq!(ck.steps.len(), 4);
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join(format!("{NAME}.json"))).unwrap())
+            .unwrap();
+    assert_eq!(j["converged"], true);
+    assert_eq!(j["failed_steps"], serde_json::json!([]));
+}

@@ -646,3 +646,168 @@ fn axisymmetric_fields_are_named_srr_szz_srz_stt() {
         );
     }
 }
+
+/// A model in mm and MPa (`[model] units`) is labelled so: the colour bar,
+/// the axes, the contact plot and the printed range name its units, not m
+/// and Pa. The key is a label only: a checkpoint solved without it is
+/// continued (`--restart`) by the same problem with it, and the bits of the
+/// solution do not change.
+#[test]
+fn model_units_label_the_figures() {
+    let dir = out_dir();
+    let d = dir.path();
+    let plain = common::model_variant(
+        &common::meshes(),
+        "two_blocks_eccentric.toml",
+        &[],
+        &d.join("m.toml"),
+    );
+    let out0 = d.join("o0");
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        plain.to_str().unwrap(),
+        "--out",
+        out0.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let mut text = std::fs::read_to_string(&plain).unwrap();
+    assert!(text.contains("[model]\n"), "{text}");
+    text = text.replace(
+        "[model]\n",
+        "[model]\nunits = { length = \"mm\", stress = \"MPa\" }\n",
+    );
+    std::fs::write(&plain, &text).unwrap();
+    let out1 = d.join("o1");
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        plain.to_str().unwrap(),
+        "--out",
+        out1.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let a = signorini::io::hdf5::read_checkpoint(&out0.join("m.h5")).unwrap();
+    let b = signorini::io::hdf5::read_checkpoint(&out1.join("m.h5")).unwrap();
+    assert_eq!(a.steps[0].displacement, b.steps[0].displacement);
+    let h5 = out1.join("m.h5");
+    let fig = d.join("f.svg");
+    let (code, stdout, stderr) =
+        signorini(&["plot", h5.to_str().unwrap(), "-o", fig.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stderr}");
+    let svg = std::fs::read_to_string(&fig).unwrap();
+    assert!(
+        svg.contains("von_mises [MPa]") && svg.contains("x [mm]"),
+        "labels"
+    );
+    assert!(
+        !svg.contains("[Pa]") && !svg.contains("[m]"),
+        "SI labels left"
+    );
+    let range = stdout.lines().find(|l| l.starts_with("range:")).unwrap();
+    assert!(range.ends_with(" MPa"), "{range}");
+    let scale = stdout
+        .lines()
+        .find(|l| l.starts_with("displacement"))
+        .unwrap();
+    assert!(scale.ends_with(" mm)"), "{scale}");
+    let cfig = d.join("c.svg");
+    let (code, stdout, stderr) = signorini(&[
+        "plot",
+        h5.to_str().unwrap(),
+        "--contact",
+        "-o",
+        cfig.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let svg = std::fs::read_to_string(&cfig).unwrap();
+    assert!(svg.contains("contact pressure [MPa]") && svg.contains("arc length s [mm]"));
+    assert!(stdout.contains(" MPa"), "{stdout}");
+    // The SI checkpoint keeps its labels.
+    let sfig = d.join("s.svg");
+    let (code, _, _) = signorini(&[
+        "plot",
+        out0.join("m.h5").to_str().unwrap(),
+        "-o",
+        sfig.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0);
+    assert!(std::fs::read_to_string(&sfig)
+        .unwrap()
+        .contains("von_mises [Pa]"));
+    // A restart across the added key is the same problem.
+    let out2 = d.join("o2");
+    let (code, _, stderr) = signorini(&[
+        "solve",
+        plain.to_str().unwrap(),
+        "--out",
+        out2.to_str().unwrap(),
+        "--restart",
+        out0.join("m.h5").to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(code, 0, "restart refused: {stderr}");
+}
+
+/// The friction count of `plot --contact --step 1` is step 1's, and the
+/// line says so; it said "(last step drawn)" whatever the step. Two blocks
+/// with Coulomb friction, pressed in step 1 and sheared in steps 2 and 3.
+#[test]
+fn the_friction_count_names_the_step_drawn() {
+    let dir = out_dir();
+    let d = dir.path();
+    let toml = common::model_variant(
+        &common::meshes(),
+        "two_blocks.toml",
+        &[
+            ("on = \"left_upper\"", "on = \"left_lower\""),
+            ("on = \"right_upper\"", "on = \"right_lower\""),
+            ("[[traction]]\non = \"top\"\npn = -1.0e6\n", "[[dirichlet]]\non = \"top\"\nu = [0.0, 0.0]\n"),
+            ("normals = \"averaged\"\n", "normals = \"averaged\"\nfriction = 0.3\n[[steps]]\ndirichlet = { top = [0.0, -2.0e-4] }\n[[steps]]\ndirichlet = { top = [2.0e-5, -2.0e-4] }\n[[steps]]\ndirichlet = { top = [4.0e-5, -2.0e-4] }\n"),
+        ],
+        &d.join("sheared.toml"),
+    );
+    let out = d.join("out");
+    let (code, so, se) = signorini(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(code, 0, "{so}\n{se}");
+    let ck_path = out.join("sheared.h5");
+    let ck = signorini::io::hdf5::read_checkpoint(&ck_path).unwrap();
+    assert_eq!(ck.steps.len(), 3);
+    let counts = |k: usize| {
+        let s = &ck.friction[k].as_ref().expect("friction arrays").state;
+        let n = |v: u8| s.iter().filter(|&&x| x == v).count();
+        (n(1), n(2))
+    };
+    for (step, args) in [
+        ("1", vec!["--step", "1"]),
+        ("3", vec![]),
+        ("3", vec!["--all-steps"]),
+    ] {
+        let fig = d.join(format!("f{step}{}.svg", args.len()));
+        let mut a = vec![
+            "plot",
+            ck_path.to_str().unwrap(),
+            "--contact",
+            "-o",
+            fig.to_str().unwrap(),
+        ];
+        a.extend(args.iter().copied());
+        let (code, so, se) = signorini(&a);
+        assert_eq!(code, 0, "{so}\n{se}");
+        let (stick, slip) = counts(step.parse::<usize>().unwrap() - 1);
+        let line = so.lines().find(|l| l.starts_with("friction:")).unwrap();
+        assert!(
+            line.starts_with(&format!(
+                "friction: {stick} rows stick, {slip} slip (step {step}"
+            )),
+            "{args:?}: {line}"
+        );
+        assert!(!line.contains("last step drawn)"), "{line}");
+    }
+}

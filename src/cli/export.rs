@@ -4,7 +4,7 @@
 
 use super::solve::bad_input;
 use super::SolverFlags;
-use crate::run::{self, ExportSpec};
+use crate::run::{self, ExportSpec, Verdict};
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -48,7 +48,7 @@ pub fn run(a: &ExportArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32
         Err(e) => return bad_input(&e),
     };
     if !quiet {
-        println!(
+        crate::outln!(
             "exported {} (n = {}, m = {}, nnz(C) = {}, kernel {}{}) to {} in {:.3} s (write {:.3} s)",
             a.problem.display(),
             r.n,
@@ -63,5 +63,21 @@ pub fn run(a: &ExportArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32
             r.t_write
         );
     }
-    0
+    // A solution not converged or not certified is written and flagged
+    // (meta.json) and exits 3, as solve does.
+    match &r.solution {
+        Some(s)
+            if !s.verdict.certified() || (a.solver.strict && s.verdict != Verdict::Certified) =>
+        {
+            crate::errln!(
+                "warning: {}: the exported solution ({}) is {} (written and flagged in {}; docs/methods.md §8)",
+                a.problem.display(),
+                s.method,
+                if s.converged { "not certified" } else { "not converged" },
+                a.qp.join("meta.json").display()
+            );
+            run::EXIT_NOT_CONVERGED
+        }
+        _ => 0,
+    }
 }

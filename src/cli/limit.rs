@@ -18,7 +18,7 @@ pub struct LimitArgs {
     #[arg(long)]
     pub no_contact: bool,
     /// Factor and solve this many times; the JSON holds the median.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = at_least_one)]
     pub repeat: usize,
     /// amd | nested-dissection; overrides [solver] ordering (docs/methods.md §3).
     #[arg(long)]
@@ -26,6 +26,14 @@ pub struct LimitArgs {
     /// Largest factor allowed, e.g. "8 GiB"; overrides [solver] memory_limit.
     #[arg(long)]
     pub memory_limit: Option<String>,
+}
+
+/// A count of at least 1 (`--repeat 0` would time nothing).
+fn at_least_one(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err("expected a whole number of times, at least 1".into()),
+    }
 }
 
 pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
@@ -40,7 +48,7 @@ pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32
     };
     match run::limit(&prep, &spec) {
         Ok(r) => {
-            println!("{}", r.to_json_line());
+            crate::outln!("{}", r.to_json_line());
             0
         }
         Err(e) => bad_input(&e),

@@ -22,11 +22,11 @@ pub struct MeshArgs {
 
 pub fn run(a: &MeshArgs, quiet: bool) -> i32 {
     if !a.geo.is_file() {
-        eprintln!("error: {}: no such file", a.geo.display());
+        crate::errln!("error: {}: no such file", a.geo.display());
         return 2;
     }
     if Command::new(&a.gmsh).arg("--version").output().is_err() {
-        eprintln!(
+        crate::errln!(
             "error: Gmsh is not installed (`{}` not found); on Debian: apt-get install gmsh (or pass --gmsh PATH)",
             a.gmsh
         );
@@ -67,7 +67,7 @@ pub fn run(a: &MeshArgs, quiet: bool) -> i32 {
         Ok(())
     });
     if let Err(e) = result {
-        eprintln!("error: {e}");
+        crate::errln!("error: {e}");
         return 2;
     }
     match crate::mesh::read_msh(&out) {
@@ -85,18 +85,18 @@ pub fn run(a: &MeshArgs, quiet: bool) -> i32 {
                         )
                     })
                     .collect();
-                println!(
+                crate::outln!(
                     "{}: {} nodes, {} triangles",
                     out.display(),
                     m.nodes.len(),
                     m.triangles.len()
                 );
-                println!("physical groups: {}", groups.join(", "));
+                crate::outln!("physical groups: {}", groups.join(", "));
             }
             0
         }
         Err(e) => {
-            eprintln!("error: {e}");
+            crate::errln!("error: {e}");
             2
         }
     }

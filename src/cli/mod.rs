@@ -1,7 +1,8 @@
 //! The `signorini` command line. Exit codes: 0 converged, 2 bad input
 //! (including an unbounded problem and an unwritable output directory),
 //! 3 not converged (outputs written and flagged) or, with `--strict`, a
-//! KKT residual above target.
+//! KKT residual above target, 4 standard output not writable (a closed
+//! pipe, a full disk; the report is lost, the files are written).
 
 pub mod compare;
 pub mod export;
@@ -20,12 +21,18 @@ use std::path::PathBuf;
     about = "Multibody contact in 2D elasticity (Signorini, optional Tresca/Coulomb friction) by P1 FEM, with a choice of QP methods"
 )]
 pub struct Cli {
-    /// Diagnostics level: error, warn, info, debug, trace.
-    #[arg(long, global = true, default_value = "warn")]
+    /// Diagnostics level on stderr (`error` hides the warnings).
+    #[arg(
+        long,
+        global = true,
+        default_value = "warn",
+        value_parser = ["error", "warn", "info", "debug", "trace"]
+    )]
     pub log_level: String,
-    /// Print nothing but errors.
-    #[arg(long, short, global = true)]
-    pub quiet: bool,
+    /// `-q`: no report nor progress on stdout (warnings and errors still go
+    /// to stderr); `-qq`: the warnings hidden too (`--log-level error`).
+    #[arg(long, short, global = true, action = clap::ArgAction::Count)]
+    pub quiet: u8,
     #[command(subcommand)]
     pub command: Command,
     /// How models are built: set by `main` from SIGNORINI_THREADS, no flag.
@@ -87,13 +94,54 @@ pub struct SolveArgs {
     pub solver: SolverFlags,
 }
 
+/// The exit code of a command line clap refused or answered itself
+/// (`--help`, `--version`): its text printed, where a failure to write the
+/// help to stdout is exit [`crate::run::EXIT_STDOUT`] with one line on
+/// stderr, as for every command.
+pub fn clap_exit(e: &clap::Error) -> i32 {
+    use std::io::Write;
+    let printed = e.print().and_then(|()| std::io::stdout().flush());
+    match printed {
+        Err(io) if !e.use_stderr() => {
+            crate::io::console::record_stdout_failure(&io);
+            stdout_verdict(0)
+        }
+        _ => e.exit_code(),
+    }
+}
+
+/// The exit code `code` of a command whose stdout failed (a closed pipe,
+/// a full disk): one line on stderr, and [`crate::run::EXIT_STDOUT`]
+/// instead of 0 (a failure's own code is kept).
+fn stdout_verdict(code: i32) -> i32 {
+    match crate::io::console::stdout_failure() {
+        None => code,
+        Some(e) => {
+            crate::errln!(
+                "error: cannot write to standard output: {e} (the report is lost; files already written are complete)"
+            );
+            if code == 0 {
+                crate::run::EXIT_STDOUT
+            } else {
+                code
+            }
+        }
+    }
+}
+
 /// Run the CLI; returns the process exit code.
 pub fn run(cli: Cli) -> i32 {
-    let level = if cli.quiet {
+    let code = run_command(cli);
+    stdout_verdict(code)
+}
+
+fn run_command(cli: Cli) -> i32 {
+    let level = if cli.quiet >= 2 {
         "error"
     } else {
         cli.log_level.as_str()
     };
+    let quiet = cli.quiet > 0;
     // Debug and trace lines carry a millisecond timestamp (phase timing).
     let verbose = level.contains("debug") || level.contains("trace");
     let _ = env_logger::Builder::new()
@@ -101,12 +149,12 @@ pub fn run(cli: Cli) -> i32 {
         .format_timestamp(verbose.then_some(env_logger::TimestampPrecision::Millis))
         .try_init();
     match cli.command {
-        Command::Solve(a) => solve::run(&a, cli.quiet, &cli.build),
-        Command::Compare(a) => compare::run(&a, cli.quiet, &cli.build),
-        Command::Mesh(a) => mesh::run(&a, cli.quiet),
-        Command::Plot(a) => plot::run(&a, cli.quiet),
-        Command::Export(a) => export::run(&a, cli.quiet, &cli.build),
-        Command::Limit(a) => limit::run(&a, cli.quiet, &cli.build),
+        Command::Solve(a) => solve::run(&a, quiet, &cli.build),
+        Command::Compare(a) => compare::run(&a, quiet, &cli.build),
+        Command::Mesh(a) => mesh::run(&a, quiet),
+        Command::Plot(a) => plot::run(&a, quiet),
+        Command::Export(a) => export::run(&a, quiet, &cli.build),
+        Command::Limit(a) => limit::run(&a, quiet, &cli.build),
         Command::Methods => {
             // One line per method, its name first (scripts parse it), then
             // what it declares; `auto`, the default, is ssn.
@@ -118,7 +166,7 @@ pub fn run(cli: Cli) -> i32 {
                     crate::qp::method::Factor::Never => "never",
                     crate::qp::method::Factor::BySettings => "by settings",
                 };
-                println!(
+                crate::outln!(
                     "{:<10} {} [friction {}, floating bodies {}, factor {factor}{}]",
                     id.name(),
                     m.summary(),
@@ -135,7 +183,7 @@ pub fn run(cli: Cli) -> i32 {
                 .iter()
                 .map(|k| k.name())
                 .collect();
-            println!("preconditioners (cgc): {}", pcs.join(", "));
+            crate::outln!("preconditioners (cgc): {}", pcs.join(", "));
             0
         }
     }

@@ -79,14 +79,14 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
     let field = match Field::parse(&a.field) {
         Ok(f) => f,
         Err(e) => {
-            eprintln!("error: {e}");
+            crate::errln!("error: {e}");
             return EXIT_BAD_INPUT;
         }
     };
     let range = match a.range.as_deref().map(parse_range).transpose() {
         Ok(r) => r,
         Err(e) => {
-            eprintln!("error: {e}");
+            crate::errln!("error: {e}");
             return EXIT_BAD_INPUT;
         }
     };
@@ -106,6 +106,8 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
             (_, true) => Some(false),
             _ => None,
         },
+        // Set from the checkpoint's problem by the renderer.
+        units: Default::default(),
     };
     match plot::plot_file(&a.checkpoint, &a.output, &opts) {
         Ok(s) => {
@@ -122,31 +124,29 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                 } else {
                     what
                 };
+                // The units of the checkpoint's problem ([model] units).
+                let u = &s.units;
                 let unit = if a.contact {
-                    " Pa"
+                    format!(" {}", u.stress)
                 } else {
-                    match field.unit() {
-                        Some("Pa") => " Pa",
-                        Some("m") => " m",
-                        _ => "",
-                    }
+                    s.field.unit(u).map(|x| format!(" {x}")).unwrap_or_default()
                 };
                 if a.all_steps {
-                    println!("steps {} to {}, {what}", s.first_step, s.steps);
+                    crate::outln!("steps {} to {}, {what}", s.first_step, s.steps);
                     // With --change the figure starts at the reference step.
                     match s.first_step {
                         1 => {}
-                        2 => println!("step 1 precedes the reference step 2: no change to draw, left out"),
-                        f => println!(
+                        2 => crate::outln!("step 1 precedes the reference step 2: no change to draw, left out"),
+                        f => crate::outln!(
                             "steps 1 to {} precede the reference step {f}: no change to draw, left out",
                             f - 1
                         ),
                     }
                 } else {
-                    println!("step {} of {}, {what}", s.step, s.steps);
+                    crate::outln!("step {} of {}, {what}", s.step, s.steps);
                 }
                 if let Some((lo, hi)) = s.range {
-                    println!(
+                    crate::outln!(
                         "range: {} to {}{unit}{}",
                         plot::fmt_num(lo),
                         plot::fmt_num(hi),
@@ -159,14 +159,26 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                     );
                 }
                 if let Some((lo, hi)) = s.tangential_range {
-                    println!(
-                        "tangential traction: {} to {} Pa",
+                    crate::outln!(
+                        "tangential traction: {} to {} {}",
                         plot::fmt_num(lo),
-                        plot::fmt_num(hi)
+                        plot::fmt_num(hi),
+                        u.stress
                     );
                 }
                 if let Some((stick, slip)) = s.stick_slip {
-                    println!("friction: {stick} rows stick, {slip} slip (last step drawn)");
+                    // Of the step drawn; with --all-steps, of the last one.
+                    if a.all_steps {
+                        crate::outln!(
+                            "friction: {stick} rows stick, {slip} slip (step {}, the last drawn)",
+                            s.steps
+                        );
+                    } else {
+                        crate::outln!(
+                            "friction: {stick} rows stick, {slip} slip (step {})",
+                            s.step
+                        );
+                    }
                 }
                 if let Some(k) = s.scale {
                     let how = if a.scale.is_some() {
@@ -174,18 +186,19 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
                     } else {
                         "largest displacement = 5 % of the bounding-box diagonal"
                     };
-                    println!(
-                        "displacement scale: {} ({how}; max |u| = {} m)",
+                    crate::outln!(
+                        "displacement scale: {} ({how}; max |u| = {} {})",
                         plot::fmt_num(k),
-                        plot::fmt_num(s.max_displacement)
+                        plot::fmt_num(s.max_displacement),
+                        u.length
                     );
                 }
-                println!("wrote {}", a.output.display());
+                crate::outln!("wrote {}", a.output.display());
             }
             0
         }
         Err(e) => {
-            eprintln!("error: {e}");
+            crate::errln!("error: {e}");
             EXIT_BAD_INPUT
         }
     }

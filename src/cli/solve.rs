@@ -74,7 +74,7 @@ fn solve(
         Some(rp) => {
             let r = Restart::read(rp, prep)?;
             if !quiet {
-                println!(
+                crate::outln!(
                     "restart     from step {} of {nsteps} ({})",
                     r.steps_done,
                     rp.display()
@@ -92,7 +92,11 @@ fn solve(
     // The VTU pair and the checkpoint are written side by side.
     let mut files = Concurrent(vtu, checkpoint);
     let mut json = SummaryWriter::new(prep, &sdir);
-    let mut progress = Progress { quiet };
+    let mut progress = Progress {
+        quiet,
+        // `-qq` and `--log-level error` hide the warnings, these too.
+        warnings: log::max_level() >= log::LevelFilter::Warn,
+    };
     let outcome = Run::new(prep, method, opts)
         .strict(a.solver.strict)
         .max_steps(a.max_steps)
@@ -104,10 +108,10 @@ fn solve(
         if outcome.last.is_none() {
             let first = outcome.steps.start;
             if first >= nsteps {
-                println!("nothing to do: the checkpoint already holds all {nsteps} steps");
+                crate::outln!("nothing to do: the checkpoint already holds all {nsteps} steps");
             } else {
                 let last = a.max_steps.unwrap_or(nsteps).min(nsteps);
-                println!(
+                crate::outln!(
                     "nothing to do: the checkpoint already holds {first} steps (--max-steps {last})"
                 );
             }
@@ -124,7 +128,7 @@ fn solve(
 
 /// Print the one error line of bad input; the exit code for it.
 pub(crate) fn bad_input(e: &impl std::fmt::Display) -> i32 {
-    eprintln!("error: {}", one_line(&e.to_string()));
+    crate::errln!("error: {}", one_line(&e.to_string()));
     EXIT_BAD_INPUT
 }
 
@@ -157,7 +161,7 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
     };
     let m = last.model(prep);
     let res = &last.result;
-    println!(
+    crate::outln!(
         "signorini {} — {} ({})",
         env!("CARGO_PKG_VERSION"),
         prep.problem.name,
@@ -168,7 +172,7 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
         b.dedup();
         b.iter().map(|&b| m.body_label(b as usize)).collect()
     };
-    println!(
+    crate::outln!(
         "mesh        {} nodes ({} with interface copies), {} triangles, {} bodies{}",
         s.mesh_nodes,
         s.nodes,
@@ -184,31 +188,59 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
             )
         }
     );
-    println!(
+    crate::outln!(
         "problem     {} DOFs, {} contact constraints",
-        s.dofs, s.constraints
+        s.dofs,
+        s.constraints
     );
-    println!(
+    crate::outln!(
         "method      {} (preconditioner {}, ordering {})",
-        s.method, s.preconditioner, s.ordering
+        s.method,
+        s.preconditioner,
+        s.ordering
     );
-    println!(
+    crate::outln!(
         "status      {} after {} iterations ({} inner)",
-        s.status, s.iterations, s.inner_iterations
+        s.status,
+        s.iterations,
+        s.inner_iterations
     );
     for note in &s.notes {
-        println!("note        {note}");
+        crate::outln!("note        {note}");
     }
-    print_certificate(s);
+    print_certificate(s, !s.failed_steps.contains(&outcome.steps.end));
+    if let (false, Some(rows)) = (s.failed_steps.is_empty(), &s.steps) {
+        let failed: Vec<String> = rows
+            .iter()
+            .filter(|r| s.failed_steps.contains(&r.step))
+            .map(|r| {
+                let why = if r.converged {
+                    "not certified"
+                } else {
+                    "not converged"
+                };
+                format!("step {} of {} ({why})", r.step, outcome.nsteps)
+            })
+            .collect();
+        crate::outln!(
+            "failed      {}; outputs written and flagged",
+            failed.join(", ")
+        );
+    }
     print_forces(s);
     for (name, x, node, u) in run::probes(prep, &last.output.displacement) {
-        println!(
+        // -0 prints as 0.
+        let u = u.map(|v| if v == 0.0 { 0.0 } else { v });
+        crate::outln!(
             "probe {name:<5} ({:.6}, {:.6}) node {node}: u = ({:.6e}, {:.6e})",
-            x[0], x[1], u[0], u[1]
+            x[0],
+            x[1],
+            u[0],
+            u[1]
         );
     }
     if let Some(k) = s.reference_step {
-        println!(
+        crate::outln!(
             "reference   step {k}: displacement_change, stress_change and contact_pressure_change (this step minus step {k}) in the VTU and HDF5 outputs of step {k} and later"
         );
     }
@@ -221,27 +253,32 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
         .map(|(k, v)| format!("{k} {v:.3}"))
         .collect();
     let t = &s.timings;
-    println!(
-        "time [s]    read {:.3}  assemble {:.3}  solve {:.3} ({})  write {:.3}  total {:.3}",
+    crate::outln!(
+        "time [s]    read {:.3}  assemble {:.3}  solve {:.3}{}  write {:.3}  total {:.3}",
         t.read,
         t.assemble,
         t.solve,
-        phases.join(", "),
+        if phases.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", phases.join(", "))
+        },
         t.write,
         t.total
     );
     let multi = !prep.problem.file.steps.is_empty();
     let out = run::output_paths(dir, &prep.problem.name, multi.then_some(outcome.steps.end));
-    println!("outputs     {}", out.vtu.display());
-    println!("            {}", out.contact_vtu.display());
-    println!("            {}", out.h5.display());
-    println!("            {}", out.json.display());
+    crate::outln!("outputs     {}", out.vtu.display());
+    crate::outln!("            {}", out.contact_vtu.display());
+    crate::outln!("            {}", out.h5.display());
+    crate::outln!("            {}", out.json.display());
 }
 
-/// The KKT line: every residual and the verdict (docs/methods.md §8.4).
-fn print_certificate(s: &run::Summary) {
+/// The KKT line: every residual of the last step and its verdict,
+/// `certified` (docs/methods.md §8.4).
+fn print_certificate(s: &run::Summary, certified: bool) {
     let k = &s.kkt;
-    println!(
+    crate::outln!(
         "KKT         primal {:.2e}  dual {:.2e}  complementarity {:.2e}  stationarity {:.2e}  contact balance {:.2e}{}  → {}",
         k.primal,
         k.dual,
@@ -253,13 +290,13 @@ fn print_certificate(s: &run::Summary) {
         } else {
             String::new()
         },
-        if k.certified && (k.stationarity > k.target || k.contact_balance > k.target) {
+        if certified && (k.stationarity > k.target || k.contact_balance > k.target) {
             format!(
                 "certified at the rounding floor (stationarity floor {:.1e}, balance floor {:.1e}; \
                  target {:.0e}; docs/methods.md §8.4)",
                 k.stationarity_floor, k.balance_floor, k.target
             )
-        } else if k.certified {
+        } else if certified {
             format!("certified (≤ {:.0e})", k.target)
         } else {
             format!("NOT certified (target {:.0e})", k.target)
@@ -270,11 +307,13 @@ fn print_certificate(s: &run::Summary) {
 /// Energy, contact, friction, reactions, the global balance and the
 /// interface resultants (docs/problem-format.md §7).
 fn print_forces(s: &run::Summary) {
-    println!(
+    crate::outln!(
         "energy      {:.6e} (QP objective); strain energy {:.6e}, work of the loads {:.6e}",
-        s.energy, s.strain_energy, s.load_work
+        s.energy,
+        s.strain_energy,
+        s.load_work
     );
-    println!(
+    crate::outln!(
         "contact     {} active of {}, max pressure {:.4e} (peak nodal), mean pressure {:.4e}, total force {:.4e}",
         s.active,
         s.constraints,
@@ -283,7 +322,7 @@ fn print_forces(s: &run::Summary) {
         s.contact.total_force
     );
     if let (Some(stick), Some(slip)) = (s.contact.stick, s.contact.slip) {
-        println!(
+        crate::outln!(
             "friction    {stick} rows stick, {slip} slip; friction residual {:.2e}",
             s.kkt.friction
         );
@@ -297,7 +336,7 @@ fn print_forces(s: &run::Summary) {
         let (f, mo) = (g.resultant.force, g.resultant.moment);
         rf = [rf[0] + f[0], rf[1] + f[1]];
         rm += mo;
-        println!(
+        crate::outln!(
             "reaction    {:<14} ({}) F = ({:.4e}, {:.4e}), M = {:.4e}",
             format!("'{name}'"),
             g.kind,
@@ -306,7 +345,7 @@ fn print_forces(s: &run::Summary) {
             mo
         );
     }
-    println!(
+    crate::outln!(
         "balance     loads F = ({:.4e}, {:.4e}), M = {:.4e}; loads + reactions F = ({:.2e}, {:.2e}), M = {:.2e}",
         lf[0],
         lf[1],
@@ -321,7 +360,7 @@ fn print_forces(s: &run::Summary) {
         .values()
         .fold(lm.abs(), |a, g| a.max(g.resultant.moment.abs()));
     if s.contact.couple.abs() > 1e-12 * mscale {
-        println!(
+        crate::outln!(
             "            contact couple M = {:.4e} (contact forces across initial gaps); loads + reactions + couple M = {:.2e}",
             s.contact.couple,
             lm + rm + s.contact.couple
@@ -330,11 +369,13 @@ fn print_forces(s: &run::Summary) {
     if let Some(unit) = s.force_unit {
         // A ring's radial forces and moments are no resultant: only the
         // axial sum balances (docs/problem-format.md §11).
-        println!("            axisymmetric: forces in {unit}; only the axial (y) sum balances");
+        crate::outln!(
+            "            axisymmetric: forces in {unit}; only the axial (y) sum balances"
+        );
     }
     for (name, i) in &s.contact.interfaces {
         let (f, mo) = (i.resultant.force, i.resultant.moment);
-        println!(
+        crate::outln!(
             "interface   {:<14} on '{}': F = ({:.4e}, {:.4e}), M = {:.4e}; {} of {} rows active, max pressure {:.4e}, mean {:.4e}{}",
             format!("'{name}'"),
             i.on_body,
@@ -364,7 +405,7 @@ fn print_forces(s: &run::Summary) {
 
 /// The per-step table (the report's §3.4 table; `steps` in the JSON).
 fn print_steps(rows: &[run::StepRow]) {
-    println!(
+    crate::outln!(
         "steps       {:>5} {:>10} {:>8} {:>9} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>9} {:>9}",
         "step",
         "t",
@@ -381,7 +422,7 @@ fn print_steps(rows: &[run::StepRow]) {
     );
     let opt = |v: Option<usize>| v.map_or_else(|| "-".to_string(), |v| v.to_string());
     for r in rows {
-        println!(
+        crate::outln!(
             "            {:>5} {:>10} {:>8} {:>9} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>9.3} {:>9.3}{}",
             r.step,
             format!("{}", r.t),
@@ -395,7 +436,13 @@ fn print_steps(rows: &[run::StepRow]) {
             r.iterations,
             r.time_solve,
             r.time_step,
-            if r.converged { "" } else { "  NOT CONVERGED" }
+            if !r.converged {
+                "  NOT CONVERGED"
+            } else if !r.certified {
+                "  NOT CERTIFIED"
+            } else {
+                ""
+            }
         );
     }
 }

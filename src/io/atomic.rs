@@ -341,6 +341,18 @@ where
     if !dir.is_dir() {
         return Err(missing_dir(path, &dir));
     }
+    // A device or a FIFO at the target (`-o /dev/full`, `--json /dev/stdout`)
+    // is never replaced by a file: the rename would unlink the device node
+    // (as root, in /dev). A symbolic link is replaced, never followed.
+    if let Ok(m) = std::fs::symlink_metadata(path) {
+        let t = m.file_type();
+        if !t.is_file() && !t.is_symlink() {
+            return Err(IoError::format(
+                path,
+                "exists and is not a regular file (a device, FIFO, socket or directory): give a file name",
+            ));
+        }
+    }
     let mut stage = Stage::new(&dir, STAGE_PREFIX).map_err(|e| e.retarget(&dir, path))?;
     stage.keep_backups = false;
     let tmp = stage.stage_dir().join(&name);

@@ -33,7 +33,10 @@ pub use split::{
 /// /                       attrs: one string attribute per `attrs` entry
 ///                                (e.g. problem, toml, version, and the
 ///                                fingerprint `--restart` compares),
-///                                plane_strain (u8 0/1), last_step (u64, once a step exists)
+///                                plane_strain (u8 0/1: the stress has a 4th component,
+///                                also 1 for an axisymmetric model), model (string:
+///                                plane_strain | plane_stress | axisymmetric),
+///                                last_step (u64, once a step exists)
 /// /mesh/nodes             f64  [n, 2]   undeformed point coordinates
 /// /mesh/node_tags         u64  [n]      Gmsh node tag of each point
 /// /mesh/body              u32  [n]      body of each point
@@ -86,7 +89,21 @@ pub struct Checkpoint {
 }
 
 /// Root attributes that are not user strings.
-const RESERVED_ROOT_ATTRS: [&str; 3] = ["plane_strain", "last_step", "axisymmetric"];
+const RESERVED_ROOT_ATTRS: [&str; 4] = ["plane_strain", "last_step", "axisymmetric", "model"];
+
+/// The root attribute `model`: "plane_strain", "plane_stress" or
+/// "axisymmetric". `plane_strain` (1 when the stress has a fourth
+/// component, σzz or, axisymmetric, σθθ) alone reads as plane strain for
+/// an axisymmetric model; readers of the kind use this one.
+pub(crate) fn model_kind(mesh: &OutMesh) -> &'static str {
+    if mesh.axisymmetric {
+        "axisymmetric"
+    } else if mesh.plane_strain {
+        "plane_strain"
+    } else {
+        "plane_stress"
+    }
+}
 
 /// Error context: the file the user named plus an HDF5 location.
 struct Ctx<'a> {
@@ -274,6 +291,7 @@ pub fn create_checkpoint(
                 set_attr_str(&ctx, root, k, v)?;
             }
             set_attr_scalar(&ctx, root, "plane_strain", &u8::from(mesh.plane_strain))?;
+            set_attr_str(&ctx, root, "model", model_kind(mesh))?;
             if mesh.axisymmetric {
                 set_attr_scalar(&ctx, root, "axisymmetric", &1u8)?;
             }

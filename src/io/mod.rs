@@ -6,6 +6,7 @@
 //! solver or of the mesh reader.
 
 pub mod atomic;
+pub mod console;
 pub mod hdf5;
 pub mod mtx;
 pub mod vtu;

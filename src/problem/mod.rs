@@ -130,6 +130,67 @@ pub struct ModelSection {
     /// [`ProblemFile::at_step`], like the factor on gravity; None = 1).
     #[serde(skip)]
     pub centrifugal_factor: Option<f64>,
+    /// The units the numbers are in, as labels only (`signorini plot`):
+    /// `units = { length = "mm", stress = "MPa" }`; default m and Pa.
+    /// Nothing is converted, and the solution does not depend on it.
+    #[serde(default)]
+    pub units: Option<Units>,
+}
+
+/// `[model] units`: the names of the model's length and stress units
+/// (labels of the figures; docs/problem-format.md §2).
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields, try_from = "UnitsKeys")]
+pub struct Units {
+    pub length: String,
+    pub stress: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct UnitsKeys {
+    length: String,
+    stress: String,
+}
+
+impl TryFrom<UnitsKeys> for Units {
+    type Error = String;
+    fn try_from(k: UnitsKeys) -> Result<Units, String> {
+        for (key, v) in [("length", &k.length), ("stress", &k.stress)] {
+            if v.trim().is_empty() || v.len() > 32 || v.chars().any(char::is_control) {
+                return Err(format!(
+                    "[model] units.{key} = {v:?}: a unit name of 1 to 32 printable bytes, e.g. \"mm\" or \"MPa\""
+                ));
+            }
+        }
+        Ok(Units {
+            length: k.length,
+            stress: k.stress,
+        })
+    }
+}
+
+impl Default for Units {
+    /// SI: m and Pa.
+    fn default() -> Units {
+        Units {
+            length: "m".into(),
+            stress: "Pa".into(),
+        }
+    }
+}
+
+impl Units {
+    /// The `[model] units` of a problem file's text (the checkpoint keeps
+    /// it as `problem_toml`); SI when absent or unreadable.
+    pub fn of_problem_text(text: &str) -> Units {
+        let table: toml::Table = toml::from_str(text).unwrap_or_default();
+        table
+            .get("model")
+            .and_then(|m| m.get("units"))
+            .and_then(|u| u.clone().try_into::<Units>().ok())
+            .unwrap_or_default()
+    }
 }
 
 fn one() -> f64 {
@@ -144,6 +205,7 @@ impl Default for ModelSection {
             gravity: None,
             omega: None,
             centrifugal_factor: None,
+            units: None,
         }
     }
 }

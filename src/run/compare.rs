@@ -374,7 +374,7 @@ fn solve_variant(
 /// The rule that a method's answer is that of a penalised problem, O(ε_p)
 /// from the exact one (docs/methods.md §4.4, §8.4): it is never the
 /// reference and agrees within its own tolerances.
-fn penalised(method: MethodId) -> bool {
+pub(crate) fn penalised(method: MethodId) -> bool {
     method.capabilities().certificate == Certificate::Penalised
 }
 

@@ -7,6 +7,7 @@
 //! parsing and printing.
 
 use super::prepare::{options, solve, Prepared};
+use super::steps::Verdict;
 use super::RunError;
 use crate::io::{atomic, mtx};
 use crate::qp::{kkt, Friction, Kkt, QpResult, SlipBound, SolverSection};
@@ -30,6 +31,9 @@ pub struct ExportSpec {
 pub struct ExportedSolution {
     pub method: String,
     pub converged: bool,
+    /// The run's verdict on the solve (as `solve` judges a step, without
+    /// `--strict`: [`Verdict::Penalised`] counts as certified there).
+    pub verdict: Verdict,
     /// The objective of `meta.json` at x (with friction: plus Σ sᵢ|vᵢ|).
     pub energy: f64,
     /// The KKT residuals of the written x, λ (and λ_t) for the written QP.
@@ -173,6 +177,7 @@ fn write_solution(
     qp: &crate::qp::QpProblem,
     method: &str,
     res: &QpResult,
+    verdict: Verdict,
 ) -> Result<ExportedSolution, RunError> {
     files.vector("x.mtx", &res.x, "x: signorini's solution")?;
     files.vector("lambda.mtx", &res.lambda, "lambda: contact multipliers")?;
@@ -189,6 +194,7 @@ fn write_solution(
     Ok(ExportedSolution {
         method: method.to_string(),
         converged: res.status.converged(),
+        verdict,
         energy: qp.energy_with_friction(&res.x, &res.lambda),
         kkt: kkt::residuals_with_friction(qp, &res.x, &res.lambda, lambda_t),
     })
@@ -199,10 +205,11 @@ fn write_solution(
 /// error names the file.
 pub fn export(prep: &Prepared, spec: &ExportSpec) -> Result<ExportReport, RunError> {
     let qp = &prep.model.qp;
-    let solved: Option<(String, QpResult)> = if spec.solution {
+    let solved: Option<(String, QpResult, Verdict)> = if spec.solution {
         let (method, opts) = options(&prep.problem, &spec.solver)?;
         let r = solve(prep, method, &opts)?;
-        Some((method.name().to_string(), r))
+        let verdict = Verdict::of(method, &r, opts.settings.kkt_target, false);
+        Some((method.name().to_string(), r, verdict))
     } else {
         None
     };
@@ -233,7 +240,7 @@ pub fn export(prep: &Prepared, spec: &ExportSpec) -> Result<ExportReport, RunErr
         .transpose()?;
     let solution = solved
         .as_ref()
-        .map(|(method, res)| write_solution(&mut files, qp, method, res))
+        .map(|(method, res, verdict)| write_solution(&mut files, qp, method, res, *verdict))
         .transpose()?;
     let mut meta = meta_json(prep, law, solution.as_ref());
     // Friction's keys only with friction: a frictionless export is as before.
@@ -292,6 +299,7 @@ fn meta_json(
         "energy": solution.map(|s| s.energy),
         "method": solution.map(|s| s.method.clone()),
         "converged": solution.map(|s| s.converged),
+        "certified": solution.map(|s| s.verdict.certified()),
         "kkt": solution.map(|s| s.kkt),
         "t_read": prep.t_read,
         "t_assemble": prep.t_assemble,

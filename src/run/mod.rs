@@ -90,3 +90,7 @@ impl RunError {
 pub const EXIT_BAD_INPUT: i32 = 2;
 /// Exit code: a step not converged or not certified (outputs written).
 pub const EXIT_NOT_CONVERGED: i32 = 3;
+/// Exit code: standard output could not be written (a closed pipe, a full
+/// disk) by a command that would otherwise have exited 0: its report is
+/// lost, the files it wrote are complete and committed.
+pub const EXIT_STDOUT: i32 = 4;

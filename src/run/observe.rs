@@ -26,16 +26,19 @@ pub trait StepObserver {
 
 /// The step lines on stdout (with load steps, unless `quiet`) and the
 /// warning of a step that is not converged or not certified on stderr
-/// (always).
+/// (unless `warnings` is false: `-qq`, `--log-level error`).
 pub struct Progress {
+    /// No step lines on stdout.
     pub quiet: bool,
+    /// The warning of a step not converged or not certified on stderr.
+    pub warnings: bool,
 }
 
 impl StepObserver for Progress {
     fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
         let res = step.result;
         if step.multi && !self.quiet {
-            println!(
+            crate::outln!(
                 "step {:>4}/{}  t = {:<10} {} in {} iterations, KKT {:.2e}, {} active, {:.3} s",
                 step.index + 1,
                 step.nsteps,
@@ -53,18 +56,21 @@ impl StepObserver for Progress {
         }
         let s = step.index + 1;
         let method = step.method;
+        if !self.warnings {
+            return Ok(vec![]);
+        }
         match step.verdict {
             Verdict::Certified => {}
-            Verdict::NotConverged => eprintln!(
+            Verdict::NotConverged => crate::errln!(
                 "warning: step {s}: {method} did not converge: {} (outputs written and flagged converged = false)",
                 res.status.describe()
             ),
-            Verdict::NotCertified => eprintln!(
+            Verdict::NotCertified => crate::errln!(
                 "warning: step {s}: not certified: KKT residual {:.2e} above the target {:.0e} (outputs written and flagged certified = false; docs/methods.md §8)",
                 res.kkt.max(),
                 step.kkt_target
             ),
-            Verdict::Penalised => eprintln!(
+            Verdict::Penalised => crate::errln!(
                 "warning: step {s}: {method} violates the contact conditions by O(ε_p) (KKT of the unpenalised problem {:.2e}; --strict certifies against it)",
                 res.kkt.max()
             ),

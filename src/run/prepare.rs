@@ -165,9 +165,16 @@ pub fn fingerprint(prep: &Prepared, no_contact: bool) -> String {
         "contact",
         "steps",
     ] {
-        let text = table
-            .get(key)
-            .map(|v| toml::to_string(&toml::Table::from_iter([(key.to_string(), v.clone())])))
+        // `[model] units` only names the units (labels): not a part.
+        let value = table.get(key).map(|v| {
+            let mut v = v.clone();
+            if let (true, Some(t)) = (key == "model", v.as_table_mut()) {
+                t.remove("units");
+            }
+            v
+        });
+        let text = value
+            .map(|v| toml::to_string(&toml::Table::from_iter([(key.to_string(), v)])))
             .and_then(Result::ok)
             .unwrap_or_default();
         parts.push((key.to_string(), fnv1a(text.as_bytes())));

@@ -333,7 +333,19 @@ impl<'a> Run<'a> {
         // An interrupted solve is no result to write, nor an error of
         // the problem.
         check_interrupt()?;
-        let res = res?;
+        // A refused step of several (an unbounded load) names the step.
+        let res = res.map_err(|e| match e {
+            RunError::Solver { path, msg } if multi => RunError::Solver {
+                path,
+                msg: format!(
+                    "step {} of {} (t = {}): {msg}",
+                    s + 1,
+                    file.nsteps(),
+                    file.step_time(s)
+                ),
+            },
+            e => e,
+        })?;
         let t_solve = t_solve0.elapsed().as_secs_f64();
         log::debug!(
             "step {}: assembly {t_assemble:.3} s, solve {t_solve:.3} s",
@@ -462,7 +474,7 @@ impl<'a> Run<'a> {
             None => self.opts.settings.ordering.name().to_string(),
         };
         let multi = !prep.problem.file.steps.is_empty();
-        let summary = Summary::new(
+        let mut summary = Summary::new(
             prep,
             last.model(prep),
             self.method,
@@ -476,8 +488,10 @@ impl<'a> Run<'a> {
                 total: self.started.elapsed().as_secs_f64(),
                 ..timings
             },
-            multi.then_some(carry.rows),
+            None,
         );
+        summary.judge_steps(&carry.rows);
+        summary.steps = multi.then_some(carry.rows);
         let mut last_commit = vec![];
         for ob in observers.iter_mut() {
             last_commit.extend(ob.on_finish(&summary).map_err(|e| unstage(&tx, e))?);
@@ -669,6 +683,7 @@ fn step_row(step: &Step<'_>, active_prev: Option<&[u8]>, t_solve: f64) -> StepRo
         step: step.index + 1,
         t: step.time,
         converged: res.status.converged(),
+        certified: step.verdict.certified(),
         iterations: res.iterations,
         inner_iterations: res.inner_iterations,
         kkt_max: res.kkt.max(),

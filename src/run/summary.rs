@@ -32,6 +32,11 @@ pub struct Summary {
     pub dofs: usize,
     pub constraints: usize,
     pub active: usize,
+    /// The steps of this run that did not converge or are not certified
+    /// (1-based; a single solve is step 1). `converged` and
+    /// `kkt.certified` are false when any step of the run failed, not
+    /// only the last (whose residuals `kkt` holds).
+    pub failed_steps: Vec<usize>,
     pub energy: f64,
     pub strain_energy: f64,
     pub load_work: f64,
@@ -62,6 +67,11 @@ pub struct Summary {
 pub struct KktSummary {
     #[serde(flatten)]
     pub residuals: Kkt,
+    /// The friction residual of a frictional problem when it is 0 (e.g.
+    /// every frictional row on a line of symmetry), which [`Kkt`] leaves
+    /// out: a frictional problem always writes `kkt.friction`.
+    #[serde(rename = "friction", skip_serializing_if = "Option::is_none")]
+    pub friction_zero: Option<f64>,
     pub target: f64,
     pub certified: bool,
 }
@@ -124,6 +134,8 @@ pub struct StepRow {
     pub step: usize,
     pub t: f64,
     pub converged: bool,
+    /// Converged and its KKT residual within the target (the step's verdict).
+    pub certified: bool,
     pub iterations: usize,
     pub inner_iterations: usize,
     pub kkt_max: f64,
@@ -215,11 +227,13 @@ impl Summary {
             dofs: model.qp.n(),
             constraints: model.qp.m(),
             active: res.active.iter().filter(|a| **a).count(),
+            failed_steps: vec![],
             energy: res.energy,
             strain_energy: forces.strain_energy,
             load_work: forces.load_work,
             kkt: KktSummary {
                 residuals: *k,
+                friction_zero: (model.qp.friction.is_some() && k.friction == 0.0).then_some(0.0),
                 target,
                 certified,
             },
@@ -251,6 +265,19 @@ impl Summary {
             steps,
             reference_step: prep.problem.file.output.reference_step,
         }
+    }
+
+    /// The verdict of the whole run from its step rows: `converged` and
+    /// `kkt.certified` are the conjunctions over the steps, `failed_steps`
+    /// names those that failed.
+    pub(crate) fn judge_steps(&mut self, rows: &[StepRow]) {
+        self.failed_steps = rows
+            .iter()
+            .filter(|r| !(r.converged && r.certified))
+            .map(|r| r.step)
+            .collect();
+        self.converged &= rows.iter().all(|r| r.converged);
+        self.kkt.certified &= rows.iter().all(|r| r.certified);
     }
 
     /// The JSON text: pretty-printed, keys in alphabetical order at every

@@ -95,6 +95,7 @@ pub fn write_index(
             set_attr_str(&ctx, root, k, v)?;
         }
         set_attr_scalar(&ctx, root, "plane_strain", &u8::from(mesh.plane_strain))?;
+        set_attr_str(&ctx, root, "model", super::model_kind(mesh))?;
         if mesh.axisymmetric {
             set_attr_scalar(&ctx, root, "axisymmetric", &1u8)?;
         }

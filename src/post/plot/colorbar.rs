@@ -3,7 +3,7 @@
 //! categories.
 
 use super::style::{category_color, de, fmt_num, viridis};
-use super::{err, Field, PlotError, PlotOptions};
+use super::{err, Field, PlotError, PlotOptions, Units};
 use crate::io::{OutMesh, StepOutput};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -187,6 +187,7 @@ pub(super) fn draw_colorbar<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     cs: ColorScale,
     field: Field,
+    units: &Units,
     fs: f64,
     bar_w: f64,
     top: u32,
@@ -201,9 +202,9 @@ pub(super) fn draw_colorbar<DB: DrawingBackend>(
     }
     let label = ("sans-serif", fs).into_font().color(&BLACK);
     let title = if cs.log {
-        format!("{} (log)", field.label())
+        format!("{} (log)", field.label(units))
     } else {
-        field.label()
+        field.label(units)
     };
     area.draw(&Text::new(
         title,

@@ -2,7 +2,7 @@
 //! arc length, one panel per interface, one curve per step drawn.
 
 use super::style::{category_color, de, fmt_num, tick, titled, viridis};
-use super::{err, PlotError};
+use super::{err, PlotError, Units};
 use crate::io::{ContactGeometry, StepOutput};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -155,6 +155,7 @@ pub(super) fn draw_contact<DB: DrawingBackend>(
     fs: f64,
     range: Option<(f64, f64)>,
     field: &str,
+    units: &Units,
 ) -> Result<(Option<(f64, f64)>, Option<(f64, f64)>), PlotError> {
     let series = contact_series(c)?;
     // Every axis is checked before anything is drawn.
@@ -208,18 +209,20 @@ pub(super) fn draw_contact<DB: DrawingBackend>(
         match (tangential, &t_axes) {
             (Some(tg), Some(tax)) => {
                 let halves = panel.split_evenly((2, 1));
-                draw_panel(&halves[0], s, ax, steps, fs, many, &|j| color_of(j, k))?;
+                draw_panel(&halves[0], s, ax, steps, fs, many, units, &|j| {
+                    color_of(j, k)
+                })?;
                 let (tlo, thi) = tax[k].data;
                 t_total = Some(match t_total {
                     Some((a, b)) => (a.min(tlo), b.max(thi)),
                     None => (tlo, thi),
                 });
                 let change = field.ends_with("_change");
-                draw_tangential(&halves[1], s, &tax[k], tg, fs, many, change, &|j| {
+                draw_tangential(&halves[1], s, &tax[k], tg, fs, many, change, units, &|j| {
                     color_of(j, k)
                 })?;
             }
-            _ => draw_panel(panel, s, ax, steps, fs, many, &|j| color_of(j, k))?,
+            _ => draw_panel(panel, s, ax, steps, fs, many, units, &|j| color_of(j, k))?,
         }
     }
     Ok((total, t_total))
@@ -358,6 +361,7 @@ fn step_legend<DB: DrawingBackend>(
 }
 
 /// One interface's panel: its caption, axes and one curve per step.
+#[allow(clippy::too_many_arguments)]
 fn draw_panel<DB: DrawingBackend>(
     panel: &DrawingArea<DB, Shift>,
     (name, start, pieces): &Series,
@@ -365,6 +369,7 @@ fn draw_panel<DB: DrawingBackend>(
     steps: &[(usize, StepOutput)],
     fs: f64,
     many: bool,
+    units: &Units,
     color_of: &dyn Fn(usize) -> RGBColor,
 ) -> Result<(), PlotError> {
     let (xr, yr) = (ax.xr.clone(), ax.yr.clone());
@@ -393,8 +398,8 @@ fn draw_panel<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .y_labels(y_ticks)
-        .x_desc("arc length s [m]")
-        .y_desc("contact pressure [Pa]")
+        .x_desc(format!("arc length s [{}]", units.length))
+        .y_desc(format!("contact pressure [{}]", units.stress))
         .light_line_style(WHITE.mix(0.0))
         .bold_line_style(BLACK.mix(0.12))
         .label_style(("sans-serif", fs * 0.9))
@@ -435,6 +440,7 @@ fn draw_tangential<DB: DrawingBackend>(
     fs: f64,
     many: bool,
     change: bool,
+    units: &Units,
     color_of: &dyn Fn(usize) -> RGBColor,
 ) -> Result<(), PlotError> {
     let (xr, yr) = (ax.xr.clone(), ax.yr.clone());
@@ -487,11 +493,11 @@ fn draw_tangential<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .y_labels(y_ticks)
-        .x_desc("arc length s [m]")
+        .x_desc(format!("arc length s [{}]", units.length))
         .y_desc(if change {
-            "tangential traction change [Pa]"
+            format!("tangential traction change [{}]", units.stress)
         } else {
-            "tangential traction [Pa]"
+            format!("tangential traction [{}]", units.stress)
         })
         .light_line_style(WHITE.mix(0.0))
         .bold_line_style(BLACK.mix(0.12))

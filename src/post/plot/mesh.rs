@@ -107,7 +107,7 @@ pub(super) fn draw_mesh<DB: DrawingBackend>(
         .max(
             tw(&format!(
                 "{}{}",
-                opts.field.label(),
+                opts.field.label(&opts.units),
                 if cs.log { " (log)" } else { "" }
             )) + 2.0 * fs,
         )
@@ -139,8 +139,8 @@ pub(super) fn draw_mesh<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .disable_mesh()
-        .x_desc("x [m]")
-        .y_desc("y [m]")
+        .x_desc(format!("x [{}]", opts.units.length))
+        .y_desc(format!("y [{}]", opts.units.length))
         .label_style(("sans-serif", fs * 0.9))
         .axis_desc_style(("sans-serif", fs))
         .x_label_formatter(&|v| tick(*v, 2.0 * hx))
@@ -163,7 +163,15 @@ pub(super) fn draw_mesh<DB: DrawingBackend>(
 
     match &values {
         Values::Categories(_, names) => draw_legend(&strip, names, opts.field, fs)?,
-        _ => draw_colorbar(&strip, cs, opts.field, fs, bar_w, margin + yl / 8)?,
+        _ => draw_colorbar(
+            &strip,
+            cs,
+            opts.field,
+            &opts.units,
+            fs,
+            bar_w,
+            margin + yl / 8,
+        )?,
     }
     Ok(range)
 }

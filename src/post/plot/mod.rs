@@ -31,6 +31,7 @@ pub use style::{fmt_num, viridis};
 use crate::io::atomic::write_atomic_bytes;
 use crate::io::hdf5::{read_checkpoint, Checkpoint};
 use crate::io::{OutMesh, StepOutput};
+pub use crate::problem::Units;
 use contact::draw_contact;
 use mesh::draw_mesh;
 use plotters::coord::Shift;
@@ -178,11 +179,11 @@ impl Field {
             })
     }
 
-    /// SI unit of the field (None for the categorical fields).
-    pub fn unit(self) -> Option<&'static str> {
+    /// The field's unit in `units` (None for the categorical fields).
+    pub fn unit(self, units: &Units) -> Option<&str> {
         match self.kind() {
-            Kind::Nodal => Some("m"),
-            Kind::Cell => Some("Pa"),
+            Kind::Nodal => Some(&units.length),
+            Kind::Cell => Some(&units.stress),
             Kind::Categorical => None,
         }
     }
@@ -196,8 +197,8 @@ impl Field {
     }
 
     /// "von_mises \[Pa\]", "body".
-    pub fn label(self) -> String {
-        match self.unit() {
+    pub fn label(self, units: &Units) -> String {
+        match self.unit(units) {
             Some(u) => format!("{} [{u}]", self.name()),
             None => self.name().to_string(),
         }
@@ -255,6 +256,9 @@ pub struct PlotOptions {
     /// (with `change`: from the reference step on, the steps before it
     /// having no change fields).
     pub all_steps: bool,
+    /// The units of the labels: [`render`] takes them from the
+    /// checkpoint's problem (`[model] units`, default m and Pa).
+    pub units: Units,
 }
 
 impl Default for PlotOptions {
@@ -271,6 +275,7 @@ impl Default for PlotOptions {
             log: false,
             change: false,
             all_steps: false,
+            units: Units::default(),
         }
     }
 }
@@ -304,6 +309,8 @@ pub struct PlotSummary {
     /// The field drawn, named as the checkpoint's model names it
     /// ([`Field::for_model`]).
     pub field: Field,
+    /// The units of the labels (`[model] units` of the checkpoint's problem).
+    pub units: Units,
 }
 
 /// Reads `h5`, draws the figure and writes it to `out` (format from its
@@ -393,8 +400,10 @@ pub fn render(
         )));
     }
     let mesh = &ck.mesh;
+    let problem_toml = ck.attrs.iter().find(|(k, _)| k == "problem_toml");
     let resolved = PlotOptions {
         field: opts.field.for_model(mesh.axisymmetric)?,
+        units: problem_toml.map_or_else(Units::default, |(_, t)| Units::of_problem_text(t)),
         ..opts.clone()
     };
     let opts = &resolved;
@@ -437,6 +446,7 @@ pub fn render(
         tangential_range: None,
         stick_slip: None,
         field: opts.field,
+        units: opts.units.clone(),
     };
     // The friction data of the drawn steps (contact plot; all or nothing).
     let tangential = if opts.contact {
@@ -535,6 +545,7 @@ fn draw<DB: DrawingBackend>(
             fs,
             opts.range,
             field,
+            &opts.units,
         )?;
         summary.range = range;
         summary.tangential_range = t_range;
