@@ -39,6 +39,11 @@ process ÷ limit against 1.5 + 0.15 (N − 1), peak RSS ÷ limit against 1.3, th
 per-step assembly / solve / write times from `--log-level debug`) to
 --steps-out (default bench/steps.md, raw JSON next to it).
 
+The mu scan (issue 42 §1): `--mu-scan 0.05,0.1,...` runs, instead of the
+above, meshes/geodynamic_steps.toml with Coulomb friction mu on its three
+faults by ssn and mprgp against the frictionless run, written to
+--mu-scan-out (default bench/mu_scan.md, raw JSON next to it).
+
 Friction (issue 36): `--friction` runs, instead of the above, the friction
 table: a floating punch held tangentially by Coulomb friction alone
 (tests/data/friction/floating_punch.geo, mu = 0.3, one load step) and NAFEMS 1
@@ -733,6 +738,58 @@ def run_friction(args, binary, work: Path) -> int:
     return 0
 
 
+# ----------------------------------------------------------------- mu scan
+FAULTS = ("fault_cont_base", "fault_subduction", "fault_ocean_base")
+
+
+def mu_scan_toml(mu) -> str:
+    """meshes/geodynamic_steps.toml with Coulomb friction mu on its three
+    faults (None: frictionless), the mesh path made absolute."""
+    text = (ROOT / "meshes" / "geodynamic_steps.toml").read_text()
+    text = text.replace('file = "geodynamic.msh"', f'file = "{ROOT / "meshes" / "geodynamic.msh"}"')
+    if mu is not None:
+        for f in FAULTS:
+            text = text.replace(f'on = "{f}"\n', f'on = "{f}"\nfriction = {mu}\n')
+    return text
+
+
+def run_mu_scan(args, binary, work: Path) -> int:
+    """The mu scan (issue 42 §1): the geodynamic load-step model with Coulomb
+    friction on its faults, by ssn and mprgp, against the frictionless run."""
+    mus = [float(v) for v in args.mu_scan.split(",") if v.strip()]
+    rows = []
+    work.mkdir(parents=True, exist_ok=True)
+    for mu in [None] + mus:
+        toml = work / f"mu_scan_{mu}.toml"
+        toml.write_text(mu_scan_toml(mu))
+        for method in (("ssn",) if mu is None else ("ssn", "mprgp")):
+            r = repeated(lambda: friction_once(binary, toml, method, work / "out_mu_scan", max(4 * args.budget, 120.0)),
+                         args.repeats, args.long)
+            rows.append({"mu": mu, "method": method, **r})
+            log(f"mu scan mu = {mu} {method}: {fmt(r.get('wall'))} s, Newton {r.get('newton')}, {r.get('status')}")
+    out = Path(args.mu_scan_out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.with_suffix(".json").write_text(json.dumps({"machine": machine(), "cmdline": "python3 scripts/bench.py " + " ".join(sys.argv[1:]),
+                                                    "rows": rows}, indent=1, default=str))
+    base = next((r.get("wall") for r in rows if r["mu"] is None), None)
+    L = ["Coulomb friction on the geodynamic step model (meshes/geodynamic_steps.toml, 5 load steps, friction = mu on "
+         "its three faults; issue 42 §1): whole-process wall time (median of the repeats), iterations summed over the "
+         "steps, ratio = wall ÷ the frictionless ssn run (target ≤ 15), status over every step.\n",
+         "| mu | method | wall [s] | iterations | ÷ frictionless | status |",
+         "|---|---|---|---|---|---|"]
+    for r in rows:
+        ratio = r["wall"] / base if base and r.get("wall") else None
+        st = r.get("status", "")
+        if "converged" in r:
+            st = "every step certified" if r.get("converged") and r.get("certified") else "NOT certified"
+        L.append(f"| {r['mu'] if r['mu'] is not None else '0 (frictionless)'} | {r['method']} | {fmt(r.get('wall'))} | "
+                 f"{r.get('newton', '–')} | {fmt(ratio, 2) if ratio else '–'} | {st} |")
+    out.write_text("\n".join(L) + "\n")
+    print("\n".join(L))
+    log(f"wrote {out} and {out.with_suffix('.json')}")
+    return 0
+
+
 # ----------------------------------------------------------------- main
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -758,6 +815,9 @@ def main() -> int:
     ap.add_argument("--friction-levels", default="0,1,2",
                     help="mesh levels of the friction table (0, 1, 2: coarse to fine)")
     ap.add_argument("--friction-out", default=str(ROOT / "bench" / "friction.md"))
+    ap.add_argument("--mu-scan", default="",
+                    help="comma list of mu: run the geodynamic mu scan (issue 42 §1) instead, e.g. 0.05,0.1,0.15,0.2,0.3,0.6")
+    ap.add_argument("--mu-scan-out", default=str(ROOT / "bench" / "mu_scan.md"))
     ap.add_argument("--report-only", metavar="JSON",
                     help="run nothing: rewrite --out from the raw results of an earlier run (its JSON)")
     ap.add_argument("--check", action="store_true",
@@ -796,6 +856,8 @@ def main() -> int:
         return run_steps(args, binary, work, size_spec)
     if args.friction:
         return run_friction(args, binary, work)
+    if args.mu_scan:
+        return run_mu_scan(args, binary, work)
     vs = variants(binary)
     if args.methods:
         want = [m.strip() for m in args.methods.split(",")]

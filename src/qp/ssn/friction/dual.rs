@@ -92,6 +92,10 @@ impl Dual {
     ) -> Result<Option<Dual>, QpError> {
         let (n, m) = (qp.n(), qp.m());
         if m == 0 || 2 * m > DUAL_ROWS_MAX {
+            log::debug!(
+                "ssn: friction: the sparse path: {} rows of B = [A; T] (the dense dual form takes 1 to {DUAL_ROWS_MAX}); no coarse start",
+                2 * m
+            );
             return Ok(None);
         }
         let mut trip = Vec::with_capacity(qp.a.nnz() + fr.t.nnz());
@@ -108,16 +112,25 @@ impl Dual {
         if nb as f64 > super::super::BORDER_RATIO * (n as f64).sqrt()
             || nb > super::super::BORDER_MAX
         {
+            log::debug!(
+                "ssn: friction: the sparse path: a border of {nb} unknowns exceeds {} (BORDER_RATIO·√n) or {}; no coarse start, the glued start",
+                (super::super::BORDER_RATIO * (n as f64).sqrt()) as usize,
+                super::super::BORDER_MAX
+            );
             return Ok(None);
         }
         let fac = ws.cholesky_rows(&qp.c, &qp.kernel, &rb)?;
+        let skip = || log::debug!("ssn: friction: the sparse path: the bordered factor gives no dense H; no coarse start");
         let Some(h) = fac.border_inverse(&b) else {
+            skip();
             return Ok(None);
         };
         let Some(fwd) = fac.forward(&qp.d) else {
+            skip();
             return Ok(None);
         };
         let Some(bk0) = fac.border_product(&fwd, &b) else {
+            skip();
             return Ok(None);
         };
         let br = (0..2 * m)

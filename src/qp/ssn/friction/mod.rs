@@ -81,7 +81,10 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
     let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
     let dual = match ctx.settings.ssn.path {
         SsnPath::Auto | SsnPath::Schur => Dual::new(qp, fr, &r, ctx.ws)?,
-        _ => None,
+        path => {
+            log::debug!("ssn: friction: the sparse path (ssn_path = {path:?}); no coarse start, the glued start");
+            None
+        }
     };
     let mut st = State::new(qp, fr, r, ctx);
     st.hold_free_bodies();
@@ -603,6 +606,7 @@ impl<'a> State<'a> {
             bound,
             in_n: &self.in_n,
         }) else {
+            log::debug!("ssn: friction: no coarse start (too few rows to coarsen, or a coarse system is singular): the method's own start");
             return false;
         };
         log::debug!(
