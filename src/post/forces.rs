@@ -62,6 +62,10 @@ pub struct InterfaceForce {
     /// and opposite up to round-off.
     #[serde(skip)]
     pub other: Resultant,
+    /// The rows it was discretized with: `"node-to-node"` (a conforming
+    /// `on =` pair), `"mortar"` or `"nts"` (a non-matching pair,
+    /// `[[contact]] discretization`; docs/problem-format.md §2).
+    pub discretization: &'static str,
     /// Contact rows of the interface, rows with λ > 0 (active).
     pub rows: usize,
     pub active: usize,
@@ -359,11 +363,13 @@ pub(crate) fn compute_from(
     let mut interfaces: Vec<InterfaceForce> = t
         .interface_names
         .iter()
-        .map(|n| InterfaceForce {
+        .zip(&t.interface_kinds)
+        .map(|(n, k)| InterfaceForce {
             name: n.clone(),
             on_body: String::new(),
             resultant: Resultant::default(),
             other: Resultant::default(),
+            discretization: k.discretization(),
             rows: 0,
             active: 0,
             max_pressure: 0.0,

@@ -165,9 +165,14 @@ pub fn fingerprint(prep: &Prepared, no_contact: bool) -> String {
         "contact",
         "steps",
     ] {
-        let text = table
-            .get(key)
-            .map(|v| toml::to_string(&toml::Table::from_iter([(key.to_string(), v.clone())])))
+        let mut value = table.get(key).cloned();
+        if key == "contact" {
+            if let Some(toml::Value::Array(entries)) = value.as_mut() {
+                with_discretization(entries, &prep.model.topo);
+            }
+        }
+        let text = value
+            .map(|v| toml::to_string(&toml::Table::from_iter([(key.to_string(), v)])))
             .and_then(Result::ok)
             .unwrap_or_default();
         parts.push((key.to_string(), fnv1a(text.as_bytes())));
@@ -178,6 +183,51 @@ pub fn fingerprint(prep: &Prepared, no_contact: bool) -> String {
         .map(|(k, h)| format!("{k}={h:016x}"))
         .collect::<Vec<_>>()
         .join(";")
+}
+
+/// The `[[contact]]` entries as the fingerprint sees them: a non-matching
+/// pair (`slave`, `master`) without `discretization` gets the rows it was
+/// built with written out (`topo.interface_kinds`: mortar, or nts for a
+/// much stiffer slave), so that it hashes as those rows do, the same as the
+/// key written by hand, and a checkpoint of node-to-segment rows, the
+/// default before, is refused rather than continued with other rows.
+fn with_discretization(entries: &mut [toml::Value], topo: &crate::fem::Topology) {
+    // Interfaces: the conforming pairs first, then the non-matching ones,
+    // each in the order of the entries (fem::topology, fem::pairs).
+    let conforming = entries
+        .iter()
+        .filter(|e| e.as_table().is_some_and(|t| !t.contains_key("slave")))
+        .count();
+    let mut k = conforming;
+    for e in entries {
+        let toml::Value::Table(t) = e else { continue };
+        if !t.contains_key("slave") {
+            continue;
+        }
+        if !t.contains_key("discretization") {
+            if let Some(kind) = topo.interface_kinds.get(k) {
+                let name = kind.discretization().to_string();
+                t.insert("discretization".into(), toml::Value::String(name));
+            }
+        }
+        k += 1;
+    }
+}
+
+/// Whether the problem has a non-matching pair without `discretization`
+/// (mortar by default; node-to-segment before): the hint of a refused
+/// restart whose contact part differs.
+pub(super) fn has_default_discretization(prep: &Prepared) -> bool {
+    let table: toml::Table = toml::from_str(&prep.problem.text).unwrap_or_default();
+    table
+        .get("contact")
+        .and_then(toml::Value::as_array)
+        .is_some_and(|entries| {
+            entries.iter().any(|e| {
+                e.as_table()
+                    .is_some_and(|t| t.contains_key("slave") && !t.contains_key("discretization"))
+            })
+        })
 }
 
 /// The parts of two fingerprints that differ (names; `all` if one is malformed).

@@ -5,7 +5,7 @@
 //! reference_step` and a finite reference step); the run then continues
 //! after its last step, warm-started from it (docs/methods.md §8.3).
 
-use super::prepare::{fingerprint, fingerprint_diff, Prepared};
+use super::prepare::{fingerprint, fingerprint_diff, has_default_discretization, Prepared};
 use super::RunError;
 use crate::io::hdf5::{read_checkpoint, step_name, Checkpoint};
 use crate::io::StepOutput;
@@ -65,8 +65,15 @@ fn check(rp: &Path, ck: &Checkpoint, fingerprint: &str, prep: &Prepared) -> Resu
     };
     let diff = fingerprint_diff(theirs, fingerprint);
     if !diff.is_empty() {
+        // A checkpoint of node-to-segment rows written when they were the
+        // default of a non-matching pair: say how to continue it.
+        let hint = if diff.iter().any(|d| d == "contact") && has_default_discretization(prep) {
+            "; a non-matching pair without discretization now has mortar rows: if the checkpoint was written with node-to-segment rows (the default before), add discretization = \"nts\" to the pair"
+        } else {
+            ""
+        };
         return Err(format!(
-            "{shown}: the checkpoint does not match {problem}: it was written for a different {} (restart needs the same mesh and the same loads, materials, contacts and steps)",
+            "{shown}: the checkpoint does not match {problem}: it was written for a different {} (restart needs the same mesh and the same loads, materials, contacts and steps){hint}",
             diff.join(", ")
         ));
     }
