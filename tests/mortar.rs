@@ -740,12 +740,15 @@ fn the_default_keeps_nts_for_a_much_stiffer_slave_and_the_outputs_record_it() {
     }
 }
 
-/// A restart compares the rows a pair was built with, not the text: a
-/// checkpoint of node-to-segment rows (the default of a pair without
-/// `discretization` before mortar) is refused for the pair without the key,
-/// with the hint to write `discretization = "nts"`, and continued once it
-/// is written; a checkpoint of the default continues with
-/// `discretization = "mortar"` written out (the same rows).
+/// A restart compares the rows a pair was built with, not the text. A
+/// checkpoint written before mortar became the default, of a pair without
+/// `discretization` (node-to-segment rows then; made here by writing a
+/// checkpoint with the key and giving it the fingerprint of that time,
+/// `run::fingerprint_before_mortar`), is refused for the pair without the
+/// key, which now has mortar rows, with the hint to write
+/// `discretization = "nts"`, and continued once it is written. A
+/// checkpoint of the default continues with `discretization = "mortar"`
+/// written out (the same rows).
 #[test]
 fn restart_refuses_a_checkpoint_of_other_rows_and_names_the_key() {
     let dir = tempfile::tempdir().unwrap();
@@ -773,24 +776,41 @@ fn restart_refuses_a_checkpoint_of_other_rows_and_names_the_key() {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         common::signorini(&args)
     };
-    for (first, then, ok) in [
-        ("discretization = \"nts\"", "", false),
-        ("discretization = \"nts\"", "discretization = \"nts\"", true),
-        ("", "discretization = \"mortar\"", true),
+    let nts = "discretization = \"nts\"";
+    for (first, old, then, ok) in [
+        (nts, true, "", false),
+        (nts, true, nts, true),
+        (nts, false, nts, true),
+        ("", false, "discretization = \"mortar\"", true),
     ] {
         let part = tempfile::tempdir().unwrap();
-        let (code, o, e) = solve_steps(&with(first), part.path(), None);
+        let toml = with(first);
+        let (code, o, e) = solve_steps(&toml, part.path(), None);
         assert_eq!(code, 0, "{o}{e}");
         let h5 = part.path().join("steps.h5");
+        if old {
+            let prep = run::prepare(&toml, false).unwrap();
+            let fp = run::fingerprint_before_mortar(&prep, false).unwrap();
+            assert_ne!(fp, run::fingerprint(&prep, false));
+            let f = hdf5::File::open_rw(&h5).unwrap();
+            f.delete_attr("fingerprint").unwrap();
+            let v: hdf5::types::VarLenUnicode = fp.parse().unwrap();
+            f.new_attr::<hdf5::types::VarLenUnicode>()
+                .create("fingerprint")
+                .unwrap()
+                .write_scalar(&v)
+                .unwrap();
+        }
         let out = tempfile::tempdir().unwrap();
         let (code, o, e) = solve_steps(&with(then), out.path(), Some(&h5));
+        let case = format!("{first:?} (old: {old}) -> {then:?}");
         if ok {
-            assert_eq!(code, 0, "{first:?} -> {then:?}: {o}{e}");
+            assert_eq!(code, 0, "{case}: {o}{e}");
         } else {
-            assert_eq!(code, 2, "{first:?} -> {then:?}: {o}{e}");
+            assert_eq!(code, 2, "{case}: {o}{e}");
             assert!(
                 e.contains("different contact") && e.contains("add discretization = \"nts\""),
-                "{e}"
+                "{case}: {e}"
             );
         }
     }

@@ -39,7 +39,7 @@ pub fn tangential_coefficients(row: &ContactRow) -> Vec<(usize, [f64; 2])> {
 /// either sign; the mirrored half cancels it, so by symmetry the row has no
 /// tangential force (NTS rows there have no unknowns and are left out
 /// alike). Such rows get an empty tangential row and bound 0 (docs/methods.md §9).
-/// Decided once per problem ([`symmetry_rows`], kept in the model).
+/// Decided once per problem (`symmetry_rows`, kept in the model).
 pub fn on_symmetry_line(model: &Model, r: usize) -> bool {
     model.symmetry_rows.get(r).copied().unwrap_or(false)
 }

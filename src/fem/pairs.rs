@@ -35,7 +35,7 @@ type ConformingSeg = (usize, usize, u32, u32, [f64; 2]);
 /// a slave 100 times (meshes/rollers.toml) or 4200 times (tests/hard/punch.toml)
 /// stiffer alternates open and closed rows; 3 times (NAFEMS 1 and 2) is
 /// within the verification tolerances; docs/methods.md §7.1).
-pub const STIFF_SLAVE: f64 = 10.0;
+pub(super) const STIFF_SLAVE: f64 = 10.0;
 
 impl Topology {
     /// Node-to-node rows on conforming curves (docs/methods.md §2.6–2.7).

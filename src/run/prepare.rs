@@ -153,6 +153,24 @@ fn check_probes(problem: &Problem, model: &Model) -> Result<(), RunError> {
 /// checkpoint's change fields instead (`run::Restart`), so that adding one
 /// after the steps a checkpoint holds is continued, not refused.
 pub fn fingerprint(prep: &Prepared, no_contact: bool) -> String {
+    fingerprint_as(prep, no_contact, false)
+}
+
+/// The fingerprint a checkpoint of this problem carries if it was written
+/// before mortar became the default of a non-matching pair, when a pair
+/// without `discretization` had node-to-segment rows: the pairs that run
+/// node-to-segment rows hashed without the key. None when no pair does.
+/// A restart accepts either (`run::Restart`).
+pub fn fingerprint_before_mortar(prep: &Prepared, no_contact: bool) -> Option<String> {
+    let nts = crate::fem::topology::RowKind::NonMatching;
+    prep.model
+        .topo
+        .interface_kinds
+        .contains(&nts)
+        .then(|| fingerprint_as(prep, no_contact, true))
+}
+
+fn fingerprint_as(prep: &Prepared, no_contact: bool, before_mortar: bool) -> String {
     let mut parts = vec![("mesh".to_string(), prep.mesh_hash)];
     let table: toml::Table = toml::from_str(&prep.problem.text).unwrap_or_default();
     for key in [
@@ -168,7 +186,7 @@ pub fn fingerprint(prep: &Prepared, no_contact: bool) -> String {
         let mut value = table.get(key).cloned();
         if key == "contact" {
             if let Some(toml::Value::Array(entries)) = value.as_mut() {
-                with_discretization(entries, &prep.model.topo);
+                with_discretization(entries, &prep.model.topo, before_mortar);
             }
         }
         let text = value
@@ -191,7 +209,11 @@ pub fn fingerprint(prep: &Prepared, no_contact: bool) -> String {
 /// much stiffer slave), so that it hashes as those rows do, the same as the
 /// key written by hand, and a checkpoint of node-to-segment rows, the
 /// default before, is refused rather than continued with other rows.
-fn with_discretization(entries: &mut [toml::Value], topo: &crate::fem::Topology) {
+fn with_discretization(
+    entries: &mut [toml::Value],
+    topo: &crate::fem::Topology,
+    before_mortar: bool,
+) {
     // Interfaces: the conforming pairs first, then the non-matching ones,
     // each in the order of the entries (fem::topology, fem::pairs).
     let conforming = entries
@@ -204,8 +226,12 @@ fn with_discretization(entries: &mut [toml::Value], topo: &crate::fem::Topology)
         if !t.contains_key("slave") {
             continue;
         }
-        if !t.contains_key("discretization") {
-            if let Some(kind) = topo.interface_kinds.get(k) {
+        if let Some(&kind) = topo.interface_kinds.get(k) {
+            let nts = kind == crate::fem::topology::RowKind::NonMatching;
+            if before_mortar && nts {
+                // Written as the default of its time.
+                t.remove("discretization");
+            } else if !t.contains_key("discretization") {
                 let name = kind.discretization().to_string();
                 t.insert("discretization".into(), toml::Value::String(name));
             }

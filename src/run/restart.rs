@@ -5,7 +5,9 @@
 //! reference_step` and a finite reference step); the run then continues
 //! after its last step, warm-started from it (docs/methods.md §8.3).
 
-use super::prepare::{fingerprint, fingerprint_diff, has_default_discretization, Prepared};
+use super::prepare::{
+    fingerprint, fingerprint_before_mortar, fingerprint_diff, has_default_discretization, Prepared,
+};
 use super::RunError;
 use crate::io::hdf5::{read_checkpoint, step_name, Checkpoint};
 use crate::io::StepOutput;
@@ -63,7 +65,12 @@ fn check(rp: &Path, ck: &Checkpoint, fingerprint: &str, prep: &Prepared) -> Resu
             "{shown}: the checkpoint has no problem fingerprint (written by another program or an older signorini), so it cannot be matched to {problem}; solve from the start"
         ));
     };
-    let diff = fingerprint_diff(theirs, fingerprint);
+    let mut diff = fingerprint_diff(theirs, fingerprint);
+    // A checkpoint written when a pair without `discretization` had
+    // node-to-segment rows, of a pair that runs them now.
+    if fingerprint_before_mortar(prep, prep.no_contact).is_some_and(|b| b == *theirs) {
+        diff.clear();
+    }
     if !diff.is_empty() {
         // A checkpoint of node-to-segment rows written when they were the
         // default of a non-matching pair: say how to continue it.
