@@ -830,7 +830,11 @@ fn mortar_friction_at_an_end_moved_in_a_later_step_is_kept() {
     let src = common::root().join("verification/shrinkfit");
     let geo = dir.path().join("shrinkfit.geo");
     std::fs::copy(src.join("shrinkfit.geo"), &geo).unwrap();
-    std::fs::copy(src.join("shrinkfit.toml"), dir.path().join("shrinkfit.toml")).unwrap();
+    std::fs::copy(
+        src.join("shrinkfit.toml"),
+        dir.path().join("shrinkfit.toml"),
+    )
+    .unwrap();
     let (code, o, e) = common::signorini(&["mesh", geo.to_str().unwrap()]);
     assert_eq!(code, 0, "{o}{e}");
     let out = dir.path().join("out");
