@@ -78,8 +78,10 @@ pub struct InterfaceForce {
     pub mean_pressure: f64,
     /// The moment of the interface's contact forces on both sides together
     /// (N·m per m in plane strain): the couple its rows make across their
-    /// initial gaps, zero when every row's forces are collinear (no
-    /// friction, or no gap).
+    /// initial gaps, zero when every row's forces are collinear
+    /// (node-to-segment or conforming rows without friction, or without a
+    /// gap); mortar rows spread a slave force over master points off its
+    /// line of action and make one without friction too.
     pub couple: f64,
     /// Where the active rows lie along the interface (None: no active row).
     pub extent: Option<Extent>,
