@@ -721,7 +721,6 @@ fn the_default_keeps_nts_for_a_much_stiffer_slave_and_the_outputs_record_it() {
             path.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
-            "--quiet",
         ]);
         assert_eq!(code, 0, "{name}: {o}{e}");
         let warned = e.contains("times stiffer than master");
