@@ -119,6 +119,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import os
 import subprocess
 import sys
@@ -814,7 +815,7 @@ class Problem:
         for c in self.contacts:
             if "slave" not in c:
                 continue
-            if c.get("discretization", "nts") == "mortar":
+            if c.get("discretization", self.default_discretization(c)) == "mortar":
                 rows.extend(self.mortar_rows(c))
                 continue
             msegs = []
@@ -942,6 +943,27 @@ class Problem:
                 raise SetupError(f"segment {(a, b)} of {name!r} is not on the boundary of one body")
             segs.append((a, b, int(tp.tri_body[ts[0]]), m.outward_normal(ts[0], a, b)))
         return segs
+
+    def default_discretization(self, c):
+        """signorini's rows for a pair without `discretization`
+        (fem::pairs::default_discretization): mortar, unless the least E of
+        the slave's bodies is more than 10 times the largest of the master's."""
+        m, tp = self.m, self.topo
+        E = {nm: float(self.cfg["materials"][nm]["E"]) for nm in m.material_names}
+
+        def bodies(curve):
+            out = set()
+            for a, b in m.lines(curve):
+                for t in m.edge_tris.get((min(a, b), max(a, b)), []):
+                    out.add(int(tp.tri_body[t]))
+            return out
+
+        sb, mb = bodies(c["slave"]), bodies(c["master"])
+        e_slave = min((E[m.material_names[int(m.tri_mat[t])]] for t in range(len(tp.tri_body))
+                       if int(tp.tri_body[t]) in sb), default=math.inf)
+        e_master = max((E[m.material_names[int(m.tri_mat[t])]] for t in range(len(tp.tri_body))
+                        if int(tp.tri_body[t]) in mb), default=0.0)
+        return "nts" if e_slave > 10.0 * e_master else "mortar"
 
     def mortar_rows(self, c):
         """Mortar rows of a non-matching pair, built here from the formulas of

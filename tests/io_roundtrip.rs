@@ -36,6 +36,7 @@ fn mesh(plane_strain: bool) -> OutMesh {
             segments: vec![[0, 1]],
             interface: vec![0, 0],
             interface_names: vec!["fault1".into()],
+            interface_discretizations: vec!["nts".into()],
             nonmatching: vec![false, true],
         },
     }

@@ -20,6 +20,19 @@ pub enum RowKind {
     Mortar,
 }
 
+impl RowKind {
+    /// The discretization the outputs record for an interface of such
+    /// rows: `"node-to-node"`, `"nts"` or `"mortar"` (the value of
+    /// `[[contact]] discretization` for a non-matching pair).
+    pub fn discretization(self) -> &'static str {
+        match self {
+            RowKind::Conforming => "node-to-node",
+            RowKind::NonMatching => crate::problem::Discretization::Nts.name(),
+            RowKind::Mortar => crate::problem::Discretization::Mortar.name(),
+        }
+    }
+}
+
 /// One contact constraint row (docs/methods.md §2.7, §7 for non-matching).
 #[derive(Clone)]
 pub struct ContactRow {

@@ -39,22 +39,78 @@ pub fn tangential_coefficients(row: &ContactRow) -> Vec<(usize, [f64; 2])> {
 /// either sign; the mirrored half cancels it, so by symmetry the row has no
 /// tangential force (NTS rows there have no unknowns and are left out
 /// alike). Such rows get an empty tangential row and bound 0 (docs/methods.md §9).
-pub fn on_symmetry_line(topo: &Topology, dofs: &[PointDofs], r: usize) -> bool {
-    let row = &topo.contact[r];
-    if row.kind != RowKind::Mortar {
-        return false;
-    }
-    let t = [-row.normal[1], row.normal[0]];
-    let pd = &dofs[row.first];
-    let fixed = (0..pd.ndof).all(|k| (t[0] * pd.t[k][0] + t[1] * pd.t[k][1]).abs() < 1e-12)
-        && (t[0] * pd.u0[0] + t[1] * pd.u0[1]) == 0.0;
-    fixed
-        && topo
-            .contact_segments
+/// Decided once per problem (`symmetry_rows`, kept in the model).
+pub fn on_symmetry_line(model: &Model, r: usize) -> bool {
+    model.symmetry_rows.get(r).copied().unwrap_or(false)
+}
+
+/// [`on_symmetry_line`] for every contact row. A `[[dirichlet]]` component
+/// along the row's tangent holds the point as a symmetry line only if it is
+/// zero in every load step: a clamped end that a later step moves along
+/// the interface (a tube pushed out of its fit) is no symmetry line, and
+/// its row keeps its friction in every step (the rows, T and the bounds,
+/// are built once for all steps).
+pub(super) fn symmetry_rows(
+    topo: &Topology,
+    dofs: &[PointDofs],
+    conditions: &[(usize, [f64; 2], u32)],
+    groups: &[(&'static str, String)],
+    problem: &Problem,
+) -> Vec<bool> {
+    let file = &problem.file;
+    // Whether Dirichlet group `name`'s component k is 0 as given and in
+    // every step that names it explicitly (factors keep a zero zero).
+    let zero_always = |name: &str, k: usize| {
+        file.dirichlet
             .iter()
-            .filter(|s| s[0] == r || s[1] == r)
-            .count()
-            <= 1
+            .filter(|d| d.on == name)
+            .all(|d| d.value.components()[k].unwrap_or(0.0) == 0.0)
+            && file
+                .steps
+                .iter()
+                .all(|st| st.dirichlet.get(name).is_none_or(|u| u[k] == 0.0))
+    };
+    let mut at: std::collections::HashMap<usize, Vec<([f64; 2], u32)>> =
+        std::collections::HashMap::new();
+    let firsts: std::collections::HashSet<usize> = topo
+        .contact
+        .iter()
+        .filter(|row| row.kind == RowKind::Mortar)
+        .map(|row| row.first)
+        .collect();
+    for &(p, dir, g) in conditions {
+        if firsts.contains(&p) {
+            at.entry(p).or_default().push((dir, g));
+        }
+    }
+    (0..topo.contact.len())
+        .map(|r| {
+            let row = &topo.contact[r];
+            if row.kind != RowKind::Mortar {
+                return false;
+            }
+            let t = [-row.normal[1], row.normal[0]];
+            let pd = &dofs[row.first];
+            let fixed = (0..pd.ndof).all(|k| (t[0] * pd.t[k][0] + t[1] * pd.t[k][1]).abs() < 1e-12)
+                && (t[0] * pd.u0[0] + t[1] * pd.u0[1]) == 0.0;
+            let steady = at.get(&row.first).is_none_or(|cs| {
+                cs.iter().all(|&(dir, g)| {
+                    let (kind, name) = &groups[g as usize];
+                    let along = (dir[0] * t[0] + dir[1] * t[1]).abs() > 1e-12;
+                    let k = usize::from(dir[1].abs() > dir[0].abs());
+                    *kind != "dirichlet" || !along || zero_always(name, k)
+                })
+            });
+            fixed
+                && steady
+                && topo
+                    .contact_segments
+                    .iter()
+                    .filter(|s| s[0] == r || s[1] == r)
+                    .count()
+                    <= 1
+        })
+        .collect()
 }
 
 /// Index of the `[[contact]]` entry of each interface id (conforming
@@ -77,6 +133,7 @@ pub(super) fn build(
     problem: &Problem,
     qp_rows: &[usize],
     t_eff: f64,
+    symmetry: &[bool],
 ) -> Result<Option<Friction>, FemError> {
     if !problem.has_friction() {
         return Ok(None);
@@ -100,7 +157,7 @@ pub(super) fn build(
         let ci = owner[row.interface as usize];
         rows_of[ci] += 1;
         let c = &contacts[ci];
-        if on_symmetry_line(topo, dofs, r) {
+        if symmetry[r] {
             bound.push(0.0);
             continue;
         }
@@ -163,7 +220,7 @@ pub fn tangential_displacement(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
         .qp_rows
         .iter()
         .map(|&r| {
-            if on_symmetry_line(&model.topo, &model.dofs, r) {
+            if on_symmetry_line(model, r) {
                 return 0.0;
             }
             tangential(&model.topo.contact[r])

@@ -71,6 +71,9 @@ pub struct Model {
     /// The name of each body: its physical surface name(s), "+"-joined,
     /// with " #b" when bodies share a material.
     pub body_names: Vec<String>,
+    /// Per contact row: a mortar row at the end of its slave curve on a
+    /// line of symmetry, which has no friction ([`friction::on_symmetry_line`]).
+    pub symmetry_rows: Vec<bool>,
 }
 
 impl Model {
@@ -146,7 +149,9 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let (a, g, qp_rows) = contact::reduced_rows(mesh, &topo, &dofs, n, problem)?;
     lap.lap("contact rows");
     let t_eff = problem.file.model.plane.t_eff(problem.file.model.thickness);
-    let friction = friction::build(&topo, &dofs, n, problem, &qp_rows, t_eff)?;
+    let conditions = conds.list();
+    let symmetry_rows = friction::symmetry_rows(&topo, &dofs, &conditions, &conds.groups, problem);
+    let friction = friction::build(&topo, &dofs, n, problem, &qp_rows, t_eff, &symmetry_rows)?;
     lap.lap("friction rows");
     let axi = problem.file.model.plane.is_axisymmetric();
     let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n, axi);
@@ -168,10 +173,11 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
         kernel_body,
         plane: f.model.plane,
         thickness: f.model.thickness,
-        conditions: conds.list(),
+        conditions,
         cond_groups: conds.groups,
         loads,
         body_names,
+        symmetry_rows,
     };
     let mut model = model;
     friction::start_step(&mut model, None);

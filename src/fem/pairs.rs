@@ -30,6 +30,13 @@ struct Acc {
 /// A conforming segment: nodes a, b, bodies k < l, normal outward of k.
 type ConformingSeg = (usize, usize, u32, u32, [f64; 2]);
 
+/// A pair without `discretization` whose slave is more than this many times
+/// stiffer than its master gets node-to-segment rows (measured: mortar with
+/// a slave 100 times (meshes/rollers.toml) or 4200 times (tests/hard/punch.toml)
+/// stiffer alternates open and closed rows; 3 times (NAFEMS 1 and 2) is
+/// within the verification tolerances; docs/methods.md §7.1).
+pub(super) const STIFF_SLAVE: f64 = 10.0;
+
 impl Topology {
     /// Node-to-node rows on conforming curves (docs/methods.md §2.6–2.7).
     pub(super) fn build_conforming(
@@ -222,6 +229,14 @@ impl Topology {
                 slaves: self.boundary_segments(mesh, problem, sg, &what, "slave", sname)?,
                 what,
             };
+            let disc = match nm.discretization {
+                Some(d) => d,
+                None => self.default_discretization(problem, &pair, sname, mname),
+            };
+            self.interface_kinds.push(match disc {
+                Discretization::Mortar => RowKind::Mortar,
+                Discretization::Nts => RowKind::NonMatching,
+            });
             let (ss, ms) = (segment_set(&pair.slaves), segment_set(&pair.masters));
             for (i, si, mi) in &seen {
                 let twice = shared(si, &ss)
@@ -246,12 +261,55 @@ impl Topology {
                 }
             }
             seen.push((ci, ss, ms));
-            match nm.discretization {
+            match disc {
                 Discretization::Mortar => self.mortar_rows(mesh, problem, nm, &pair)?,
                 Discretization::Nts => self.nonmatching_rows(mesh, problem, nm, &pair)?,
             }
         }
         Ok(())
+    }
+
+    /// The rows of a non-matching pair without `discretization`: mortar,
+    /// unless the slave is more than [`STIFF_SLAVE`] times stiffer than the
+    /// master (the least Young's modulus of the slave's bodies against the
+    /// largest of the master's), where mortar multipliers, which live on the
+    /// slave, alternate between open and closed rows: node-to-segment rows
+    /// then, with a warning (docs/methods.md §7.1, which side is the slave).
+    fn default_discretization(
+        &self,
+        problem: &Problem,
+        pair: &Pair,
+        sname: &str,
+        mname: &str,
+    ) -> Discretization {
+        let bodies = |segs: &[MasterSeg]| -> HashSet<u32> { segs.iter().map(|s| s.2).collect() };
+        let (sb, mb) = (bodies(&pair.slaves), bodies(&pair.masters));
+        let (mut e_slave, mut e_master) = (f64::INFINITY, 0.0f64);
+        for (&b, &m) in self.tri_body.iter().zip(&self.tri_material) {
+            let Some(mat) = self
+                .material_names
+                .get(m as usize)
+                .and_then(|n| problem.file.materials.get(n))
+            else {
+                continue;
+            };
+            if sb.contains(&b) {
+                e_slave = e_slave.min(mat.e);
+            }
+            if mb.contains(&b) {
+                e_master = e_master.max(mat.e);
+            }
+        }
+        if e_slave > STIFF_SLAVE * e_master {
+            log::warn!(
+                "{}: slave \"{sname}\" (E = {e_slave:e}) is {:.0} times stiffer than master \"{mname}\" (E = {e_master:e}): node-to-segment rows, not the default mortar rows, whose multipliers oscillate on a stiff slave; make the softer body the slave for mortar rows, or write discretization = \"nts\"",
+                pair.what,
+                e_slave / e_master
+            );
+            Discretization::Nts
+        } else {
+            Discretization::Mortar
+        }
     }
 
     /// The segments of curve `g` with their owner body and outward normal;

@@ -40,6 +40,9 @@ pub struct Topology {
     /// Segments between contact rows (for the contact VTU).
     pub contact_segments: Vec<[usize; 2]>,
     pub interface_names: Vec<String>,
+    /// The rows of each interface (same order as `interface_names`):
+    /// conforming, node-to-segment or mortar; the outputs record it.
+    pub interface_kinds: Vec<super::contact::RowKind>,
 }
 
 /// A point of a physical group: (point, mesh node, Some((segment node a,
@@ -161,6 +164,7 @@ impl Topology {
             mesh_tris,
             contact: vec![],
             contact_segments: vec![],
+            interface_kinds: vec![super::contact::RowKind::Conforming; interface_names.len()],
             interface_names,
         };
         topo.triangles = topo.point_triangles();

@@ -50,7 +50,10 @@ pub use split::{
 /// /mesh/contact_gap0      f64  [rows]
 /// /mesh/contact_interface u32  [rows]   index into interface_names
 /// /mesh/contact_segments  u64  [k, 2]   contact-point indices
-/// /mesh                   attrs: material_names, interface_names
+/// /mesh                   attrs: material_names, interface_names,
+///                                interface_discretizations ("node-to-node",
+///                                "nts" or "mortar" per interface; absent in
+///                                checkpoints written before it)
 ///                                (1-D arrays of variable-length UTF-8 strings)
 /// /steps/NNNN             one group per step (4+ digits, 1-based):
 ///     displacement f64 [n, 2], stress f64 [m, 4], von_mises f64 [m],
@@ -335,6 +338,12 @@ fn write_mesh(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<(), IoError> {
     let seg: Vec<u64> = c.segments.iter().flat_map(|s| s.map(u)).collect();
     write_ds(ctx, g, "contact_segments", &[k, 2], &seg)?;
     set_attr_str_list(ctx, g, "interface_names", &c.interface_names)?;
+    set_attr_str_list(
+        ctx,
+        g,
+        "interface_discretizations",
+        &c.interface_discretizations,
+    )?;
     Ok(())
 }
 
@@ -840,6 +849,11 @@ fn read_mesh(ctx: &Ctx, g: &Group) -> Result<OutMesh, IoError> {
     let (_, seg) = read_ds::<u64>(ctx, g, "contact_segments", Some(2), None)?;
     let seg = indices(ctx, "/mesh/contact_segments", &seg, r)?;
     let interface_names = get_attr_str_list(ctx, g, "interface_names")?;
+    let interface_discretizations = if has_attr(ctx, g, "interface_discretizations")? {
+        get_attr_str_list(ctx, g, "interface_discretizations")?
+    } else {
+        vec![]
+    };
 
     let second = second
         .chunks_exact(2)
@@ -874,6 +888,7 @@ fn read_mesh(ctx: &Ctx, g: &Group) -> Result<OutMesh, IoError> {
                 .collect(),
             interface,
             interface_names,
+            interface_discretizations,
         },
     })
 }

@@ -55,6 +55,10 @@ pub struct ContactGeometry {
     /// Interface index of each row (into `interface_names`).
     pub interface: Vec<u32>,
     pub interface_names: Vec<String>,
+    /// The discretization of each interface (same order as
+    /// `interface_names`): `"node-to-node"`, `"nts"` or `"mortar"`; empty
+    /// when read from a checkpoint that did not record it.
+    pub interface_discretizations: Vec<String>,
     /// Whether each row is node-to-segment (slave point, two master points)
     /// rather than a conforming node pair.
     pub nonmatching: Vec<bool>,

@@ -62,6 +62,10 @@ pub struct InterfaceForce {
     /// and opposite up to round-off.
     #[serde(skip)]
     pub other: Resultant,
+    /// The rows it was discretized with: `"node-to-node"` (a conforming
+    /// `on =` pair), `"mortar"` or `"nts"` (a non-matching pair,
+    /// `[[contact]] discretization`; docs/problem-format.md §2).
+    pub discretization: &'static str,
     /// Contact rows of the interface, rows with λ > 0 (active).
     pub rows: usize,
     pub active: usize,
@@ -74,8 +78,10 @@ pub struct InterfaceForce {
     pub mean_pressure: f64,
     /// The moment of the interface's contact forces on both sides together
     /// (N·m per m in plane strain): the couple its rows make across their
-    /// initial gaps, zero when every row's forces are collinear (no
-    /// friction, or no gap).
+    /// initial gaps, zero when every row's forces are collinear
+    /// (node-to-segment or conforming rows without friction, or without a
+    /// gap); mortar rows spread a slave force over master points off its
+    /// line of action and make one without friction too.
     pub couple: f64,
     /// Where the active rows lie along the interface (None: no active row).
     pub extent: Option<Extent>,
@@ -359,11 +365,13 @@ pub(crate) fn compute_from(
     let mut interfaces: Vec<InterfaceForce> = t
         .interface_names
         .iter()
-        .map(|n| InterfaceForce {
+        .zip(&t.interface_kinds)
+        .map(|(n, k)| InterfaceForce {
             name: n.clone(),
             on_body: String::new(),
             resultant: Resultant::default(),
             other: Resultant::default(),
+            discretization: k.discretization(),
             rows: 0,
             active: 0,
             max_pressure: 0.0,

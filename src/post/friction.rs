@@ -58,7 +58,7 @@ pub fn friction_output(model: &Model, res: &QpResult) -> Option<FrictionOutput> 
         let in_contact = res.active.get(qi).copied().unwrap_or(false) || res.lambda[qi] > 0.0;
         // A mortar row on a line of symmetry has no tangential row (bound 0):
         // the line holds its slave point, so it sticks (docs/methods.md §9).
-        let held = on_symmetry_line(&model.topo, &model.dofs, r);
+        let held = on_symmetry_line(model, r);
         out.state[r] = if !in_contact {
             0
         } else if !held && lt.abs() >= (1.0 - STICK_MARGIN) * s[qi] {

@@ -23,6 +23,11 @@ pub fn out_mesh(model: &Model, mesh: &crate::mesh::Mesh) -> OutMesh {
         segments: t.contact_segments.clone(),
         interface: t.contact.iter().map(|r| r.interface).collect(),
         interface_names: t.interface_names.clone(),
+        interface_discretizations: t
+            .interface_kinds
+            .iter()
+            .map(|k| k.discretization().to_string())
+            .collect(),
         nonmatching: t
             .contact
             .iter()

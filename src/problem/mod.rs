@@ -347,7 +347,10 @@ pub struct NonMatchingPair {
     /// Largest initial gap at which a slave node is paired (None: every
     /// slave node that projects onto the master).
     pub max_gap: Option<f64>,
-    pub discretization: Discretization,
+    /// `discretization` as written; None: the default, mortar rows, or
+    /// node-to-segment rows when the slave is much stiffer than the master
+    /// (decided with the mesh, `fem::pairs`; docs/problem-format.md §2).
+    pub discretization: Option<Discretization>,
     /// `interference = true`: an initial overlap of the slave into the
     /// master is intended (a shrink or press fit); the negative gap enters
     /// g and is resolved in the first step (docs/problem-format.md §5).
@@ -357,12 +360,24 @@ pub struct NonMatchingPair {
 /// The rows of a non-matching pair (`discretization`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Discretization {
-    /// `"nts"` (the default): node-to-segment rows.
-    #[default]
+    /// `"nts"`: node-to-segment rows (the report's; they miss the contact
+    /// patch test, docs/methods.md §7). On request, or the default of a
+    /// pair whose slave is much stiffer than its master.
     Nts,
-    /// `"mortar"`: segment-to-segment rows with dual multipliers
-    /// (docs/methods.md §7.1).
+    /// `"mortar"` (the default): segment-to-segment rows with dual
+    /// multipliers (docs/methods.md §7.1).
+    #[default]
     Mortar,
+}
+
+impl Discretization {
+    /// The key's value: `"nts"` or `"mortar"` (the outputs record it).
+    pub fn name(self) -> &'static str {
+        match self {
+            Discretization::Nts => "nts",
+            Discretization::Mortar => "mortar",
+        }
+    }
 }
 
 /// The friction law of a pair (docs/methods.md §9).

@@ -299,7 +299,7 @@ fn contact(i: usize, c: &RawContact) -> Check<Contact> {
             slave: slave.clone(),
             master: master.clone(),
             max_gap: c.max_gap,
-            discretization: Discretization::Nts,
+            discretization: None,
             interference: c.interference.unwrap_or(false),
         }),
         _ => {
@@ -340,8 +340,9 @@ fn contact(i: usize, c: &RawContact) -> Check<Contact> {
                 ));
             }
             p.discretization = match c.discretization.as_deref() {
-                None | Some("nts") => Discretization::Nts,
-                Some("mortar") => Discretization::Mortar,
+                None => None,
+                Some("nts") => Some(Discretization::Nts),
+                Some("mortar") => Some(Discretization::Mortar),
                 Some(d) => {
                     return Err(format!(
                         "{at}: discretization = {:?} is unknown; use \"nts\" or \"mortar\"",
@@ -515,7 +516,8 @@ mod tests {
         let f = parse(
             "[[contact]]\non = \"i\"\nnormals = \"segment\"\nfriction = 0.0\n\
              [[contact]]\nslave = \"s\"\nmaster = \"m\"\ndiscretization = \"mortar\"\nmax_gap = 0.5\nfriction = 2.0\n\
-             [[contact]]\nslave = \"t\"\nmaster = \"m\"\nfriction = 0.25\n",
+             [[contact]]\nslave = \"t\"\nmaster = \"m\"\nfriction = 0.25\n\
+             [[contact]]\nslave = \"u\"\nmaster = \"m\"\ndiscretization = \"nts\"\n",
         )
         .unwrap();
         let want = [
@@ -532,7 +534,7 @@ mod tests {
                     slave: "s".into(),
                     master: "m".into(),
                     max_gap: Some(0.5),
-                    discretization: Discretization::Mortar,
+                    discretization: Some(Discretization::Mortar),
                     interference: false,
                 }),
                 friction: FrictionLaw::Coulomb(2.0),
@@ -542,10 +544,21 @@ mod tests {
                     slave: "t".into(),
                     master: "m".into(),
                     max_gap: None,
-                    discretization: Discretization::Nts,
+                    // No key: the default, decided with the mesh (fem::pairs).
+                    discretization: None,
                     interference: false,
                 }),
                 friction: FrictionLaw::Coulomb(0.25),
+            },
+            Contact {
+                pair: ContactPair::NonMatching(NonMatchingPair {
+                    slave: "u".into(),
+                    master: "m".into(),
+                    max_gap: None,
+                    discretization: Some(Discretization::Nts),
+                    interference: false,
+                }),
+                friction: FrictionLaw::Frictionless,
             },
         ];
         assert_eq!(f.contact, want);

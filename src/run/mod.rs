@@ -30,8 +30,9 @@ pub use output::{
     Outputs, SummaryWriter, Transaction, VtuWriter,
 };
 pub use prepare::{
-    fingerprint, fingerprint_diff, fnv1a, options, prepare, prepare_with, probes, reduce,
-    reduce_active, solve, solve_model, solve_model_in, step_model, step_model_reusing, Prepared,
+    fingerprint, fingerprint_before_mortar, fingerprint_diff, fnv1a, options, prepare,
+    prepare_with, probes, reduce, reduce_active, solve, solve_model, solve_model_in, step_model,
+    step_model_reusing, Prepared,
 };
 pub use restart::Restart;
 pub use steps::{preconditioner_label, Outcome, Run, Solved, Step, Verdict};

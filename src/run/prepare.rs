@@ -153,6 +153,24 @@ fn check_probes(problem: &Problem, model: &Model) -> Result<(), RunError> {
 /// checkpoint's change fields instead (`run::Restart`), so that adding one
 /// after the steps a checkpoint holds is continued, not refused.
 pub fn fingerprint(prep: &Prepared, no_contact: bool) -> String {
+    fingerprint_as(prep, no_contact, false)
+}
+
+/// The fingerprint a checkpoint of this problem carries if it was written
+/// before mortar became the default of a non-matching pair, when a pair
+/// without `discretization` had node-to-segment rows: the pairs that run
+/// node-to-segment rows hashed without the key. None when no pair does.
+/// A restart accepts either (`run::Restart`).
+pub fn fingerprint_before_mortar(prep: &Prepared, no_contact: bool) -> Option<String> {
+    let nts = crate::fem::topology::RowKind::NonMatching;
+    prep.model
+        .topo
+        .interface_kinds
+        .contains(&nts)
+        .then(|| fingerprint_as(prep, no_contact, true))
+}
+
+fn fingerprint_as(prep: &Prepared, no_contact: bool, before_mortar: bool) -> String {
     let mut parts = vec![("mesh".to_string(), prep.mesh_hash)];
     let table: toml::Table = toml::from_str(&prep.problem.text).unwrap_or_default();
     for key in [
@@ -166,13 +184,18 @@ pub fn fingerprint(prep: &Prepared, no_contact: bool) -> String {
         "steps",
     ] {
         // `[model] units` only names the units (labels): not a part.
-        let value = table.get(key).map(|v| {
+        let mut value = table.get(key).map(|v| {
             let mut v = v.clone();
             if let (true, Some(t)) = (key == "model", v.as_table_mut()) {
                 t.remove("units");
             }
             v
         });
+        if key == "contact" {
+            if let Some(toml::Value::Array(entries)) = value.as_mut() {
+                with_discretization(entries, &prep.model.topo, before_mortar);
+            }
+        }
         let text = value
             .map(|v| toml::to_string(&toml::Table::from_iter([(key.to_string(), v)])))
             .and_then(Result::ok)
@@ -185,6 +208,59 @@ pub fn fingerprint(prep: &Prepared, no_contact: bool) -> String {
         .map(|(k, h)| format!("{k}={h:016x}"))
         .collect::<Vec<_>>()
         .join(";")
+}
+
+/// The `[[contact]]` entries as the fingerprint sees them: a non-matching
+/// pair (`slave`, `master`) without `discretization` gets the rows it was
+/// built with written out (`topo.interface_kinds`: mortar, or nts for a
+/// much stiffer slave), so that it hashes as those rows do, the same as the
+/// key written by hand, and a checkpoint of node-to-segment rows, the
+/// default before, is refused rather than continued with other rows.
+fn with_discretization(
+    entries: &mut [toml::Value],
+    topo: &crate::fem::Topology,
+    before_mortar: bool,
+) {
+    // Interfaces: the conforming pairs first, then the non-matching ones,
+    // each in the order of the entries (fem::topology, fem::pairs).
+    let conforming = entries
+        .iter()
+        .filter(|e| e.as_table().is_some_and(|t| !t.contains_key("slave")))
+        .count();
+    let mut k = conforming;
+    for e in entries {
+        let toml::Value::Table(t) = e else { continue };
+        if !t.contains_key("slave") {
+            continue;
+        }
+        if let Some(&kind) = topo.interface_kinds.get(k) {
+            let nts = kind == crate::fem::topology::RowKind::NonMatching;
+            if before_mortar && nts {
+                // Written as the default of its time.
+                t.remove("discretization");
+            } else if !t.contains_key("discretization") {
+                let name = kind.discretization().to_string();
+                t.insert("discretization".into(), toml::Value::String(name));
+            }
+        }
+        k += 1;
+    }
+}
+
+/// Whether the problem has a non-matching pair without `discretization`
+/// (mortar by default; node-to-segment before): the hint of a refused
+/// restart whose contact part differs.
+pub(super) fn has_default_discretization(prep: &Prepared) -> bool {
+    let table: toml::Table = toml::from_str(&prep.problem.text).unwrap_or_default();
+    table
+        .get("contact")
+        .and_then(toml::Value::as_array)
+        .is_some_and(|entries| {
+            entries.iter().any(|e| {
+                e.as_table()
+                    .is_some_and(|t| t.contains_key("slave") && !t.contains_key("discretization"))
+            })
+        })
 }
 
 /// The parts of two fingerprints that differ (names; `all` if one is malformed).

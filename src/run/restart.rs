@@ -5,7 +5,9 @@
 //! reference_step` and a finite reference step); the run then continues
 //! after its last step, warm-started from it (docs/methods.md §8.3).
 
-use super::prepare::{fingerprint, fingerprint_diff, Prepared};
+use super::prepare::{
+    fingerprint, fingerprint_before_mortar, fingerprint_diff, has_default_discretization, Prepared,
+};
 use super::RunError;
 use crate::io::hdf5::{read_checkpoint, step_name, Checkpoint};
 use crate::io::StepOutput;
@@ -63,10 +65,22 @@ fn check(rp: &Path, ck: &Checkpoint, fingerprint: &str, prep: &Prepared) -> Resu
             "{shown}: the checkpoint has no problem fingerprint (written by another program or an older signorini), so it cannot be matched to {problem}; solve from the start"
         ));
     };
-    let diff = fingerprint_diff(theirs, fingerprint);
+    let mut diff = fingerprint_diff(theirs, fingerprint);
+    // A checkpoint written when a pair without `discretization` had
+    // node-to-segment rows, of a pair that runs them now.
+    if fingerprint_before_mortar(prep, prep.no_contact).is_some_and(|b| b == *theirs) {
+        diff.clear();
+    }
     if !diff.is_empty() {
+        // A checkpoint of node-to-segment rows written when they were the
+        // default of a non-matching pair: say how to continue it.
+        let hint = if diff.iter().any(|d| d == "contact") && has_default_discretization(prep) {
+            "; a non-matching pair without discretization now has mortar rows: if the checkpoint was written with node-to-segment rows (the default before), add discretization = \"nts\" to the pair"
+        } else {
+            ""
+        };
         return Err(format!(
-            "{shown}: the checkpoint does not match {problem}: it was written for a different {} (restart needs the same mesh and the same loads, materials, contacts and steps)",
+            "{shown}: the checkpoint does not match {problem}: it was written for a different {} (restart needs the same mesh and the same loads, materials, contacts and steps){hint}",
             diff.join(", ")
         ));
     }
