@@ -7,6 +7,7 @@ pub mod compare;
 pub mod export;
 pub mod limit;
 pub mod mesh;
+pub mod pack;
 pub mod plot;
 pub mod solve;
 
@@ -43,6 +44,8 @@ pub enum Command {
     Plot(plot::PlotArgs),
     /// Mesh a Gmsh .geo file (2D, MSH 4.1) and check it.
     Mesh(mesh::MeshArgs),
+    /// Write a checkpoint (a split NAME.h5 with its step files) as one self-contained HDF5 file.
+    Pack(pack::PackArgs),
     /// Write the assembled QP (C, d, A, g, ker C) as Matrix Market files + meta.json.
     Export(export::ExportArgs),
     /// The benchmark's yardstick: one sparse Cholesky factorization + solve of C (no contact).
@@ -105,6 +108,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Compare(a) => compare::run(&a, cli.quiet, &cli.build),
         Command::Mesh(a) => mesh::run(&a, cli.quiet),
         Command::Plot(a) => plot::run(&a, cli.quiet),
+        Command::Pack(a) => pack::run(&a, cli.quiet),
         Command::Export(a) => export::run(&a, cli.quiet, &cli.build),
         Command::Limit(a) => limit::run(&a, cli.quiet, &cli.build),
         Command::Methods => {

@@ -14,6 +14,7 @@
 mod conditions;
 mod contact;
 mod edges;
+mod interference;
 pub mod element;
 pub mod friction;
 mod loads;
