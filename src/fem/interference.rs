@@ -65,7 +65,7 @@ pub(super) fn check_overlap(
     }
     let why = if overlap > seg_max {
         format!(
-            "more than {SEGMENT_FRACTION} × the local segment length {seg_len:.3e} (refine the mesh there, or the gap and projection, built on the reference geometry, do not hold)"
+            "more than {SEGMENT_FRACTION} × the local segment length {seg_len:.3e} (the gap and the projection are built on the reference geometry and hold within one segment)"
         )
     } else {
         format!(

@@ -210,7 +210,7 @@ impl Topology {
                         let sizes = body_sizes.get_or_insert_with(|| self.body_sizes());
                         let size = |b: u32| sizes.get(b as usize).copied().unwrap_or(0.0);
                         let x = geom.point(s);
-                        let at = format!("({:.6e}, {:.6e}) of \"{sname}\"", x[0], x[1]);
+                        let at = format!("({:.6e}, {:.6e}) of \"{sname}\" against \"{mname}\"", x[0], x[1]);
                         super::interference::check_overlap(what, &at, -g, len, [size(sb), size(mbody)])
                             .map_err(err)?;
                     }
