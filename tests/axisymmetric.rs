@@ -664,13 +664,19 @@ fn hostile_axisymmetric_loads_are_named() {
         assert_eq!(said, warned, "{name}: {log}");
     }
     // A spin of 1e60 rad/s: ρω²r ≈ 1e123, past the bound of 1e100.
-    let body = base.replace("plane = \"axisymmetric\"\n", "plane = \"axisymmetric\"\nomega = 1.0e60\n");
+    let body = base.replace(
+        "plane = \"axisymmetric\"\n",
+        "plane = \"axisymmetric\"\nomega = 1.0e60\n",
+    );
     let path = write_model(dir.path(), "spin", &[block_of(&block)], &body);
     let err = match signorini::run::prepare(&path, false) {
         Ok(_) => panic!("a spin of 1e60 was accepted"),
         Err(e) => e.to_string(),
     };
-    assert!(err.contains("omega = 1e60") && err.contains("centrifugal"), "{err}");
+    assert!(
+        err.contains("omega = 1e60") && err.contains("centrifugal"),
+        "{err}"
+    );
     // A tube whose outer radius is 0.3 past the bore of the other (its
     // wall is 0.5 thick, its segments about 0.04): no small overlap.
     let blocks = [
@@ -730,7 +736,12 @@ fn a_probe_on_the_boundary_is_in_the_mesh() {
     let body = format!("{base}[output]\nprobes = {{ edge = [0.5, 1.0], corner = [1.0, 1.0] }}\n");
     let path = write_model(dir.path(), "edge", &[block_of(&block)], &body);
     let out = dir.path().join("out");
-    let (code, log) = common::run(&["solve", path.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let (code, log) = common::run(&[
+        "solve",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert_eq!(code, 0, "{log}");
     let j: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("edge.json")).unwrap()).unwrap();
@@ -741,13 +752,22 @@ fn a_probe_on_the_boundary_is_in_the_mesh() {
         let node = p["node"].as_u64().unwrap() as usize;
         // The nearest output point (the first of equals), as before.
         let d2 = |q: &[f64; 2]| (q[0] - x[0]).powi(2) + (q[1] - x[1]).powi(2);
-        let nearest = (0..ck.mesh.points.len())
-            .fold(0, |b, i| if d2(&ck.mesh.points[i]) < d2(&ck.mesh.points[b]) { i } else { b });
+        let nearest = (0..ck.mesh.points.len()).fold(0, |b, i| {
+            if d2(&ck.mesh.points[i]) < d2(&ck.mesh.points[b]) {
+                i
+            } else {
+                b
+            }
+        });
         assert_eq!(node, nearest, "{name}");
         // Its displacement (the JSON's decimal text: to 1 ulp).
         for k in 0..2 {
             let got = p["u"][k].as_f64().unwrap();
-            assert!((got - u[node][k]).abs() <= 1e-15 * u[node][k].abs(), "{name}: {got} vs {:?}", u[node]);
+            assert!(
+                (got - u[node][k]).abs() <= 1e-15 * u[node][k].abs(),
+                "{name}: {got} vs {:?}",
+                u[node]
+            );
         }
     }
     assert_eq!(j["probes"]["corner"]["x"].as_f64(), Some(1.0));
@@ -759,7 +779,9 @@ fn a_probe_on_the_boundary_is_in_the_mesh() {
         Err(e) => e.to_string(),
     };
     assert!(
-        err.contains("probe above") && err.contains("outside the mesh") && err.contains("0.05 × its size"),
+        err.contains("probe above")
+            && err.contains("outside the mesh")
+            && err.contains("0.05 × its size"),
         "{err}"
     );
     // 0.02 past it (2 % of the element) is in.

@@ -364,12 +364,7 @@ struct Stopped {
 /// is a new file (the first step committed) sends `signals` in order;
 /// waits at most 300 s for the end.
 fn signal_after_first_commit(name: &str, dir: &Path, extra: &[&str], signals: &[i32]) -> Stopped {
-    signal_after_first_commit_of(
-        &meshes().join(format!("{name}.toml")),
-        dir,
-        extra,
-        signals,
-    )
+    signal_after_first_commit_of(&meshes().join(format!("{name}.toml")), dir, extra, signals)
 }
 
 /// [`signal_after_first_commit`] of the problem file `toml` (its stem the
@@ -758,12 +753,15 @@ fn a_killed_shorter_run_leaves_no_older_step_file_and_restarts_to_its_own_set() 
     let _ = child.wait();
     let ck = read_checkpoint(&h5).expect("the checkpoint opens after the kill");
     let have = ck.steps.len();
-    assert!(have >= 2 && have <= 12, "{have} steps");
+    assert!((2..=12).contains(&have), "{have} steps");
     for name in snapshot(&out).keys() {
         if let Some(k) = step_of(name) {
             // The step being committed may have its pair in place before
             // its index; nothing beyond it.
-            assert!(k <= have + 1, "{name} left beside a checkpoint of {have} steps");
+            assert!(
+                k <= have + 1,
+                "{name} left beside a checkpoint of {have} steps"
+            );
         }
     }
     let pvd = signorini::io::vtu::read_pvd(&out.join(format!("{NAME}.pvd"))).unwrap();
@@ -771,11 +769,17 @@ fn a_killed_shorter_run_leaves_no_older_step_file_and_restarts_to_its_own_set() 
         assert!(out.join(f).is_file(), "the .pvd names {f}, absent");
     }
     // The restart completes the shorter run's set, and only it.
-    let (code, log) = solve_toml_in(&short, &out, &["--quiet", "--restart", h5.to_str().unwrap()]);
+    let (code, log) = solve_toml_in(
+        &short,
+        &out,
+        &["--quiet", "--restart", h5.to_str().unwrap()],
+    );
     assert_eq!(code, 0, "{log}");
     let names: Vec<String> = snapshot(&out).into_keys().collect();
     assert_eq!(names.len(), 4 + 3 * 12, "{names:?}");
-    assert!(names.iter().all(|n| step_of(n).is_none_or(|k| (1..=12).contains(&k))));
+    assert!(names
+        .iter()
+        .all(|n| step_of(n).is_none_or(|k| (1..=12).contains(&k))));
     assert_eq!(read_checkpoint(&h5).unwrap().steps.len(), 12);
 }
 

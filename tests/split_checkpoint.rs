@@ -274,7 +274,11 @@ fn pvd_entries_exist(dir: &Path) -> Vec<String> {
     let entries = signorini::io::vtu::read_pvd(&pvd).unwrap();
     for (_, f) in &entries {
         let p = pvd.parent().unwrap().join(f);
-        assert!(p.is_file(), "{} names {f}, which is not beside it", pvd.display());
+        assert!(
+            p.is_file(),
+            "{} names {f}, which is not beside it",
+            pvd.display()
+        );
     }
     entries.into_iter().map(|e| e.1).collect()
 }
@@ -293,7 +297,13 @@ fn a_shorter_run_removes_the_files_of_an_older_longer_run() {
     // Was 64 files: 45 of them the 20-step run's steps 6..20.
     assert_eq!(listing(&out), expected_set(5));
     assert_eq!(pvd_entries_exist(&out).len(), 10);
-    assert_eq!(read_checkpoint(&out.join(format!("{NAME}.h5"))).unwrap().steps.len(), 5);
+    assert_eq!(
+        read_checkpoint(&out.join(format!("{NAME}.h5")))
+            .unwrap()
+            .steps
+            .len(),
+        5
+    );
 }
 
 #[test]
@@ -340,7 +350,10 @@ fn a_restart_into_another_folder_brings_the_pairs_its_pvd_lists() {
     assert_eq!(pvd_entries_exist(&second).len(), 10);
     // Steps 1..3 are the first folder's pairs, copied as they are.
     for k in 1..=3 {
-        for f in [format!("{NAME}_{k:04}.vtu"), format!("{NAME}_{k:04}_contact.vtu")] {
+        for f in [
+            format!("{NAME}_{k:04}.vtu"),
+            format!("{NAME}_{k:04}_contact.vtu"),
+        ] {
             assert!(
                 std::fs::read(first.join(&f)).unwrap() == std::fs::read(second.join(&f)).unwrap(),
                 "{f} differs from the first folder's"
@@ -413,7 +426,10 @@ fn a_packed_checkpoint_travels_alone() {
                 Ok(())
             })
             .unwrap();
-        assert!(kinds.iter().all(|k| *k == hdf5::LinkType::Hard), "{kinds:?}");
+        assert!(
+            kinds.iter().all(|k| *k == hdf5::LinkType::Hard),
+            "{kinds:?}"
+        );
     }
     // restart
     let out = d.path().join("restarted");
@@ -427,9 +443,18 @@ fn a_packed_checkpoint_travels_alone() {
     assert!(std::fs::metadata(&png).unwrap().len() > 0);
     // export: a restart with nothing to solve writes the pairs and series.
     let exported = d.path().join("exported");
-    solve(&exported, &["--restart", moved.to_str().unwrap(), "--max-steps", "2"]);
+    solve(
+        &exported,
+        &["--restart", moved.to_str().unwrap(), "--max-steps", "2"],
+    );
     assert_eq!(pvd_entries_exist(&exported).len(), 4);
-    assert_eq!(read_checkpoint(&exported.join(format!("{NAME}.h5"))).unwrap().steps.len(), 2);
+    assert_eq!(
+        read_checkpoint(&exported.join(format!("{NAME}.h5")))
+            .unwrap()
+            .steps
+            .len(),
+        2
+    );
     // The packed file is left as it was.
     assert_eq!(listing(&travel), vec!["one.h5".to_string()]);
 }
@@ -449,13 +474,23 @@ fn a_missing_step_file_is_named_by_every_reader() {
     let png = d.path().join("x.png");
     let packed = d.path().join("one.h5");
     for args in [
-        vec!["solve", &example(), "--out", out.to_str().unwrap(), "--restart", h5.to_str().unwrap()],
+        vec![
+            "solve",
+            &example(),
+            "--out",
+            out.to_str().unwrap(),
+            "--restart",
+            h5.to_str().unwrap(),
+        ],
         vec!["plot", h5.to_str().unwrap(), "-o", png.to_str().unwrap()],
         vec!["pack", h5.to_str().unwrap(), "-o", packed.to_str().unwrap()],
     ] {
         let (code, log) = run(&args);
         assert_eq!(code, 2, "{args:?}: {log}");
-        let line = log.lines().find(|l| l.starts_with("error")).unwrap_or_default();
+        let line = log
+            .lines()
+            .find(|l| l.starts_with("error"))
+            .unwrap_or_default();
         assert!(
             line.contains(want) && line.contains("does not exist") && !log.contains("panicked"),
             "{args:?}: {log}"

@@ -14,9 +14,9 @@
 mod conditions;
 mod contact;
 mod edges;
-mod interference;
 pub mod element;
 pub mod friction;
+mod interference;
 mod loads;
 mod mortar;
 mod pairs;

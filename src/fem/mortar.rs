@@ -210,9 +210,18 @@ impl Topology {
                         let sizes = body_sizes.get_or_insert_with(|| self.body_sizes());
                         let size = |b: u32| sizes.get(b as usize).copied().unwrap_or(0.0);
                         let x = geom.point(s);
-                        let at = format!("({:.6e}, {:.6e}) of \"{sname}\" against \"{mname}\"", x[0], x[1]);
-                        super::interference::check_overlap(what, &at, -g, len, [size(sb), size(mbody)])
-                            .map_err(err)?;
+                        let at = format!(
+                            "({:.6e}, {:.6e}) of \"{sname}\" against \"{mname}\"",
+                            x[0], x[1]
+                        );
+                        super::interference::check_overlap(
+                            what,
+                            &at,
+                            -g,
+                            len,
+                            [size(sb), size(mbody)],
+                        )
+                        .map_err(err)?;
                     }
                     if g < -1e-6 * len && !c.interference {
                         let x = geom.point(s);

@@ -337,7 +337,10 @@ impl Topology {
             if g < 0.0 && c.interference {
                 let sizes = body_sizes.get_or_insert_with(|| self.body_sizes());
                 let size = |b: u32| sizes.get(b as usize).copied().unwrap_or(0.0);
-                let at = format!("slave node {} of \"{sname}\" against \"{mname}\"", mesh.node_tags[v]);
+                let at = format!(
+                    "slave node {} of \"{sname}\" against \"{mname}\"",
+                    mesh.node_tags[v]
+                );
                 super::interference::check_overlap(what, &at, -g, seg_len, [size(sb), size(mb)])
                     .map_err(err)?;
             }

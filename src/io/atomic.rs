@@ -272,8 +272,7 @@ impl Stage {
     /// drops it. A name already committed or removed, or absent, is left.
     pub fn remove(&mut self, name: &str) -> Result<(), IoError> {
         let fin = self.target(name);
-        if self.touched.iter().any(|(p, _)| *p == fin) || std::fs::symlink_metadata(&fin).is_err()
-        {
+        if self.touched.iter().any(|(p, _)| *p == fin) || std::fs::symlink_metadata(&fin).is_err() {
             return Ok(());
         }
         let prev = self.stage_dir().join(".prev");

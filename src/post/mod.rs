@@ -166,7 +166,11 @@ pub fn locate(points: &[[f64; 2]], triangles: &[[usize; 3]], x: [f64; 2]) -> Opt
             })
             .fold(0.0f64, f64::max);
         let distance = distance_to_triangle(v, x);
-        let rel = if size > 0.0 { distance / size } else { f64::INFINITY };
+        let rel = if size > 0.0 {
+            distance / size
+        } else {
+            f64::INFINITY
+        };
         if best.as_ref().is_none_or(|(r, _)| rel < *r) {
             best = Some((
                 rel,

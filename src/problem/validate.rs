@@ -6,8 +6,8 @@
 
 use super::raw::{RawContact, RawDirichlet, RawFile, RawTraction};
 use super::{
-    num, shorten, Contact, ContactPair, Dirichlet, Discretization, FrictionLaw, NonMatchingPair, Plane,
-    Prescribed, ProblemFile, Traction, TractionLoad, MAX_MAGNITUDE, MAX_NAME,
+    num, shorten, Contact, ContactPair, Dirichlet, Discretization, FrictionLaw, NonMatchingPair,
+    Plane, Prescribed, ProblemFile, Traction, TractionLoad, MAX_MAGNITUDE, MAX_NAME,
 };
 
 type Check<T = ()> = Result<T, String>;
@@ -255,7 +255,10 @@ fn check_materials(f: &RawFile) -> Check {
     }
     for (name, m) in &f.materials {
         if !(m.e > 0.0 && m.e.is_finite()) {
-            return Err(format!("[materials.{name}] E = {} must be positive", num(m.e)));
+            return Err(format!(
+                "[materials.{name}] E = {} must be positive",
+                num(m.e)
+            ));
         }
         if !(m.nu > -1.0 && m.nu < 0.5) {
             return Err(format!(
@@ -404,7 +407,10 @@ fn friction_law(c: &RawContact, at: &str) -> Check<FrictionLaw> {
     for (key, v) in [("friction", c.friction), ("tresca", c.tresca)] {
         let Some(v) = v else { continue };
         if !(v.is_finite() && v >= 0.0) {
-            return Err(format!("{at}: {key} = {} must be a finite number >= 0", num(v)));
+            return Err(format!(
+                "{at}: {key} = {} must be a finite number >= 0",
+                num(v)
+            ));
         }
         if v > MAX_MAGNITUDE {
             return Err(format!(

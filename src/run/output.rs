@@ -596,13 +596,12 @@ impl<'a> VtuWriter<'a> {
             // The pair the run that wrote the checkpoint left beside it:
             // copied as it is (it has the reactions, which the checkpoint
             // does not keep).
-            let src = output_paths(
-                path.parent().unwrap_or(Path::new(".")),
-                &self.name,
-                Some(i),
-            );
+            let src = output_paths(path.parent().unwrap_or(Path::new(".")), &self.name, Some(i));
             if !in_place && src.vtu.is_file() && src.contact_vtu.is_file() {
-                for (from, to) in [(&src.vtu, &staged.vtu), (&src.contact_vtu, &staged.contact_vtu)] {
+                for (from, to) in [
+                    (&src.vtu, &staged.vtu),
+                    (&src.contact_vtu, &staged.contact_vtu),
+                ] {
                     std::fs::copy(from, to).map_err(|e| {
                         RunError::Output(format!(
                             "{}: cannot copy the restart's step file: {e}",
@@ -616,7 +615,13 @@ impl<'a> VtuWriter<'a> {
             if !self.compress && self.parts.is_none() {
                 self.parts = Some(io::vtu::VtuMeshParts::new(self.om));
             }
-            io::vtu::write_vtu_with(&staged.vtu, self.om, &out, self.compress, self.parts.as_ref())?;
+            io::vtu::write_vtu_with(
+                &staged.vtu,
+                self.om,
+                &out,
+                self.compress,
+                self.parts.as_ref(),
+            )?;
             let arrays = fr.as_ref().map(|f| io::vtu::FrictionArrays {
                 tangential_traction: &f.tangential_traction,
                 slip: &f.slip,
