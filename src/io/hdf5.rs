@@ -408,7 +408,7 @@ fn step_names(ctx: &Ctx, file: &File) -> Result<Option<StepNames>, IoError> {
 fn linked(ctx: &Ctx, loc: &str, cause: ::hdf5::Error) -> IoError {
     let text = cause.to_string();
     if text.contains("external") {
-        let hint = "a checkpoint written with load steps is NAME.h5 with NAME_mesh.h5 and one NAME_NNNN.h5 per step beside it: copy or move them together, or make one self-contained file with `signorini pack`";
+        let hint = "a checkpoint written with load steps is NAME.h5 with NAME_mesh.h5 and one NAME_NNNN.h5 per step beside it: copy or move them as a whole, or make one self-contained file with `signorini pack`";
         let dir = match ctx.path.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => std::path::PathBuf::from("."),
@@ -416,7 +416,7 @@ fn linked(ctx: &Ctx, loc: &str, cause: ::hdf5::Error) -> IoError {
         let target = external_file_name(&text).map(|n| dir.join(n));
         return ctx.format(match target {
             Some(f) if !f.exists() => format!(
-                "{loc}: the step data is in {}, which does not exist; {hint}",
+                "{loc}: its data is in {}, which does not exist; {hint}",
                 f.display()
             ),
             Some(f) => format!(
