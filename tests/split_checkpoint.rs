@@ -519,3 +519,108 @@ fn pack_refuses_to_write_over_a_file_of_its_own_checkpoint() {
     assert!(std::fs::read(&step).unwrap() == bytes);
     assert_eq!(read_checkpoint(&h5).unwrap().steps.len(), 2);
 }
+
+/// A restart with nothing left to solve into a folder of an older, longer
+/// run (an export): the folder ends with the checkpoint's set only, the
+/// summary of the run that wrote the checkpoint copied along; from a
+/// packed checkpoint moved alone (no summary beside it) the older
+/// summary is removed, not left to describe another run.
+#[test]
+fn a_restart_with_nothing_to_solve_replaces_an_older_runs_set() {
+    let d = tempfile::tempdir().unwrap();
+    let five = variant(&d.path().join("five"), 5);
+    let long = variant(&d.path().join("long"), 20);
+    let first = d.path().join("first");
+    assert_eq!(solve_toml(&five, &first, &[]).0, 0);
+    let h5 = first.join(format!("{NAME}.h5"));
+    let second = d.path().join("second");
+    assert_eq!(solve_toml(&long, &second, &[]).0, 0);
+    let (code, log) = solve_toml(&five, &second, &["--restart", h5.to_str().unwrap()]);
+    assert_eq!(code, 0, "{log}");
+    assert_eq!(listing(&second), expected_set(5));
+    assert_eq!(pvd_entries_exist(&second).len(), 10);
+    let json = format!("{NAME}.json");
+    assert!(
+        std::fs::read(first.join(&json)).unwrap() == std::fs::read(second.join(&json)).unwrap()
+    );
+
+    let alone = d.path().join("alone");
+    std::fs::create_dir(&alone).unwrap();
+    let packed = alone.join("five.h5");
+    assert_eq!(
+        run(&["pack", h5.to_str().unwrap(), "-o", packed.to_str().unwrap()]).0,
+        0
+    );
+    let third = d.path().join("third");
+    assert_eq!(solve_toml(&long, &third, &[]).0, 0);
+    let (code, log) = solve_toml(&five, &third, &["--restart", packed.to_str().unwrap()]);
+    assert_eq!(code, 0, "{log}");
+    // The packed checkpoint copied as one file, the pairs written from it.
+    let mut want: Vec<String> = expected_set(5)
+        .into_iter()
+        .filter(|f| f.ends_with(".vtu") || f.ends_with(".pvd") || *f == format!("{NAME}.h5"))
+        .collect();
+    want.sort();
+    assert_eq!(listing(&third), want);
+    assert_eq!(pvd_entries_exist(&third).len(), 10);
+    assert_eq!(
+        read_checkpoint(&third.join(format!("{NAME}.h5")))
+            .unwrap()
+            .steps
+            .len(),
+        5
+    );
+}
+
+/// Files outside the name's pattern are never touched: another name, a
+/// step number of fewer than four digits, another extension.
+#[test]
+fn files_outside_the_name_pattern_are_left_alone() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let others = [
+        format!("{NAME}_notes.txt"),
+        format!("{NAME}_0001.png"),
+        format!("{NAME}_1.vtu"),
+        format!("{NAME}_0009.vtu.bak"),
+        "other_0001.vtu".to_string(),
+        format!("x{NAME}_0009.vtu"),
+    ];
+    for (k, f) in others.iter().enumerate() {
+        std::fs::write(out.join(f), format!("keep {k}")).unwrap();
+    }
+    let three = variant(&d.path().join("three"), 3);
+    let single = variant(&d.path().join("single"), 0);
+    assert_eq!(solve_toml(&three, &out, &[]).0, 0);
+    assert_eq!(solve_toml(&single, &out, &[]).0, 0);
+    for (k, f) in others.iter().enumerate() {
+        assert_eq!(
+            std::fs::read_to_string(out.join(f)).unwrap(),
+            format!("keep {k}"),
+            "{f}"
+        );
+    }
+    let mut want = expected_set(0);
+    want.extend(others.iter().cloned());
+    want.sort();
+    assert_eq!(listing(&out), want);
+}
+
+/// A restart in place whose earlier pair was deleted writes it again from
+/// the checkpoint, so the .pvd still names only files beside it.
+#[test]
+fn a_restart_in_place_rewrites_a_deleted_pair() {
+    let d = tempfile::tempdir().unwrap();
+    solve(d.path(), &["--max-steps", "2"]);
+    let vtu = d.path().join(format!("{NAME}_0001.vtu"));
+    let kept = std::fs::read(d.path().join(format!("{NAME}_0002.vtu"))).unwrap();
+    std::fs::remove_file(&vtu).unwrap();
+    let h5 = d.path().join(format!("{NAME}.h5"));
+    solve(d.path(), &["--restart", h5.to_str().unwrap()]);
+    assert!(vtu.is_file());
+    assert_eq!(listing(d.path()), expected_set(4));
+    assert_eq!(pvd_entries_exist(d.path()).len(), 8);
+    // The pair that was there is kept as it was.
+    assert!(std::fs::read(d.path().join(format!("{NAME}_0002.vtu"))).unwrap() == kept);
+}

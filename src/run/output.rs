@@ -138,6 +138,10 @@ pub struct Transaction {
 struct Sweep {
     multi: bool,
     kept: usize,
+    /// The run writes `NAME.json` (it solves a step); else (a restart with
+    /// nothing left to solve) an older run's summary is removed unless
+    /// one is copied in.
+    summary: bool,
 }
 
 /// The kind of a file of the output name `name` (None: not of its pattern).
@@ -199,13 +203,18 @@ impl Transaction {
     }
 
     /// The files of the output name this run leaves: with load steps
-    /// (`multi`) or not, and a restart's steps `1..=kept` kept in place
-    /// (the restart checkpoint is this directory's). The first commit then
+    /// (`multi`) or not, a restart's steps `1..=kept` kept in place (the
+    /// restart checkpoint is this directory's), and a summary written or
+    /// not (`summary`: a step is solved). The first commit then
     /// removes every other file of the name's pattern (an older run's
     /// surplus: its later steps, or the files of the other layout), as part
     /// of the transaction: a rollback puts them back.
-    pub fn plan(&mut self, multi: bool, kept: usize) {
-        self.sweep = Some(Sweep { multi, kept });
+    pub fn plan(&mut self, multi: bool, kept: usize, summary: bool) {
+        self.sweep = Some(Sweep {
+            multi,
+            kept,
+            summary,
+        });
     }
 
     /// Removes the files of the name this run does not leave ([`Transaction::plan`]),
@@ -220,7 +229,10 @@ impl Transaction {
             .filter_map(|e| e.file_name().to_str().map(str::to_string))
             .filter(|f| !committed.contains(&f.as_str()))
             .filter(|f| match owned(&self.name, f) {
-                None | Some(Owned::Record) => false,
+                None => false,
+                // The checkpoint is in every run's last commit; the
+                // summary in every run's that solves a step.
+                Some(Owned::Record) => !plan.summary && f.ends_with(".json"),
                 Some(Owned::Single) => plan.multi,
                 // With load steps, the mesh file of a restart in place is
                 // the checkpoint's (the time series is in every commit).
@@ -736,6 +748,30 @@ impl SummaryWriter {
 impl StepObserver for SummaryWriter {
     fn on_step(&mut self, _step: &Step<'_>) -> Result<Vec<String>, RunError> {
         Ok(vec![])
+    }
+
+    /// A restart with nothing left to solve, from another directory: the
+    /// summary beside its checkpoint (of the run that wrote it) comes
+    /// along with the checkpoint, if there is one.
+    fn on_nothing_to_do(&mut self, restart: &Restart) -> Result<Vec<String>, RunError> {
+        let name = fname(&self.path);
+        let Some(dir) = self.path.parent() else {
+            return Ok(vec![]);
+        };
+        let src = restart.path.with_file_name(&name);
+        // The staging directory lies in the output directory (or is it,
+        // without a transaction).
+        let out = dir.parent().unwrap_or(dir);
+        if same_dir(&restart.path, dir) || same_dir(&restart.path, out) || !src.is_file() {
+            return Ok(vec![]);
+        }
+        std::fs::copy(&src, &self.path).map_err(|e| {
+            RunError::Output(format!(
+                "{}: cannot copy the restart's summary: {e}",
+                src.display()
+            ))
+        })?;
+        Ok(vec![name])
     }
 
     fn on_finish(&mut self, summary: &Summary) -> Result<Vec<String>, RunError> {
