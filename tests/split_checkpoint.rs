@@ -624,3 +624,18 @@ fn a_restart_in_place_rewrites_a_deleted_pair() {
     // The pair that was there is kept as it was.
     assert!(std::fs::read(d.path().join(format!("{NAME}_0002.vtu"))).unwrap() == kept);
 }
+
+/// A restart in place with nothing left to solve, one pair deleted: the
+/// pair is written again and the run's own summary is kept.
+#[test]
+fn a_finished_restart_in_place_rewrites_a_deleted_pair_and_keeps_its_summary() {
+    let d = tempfile::tempdir().unwrap();
+    solve(d.path(), &[]);
+    let json = std::fs::read(d.path().join(format!("{NAME}.json"))).unwrap();
+    std::fs::remove_file(d.path().join(format!("{NAME}_0003_contact.vtu"))).unwrap();
+    let h5 = d.path().join(format!("{NAME}.h5"));
+    solve(d.path(), &["--restart", h5.to_str().unwrap()]);
+    assert_eq!(listing(d.path()), expected_set(4));
+    assert_eq!(pvd_entries_exist(d.path()).len(), 8);
+    assert!(std::fs::read(d.path().join(format!("{NAME}.json"))).unwrap() == json);
+}

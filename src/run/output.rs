@@ -231,8 +231,9 @@ impl Transaction {
             .filter(|f| match owned(&self.name, f) {
                 None => false,
                 // The checkpoint is in every run's last commit; the
-                // summary in every run's that solves a step.
-                Some(Owned::Record) => !plan.summary && f.ends_with(".json"),
+                // summary in every run's that solves a step (a restart in
+                // place with nothing to solve keeps its own).
+                Some(Owned::Record) => !plan.summary && plan.kept == 0 && f.ends_with(".json"),
                 Some(Owned::Single) => plan.multi,
                 // With load steps, the mesh file of a restart in place is
                 // the checkpoint's (the time series is in every commit).
