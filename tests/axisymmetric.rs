@@ -740,3 +740,161 @@ fn the_checkpoint_names_the_model_kind() {
         assert!(!ck.attrs.iter().any(|(k, _)| k == "model"), "{plane}");
     }
 }
+
+/// Issue 43, hostile axisymmetric input: a traction on the axis r = 0
+/// carries no area and adds no load, which the run says, naming the group
+/// (a traction on a curve off the axis says nothing); an interference
+/// overlap as thick as a tube's wall is refused naming the pair; a spin
+/// whose ρω²r passes the load bound is refused naming `omega`.
+#[test]
+fn hostile_axisymmetric_loads_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let block = Block {
+        name: "part",
+        r: [0.0, 1.0],
+        z: [0.0, 1.0],
+        n: [4, 4],
+    };
+    let base = "[model]\nplane = \"axisymmetric\"\n[materials.part]\nE = 1e9\nnu = 0.3\nrho = 1000.0\n[[dirichlet]]\non = \"part_bottom\"\nuy = 0.0\n";
+    for (name, on, warned) in [("axis", "part_inner", true), ("rim", "part_outer", false)] {
+        let body = format!("{base}[[traction]]\non = \"{on}\"\np = [1.0e6, 0.0]\n");
+        let path = write_model(dir.path(), name, &[block_of(&block)], &body);
+        let out = dir.path().join(format!("out_{name}"));
+        let (code, log) = common::run(&[
+            "solve",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{name}: {log}");
+        let said = log
+            .lines()
+            .any(|l| l.contains(on) && l.contains("axis r = 0") && l.contains("no load"));
+        assert_eq!(said, warned, "{name}: {log}");
+    }
+    // A spin of 1e60 rad/s: ρω²r ≈ 1e123, past the bound of 1e100.
+    let body = base.replace(
+        "plane = \"axisymmetric\"\n",
+        "plane = \"axisymmetric\"\nomega = 1.0e60\n",
+    );
+    let path = write_model(dir.path(), "spin", &[block_of(&block)], &body);
+    let err = match signorini::run::prepare(&path, false) {
+        Ok(_) => panic!("a spin of 1e60 was accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("omega = 1e60") && err.contains("centrifugal"),
+        "{err}"
+    );
+    // A tube whose outer radius is 0.3 past the bore of the other (its
+    // wall is 0.5 thick, its segments about 0.04): no small overlap.
+    let blocks = [
+        Block {
+            name: "inner",
+            r: [0.5, 1.3],
+            z: [0.0, 0.25],
+            n: [12, 6],
+        },
+        Block {
+            name: "outer",
+            r: [1.0, 1.5],
+            z: [0.0, 0.25],
+            n: [12, 7],
+        },
+    ];
+    let body = "[model]\nplane = \"axisymmetric\"\n[materials.inner]\nE = 2e11\nnu = 0.3\n[materials.outer]\nE = 2e11\nnu = 0.3\n[[dirichlet]]\non = \"inner_bottom\"\nuy = 0.0\n[[dirichlet]]\non = \"outer_bottom\"\nuy = 0.0\n[[contact]]\nslave = \"inner_outer\"\nmaster = \"outer_inner\"\ninterference = true\n";
+    let path = write_model(dir.path(), "deep_fit", &blocks, body);
+    let err = match signorini::run::prepare(&path, false) {
+        Ok(_) => panic!("an overlap of 0.3 was accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("interference overlap")
+            && err.contains("inner_outer")
+            && err.contains("outer_inner")
+            && err.contains("segment length"),
+        "{err}"
+    );
+}
+
+fn block_of(b: &Block) -> Block {
+    Block {
+        name: b.name,
+        r: b.r,
+        z: b.z,
+        n: b.n,
+    }
+}
+
+/// Issue 43, probes: a probe on the boundary of a coarse mesh, between
+/// two nodes and half an element from either (it was refused as "outside
+/// the mesh", the rule being 10 % of the mesh diagonal to a node), is in
+/// its triangle and reports the nearest output point's displacement bit
+/// for bit; one at 10 % of an element past the boundary is refused, the
+/// message saying the rule.
+#[test]
+fn a_probe_on_the_boundary_is_in_the_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let block = Block {
+        name: "part",
+        r: [0.0, 1.0],
+        z: [0.0, 1.0],
+        n: [1, 1],
+    };
+    let base = "[model]\nplane = \"strain\"\n[materials.part]\nE = 1e9\nnu = 0.3\n[[dirichlet]]\non = \"part_bottom\"\nu = [0.0, 0.0]\n[[traction]]\non = \"part_top\"\np = [1.0e6, -1.0e6]\n";
+    let body = format!("{base}[output]\nprobes = {{ edge = [0.5, 1.0], corner = [1.0, 1.0] }}\n");
+    let path = write_model(dir.path(), "edge", &[block_of(&block)], &body);
+    let out = dir.path().join("out");
+    let (code, log) = common::run(&[
+        "solve",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{log}");
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("edge.json")).unwrap()).unwrap();
+    let ck = signorini::io::hdf5::read_checkpoint(&out.join("edge.h5")).unwrap();
+    let u = &ck.steps[0].displacement;
+    for (name, x) in [("edge", [0.5, 1.0]), ("corner", [1.0, 1.0])] {
+        let p = &j["probes"][name];
+        let node = p["node"].as_u64().unwrap() as usize;
+        // The nearest output point (the first of equals), as before.
+        let d2 = |q: &[f64; 2]| (q[0] - x[0]).powi(2) + (q[1] - x[1]).powi(2);
+        let nearest = (0..ck.mesh.points.len()).fold(0, |b, i| {
+            if d2(&ck.mesh.points[i]) < d2(&ck.mesh.points[b]) {
+                i
+            } else {
+                b
+            }
+        });
+        assert_eq!(node, nearest, "{name}");
+        // Its displacement (the JSON's decimal text: to 1 ulp).
+        for k in 0..2 {
+            let got = p["u"][k].as_f64().unwrap();
+            assert!(
+                (got - u[node][k]).abs() <= 1e-15 * u[node][k].abs(),
+                "{name}: {got} vs {:?}",
+                u[node]
+            );
+        }
+    }
+    assert_eq!(j["probes"]["corner"]["x"].as_f64(), Some(1.0));
+    // 0.1 past the top edge of a 1 × 1 element: 10 % of its size > 5 %.
+    let body = format!("{base}[output]\nprobes = {{ above = [0.5, 1.1] }}\n");
+    let path = write_model(dir.path(), "above", &[block_of(&block)], &body);
+    let err = match signorini::run::prepare(&path, false) {
+        Ok(_) => panic!("a probe 0.1 past the mesh was accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("probe above")
+            && err.contains("outside the mesh")
+            && err.contains("0.05 × its size"),
+        "{err}"
+    );
+    // 0.02 past it (2 % of the element) is in.
+    let body = format!("{base}[output]\nprobes = {{ near = [0.5, 1.02] }}\n");
+    let path = write_model(dir.path(), "near", &[block_of(&block)], &body);
+    assert!(signorini::run::prepare(&path, false).is_ok());
+}

@@ -364,12 +364,24 @@ struct Stopped {
 /// is a new file (the first step committed) sends `signals` in order;
 /// waits at most 300 s for the end.
 fn signal_after_first_commit(name: &str, dir: &Path, extra: &[&str], signals: &[i32]) -> Stopped {
+    signal_after_first_commit_of(&meshes().join(format!("{name}.toml")), dir, extra, signals)
+}
+
+/// [`signal_after_first_commit`] of the problem file `toml` (its stem the
+/// output name).
+fn signal_after_first_commit_of(
+    toml: &Path,
+    dir: &Path,
+    extra: &[&str],
+    signals: &[i32],
+) -> Stopped {
+    let name = toml.file_stem().unwrap().to_string_lossy().into_owned();
     let h5 = dir.join(format!("{name}.h5"));
     let before = inode(&h5);
     let err = dir.with_extension("stderr");
     let mut child = command()
         .arg("solve")
-        .arg(meshes().join(format!("{name}.toml")))
+        .arg(toml)
         .arg("--out")
         .arg(dir)
         .args(extra)
@@ -682,4 +694,146 @@ fn a_reader_that_goes_away_mid_run_loses_the_report_not_the_run() {
             .unwrap();
     assert_eq!(j["converged"], true);
     assert_eq!(j["failed_steps"], serde_json::json!([]));
+}
+
+// ------------------------------------------------- files from another run
+//
+// Issue 43: a run's first commit removes the files of its name that an
+// older run left and it will not write (later steps of a longer run),
+// keeping them in its staging directory until the end: a signal puts them
+// back with the rest, and a SIGKILL leaves no older step file beside the
+// new checkpoint.
+
+/// `dir/NAME.toml`: three_bodies_steps with `nsteps` load steps, the mesh
+/// path made absolute.
+fn steps_variant(dir: &Path, nsteps: usize) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let text = std::fs::read_to_string(problem()).unwrap();
+    let head = &text[..text.find("[[steps]]").unwrap()];
+    let mesh = meshes().join("three_bodies.msh");
+    let mut out = head.replace(
+        "file = \"three_bodies.msh\"",
+        &format!("file = {:?}", mesh.to_str().unwrap()),
+    );
+    for k in 1..=nsteps {
+        out.push_str(&format!(
+            "[[steps]]\nt = {k}.0\ndisplacement = {}\nload = 1.0\n\n",
+            k as f64 / nsteps as f64
+        ));
+    }
+    let p = dir.join(format!("{NAME}.toml"));
+    std::fs::write(&p, out).unwrap();
+    p
+}
+
+/// The step index of a step file of NAME (`NAME_NNNN.vtu`, `…_contact.vtu`, `….h5`).
+fn step_of(name: &str) -> Option<usize> {
+    let rest = name.strip_prefix(&format!("{NAME}_"))?;
+    let digits = ["_contact.vtu", ".vtu", ".h5"]
+        .iter()
+        .find_map(|s| rest.strip_suffix(s))?;
+    digits.parse().ok()
+}
+
+#[test]
+fn sigterm_during_a_shorter_run_puts_back_the_longer_runs_files() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let long = steps_variant(&d.path().join("long"), 20);
+    let short = steps_variant(&d.path().join("short"), 12);
+    let (code, log) = solve_toml_in(&long, &out, &["--quiet"]);
+    assert_eq!(code, 0, "{log}");
+    let before = snapshot(&out);
+    assert_eq!(before.keys().filter(|k| step_of(k) == Some(20)).count(), 3);
+    let s = signal_after_first_commit_of(&short, &out, &["--quiet"], &[libc::SIGTERM]);
+    let after = snapshot(&out);
+    assert_eq!(
+        after.keys().collect::<Vec<_>>(),
+        before.keys().collect::<Vec<_>>(),
+        "the older run's files were not all put back"
+    );
+    for (k, v) in &before {
+        assert!(after[k] == *v, "{k} is not the older run's");
+    }
+    assert_stopped(&s, libc::SIGTERM, "shorter run");
+}
+
+#[test]
+fn a_killed_shorter_run_leaves_no_older_step_file_and_restarts_to_its_own_set() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let long = steps_variant(&d.path().join("long"), 20);
+    let short = steps_variant(&d.path().join("short"), 12);
+    let (code, log) = solve_toml_in(&long, &out, &["--quiet"]);
+    assert_eq!(code, 0, "{log}");
+    let h5 = out.join(format!("{NAME}.h5"));
+    let mut child = command()
+        .arg("solve")
+        .arg(&short)
+        .args(["--out", out.to_str().unwrap(), "--quiet"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Two steps in the new checkpoint: the first commit (and its removal
+    // of the older files) is complete, the run goes on.
+    let t0 = Instant::now();
+    let mut seen = 0;
+    loop {
+        let exited = child.try_wait().unwrap().is_some();
+        if let Ok(c) = read_checkpoint(&h5) {
+            if c.steps.len() < 20 {
+                seen = c.steps.len();
+            }
+        }
+        if seen >= 2 || exited {
+            break;
+        }
+        assert!(t0.elapsed() < Duration::from_secs(300), "no second step");
+        std::thread::sleep(Duration::from_micros(500));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    let ck = read_checkpoint(&h5).expect("the checkpoint opens after the kill");
+    let have = ck.steps.len();
+    assert!((2..=12).contains(&have), "{have} steps");
+    for name in snapshot(&out).keys() {
+        if let Some(k) = step_of(name) {
+            // The step being committed may have its pair in place before
+            // its index; nothing beyond it.
+            assert!(
+                k <= have + 1,
+                "{name} left beside a checkpoint of {have} steps"
+            );
+        }
+    }
+    let pvd = signorini::io::vtu::read_pvd(&out.join(format!("{NAME}.pvd"))).unwrap();
+    for (_, f) in &pvd {
+        assert!(out.join(f).is_file(), "the .pvd names {f}, absent");
+    }
+    // The restart completes the shorter run's set, and only it.
+    let (code, log) = solve_toml_in(
+        &short,
+        &out,
+        &["--quiet", "--restart", h5.to_str().unwrap()],
+    );
+    assert_eq!(code, 0, "{log}");
+    let names: Vec<String> = snapshot(&out).into_keys().collect();
+    assert_eq!(names.len(), 4 + 3 * 12, "{names:?}");
+    assert!(names
+        .iter()
+        .all(|n| step_of(n).is_none_or(|k| (1..=12).contains(&k))));
+    assert_eq!(read_checkpoint(&h5).unwrap().steps.len(), 12);
+}
+
+fn solve_toml_in(toml: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
+    let o = command()
+        .arg("solve")
+        .arg(toml)
+        .arg("--out")
+        .arg(out)
+        .args(extra)
+        .output()
+        .unwrap();
+    joined(&o)
 }

@@ -304,3 +304,44 @@ fn ssn_kept_across_steps_gives_each_steps_fresh_answer_bit_for_bit() {
         assert!(warm_used > 0, "{name}: no step was warm-started");
     }
 }
+
+/// A step's explicit displacement for a component its `[[dirichlet]]`
+/// group does not prescribe is dropped: the run warns, naming the step,
+/// the group and the component (issue 43); a zero there (the step must give
+/// two values, as every step of geodynamic_steps does) says nothing.
+#[test]
+fn a_step_value_for_a_free_component_is_named_in_a_warning() {
+    let d = tempfile::tempdir().unwrap();
+    let toml = common::model_variant(
+        &meshes(),
+        "geodynamic_steps.toml",
+        &[("left_plate = [500.0, 0.0]", "left_plate = [500.0, 7.0]")],
+        &d.path().join("free_uy.toml"),
+    );
+    for (toml, want) in [(toml, 1), (meshes().join("geodynamic_steps.toml"), 0)] {
+        let out = d.path().join(format!("out{want}"));
+        let (code, log) = run(&[
+            "solve",
+            toml.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--max-steps",
+            "1",
+        ]);
+        assert_eq!(code, 0, "{log}");
+        let warnings: Vec<&str> = log
+            .lines()
+            .filter(|l| l.contains("does not prescribe"))
+            .collect();
+        assert_eq!(warnings.len(), want, "{log}");
+        if let Some(w) = warnings.first() {
+            assert!(
+                w.contains("free_uy.toml")
+                    && w.contains("[[steps]] #3")
+                    && w.contains("dirichlet.left_plate")
+                    && w.contains("uy = 7"),
+                "{w}"
+            );
+        }
+    }
+}

@@ -8,6 +8,7 @@ pub mod compare;
 pub mod export;
 pub mod limit;
 pub mod mesh;
+pub mod pack;
 pub mod plot;
 pub mod solve;
 
@@ -50,6 +51,8 @@ pub enum Command {
     Plot(plot::PlotArgs),
     /// Mesh a Gmsh .geo file (2D, MSH 4.1) and check it.
     Mesh(mesh::MeshArgs),
+    /// Write a checkpoint (a split NAME.h5 with its step files) as one self-contained HDF5 file.
+    Pack(pack::PackArgs),
     /// Write the assembled QP (C, d, A, g, ker C) as Matrix Market files + meta.json.
     Export(export::ExportArgs),
     /// The benchmark's yardstick: one sparse Cholesky factorization + solve of C (no contact).
@@ -153,6 +156,7 @@ fn run_command(cli: Cli) -> i32 {
         Command::Compare(a) => compare::run(&a, quiet, &cli.build),
         Command::Mesh(a) => mesh::run(&a, quiet),
         Command::Plot(a) => plot::run(&a, quiet),
+        Command::Pack(a) => pack::run(&a, quiet),
         Command::Export(a) => export::run(&a, quiet, &cli.build),
         Command::Limit(a) => limit::run(&a, quiet, &cli.build),
         Command::Methods => {

@@ -87,7 +87,7 @@ fn solve(
     let om = post::out_mesh(&prep.model, &prep.mesh);
     let (sdir, fdir) = (tx.stage_dir().to_path_buf(), tx.dir().to_path_buf());
     let compress = a.compress || file.output.compress;
-    let vtu = VtuWriter::new(prep, &om, &sdir, &fdir, compress);
+    let vtu = VtuWriter::new(prep, &om, &sdir, &fdir, compress).restart(restart.as_ref());
     let checkpoint = CheckpointWriter::new(prep, &om, &sdir, &fdir, restart.as_ref());
     // The VTU pair and the checkpoint are written side by side.
     let mut files = Concurrent(vtu, checkpoint);

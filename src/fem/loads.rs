@@ -14,7 +14,7 @@ use super::stiffness::Materials;
 use super::topology::{dim_name, group_names, Topology};
 use super::{FemError, Model};
 use crate::mesh::Mesh;
-use crate::problem::{Problem, TractionLoad};
+use crate::problem::{num, shorten, Problem, TractionLoad, MAX_MAGNITUDE};
 use crate::qp::Csr;
 
 /// The nodal loads on every point [N] (thickness included), and their
@@ -64,6 +64,81 @@ fn gravity(topo: &Topology, mats: &Materials) -> Vec<[f64; 2]> {
         }
     }
     loads
+}
+
+/// Refuses a body force beyond ±[`MAX_MAGNITUDE`] (the bound of every
+/// load, docs/problem-format.md §2): ρ|g| of each material, and with a spin
+/// the centrifugal ρω²·r_max (r_max the largest radius of the material's
+/// triangles). Names the key and the material: a load past the bound
+/// overflows in the solver's products (a stagnation far from the cause).
+pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<(), FemError> {
+    let f = &problem.file;
+    let err = |msg: String| FemError::new(&problem.path, msg);
+    let g = f.model.gravity.unwrap_or([0.0, 0.0]);
+    let w = f.model.omega.unwrap_or(0.0);
+    let axi = f.model.plane.is_axisymmetric();
+    let mut r_max = vec![0.0f64; topo.material_names.len()];
+    for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
+        for &p in tri {
+            if let Some(r) = r_max.get_mut(mi as usize) {
+                *r = r.max(topo.points[p][0].abs());
+            }
+        }
+    }
+    for (mi, name) in topo.material_names.iter().enumerate() {
+        let Some(m) = f.materials.get(name) else {
+            continue;
+        };
+        let rg = m.rho * g[0].hypot(g[1]);
+        if !(rg <= MAX_MAGNITUDE) {
+            return Err(err(format!(
+                "[model] gravity with [materials.{}] rho = {}: the body force ρ|g| = {rg:.3e} is beyond ±{MAX_MAGNITUDE:e}; change the units",
+                shorten(name),
+                num(m.rho)
+            )));
+        }
+        if axi && w != 0.0 {
+            let c = m.rho * w * w * r_max[mi];
+            if !(c <= MAX_MAGNITUDE) {
+                return Err(err(format!(
+                    "[model] omega = {}: the centrifugal body force ρω²r of [materials.{}] (rho = {}, r up to {:.3e}) reaches {c:.3e}, beyond ±{MAX_MAGNITUDE:e}; change the units or the spin",
+                    num(w),
+                    shorten(name),
+                    num(m.rho),
+                    r_max[mi]
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Warns of each `[[traction]]` of an axisymmetric model whose curve lies
+/// on the axis r = 0: it carries no area there (∫ N r ds = 0 on every
+/// segment), so it adds no load at all.
+pub(super) fn warn_axis_tractions(mesh: &Mesh, problem: &Problem) {
+    if !problem.file.model.plane.is_axisymmetric() {
+        return;
+    }
+    for (i, tr) in problem.file.traction.iter().enumerate() {
+        let Some(g) = mesh.group_any(&tr.on).filter(|g| g.dim == 1) else {
+            continue;
+        };
+        let on_axis = |v: usize| mesh.nodes.get(v).is_some_and(|p| p[0] == 0.0);
+        let lines: Vec<[usize; 2]> = g
+            .elements
+            .iter()
+            .filter_map(|&li| mesh.lines.get(li).copied())
+            .collect();
+        if !lines.is_empty() && lines.iter().all(|l| on_axis(l[0]) && on_axis(l[1])) {
+            log::warn!(
+                "{}: [[traction]] #{} (on = \"{}\"): the curve lies on the axis r = 0 of the axisymmetric model, where a traction acts on no area; it adds no load",
+                problem.path.display(),
+                i + 1,
+                shorten(&tr.on)
+            );
+        }
+    }
 }
 
 /// The nodal loads being summed, and d.

@@ -16,6 +16,7 @@ mod contact;
 mod edges;
 pub mod element;
 pub mod friction;
+mod interference;
 mod loads;
 mod mortar;
 mod pairs;
@@ -140,6 +141,8 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let dofs = conds.eliminate(mesh, &topo, &body_names, problem)?;
     let n = dofs.last().map_or(0, |pd| pd.start + pd.ndof);
     lap.lap("elimination");
+    loads::check_body_forces(&topo, problem)?;
+    loads::warn_axis_tractions(mesh, problem);
     let mats = stiffness::Materials::new(&topo, problem);
     let (c, mut d) = stiffness::assemble(&topo, &dofs, n, &mats, opts.parallel);
     lap.lap("stiffness");

@@ -168,6 +168,7 @@ impl Topology {
         let mut mj: HashMap<(usize, u32), BTreeMap<usize, f64>> = HashMap::new();
         let mut gj: HashMap<(usize, u32), f64> = HashMap::new();
         let axi = problem.file.model.plane.is_axisymmetric();
+        let mut body_sizes: Option<Vec<f64>> = None;
         for &(a, b, sb, ns) in ssegs {
             let geom = SlaveGeom {
                 x: [mesh.nodes[a], mesh.nodes[b]],
@@ -205,6 +206,23 @@ impl Topology {
                     let Some((xi, g)) = geom.ray(s, y) else {
                         continue;
                     };
+                    if g < 0.0 && c.interference {
+                        let sizes = body_sizes.get_or_insert_with(|| self.body_sizes());
+                        let size = |b: u32| sizes.get(b as usize).copied().unwrap_or(0.0);
+                        let x = geom.point(s);
+                        let at = format!(
+                            "({:.6e}, {:.6e}) of \"{sname}\" against \"{mname}\"",
+                            x[0], x[1]
+                        );
+                        super::interference::check_overlap(
+                            what,
+                            &at,
+                            -g,
+                            len,
+                            [size(sb), size(mbody)],
+                        )
+                        .map_err(err)?;
+                    }
                     if g < -1e-6 * len && !c.interference {
                         let x = geom.point(s);
                         return Err(err(format!(

@@ -372,6 +372,7 @@ impl Topology {
         let mut row_of: HashMap<(usize, u32), usize> = HashMap::new();
         let mut skipped = 0usize;
         let tol_pen = 1e-6;
+        let mut body_sizes: Option<Vec<f64>> = None;
         for ((v, sb), trib) in snodes {
             let xs = mesh.nodes[v];
             // Nearest master segment whose orthogonal projection falls on it.
@@ -390,6 +391,16 @@ impl Topology {
                     "{what}: slave node {} of \"{sname}\" penetrates master \"{mname}\" by {:.3e} (initial gap must be >= 0; set interference = true if the overlap is an intended fit)",
                     mesh.node_tags[v], -g
                 )));
+            }
+            if g < 0.0 && c.interference {
+                let sizes = body_sizes.get_or_insert_with(|| self.body_sizes());
+                let size = |b: u32| sizes.get(b as usize).copied().unwrap_or(0.0);
+                let at = format!(
+                    "slave node {} of \"{sname}\" against \"{mname}\"",
+                    mesh.node_tags[v]
+                );
+                super::interference::check_overlap(what, &at, -g, seg_len, [size(sb), size(mb)])
+                    .map_err(err)?;
             }
             if let Some(maxg) = c.max_gap {
                 if g > maxg {

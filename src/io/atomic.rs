@@ -266,6 +266,28 @@ impl Stage {
             .map_err(|e| IoError::io(&fin, "cannot rename into place", e))
     }
 
+    /// Removes the file `name` of the output directory as part of the
+    /// transaction: like a replaced file, it is first kept in `.prev/`
+    /// (a hard link), so that a rollback puts it back; [`Stage::finish`]
+    /// drops it. A name already committed or removed, or absent, is left.
+    pub fn remove(&mut self, name: &str) -> Result<(), IoError> {
+        let fin = self.target(name);
+        if self.touched.iter().any(|(p, _)| *p == fin) || std::fs::symlink_metadata(&fin).is_err() {
+            return Ok(());
+        }
+        let prev = self.stage_dir().join(".prev");
+        if !prev.is_dir() {
+            std::fs::create_dir(&prev)
+                .map_err(|e| IoError::io(&fin, "cannot keep the previous file", e))?;
+        }
+        let b = prev.join(name);
+        // A rename keeps the file (its inode, its bytes) for a rollback.
+        std::fs::rename(&fin, &b)
+            .map_err(|e| IoError::io(&fin, "cannot remove the previous run's file", e))?;
+        self.touched.push((fin, Some(b)));
+        Ok(())
+    }
+
     /// Put back the previous files of every commit from index `from` of
     /// `touched` on (best effort: this runs on an error path).
     fn restore_from(&mut self, from: usize) {

@@ -21,8 +21,8 @@ use super::{Change, ContactGeometry, OutMesh, StepInfo, StepOutput};
 
 mod split;
 pub use split::{
-    checkpoint_files, mesh_file_name, step_file_name, write_index, write_mesh_file,
-    write_step_file, CheckpointFiles,
+    checkpoint_files, mesh_file_name, pack, step_file_name, write_index, write_mesh_file,
+    write_step_file, CheckpointFiles, Packed,
 };
 
 /// Everything a checkpoint holds.
@@ -430,25 +430,42 @@ fn step_names(ctx: &Ctx, file: &File) -> Result<Option<StepNames>, IoError> {
 }
 
 /// An HDF5 error opening `loc`, with a hint when it is an external link of
-/// a split checkpoint whose file is missing.
+/// a split checkpoint whose file is missing: the file is named (as HDF5
+/// looked for it, next to the index), and so is what makes a checkpoint.
 fn linked(ctx: &Ctx, loc: &str, cause: ::hdf5::Error) -> IoError {
     let text = cause.to_string();
     if text.contains("external") {
-        let stem = ctx
-            .path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        return ctx.format(format!(
-            "{loc}: the file it links to cannot be opened ({text}); a checkpoint written with load steps keeps /mesh in {} and each step in {stem}_NNNN.h5 next to it: copy or move the directory as a whole",
-            mesh_file_name(&stem)
-        ));
+        let hint = "a checkpoint written with load steps is NAME.h5 with NAME_mesh.h5 and one NAME_NNNN.h5 per step beside it: copy or move them as a whole, or make one self-contained file with `signorini pack`";
+        let dir = match ctx.path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => std::path::PathBuf::from("."),
+        };
+        let target = external_file_name(&text).map(|n| dir.join(n));
+        return ctx.format(match target {
+            Some(f) if !f.exists() => format!(
+                "{loc}: its data is in {}, which does not exist; {hint}",
+                f.display()
+            ),
+            Some(f) => format!(
+                "{loc}: the file it links to, {}, cannot be opened ({text}); {hint}",
+                f.display()
+            ),
+            None => format!("{loc}: the file it links to cannot be opened ({text}); {hint}"),
+        });
     }
     IoError::Hdf5 {
         path: ctx.path.to_path_buf(),
         location: loc.to_string(),
         cause,
     }
+}
+
+/// The file an external link names, from HDF5's message
+/// (`external link file name = 'NAME'`), if it says.
+fn external_file_name(text: &str) -> Option<&str> {
+    let rest = text.split("external link file name = '").nth(1)?;
+    let name = &rest[..rest.find('\'')?];
+    (!name.is_empty()).then_some(name)
 }
 
 /// Reads the step group `NNNN` of the checkpoint at `path` (either layout)

@@ -135,6 +135,93 @@ pub fn step_output_with_forces(
     (step, forces)
 }
 
+/// A probe lies in the mesh when it is within this fraction of an
+/// element's size (its longest edge) of that element: on the boundary, and
+/// a little past a curved boundary that the mesh's chords cut
+/// (docs/problem-format.md §5, probes).
+pub const PROBE_TOLERANCE: f64 = 0.05;
+
+/// Where a point lies against the triangles: the triangle nearest to it
+/// relative to its size, the distance to it (0 inside) and its size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Located {
+    pub triangle: usize,
+    pub distance: f64,
+    pub size: f64,
+}
+
+impl Located {
+    /// Within [`PROBE_TOLERANCE`] × the size of its triangle.
+    pub fn inside(&self) -> bool {
+        self.distance <= PROBE_TOLERANCE * self.size
+    }
+}
+
+/// The triangle of `triangles` (point indices into `points`) that `x` lies
+/// in, or else the one it is nearest to relative to that triangle's size
+/// (None without triangles). Deterministic: the first of equals wins.
+pub fn locate(points: &[[f64; 2]], triangles: &[[usize; 3]], x: [f64; 2]) -> Option<Located> {
+    let mut best: Option<(f64, Located)> = None;
+    for (t, tri) in triangles.iter().enumerate() {
+        let v = tri.map(|i| points[i]);
+        let size = (0..3)
+            .map(|k| {
+                let (a, b) = (v[k], v[(k + 1) % 3]);
+                (a[0] - b[0]).hypot(a[1] - b[1])
+            })
+            .fold(0.0f64, f64::max);
+        let distance = distance_to_triangle(v, x);
+        let rel = if size > 0.0 {
+            distance / size
+        } else {
+            f64::INFINITY
+        };
+        if best.as_ref().is_none_or(|(r, _)| rel < *r) {
+            best = Some((
+                rel,
+                Located {
+                    triangle: t,
+                    distance,
+                    size,
+                },
+            ));
+            if distance == 0.0 {
+                break;
+            }
+        }
+    }
+    best.map(|(_, l)| l)
+}
+
+/// The distance from `x` to the closed triangle `v` (0 inside or on it).
+fn distance_to_triangle(v: [[f64; 2]; 3], x: [f64; 2]) -> f64 {
+    let cross = |a: [f64; 2], b: [f64; 2], p: [f64; 2]| {
+        (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+    };
+    let orient = cross(v[0], v[1], v[2]);
+    let sides = [
+        cross(v[0], v[1], x),
+        cross(v[1], v[2], x),
+        cross(v[2], v[0], x),
+    ];
+    if sides.iter().all(|s| s * orient >= 0.0) {
+        return 0.0;
+    }
+    (0..3)
+        .map(|k| {
+            let (a, b) = (v[k], v[(k + 1) % 3]);
+            let e = [b[0] - a[0], b[1] - a[1]];
+            let len2 = e[0] * e[0] + e[1] * e[1];
+            let s = if len2 > 0.0 {
+                (((x[0] - a[0]) * e[0] + (x[1] - a[1]) * e[1]) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (a[0] + s * e[0] - x[0]).hypot(a[1] + s * e[1] - x[1])
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// The point nearest to (x, y).
 pub fn nearest_point(points: &[[f64; 2]], x: [f64; 2]) -> usize {
     points

@@ -23,6 +23,17 @@ pub const MAX_MAGNITUDE: f64 = 1e100;
 /// messages, which must stay one short line.
 pub const MAX_NAME: usize = 256;
 
+/// A number as shown in a message: as Rust writes it when that is short
+/// (`0.3`, `-250`), else in scientific form (`1e200`, not 201 digits).
+pub fn num(v: f64) -> String {
+    let plain = format!("{v}");
+    if plain.len() <= 12 {
+        plain
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// A name as shown in a message: at most 60 characters, then `…`.
 pub fn shorten(s: &str) -> String {
     const KEEP: usize = 60;
@@ -548,6 +559,9 @@ impl Problem {
             path: path.to_path_buf(),
             msg,
         })?;
+        for w in validate::warnings(&file) {
+            log::warn!("{}: {w}", path.display());
+        }
         let name = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())

@@ -6,8 +6,8 @@
 
 use super::raw::{RawContact, RawDirichlet, RawFile, RawTraction};
 use super::{
-    shorten, Contact, ContactPair, Dirichlet, Discretization, FrictionLaw, NonMatchingPair, Plane,
-    Prescribed, ProblemFile, Traction, TractionLoad, MAX_MAGNITUDE, MAX_NAME,
+    num, shorten, Contact, ContactPair, Dirichlet, Discretization, FrictionLaw, NonMatchingPair,
+    Plane, Prescribed, ProblemFile, Traction, TractionLoad, MAX_MAGNITUDE, MAX_NAME,
 };
 
 type Check<T = ()> = Result<T, String>;
@@ -49,6 +49,37 @@ pub(super) fn validate(raw: RawFile) -> Check<ProblemFile> {
         output: raw.output,
         steps: raw.steps,
     })
+}
+
+/// What a valid file leaves unused, as messages naming the table and entry
+/// (logged as warnings by the caller, which adds the file): a `[[steps]]`
+/// value for a displacement component that its `[[dirichlet]]` group does
+/// not prescribe is dropped (the component stays free); the step must give
+/// two values, so only a non-zero one is reported.
+pub(super) fn warnings(f: &ProblemFile) -> Vec<String> {
+    let mut out = vec![];
+    for (i, st) in f.steps.iter().enumerate() {
+        for d in &f.dirichlet {
+            let Some(u) = st.dirichlet.get(&d.on) else {
+                continue;
+            };
+            let held = d.value.components();
+            for (k, axis) in ["ux", "uy"].iter().enumerate() {
+                if held[k].is_none() && u[k] != 0.0 {
+                    out.push(format!(
+                        "[[steps]] #{}: dirichlet.{} = [{}, {}] sets {axis} = {}, but [[dirichlet]] on = \"{}\" does not prescribe {axis}: the value is ignored and {axis} stays free (add {axis} to that [[dirichlet]] to prescribe it)",
+                        i + 1,
+                        shorten(&d.on),
+                        num(u[0]),
+                        num(u[1]),
+                        num(u[k]),
+                        shorten(&d.on)
+                    ));
+                }
+            }
+        }
+    }
+    out
 }
 
 /// Converts entry #i of a `[[table]]` array by `f(i, entry)`.
@@ -185,7 +216,7 @@ fn check_magnitudes(f: &RawFile) -> Check {
 fn check_model(f: &RawFile) -> Check {
     let t = f.model.thickness;
     if !(t > 0.0 && t.is_finite()) {
-        return Err(format!("[model] thickness = {t} must be positive"));
+        return Err(format!("[model] thickness = {} must be positive", num(t)));
     }
     if let Some(g) = f.model.gravity {
         if !g.iter().all(|v| v.is_finite()) {
@@ -194,13 +225,19 @@ fn check_model(f: &RawFile) -> Check {
         if f.model.plane == Plane::Axisymmetric && g[0] != 0.0 {
             return Err(format!(
                 "[model] gravity = [{}, {}]: an axisymmetric model (x = r, y = z) takes gravity along z only; give [0, gz]",
-                g[0], g[1]
+                num(g[0]), num(g[1])
             ));
         }
     }
     if let Some(w) = f.model.omega {
-        if !w.is_finite() || beyond(w) {
-            return Err(format!("[model] omega = {w} must be finite"));
+        if !w.is_finite() {
+            return Err(format!("[model] omega = {} must be finite", num(w)));
+        }
+        if beyond(w) {
+            return Err(format!(
+                "[model] omega = {} is beyond ±{MAX_MAGNITUDE:e}: the centrifugal load ρω²r would overflow; change the units",
+                num(w)
+            ));
         }
         if f.model.plane != Plane::Axisymmetric {
             return Err(
@@ -218,18 +255,21 @@ fn check_materials(f: &RawFile) -> Check {
     }
     for (name, m) in &f.materials {
         if !(m.e > 0.0 && m.e.is_finite()) {
-            return Err(format!("[materials.{name}] E = {} must be positive", m.e));
+            return Err(format!(
+                "[materials.{name}] E = {} must be positive",
+                num(m.e)
+            ));
         }
         if !(m.nu > -1.0 && m.nu < 0.5) {
             return Err(format!(
                 "[materials.{name}] nu = {} must lie in (-1, 0.5)",
-                m.nu
+                num(m.nu)
             ));
         }
         if !(m.rho >= 0.0 && m.rho.is_finite()) {
             return Err(format!(
                 "[materials.{name}] rho = {} must be non-negative",
-                m.rho
+                num(m.rho)
             ));
         }
     }
@@ -368,7 +408,10 @@ fn friction_law(c: &RawContact, at: &str) -> Check<FrictionLaw> {
     for (key, v) in [("friction", c.friction), ("tresca", c.tresca)] {
         let Some(v) = v else { continue };
         if !(v.is_finite() && v >= 0.0) {
-            return Err(format!("{at}: {key} = {v} must be a finite number >= 0"));
+            return Err(format!(
+                "{at}: {key} = {} must be a finite number >= 0",
+                num(v)
+            ));
         }
         if v > MAX_MAGNITUDE {
             return Err(format!(
@@ -437,7 +480,7 @@ fn check_solver(f: &RawFile) -> Check {
     let s = &f.solver;
     if let Some(t) = s.tol {
         if !(t > 0.0 && t < 1.0) {
-            return Err(format!("[solver] tol = {t} must lie in (0, 1)"));
+            return Err(format!("[solver] tol = {} must lie in (0, 1)", num(t)));
         }
     }
     if s.max_iter == Some(0) {
@@ -456,10 +499,24 @@ fn check_steps(f: &RawFile) -> Check {
         if !values.into_iter().flatten().all(f64::is_finite) {
             return Err(format!("[[steps]] #{n}: values must be finite"));
         }
+        let factors = [
+            ("factor", st.factor),
+            ("load", st.load),
+            ("displacement", st.displacement),
+        ];
+        for (key, v) in factors {
+            if let Some(v) = v.filter(|v| beyond(*v)) {
+                return Err(format!(
+                    "[[steps]] #{n}: {key} = {} is beyond ±{MAX_MAGNITUDE:e}: the loads it scales would overflow; change the units",
+                    num(v)
+                ));
+            }
+        }
         let t = st.t.unwrap_or(n as f64);
         if t <= last_t {
             return Err(format!(
-                "[[steps]] #{n}: t = {t} must increase from step to step"
+                "[[steps]] #{n}: t = {} must increase from step to step",
+                num(t)
             ));
         }
         last_t = t;
@@ -472,6 +529,13 @@ fn check_steps(f: &RawFile) -> Check {
             if !u.iter().all(|v| v.is_finite()) {
                 return Err(format!(
                     "[[steps]] #{n}: dirichlet.{name}: values must be finite"
+                ));
+            }
+            if let Some(v) = u.iter().find(|v| beyond(**v)) {
+                return Err(format!(
+                    "[[steps]] #{n}: dirichlet.{} = {} is beyond ±{MAX_MAGNITUDE:e}: products with it would overflow; change the units",
+                    shorten(name),
+                    num(*v)
                 ));
             }
         }

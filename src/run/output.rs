@@ -97,6 +97,18 @@ pub fn output_paths(dir: &Path, name: &str, step: Option<usize>) -> Outputs {
     }
 }
 
+/// Whether the file `path` lies in the directory `dir` (both resolved).
+pub(crate) fn same_dir(path: &Path, dir: &Path) -> bool {
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    match (parent.canonicalize(), dir.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}
+
 /// The file name of an output path.
 fn fname(p: &Path) -> String {
     p.file_name()
@@ -112,6 +124,58 @@ pub struct Transaction {
     stage: Stage,
     _lock: OutputLock,
     dir: PathBuf,
+    name: String,
+    /// The files of the name this run keeps, until the first commit
+    /// removes the others ([`Transaction::plan`]); None once done.
+    sweep: Option<Sweep>,
+}
+
+/// What a run leaves of its output name (docs/problem-format.md §6): with
+/// load steps (`multi`) the index, mesh file, time series and step files,
+/// else the single files; the step files of steps `1..=kept` are those of
+/// a restart in place (the checkpoint's own), the later ones this run's.
+#[derive(Debug, Clone, Copy)]
+struct Sweep {
+    multi: bool,
+    kept: usize,
+    /// The run writes `NAME.json` (it solves a step); else (a restart with
+    /// nothing left to solve) an older run's summary is removed unless
+    /// one is copied in.
+    summary: bool,
+}
+
+/// The kind of a file of the output name `name` (None: not of its pattern).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Owned {
+    /// `NAME.h5`, `NAME.json`: rewritten by every run's last commit.
+    Record,
+    /// `NAME.vtu`, `NAME_contact.vtu`: a single solve's.
+    Single,
+    /// `NAME.pvd`, `NAME_mesh.h5`: a run with load steps'.
+    Series,
+    /// `NAME_NNNN.vtu`, `NAME_NNNN_contact.vtu`, `NAME_NNNN.h5`: step NNNN's.
+    Step(usize),
+}
+
+/// Classifies `file` against the output name `name`.
+fn owned(name: &str, file: &str) -> Option<Owned> {
+    if file == format!("{name}.h5") || file == format!("{name}.json") {
+        return Some(Owned::Record);
+    }
+    if file == format!("{name}.vtu") || file == format!("{name}_contact.vtu") {
+        return Some(Owned::Single);
+    }
+    if file == format!("{name}.pvd") || file == io::hdf5::mesh_file_name(name) {
+        return Some(Owned::Series);
+    }
+    let rest = file.strip_prefix(name)?.strip_prefix('_')?;
+    let digits = ["_contact.vtu", ".vtu", ".h5"]
+        .iter()
+        .find_map(|suffix| rest.strip_suffix(suffix))?;
+    if digits.len() < 4 || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    digits.parse().ok().map(Owned::Step)
 }
 
 impl Transaction {
@@ -133,7 +197,60 @@ impl Transaction {
             stage,
             _lock: lock,
             dir: dir.to_path_buf(),
+            name: name.to_string(),
+            sweep: None,
         })
+    }
+
+    /// The files of the output name this run leaves: with load steps
+    /// (`multi`) or not, a restart's steps `1..=kept` kept in place (the
+    /// restart checkpoint is this directory's), and a summary written or
+    /// not (`summary`: a step is solved). The first commit then
+    /// removes every other file of the name's pattern (an older run's
+    /// surplus: its later steps, or the files of the other layout), as part
+    /// of the transaction: a rollback puts them back.
+    pub fn plan(&mut self, multi: bool, kept: usize, summary: bool) {
+        self.sweep = Some(Sweep {
+            multi,
+            kept,
+            summary,
+        });
+    }
+
+    /// Removes the files of the name this run does not leave ([`Transaction::plan`]),
+    /// except `committed`.
+    fn sweep(&mut self, plan: Sweep, committed: &[&str]) -> Result<(), IoError> {
+        let Ok(rd) = std::fs::read_dir(&self.dir) else {
+            return Ok(());
+        };
+        let mut surplus: Vec<String> = rd
+            .flatten()
+            .filter(|e| e.file_type().is_ok_and(|t| !t.is_dir()))
+            .filter_map(|e| e.file_name().to_str().map(str::to_string))
+            .filter(|f| !committed.contains(&f.as_str()))
+            .filter(|f| match owned(&self.name, f) {
+                None => false,
+                // The checkpoint is in every run's last commit; the
+                // summary in every run's that solves a step (a restart in
+                // place with nothing to solve keeps its own).
+                Some(Owned::Record) => !plan.summary && plan.kept == 0 && f.ends_with(".json"),
+                Some(Owned::Single) => plan.multi,
+                // With load steps, the mesh file of a restart in place is
+                // the checkpoint's (the time series is in every commit).
+                Some(Owned::Series) => !plan.multi || plan.kept == 0,
+                Some(Owned::Step(i)) => !plan.multi || i == 0 || i > plan.kept,
+            })
+            .collect();
+        // Directory order is the file system's: sorted, the same input
+        // removes the same files in the same order.
+        surplus.sort();
+        for f in &surplus {
+            self.stage.remove(f)?;
+        }
+        if !surplus.is_empty() {
+            log::debug!("removed {} files of an older run", surplus.len());
+        }
+        Ok(())
     }
 
     /// The output directory.
@@ -150,10 +267,13 @@ impl Transaction {
     pub fn commit(&mut self, names: &[String]) -> Result<(), RunError> {
         let t = std::time::Instant::now();
         let names: Vec<&str> = names.iter().map(String::as_str).collect();
-        let r = self
-            .stage
-            .commit(&names)
-            .map_err(|e| RunError::Output(self.unstage(&e.to_string())));
+        let mut r = self.stage.commit(&names);
+        // After the commit's files (a new index first, then the older
+        // run's step files it no longer links to).
+        if let (Ok(()), Some(plan)) = (&r, self.sweep.take()) {
+            r = self.sweep(plan, &names);
+        }
+        let r = r.map_err(|e| RunError::Output(self.unstage(&e.to_string())));
         log::debug!(
             "commit of {} files {:.3} s",
             names.len(),
@@ -429,6 +549,11 @@ pub struct VtuWriter<'a> {
     /// load steps (uncompressed files): the later steps encode their
     /// fields only.
     parts: Option<io::vtu::VtuMeshParts>,
+    /// The checkpoint a restart continues and the steps it holds, until
+    /// their VTU pairs are in the output directory (then None).
+    restart: Option<(PathBuf, usize)>,
+    /// The problem has load steps (a time series of step files).
+    multi: bool,
 }
 
 impl<'a> VtuWriter<'a> {
@@ -449,7 +574,100 @@ impl<'a> VtuWriter<'a> {
             compress,
             times: (0..file.nsteps()).map(|s| file.step_time(s)).collect(),
             parts: None,
+            restart: None,
+            multi: !file.steps.is_empty(),
         }
+    }
+
+    /// The run continues the checkpoint of `restart`: the time series
+    /// lists its steps too, so their VTU pairs must lie beside it. Those of
+    /// a restart in place are there already; for a checkpoint in another
+    /// directory they are copied from beside it, and a pair found nowhere
+    /// is written again from the checkpoint's step (every field but the
+    /// reactions, which the checkpoint does not keep).
+    pub fn restart(mut self, restart: Option<&Restart>) -> Self {
+        self.restart = restart.map(|r| (r.path.clone(), r.steps_done));
+        self
+    }
+
+    /// Stages the VTU pairs of the restart's steps that the output
+    /// directory lacks (see [`VtuWriter::restart`]); their names.
+    fn restart_pairs(&mut self) -> Result<Vec<String>, RunError> {
+        let Some((path, k)) = self.restart.take() else {
+            return Ok(vec![]);
+        };
+        let in_place = same_dir(&path, &self.dir);
+        let mut names = vec![];
+        for i in 1..=k {
+            let fin = output_paths(&self.dir, &self.name, Some(i));
+            if in_place && fin.vtu.is_file() && fin.contact_vtu.is_file() {
+                continue;
+            }
+            let staged = output_paths(&self.stage_dir, &self.name, Some(i));
+            names.push(fname(&staged.vtu));
+            names.push(fname(&staged.contact_vtu));
+            // The pair the run that wrote the checkpoint left beside it:
+            // copied as it is (it has the reactions, which the checkpoint
+            // does not keep).
+            let src = output_paths(path.parent().unwrap_or(Path::new(".")), &self.name, Some(i));
+            if !in_place && src.vtu.is_file() && src.contact_vtu.is_file() {
+                for (from, to) in [
+                    (&src.vtu, &staged.vtu),
+                    (&src.contact_vtu, &staged.contact_vtu),
+                ] {
+                    std::fs::copy(from, to).map_err(|e| {
+                        RunError::Output(format!(
+                            "{}: cannot copy the restart's step file: {e}",
+                            from.display()
+                        ))
+                    })?;
+                }
+                continue;
+            }
+            let (out, fr) = io::hdf5::read_step_of(&path, self.om, &io::hdf5::step_name(i))?;
+            if !self.compress && self.parts.is_none() {
+                self.parts = Some(io::vtu::VtuMeshParts::new(self.om));
+            }
+            io::vtu::write_vtu_with(
+                &staged.vtu,
+                self.om,
+                &out,
+                self.compress,
+                self.parts.as_ref(),
+            )?;
+            let arrays = fr.as_ref().map(|f| io::vtu::FrictionArrays {
+                tangential_traction: &f.tangential_traction,
+                slip: &f.slip,
+                state: &f.state,
+            });
+            io::vtu::write_contact_vtu_with_friction(
+                &staged.contact_vtu,
+                self.om,
+                &out,
+                arrays.as_ref(),
+                self.compress,
+            )?;
+        }
+        Ok(names)
+    }
+
+    /// The time series of steps `0..=s` (0-based), staged: every pair it
+    /// names is in the output directory or staged beside it.
+    fn write_pvd(&self, s: usize, time: f64) -> Result<String, RunError> {
+        let entries: Vec<(f64, String)> = (0..=s)
+            .filter_map(|k| {
+                let o = output_paths(&self.dir, &self.name, Some(k + 1));
+                let t = self.times.get(k).copied().unwrap_or(time);
+                let staged = output_paths(&self.stage_dir, &self.name, Some(k + 1));
+                let here = |fin: &Path, st: &Path| fin.is_file() || st.is_file();
+                (here(&o.vtu, &staged.vtu) && here(&o.contact_vtu, &staged.contact_vtu))
+                    .then(|| [(t, fname(&o.vtu)), (t, fname(&o.contact_vtu))])
+            })
+            .flatten()
+            .collect();
+        let pvd = format!("{}.pvd", self.name);
+        io::vtu::write_pvd(&self.stage_dir.join(&pvd), &entries)?;
+        Ok(pvd)
     }
 }
 
@@ -458,6 +676,11 @@ impl StepObserver for VtuWriter<'_> {
         let s = step.index;
         let staged = output_paths(&self.stage_dir, &self.name, step.multi.then_some(s + 1));
         let t = std::time::Instant::now();
+        let earlier = if step.multi {
+            self.restart_pairs()?
+        } else {
+            vec![]
+        };
         if step.multi && !self.compress && self.parts.is_none() {
             self.parts = Some(io::vtu::VtuMeshParts::new(self.om));
         }
@@ -482,19 +705,29 @@ impl StepObserver for VtuWriter<'_> {
             self.compress,
         )?;
         log::debug!("VTU pair {:.3} s", t.elapsed().as_secs_f64());
-        let mut names = vec![fname(&staged.vtu), fname(&staged.contact_vtu)];
+        let mut names = earlier;
+        names.extend([fname(&staged.vtu), fname(&staged.contact_vtu)]);
         if step.multi {
-            let entries: Vec<(f64, String)> = (0..=s)
-                .flat_map(|k| {
-                    let o = output_paths(&self.dir, &self.name, Some(k + 1));
-                    let t = self.times.get(k).copied().unwrap_or(step.time);
-                    [(t, fname(&o.vtu)), (t, fname(&o.contact_vtu))]
-                })
-                .collect();
-            let pvd = format!("{}.pvd", self.name);
-            io::vtu::write_pvd(&self.stage_dir.join(&pvd), &entries)?;
-            names.push(pvd);
+            names.push(self.write_pvd(s, step.time)?);
         }
+        Ok(names)
+    }
+
+    /// A restart with nothing left to solve, into another directory: the
+    /// checkpoint's VTU pairs and time series are written there too.
+    fn on_nothing_to_do(&mut self, restart: &Restart) -> Result<Vec<String>, RunError> {
+        // A single solve's VTU pair is no series (and nothing to continue).
+        if !self.multi || restart.steps_done == 0 {
+            return Ok(vec![]);
+        }
+        if self.restart.is_none() {
+            self.restart = Some((restart.path.clone(), restart.steps_done));
+        }
+        let mut names = self.restart_pairs()?;
+        if names.is_empty() && same_dir(&restart.path, &self.dir) {
+            return Ok(names);
+        }
+        names.push(self.write_pvd(restart.steps_done - 1, 0.0)?);
         Ok(names)
     }
 }
@@ -516,6 +749,30 @@ impl SummaryWriter {
 impl StepObserver for SummaryWriter {
     fn on_step(&mut self, _step: &Step<'_>) -> Result<Vec<String>, RunError> {
         Ok(vec![])
+    }
+
+    /// A restart with nothing left to solve, from another directory: the
+    /// summary beside its checkpoint (of the run that wrote it) comes
+    /// along with the checkpoint, if there is one.
+    fn on_nothing_to_do(&mut self, restart: &Restart) -> Result<Vec<String>, RunError> {
+        let name = fname(&self.path);
+        let Some(dir) = self.path.parent() else {
+            return Ok(vec![]);
+        };
+        let src = restart.path.with_file_name(&name);
+        // The staging directory lies in the output directory (or is it,
+        // without a transaction).
+        let out = dir.parent().unwrap_or(dir);
+        if same_dir(&restart.path, dir) || same_dir(&restart.path, out) || !src.is_file() {
+            return Ok(vec![]);
+        }
+        std::fs::copy(&src, &self.path).map_err(|e| {
+            RunError::Output(format!(
+                "{}: cannot copy the restart's summary: {e}",
+                src.display()
+            ))
+        })?;
+        Ok(vec![name])
     }
 
     fn on_finish(&mut self, summary: &Summary) -> Result<Vec<String>, RunError> {

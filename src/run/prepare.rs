@@ -103,39 +103,35 @@ fn check_contact_groups(problem: &Problem, mesh: &Mesh) -> Result<(), RunError> 
     Ok(())
 }
 
-/// A probe farther from every node than this fraction of the mesh's
-/// diagonal is refused: it cannot mean any node of this mesh.
-const PROBE_REACH: f64 = 0.1;
-
+/// Every probe must lie in the mesh: in a triangle, or within
+/// [`post::PROBE_TOLERANCE`] × that triangle's size of it (a point on the
+/// boundary, or just past a curved one that the mesh's chords cut). It then
+/// reports the output point nearest to it ([`probes`]).
 fn check_probes(problem: &Problem, model: &Model) -> Result<(), RunError> {
-    let pts = &model.topo.points;
-    if pts.is_empty() || problem.file.output.probes.is_empty() {
+    let topo = &model.topo;
+    if topo.points.is_empty() || problem.file.output.probes.is_empty() {
         return Ok(());
     }
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in pts {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let diag = (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
+    use crate::problem::num;
     for (name, x) in &problem.file.output.probes {
-        let p = post::nearest_point(pts, *x);
-        let dist = (pts[p][0] - x[0]).hypot(pts[p][1] - x[1]);
-        let near = dist <= PROBE_REACH * diag;
-        if !near {
+        let Some(at) = post::locate(&topo.points, &topo.triangles, *x) else {
+            continue;
+        };
+        if !at.inside() {
+            let tri = topo.triangles[at.triangle];
             return Err(RunError::Solver {
                 path: problem.path.clone(),
                 msg: format!(
-                    "[output] probe {}: ({:e}, {:e}) lies {dist:.3e} from the nearest node, outside the mesh ([{:e}, {:e}] x [{:e}, {:e}])",
+                    "[output] probe {}: ({}, {}) lies outside the mesh: {:.3e} from the nearest triangle (points {}, {}, {}), whose size is {:.3e}; a probe must lie in a triangle or within {} × its size of it",
                     crate::problem::shorten(name),
-                    x[0],
-                    x[1],
-                    lo[0],
-                    hi[0],
-                    lo[1],
-                    hi[1]
+                    num(x[0]),
+                    num(x[1]),
+                    at.distance,
+                    tri[0],
+                    tri[1],
+                    tri[2],
+                    at.size,
+                    post::PROBE_TOLERANCE
                 ),
             });
         }

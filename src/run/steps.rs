@@ -179,6 +179,9 @@ impl<'a> Run<'a> {
     ) -> Result<Outcome, RunError> {
         self.check()?;
         let steps = self.steps();
+        if let Some(t) = tx.as_deref_mut() {
+            self.plan(t, !steps.is_empty());
+        }
         if steps.is_empty() {
             return self.nothing_to_do(observers, tx);
         }
@@ -248,6 +251,20 @@ impl<'a> Run<'a> {
             };
             self.finish(carry, obs, tx)
         })
+    }
+
+    /// Tells the transaction which files of the output name this run
+    /// leaves, so that its first commit removes an older run's others: the
+    /// restart's steps are kept in place when its checkpoint is the output
+    /// directory's (else they are copied, [`super::CheckpointWriter`] and
+    /// [`super::VtuWriter`]).
+    fn plan(&self, t: &mut Transaction, summary: bool) {
+        let multi = !self.prep.problem.file.steps.is_empty();
+        let kept = match &self.restart {
+            Some(r) if super::output::same_dir(&r.path, t.dir()) => r.steps_done,
+            _ => 0,
+        };
+        t.plan(multi, kept, summary);
     }
 
     /// The settings and the step count, before anything is solved.

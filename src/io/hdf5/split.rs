@@ -147,3 +147,90 @@ pub fn checkpoint_files(path: &Path) -> Result<CheckpointFiles, IoError> {
     }
     Ok(out)
 }
+
+/// What [`pack`] wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Packed {
+    /// The steps copied (their group names, in order).
+    pub steps: Vec<String>,
+    /// The files of the source read (its index or single file first).
+    pub sources: Vec<std::path::PathBuf>,
+}
+
+/// Writes the checkpoint `src` (either layout) as one self-contained file
+/// `dst`: the root attributes, `/mesh` and every `/steps/NNNN` copied as
+/// HDF5 objects (datasets and attributes bit for bit, through the external
+/// links of a split checkpoint), atomically. The result is the single-file
+/// layout, read by everything that reads a checkpoint. `dst` may not be one
+/// of the files `src` reads. The source is read whole first
+/// ([`read_checkpoint`]): a missing or damaged step file is refused, named,
+/// before anything is written.
+pub fn pack(src: &Path, dst: &Path) -> Result<Packed, IoError> {
+    // Every dataset checked (sizes, indices, finiteness of nothing more).
+    let ck = read_checkpoint(src)?;
+    let files = checkpoint_files(src)?;
+    let mut sources = vec![src.to_path_buf()];
+    for f in std::iter::once(&files.mesh).chain(files.steps.iter().map(|s| &s.2)) {
+        if !sources.contains(f) {
+            sources.push(f.clone());
+        }
+    }
+    let dst_real = dst
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+        .canonicalize()
+        .ok()
+        .zip(dst.file_name())
+        .map(|(d, n)| d.join(n));
+    for f in &sources {
+        let same = match (f.canonicalize(), &dst_real) {
+            (Ok(a), Some(b)) => a == *b,
+            _ => false,
+        };
+        if same {
+            return Err(IoError::format(
+                dst,
+                format!(
+                    "is a file of the checkpoint {} ({}); write the packed file under another name",
+                    src.display(),
+                    f.display()
+                ),
+            ));
+        }
+    }
+    let rctx = Ctx::writing(src);
+    write_atomic(dst, |tmp| {
+        let wctx = Ctx::writing(dst);
+        let from = File::open(src).map_err(rctx.h5("/"))?;
+        let to = File::create(tmp).map_err(wctx.h5("/"))?;
+        {
+            let root: &Group = &to;
+            for (k, v) in &ck.attrs {
+                set_attr_str(&wctx, root, k, v)?;
+            }
+            set_attr_scalar(&wctx, root, "plane_strain", &u8::from(ck.mesh.plane_strain))?;
+            if ck.mesh.axisymmetric {
+                set_attr_scalar(&wctx, root, "axisymmetric", &1u8)?;
+            }
+            let mesh = from.group("mesh").map_err(|e| linked(&rctx, "/mesh", e))?;
+            mesh.copy_to(root, "mesh").map_err(wctx.h5("/mesh"))?;
+            if let Some((sg, names)) = step_names(&rctx, &from)? {
+                let steps = to.create_group("steps").map_err(wctx.h5("/steps"))?;
+                for (_, name) in &names {
+                    let loc = format!("/steps/{name}");
+                    let g = sg.group(name).map_err(|e| linked(&rctx, &loc, e))?;
+                    g.copy_to(&steps, name).map_err(wctx.h5(loc))?;
+                }
+                if let Some((last, _)) = names.last() {
+                    set_attr_scalar(&wctx, root, "last_step", &(*last as u64))?;
+                }
+            }
+        }
+        to.close().map_err(wctx.h5("/"))
+    })?;
+    Ok(Packed {
+        steps: ck.step_groups,
+        sources,
+    })
+}

@@ -120,7 +120,9 @@ impl Dual {
             return Ok(None);
         }
         let fac = ws.cholesky_rows(&qp.c, &qp.kernel, &rb)?;
-        let skip = || log::debug!("ssn: friction: the sparse path: the bordered factor gives no dense H; no coarse start");
+        let skip = || {
+            log::debug!("ssn: friction: the sparse path: the bordered factor gives no dense H; no coarse start")
+        };
         let Some(h) = fac.border_inverse(&b) else {
             skip();
             return Ok(None);
