@@ -221,7 +221,7 @@ pub fn solve(
 }
 
 /// The most Tresca solves of one Coulomb loop that may stop on
-/// stagnation or cycling and still feed the next bound ([`usable`]).
+/// stagnation or cycling and still feed the next bound (docs/methods.md §9.1).
 pub const MAX_STALLED: usize = 3;
 
 /// What the loop makes of a Tresca answer ([`usable`]).
