@@ -907,12 +907,15 @@ class Problem:
         Tt = sp.csr_matrix((tv, (ti, tj)), shape=(len(rows), 2 * self.topo.np))
         return law, Tt, np.array(bound)
 
-    def held_rows(self, rows, T, u0):
+    def held_rows(self, rows, T, u0s):
         """Mortar rows on a line of symmetry (docs/methods.md §9, signorini's
         fem::friction::on_symmetry_line): the slave point cannot move along the
-        tangent (no free DOF along t, t·u0 = 0) and the row ends its run of
-        rows. By symmetry they carry no tangential force: no tangential row,
-        bound 0, and they stick when in contact."""
+        tangent (no free DOF along t, and t·u0 = 0 in every load step `u0s`:
+        a clamped end that a later step moves along the interface, a tube
+        pushed out of its fit, is no symmetry line; signorini builds the rows
+        once for all steps) and the row ends its run of rows. By symmetry
+        they carry no tangential force: no tangential row, bound 0, and they
+        stick when in contact."""
         held = np.zeros(len(rows), dtype=bool)
         Tc = T.tocsr()
         for i, r in enumerate(rows):
@@ -922,7 +925,7 @@ class Problem:
             t = np.array([-n[1], n[0]])
             p = r["first"]
             free = t[0] * Tc[2 * p] + t[1] * Tc[2 * p + 1]
-            if np.abs(free.data).max(initial=0.0) < 1e-12 and t @ u0[2 * p:2 * p + 2] == 0.0:
+            if np.abs(free.data).max(initial=0.0) < 1e-12 and all(t @ u0[2 * p:2 * p + 2] == 0.0 for u0 in u0s):
                 held[i] = True
         return held
 
@@ -1857,6 +1860,13 @@ def main(argv=None) -> int:
                     if hand > 1e-9:
                         raise NotChecked(f"the friction reference fails its hand case (error {hand:.2e})")
                 u_prev = np.zeros(2 * prob.topo.np)  # the slip is measured from the previous step
+                # every step's prescribed displacements: a row is held (a line of
+                # symmetry) only if its point is held along t in all of them
+                u0s = []
+                if law:
+                    for cfg_s in step_cfgs:
+                        prob.cfg = cfg_s
+                        u0s.append(prob.reduction()[1])
                 for s, cfg_s in enumerate(step_cfgs, start=1):
                     prob.cfg = cfg_s
                     T, u0, floating = prob.reduction()
@@ -1877,7 +1887,7 @@ def main(argv=None) -> int:
                     if law:
                         # tangential rows in the reduced unknowns; v = Tt u − Tt u_prev
                         # = Ttr ξ − c with c = Tt (u_prev − u0) (methods.md §9.1)
-                        held = prob.held_rows(rows, T, u0)
+                        held = prob.held_rows(rows, T, u0s)
                         Ttr = (Tt @ T).tocsr()
                         Ttr.data[np.abs(Ttr.data) <= 1e-14] = 0.0
                         Ttr.eliminate_zeros()
