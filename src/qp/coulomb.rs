@@ -9,7 +9,7 @@
 //! every method.
 
 use crate::linalg::sparse::norm_inf;
-use crate::qp::{Failure, Friction, IterRecord, Output, QpError, SlipBound, Status};
+use crate::qp::{Failure, Friction, IterRecord, Output, QpError, QpProblem, SlipBound, Status};
 
 /// The most Tresca solves of one Coulomb loop (the glued one included).
 /// Both methods settle in far fewer: the keystone of tests/trust.rs, the
@@ -217,6 +217,15 @@ pub fn solve(
         }
         counts.add(&mut r);
         s = relax.next(&s, target, false);
+    }
+}
+
+/// The driver's certificate of Coulomb's problem `qp` (docs/methods.md
+/// §9.4) on a Tresca answer, at a given target: the `proven` of [`solve`]
+/// for every method.
+pub fn certificate(qp: &QpProblem) -> impl Fn(&Tresca, f64) -> bool + '_ {
+    move |t: &Tresca, at: f64| {
+        crate::qp::kkt::residuals_with_friction(qp, &t.x, &t.lambda_n, &t.lambda_t).within(at)
     }
 }
 

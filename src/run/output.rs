@@ -625,30 +625,38 @@ impl<'a> VtuWriter<'a> {
                 continue;
             }
             let (out, fr) = io::hdf5::read_step_of(&path, self.om, &io::hdf5::step_name(i))?;
-            if !self.compress && self.parts.is_none() {
-                self.parts = Some(io::vtu::VtuMeshParts::new(self.om));
-            }
-            io::vtu::write_vtu_with(
-                &staged.vtu,
-                self.om,
-                &out,
-                self.compress,
-                self.parts.as_ref(),
-            )?;
             let arrays = fr.as_ref().map(|f| io::vtu::FrictionArrays {
                 tangential_traction: &f.tangential_traction,
                 slip: &f.slip,
                 state: &f.state,
             });
-            io::vtu::write_contact_vtu_with_friction(
-                &staged.contact_vtu,
-                self.om,
-                &out,
-                arrays.as_ref(),
-                self.compress,
-            )?;
+            self.write_pair(&staged, &out, arrays.as_ref(), true)?;
         }
         Ok(names)
+    }
+
+    /// One step's VTU pair at `paths`: the bulk file (with the mesh arrays
+    /// encoded once for a time series, `series`) and the contact file with
+    /// the friction arrays, if any.
+    fn write_pair(
+        &mut self,
+        paths: &Outputs,
+        out: &io::StepOutput,
+        arrays: Option<&io::vtu::FrictionArrays<'_>>,
+        series: bool,
+    ) -> Result<(), RunError> {
+        if series && !self.compress && self.parts.is_none() {
+            self.parts = Some(io::vtu::VtuMeshParts::new(self.om));
+        }
+        io::vtu::write_vtu_with(&paths.vtu, self.om, out, self.compress, self.parts.as_ref())?;
+        io::vtu::write_contact_vtu_with_friction(
+            &paths.contact_vtu,
+            self.om,
+            out,
+            arrays,
+            self.compress,
+        )?;
+        Ok(())
     }
 
     /// The time series of steps `0..=s` (0-based), staged: every pair it
@@ -681,29 +689,13 @@ impl StepObserver for VtuWriter<'_> {
         } else {
             vec![]
         };
-        if step.multi && !self.compress && self.parts.is_none() {
-            self.parts = Some(io::vtu::VtuMeshParts::new(self.om));
-        }
-        io::vtu::write_vtu_with(
-            &staged.vtu,
-            self.om,
-            step.output,
-            self.compress,
-            self.parts.as_ref(),
-        )?;
         let fo = crate::post::friction::friction_output(step.model, step.result);
         let arrays = fo.as_ref().map(|f| io::vtu::FrictionArrays {
             tangential_traction: &f.tangential_traction,
             slip: &f.slip,
             state: &f.state,
         });
-        io::vtu::write_contact_vtu_with_friction(
-            &staged.contact_vtu,
-            self.om,
-            step.output,
-            arrays.as_ref(),
-            self.compress,
-        )?;
+        self.write_pair(&staged, step.output, arrays.as_ref(), step.multi)?;
         log::debug!("VTU pair {:.3} s", t.elapsed().as_secs_f64());
         let mut names = earlier;
         names.extend([fname(&staged.vtu), fname(&staged.contact_vtu)]);

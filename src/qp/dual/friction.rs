@@ -80,9 +80,7 @@ pub(crate) fn solve_friction<S: BoundStep>(
         lam0: None,
     };
     let target = ctx.settings.kkt_target;
-    let proven = |t: &Tresca, at: f64| {
-        crate::qp::kkt::residuals_with_friction(qp, &t.x, &t.lambda_n, &t.lambda_t).within(at)
-    };
+    let proven = coulomb::certificate(qp);
     let mut out = coulomb::solve(fr, &mut step, name, &proven, target)?;
     out.timings = vec![("iterate".into(), t_start.elapsed().as_secs_f64())];
     Ok(out)

@@ -99,9 +99,7 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
         counted: 0,
     };
     let target = ctx.settings.kkt_target;
-    let proven = |t: &Tresca, at: f64| {
-        crate::qp::kkt::residuals_with_friction(qp, &t.x, &t.lambda_n, &t.lambda_t).within(at)
-    };
+    let proven = coulomb::certificate(qp);
     coulomb::solve(fr, &mut step, "ssn", &proven, target)
 }
 
