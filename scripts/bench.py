@@ -648,11 +648,55 @@ FRICTION
 tol = 1.0e-10
 """
 PUNCH_SIDE = '[[traction]]\non = "punch_left"\np = [2.0e5, 0.0]\n'
-# model: (geo, clscale per level)
+SHEARED_TOML = """# meshes/two_blocks with the upper block held only by the contact, pressed
+# and sheared by a traction on top in four load steps (bench.py --friction-scale).
+[mesh]
+file = "MESH"
+[model]
+plane = "strain"
+[materials.lower]
+E = 2.0e9
+nu = 0.25
+[materials.upper]
+E = 2.0e9
+nu = 0.25
+[[dirichlet]]
+on = "bottom"
+u = [0.0, 0.0]
+[[slip]]
+on = "left_lower"
+[[slip]]
+on = "right_lower"
+[[traction]]
+on = "top"
+p = [1.0e5, -1.0e6]
+[[contact]]
+on = "interface"
+FRICTION
+[[steps]]
+factor = 0.25
+[[steps]]
+factor = 0.5
+[[steps]]
+factor = 0.75
+[[steps]]
+factor = 1.0
+"""
+# model: (geo, gmsh arguments per level). The first three levels of punch
+# and nafems1 are those of --friction; --friction-scale runs the families
+# of FRICTION_SCALE at about 10 k, 50 k and 200 k nodes.
 FRICTION_MODELS = {
-    "punch": ("tests/data/friction/floating_punch.geo", [1.0, 0.45, 0.2]),
-    "nafems1": ("verification/nafems1/nafems1.geo", [0.5, 0.25, 0.15]),
+    "punch": ("tests/data/friction/floating_punch.geo", [["-clscale", "1.0"], ["-clscale", "0.45"], ["-clscale", "0.2"]]),
+    "nafems1": ("verification/nafems1/nafems1.geo",
+                [["-clscale", "0.5"], ["-clscale", "0.25"], ["-clscale", "0.15"],
+                 ["-clscale", "0.43"], ["-clscale", "0.19"], ["-clscale", "0.097"]]),
+    "shrinkfit": ("scripts/bench_models/shrinkfit_push.geo",
+                  [None, None, None, ["-setnumber", "nz", "400", "-setnumber", "nr", "12"],
+                   ["-setnumber", "nz", "800", "-setnumber", "nr", "31"],
+                   ["-setnumber", "nz", "1600", "-setnumber", "nr", "62"]]),
+    "sheared": ("meshes/two_blocks.geo", [None, None, None, ["-clscale", "0.2"], ["-clscale", "0.1"], ["-clscale", "0.05"]]),
 }
+FRICTION_SCALE = ("shrinkfit", "nafems1", "sheared")
 
 
 def friction_toml(model: str, msh: Path, frictional: bool) -> str:
@@ -660,6 +704,15 @@ def friction_toml(model: str, msh: Path, frictional: bool) -> str:
         return (PUNCH_TOML.replace("MESH", msh.name)
                 .replace("SIDE", PUNCH_SIDE if frictional else "")
                 .replace("FRICTION", "friction = 0.3" if frictional else ""))
+    if model == "sheared":
+        # Frictionless: the upper block's sides slip instead of friction holding it.
+        return (SHEARED_TOML.replace("MESH", msh.name)
+                .replace("FRICTION", "friction = 0.12" if frictional else
+                         '[[slip]]\non = "left_upper"\n[[slip]]\non = "right_upper"'))
+    if model == "shrinkfit":
+        text = (ROOT / "scripts" / "bench_models" / "shrinkfit_push.toml").read_text()
+        text = text.replace('file = "shrinkfit_push.msh"', f'file = "{msh.name}"')
+        return text if frictional else text.replace("friction = 0.2\n", "")
     text = (ROOT / "verification" / "nafems1" / "nafems1_mu.toml").read_text()
     text = text.replace('file = "nafems1.msh"', f'file = "{msh.name}"')
     text = text[: text.index("[[steps]]")] + "".join(f"[[steps]]\nfactor = {k / 10!r}\n\n" for k in range(1, 11))
@@ -693,22 +746,29 @@ def friction_once(binary, toml: Path, method: str, outdir: Path, timeout):
 def run_friction(args, binary, work: Path) -> int:
     """The friction table (issue 36): ssn vs mprgp vs frictionless ssn."""
     levels = [int(v) for v in args.friction_levels.split(",") if v.strip()]
+    models = FRICTION_SCALE if args.friction_scale else ("punch", "nafems1")
+    if args.friction_scale:
+        levels = [3 + lv for lv in levels]
+    methods = [m for m in args.friction_methods.split(",") if m]
     rows = []
-    for model, (geo, scales) in FRICTION_MODELS.items():
+    for model in models:
+        geo, scales = FRICTION_MODELS[model]
         for lv in levels:
             s = scales[lv]
+            if s is None:
+                continue
             msh = work / f"friction_{model}_{lv}.msh"
             if not msh.exists():
-                rc, _, err, _ = run([args.gmsh, "-2", "-format", "msh41", "-bin", "-clscale", f"{s}", ROOT / geo, "-o", msh])
+                rc, _, err, _ = run([args.gmsh, "-2", "-format", "msh41", "-bin", *s, ROOT / geo, "-o", msh])
                 if rc != 0:
                     raise RuntimeError(f"gmsh failed on {geo}: {err[-500:]}")
-            for method, frictional in (("ssn", True), ("mprgp", True), ("ssn", False)):
+            for method, frictional in [(m, True) for m in methods] + [("ssn", False)]:
                 toml = work / f"friction_{model}_{lv}_{'mu' if frictional else 'nomu'}.toml"
                 toml.write_text(friction_toml(model, msh, frictional))
                 variant = method if frictional else "ssn, frictionless"
                 r = repeated(lambda: friction_once(binary, toml, method, work / "out_friction", max(4 * args.budget, 120.0)),
                              args.repeats, args.long)
-                row = {"model": model, "level": lv, "clscale": s, "variant": variant, **r}
+                row = {"model": model, "level": lv, "gmsh": " ".join(s), "variant": variant, **r}
                 rows.append(row)
                 log(f"friction {model} level {lv} ({r.get('nodes')} nodes) {variant}: {fmt(r.get('wall'))} s, "
                     f"Newton {r.get('newton')}, inner {r.get('inner')}, {r.get('status')}")
@@ -716,8 +776,14 @@ def run_friction(args, binary, work: Path) -> int:
     out.parent.mkdir(parents=True, exist_ok=True)
     out.with_suffix(".json").write_text(json.dumps({"machine": machine(), "cmdline": "python3 scripts/bench.py " + " ".join(sys.argv[1:]),
                                                     "rows": rows}, indent=1, default=str))
-    L = ["Friction (issue 36): a floating punch held by Coulomb friction alone (mu 0.3, 1 step) and NAFEMS 1 "
-         "(mu 0.1, 10 load steps); whole process wall time (median of the repeats), solve time, Newton steps and "
+    head = ("Friction at scale (issue 42 §2): the shrink fit pushed out (scripts/bench_models/shrinkfit_push.toml: "
+            "axisymmetric, NTS 5:4, mu 0.2, 6 load steps), NAFEMS 1 (mu 0.1, 10 load steps) and the sheared blocks "
+            "(two_blocks, the upper block held by friction mu 0.12 alone, 4 load steps; frictionless: its sides slip "
+            "instead) at about 10 k, 50 k and 200 k nodes"
+            if args.friction_scale else
+            "Friction (issue 36): a floating punch held by Coulomb friction alone (mu 0.3, 1 step) and NAFEMS 1 "
+            "(mu 0.1, 10 load steps)")
+    L = [head + "; whole process wall time (median of the repeats), solve time, Newton steps and "
          "inner iterations summed over the steps; ratio = wall ÷ the frictionless ssn run on the same mesh "
          "(target ssn ≤ 3, and ssn never slower than mprgp).\n",
          "| model | nodes | DOFs | rows | variant | wall [s] | solve [s] | Newton | inner | ÷ frictionless | status |",
@@ -815,6 +881,11 @@ def main() -> int:
     ap.add_argument("--friction-levels", default="0,1,2",
                     help="mesh levels of the friction table (0, 1, 2: coarse to fine)")
     ap.add_argument("--friction-out", default=str(ROOT / "bench" / "friction.md"))
+    ap.add_argument("--friction-scale", action="store_true",
+                    help="with --friction: the families of issue 42 §2 (shrink fit push-out, NAFEMS 1, sheared "
+                         "blocks) at about 10 k, 50 k, 200 k nodes (--friction-levels 0,1,2)")
+    ap.add_argument("--friction-methods", default="ssn,mprgp",
+                    help="frictional variants of --friction (frictionless ssn always runs)")
     ap.add_argument("--mu-scan", default="",
                     help="comma list of mu: run the geodynamic mu scan (issue 42 §1) instead, e.g. 0.05,0.1,0.15,0.2,0.3,0.6")
     ap.add_argument("--mu-scan-out", default=str(ROOT / "bench" / "mu_scan.md"))

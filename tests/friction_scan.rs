@@ -59,3 +59,122 @@ fn every_step_of_the_geodynamic_mu_scan_is_certified() {
         assert!(text.contains("friction residual"), "μ = {mu}:\n{text}");
     }
 }
+
+/// meshes/two_blocks with the upper block held only by friction μ = 0.12
+/// and sheared by a traction p = [1.1·10⁵, −10⁶] Pa in three load steps.
+fn sheared_steps(dir: &std::path::Path) -> String {
+    let text = format!(
+        r#"[mesh]
+file = "{}"
+[model]
+plane = "strain"
+[materials.lower]
+E = 2.0e9
+nu = 0.25
+[materials.upper]
+E = 2.0e9
+nu = 0.25
+[[dirichlet]]
+on = "bottom"
+u = [0.0, 0.0]
+[[slip]]
+on = "left_lower"
+[[slip]]
+on = "right_lower"
+[[traction]]
+on = "top"
+p = [1.1e5, -1.0e6]
+[[contact]]
+on = "interface"
+friction = 0.12
+[[steps]]
+factor = 0.4
+[[steps]]
+factor = 0.7
+[[steps]]
+factor = 1.0
+"#,
+        meshes().join("two_blocks.msh").display()
+    );
+    let p = dir.join("sheared_steps.toml");
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+/// The last step's displacements of a checkpoint.
+fn last_displacement(h5: &std::path::Path) -> Vec<[f64; 2]> {
+    let ck = signorini::io::hdf5::read_checkpoint(h5).unwrap();
+    ck.steps.last().unwrap().displacement.clone()
+}
+
+/// Issue 42 §2: on ssn's sparse path (no coarse start there) a load step
+/// starts from the last step's stick / slip / open sets and bound μλ_n,
+/// says so in the debug log, gives the dual path's answer, and a restart
+/// (which reads λ_n, λ_t from the checkpoint) gives the same bits as the
+/// run it continues.
+#[test]
+fn sparse_path_load_steps_start_from_the_last_steps_sets() {
+    let d = tempfile::tempdir().unwrap();
+    let model = sheared_steps(d.path());
+    let out = |k: &str| d.path().join(k).display().to_string();
+    let (code, text) = run(&[
+        "solve",
+        &model,
+        "--ssn-path",
+        "augmented",
+        "--log-level",
+        "debug",
+        "--out",
+        &out("sparse"),
+    ]);
+    assert_eq!(code, 0, "{text}");
+    assert_eq!(
+        text.matches("the fixed point starts from the last step's bound")
+            .count(),
+        2,
+        "{text}"
+    );
+    assert!(text.contains("the last step's sets: stick"), "{text}");
+    let (code, text) = run(&["solve", &model, "--out", &out("dual")]);
+    assert_eq!(code, 0, "{text}");
+    let us = last_displacement(&d.path().join("sparse/sheared_steps.h5"));
+    let ud = last_displacement(&d.path().join("dual/sheared_steps.h5"));
+    let scale = ud
+        .iter()
+        .fold(0.0f64, |m, u| m.max(u[0].abs()).max(u[1].abs()));
+    let diff = us.iter().zip(&ud).fold(0.0f64, |m, (a, b)| {
+        m.max((a[0] - b[0]).abs()).max((a[1] - b[1]).abs())
+    });
+    assert!(
+        diff <= 1e-8 * scale,
+        "sparse vs dual path: {diff:e} of {scale:e}"
+    );
+    // Two steps, then a restart for the third.
+    let (code, text) = run(&[
+        "solve",
+        &model,
+        "--ssn-path",
+        "augmented",
+        "--max-steps",
+        "2",
+        "--out",
+        &out("part"),
+    ]);
+    assert_eq!(code, 0, "{text}");
+    let (code, text) = run(&[
+        "solve",
+        &model,
+        "--ssn-path",
+        "augmented",
+        "--restart",
+        &out("part/sheared_steps.h5"),
+        "--out",
+        &out("part"),
+    ]);
+    assert_eq!(code, 0, "{text}");
+    let ur = last_displacement(&d.path().join("part/sheared_steps.h5"));
+    assert!(
+        ur == us,
+        "the restart's last step differs from the whole run's"
+    );
+}

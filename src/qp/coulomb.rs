@@ -82,6 +82,15 @@ pub trait TrescaStep {
     fn coulomb_first(&mut self, _mu: &[f64]) -> Option<Result<Tresca, QpError>> {
         None
     }
+
+    /// A first bound of the fixed point that is better than the glued
+    /// answer's, with the method's state set to start from it; None: the
+    /// glued start. ssn: μλ_n of the best iterate of a direct iteration
+    /// that did not settle, or of the last load step (its sets kept,
+    /// docs/methods.md §9.5).
+    fn warm_bound(&mut self, _mu: &[f64]) -> Option<Vec<f64>> {
+        None
+    }
 }
 
 /// Solve the frictional problem of `fr` by `step`: one Tresca solve with
@@ -90,7 +99,10 @@ pub trait TrescaStep {
 /// ([`TrescaStep::coulomb_first`]); else (or if that does not settle) the
 /// glued solve, then the direct iteration from it if the method has one
 /// ([`TrescaStep::coulomb`]), else (or if that does not settle) the fixed
-/// point from the glued answer. Each solve's log follows the last one's
+/// point from the glued answer. A method's warm bound
+/// ([`TrescaStep::warm_bound`]: ssn's sparse path in a load step, the last
+/// step's μλ_n) replaces the glued solve, unless its Tresca problem is
+/// unbounded (the loads grew beyond what the last step's bound holds). Each solve's log follows the last one's
 /// (iterations numbered on).
 ///
 /// The fixed point stops at an iterate that `proven` (the driver's KKT
@@ -118,63 +130,62 @@ pub fn solve(
         SlipBound::Coulomb(mu) => mu,
     };
     let mut counts = Counts::default();
-    // A direct iteration's answer: returned if it converged, else counted
-    // and the loop goes on to `next`.
-    let direct = |d: Option<Result<Tresca, QpError>>,
-                  step: &mut dyn TrescaStep,
-                  counts: &mut Counts,
-                  next: &str|
-     -> Result<Option<Tresca>, QpError> {
-        let Some(d) = d else { return Ok(None) };
-        let mut d = d?;
-        if d.status.converged() {
-            step.complete(&mut d)?;
-            return Ok(Some(d));
-        }
-        log::debug!(
-            "{name}: the direct Coulomb iteration stopped ({}): {next}",
-            d.status.describe()
-        );
-        counts.add(&mut d);
-        Ok(None)
-    };
     let first = step.coulomb_first(mu);
-    if let Some(d) = direct(first, step, &mut counts, "the glued start")? {
+    if let Some(d) = direct(
+        first,
+        step,
+        &mut counts,
+        name,
+        "a warm bound or the glued start",
+    )? {
         return Ok(counts.output(d));
     }
-    let mut r = step.solve(Bound::Glued)?;
     let mut stalled = 0;
-    match usable(&mut r, step, &mut stalled, proven, kkt_target)? {
-        Use::Next => {}
-        Use::Stop => return Ok(counts.output(r)),
-        Use::Proven => {
-            r.status = Status::Converged;
-            return Ok(counts.output(r));
+    // The first Tresca answer of the fixed point, when a warm bound gave it.
+    let mut warm_answer = None;
+    let warm = match step.warm_bound(mu) {
+        Some(s) => {
+            log::debug!("{name}: the fixed point from a warm bound, not the glued start");
+            let mut r = step.solve(Bound::Given(&s))?;
+            if matches!(r.status, Status::Unbounded { .. }) {
+                // The last step's bound cannot hold this step's larger
+                // loads (a Tresca problem, not Coulomb's): the glued start.
+                log::debug!(
+                    "{name}: the warm bound's Tresca problem is unbounded: the glued start"
+                );
+                counts.add(&mut r);
+                None
+            } else {
+                warm_answer = Some(r);
+                Some(s)
+            }
         }
-    }
-    // The glued answer is Coulomb's when every closed row's force is
-    // within μλ_n (a large μ).
-    step.complete(&mut r)?;
-    if proven(&r, step.resolution()) {
-        log::debug!("{name}: the glued answer passes the certificate");
-        r.status = Status::Converged;
-        return Ok(counts.output(r));
-    }
-    // s = μλ_n of the glued answer: the first bound of the fixed point.
-    let mut s = fr.slip_bound(&r.lambda_n);
-    log::debug!("{name}: Coulomb update 1: change of s inf, ω = 1");
-    counts.add(&mut r);
-    let after_glued = step.coulomb(mu);
-    let next = "the fixed point from the glued answer";
-    if let Some(d) = direct(after_glued, step, &mut counts, next)? {
-        return Ok(counts.output(d));
-    }
+        None => None,
+    };
+    let (mut s, mut outer) = match warm {
+        Some(s) => (s, 0),
+        None => match glued_start(
+            fr,
+            step,
+            name,
+            mu,
+            &mut counts,
+            &mut stalled,
+            proven,
+            kkt_target,
+        )? {
+            Start::Done(out) => return Ok(out),
+            Start::From(s) => (s, 1),
+        },
+    };
     let mut relax = CoulombRelaxation::default();
-    let mut outer = 1;
     let mut last_change = f64::INFINITY;
     loop {
         outer += 1;
-        let mut r = step.solve(Bound::Given(&s))?;
+        let mut r = match warm_answer.take() {
+            Some(r) => r,
+            None => step.solve(Bound::Given(&s))?,
+        };
         match usable(&mut r, step, &mut stalled, proven, kkt_target)? {
             Use::Next => {}
             Use::Stop => return Ok(counts.output(r)),
@@ -220,6 +231,79 @@ pub fn solve(
     }
 }
 
+/// A direct iteration's answer `d`: returned if it converged, else counted
+/// and the loop goes on to `next`.
+fn direct(
+    d: Option<Result<Tresca, QpError>>,
+    step: &mut dyn TrescaStep,
+    counts: &mut Counts,
+    name: &str,
+    next: &str,
+) -> Result<Option<Tresca>, QpError> {
+    let Some(d) = d else { return Ok(None) };
+    let mut d = d?;
+    if d.status.converged() {
+        step.complete(&mut d)?;
+        return Ok(Some(d));
+    }
+    log::debug!(
+        "{name}: the direct Coulomb iteration stopped ({}): {next}",
+        d.status.describe()
+    );
+    counts.add(&mut d);
+    Ok(None)
+}
+
+/// How the fixed point starts after the glued solve ([`glued_start`]).
+enum Start {
+    /// The glued answer (or the direct iteration from it) ends the loop.
+    Done(Output),
+    /// The first bound of the fixed point: μλ_n of the glued answer.
+    From(Vec<f64>),
+}
+
+/// The glued solve, then the method's direct iteration from it if it has
+/// one: Coulomb's answer, or the fixed point's first bound.
+#[allow(clippy::too_many_arguments)]
+fn glued_start(
+    fr: &Friction,
+    step: &mut dyn TrescaStep,
+    name: &str,
+    mu: &[f64],
+    counts: &mut Counts,
+    stalled: &mut usize,
+    proven: &dyn Fn(&Tresca, f64) -> bool,
+    kkt_target: f64,
+) -> Result<Start, QpError> {
+    let mut r = step.solve(Bound::Glued)?;
+    match usable(&mut r, step, stalled, proven, kkt_target)? {
+        Use::Next => {}
+        Use::Stop => return Ok(Start::Done(std::mem::take(counts).output(r))),
+        Use::Proven => {
+            r.status = Status::Converged;
+            return Ok(Start::Done(std::mem::take(counts).output(r)));
+        }
+    }
+    // The glued answer is Coulomb's when every closed row's force is
+    // within μλ_n (a large μ).
+    step.complete(&mut r)?;
+    if proven(&r, step.resolution()) {
+        log::debug!("{name}: the glued answer passes the certificate");
+        r.status = Status::Converged;
+        return Ok(Start::Done(std::mem::take(counts).output(r)));
+    }
+    // s = μλ_n of the glued answer: the first bound of the fixed point.
+    let s = fr.slip_bound(&r.lambda_n);
+    log::debug!("{name}: Coulomb update 1: change of s inf, ω = 1");
+    counts.add(&mut r);
+    let after_glued = step.coulomb(mu);
+    let next = "the fixed point from the glued answer";
+    if let Some(d) = direct(after_glued, step, counts, name, next)? {
+        return Ok(Start::Done(std::mem::take(counts).output(d)));
+    }
+    Ok(Start::From(s))
+}
+
 /// The driver's certificate of Coulomb's problem `qp` (docs/methods.md
 /// §9.4) on a Tresca answer, at a given target: the `proven` of [`solve`]
 /// for every method.
@@ -256,7 +340,7 @@ enum Use {
 /// its status. `r` is completed unless it converged.
 fn usable(
     r: &mut Tresca,
-    step: &mut impl TrescaStep,
+    step: &mut (impl TrescaStep + ?Sized),
     stalled: &mut usize,
     proven: &dyn Fn(&Tresca, f64) -> bool,
     kkt_target: f64,

@@ -53,6 +53,9 @@ pub struct Context<'a> {
     pub x0: Option<&'a [f64]>,
     /// The working-set warm start, one flag per row (checked by the driver).
     pub active0: Option<&'a [bool]>,
+    /// The multiplier warm start (checked by the driver: one finite pair
+    /// per row, the problem frictional).
+    pub lambda0: Option<&'a crate::qp::Multipliers>,
     opts: &'a SolveOptions,
     timings: Vec<(String, f64)>,
 }
@@ -64,6 +67,7 @@ impl<'a> Context<'a> {
             ws,
             x0: opts.x0.as_deref(),
             active0: opts.active0.as_deref(),
+            lambda0: opts.lambda0.as_ref(),
             opts,
             timings: vec![],
         }
@@ -77,6 +81,7 @@ impl<'a> Context<'a> {
             ws: self.ws,
             x0: None,
             active0: None,
+            lambda0: None,
             opts: self.opts,
             timings: vec![],
         }
@@ -321,7 +326,23 @@ fn checked_start<'a>(
         .as_ref()
         .filter(|a| a.len() != qp.m())
         .map(|a| format!("{} working-set flags for {} contact rows", a.len(), qp.m()));
-    if bad_x0.is_none() && bad_active0.is_none() {
+    let bad_lambda0 = opts.lambda0.as_ref().and_then(|l| {
+        let m = qp.m();
+        if qp.friction.is_none() {
+            Some("multipliers of a frictional start for a frictionless problem".to_string())
+        } else if l.normal.len() != m || l.tangential.len() != m {
+            Some(format!(
+                "{} normal and {} tangential multipliers for {m} contact rows",
+                l.normal.len(),
+                l.tangential.len()
+            ))
+        } else if !l.normal.iter().chain(&l.tangential).all(|v| v.is_finite()) {
+            Some("a multiplier of the start is not finite".to_string())
+        } else {
+            None
+        }
+    });
+    if bad_x0.is_none() && bad_active0.is_none() && bad_lambda0.is_none() {
         return Cow::Borrowed(opts);
     }
     let mut o = opts.clone();
@@ -336,6 +357,10 @@ fn checked_start<'a>(
     }
     if let Some(why) = bad_active0 {
         o.active0 = None;
+        refuse(why);
+    }
+    if let Some(why) = bad_lambda0 {
+        o.lambda0 = None;
         refuse(why);
     }
     Cow::Owned(o)

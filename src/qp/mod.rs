@@ -385,6 +385,11 @@ pub struct SolveOptions {
     /// contact, e.g. the last step's active set; methods that start from a
     /// working set (ssn) start from it (docs/methods.md §8.3).
     pub active0: Option<Vec<bool>>,
+    /// Multiplier warm start of a frictional problem (load steps, restart):
+    /// the last step's λ_n and λ_t per row, from which ssn takes the
+    /// stick / slip / open sets and the first slip bound μλ_n of its
+    /// Coulomb loop (docs/methods.md §9.5).
+    pub lambda0: Option<Multipliers>,
     /// Observers of every iteration record, besides the progress bar.
     pub observers: Vec<SharedObserver>,
 }
@@ -399,9 +404,18 @@ impl std::fmt::Debug for SolveOptions {
             .field("stop", &self.stop.is_some())
             .field("x0", &self.x0.as_ref().map(|x| x.len()))
             .field("active0", &self.active0.as_ref().map(|a| a.len()))
+            .field("lambda0", &self.lambda0.as_ref().map(|l| l.normal.len()))
             .field("observers", &self.observers.len())
             .finish()
     }
+}
+
+/// The multipliers of a frictional answer per contact row: λ_n (normal)
+/// and λ_t (tangential), as a warm start ([`SolveOptions::lambda0`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Multipliers {
+    pub normal: Vec<f64>,
+    pub tangential: Vec<f64>,
 }
 
 impl SolveOptions {

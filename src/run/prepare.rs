@@ -335,6 +335,20 @@ pub fn reduce_active(model: &Model, active: &[u8]) -> Option<Vec<bool>> {
         .filter(|_| active.len() == model.topo.contact.len())
 }
 
+/// The QP rows' values of per-contact-row `values` (a multiplier warm
+/// start); None if they are not this model's rows.
+pub fn reduce_rows(model: &Model, values: &[f64]) -> Option<Vec<f64>> {
+    (values.len() == model.topo.contact.len())
+        .then(|| {
+            model
+                .qp_rows
+                .iter()
+                .map(|&r| values.get(r).copied())
+                .collect()
+        })
+        .flatten()
+}
+
 /// The method and the options of a solve: the problem's `[solver]` with
 /// `flags` (the command line) laid over it, validated once
 /// ([`Settings::from_section`]).

@@ -27,6 +27,9 @@ pub struct Restart {
     /// Active flags of its last step (per contact row): the state the next
     /// step's opened/closed counts refer to.
     pub active: Option<Vec<u8>>,
+    /// λ_n and λ_t of its last step (per contact row), if frictional: the
+    /// next step's multiplier warm start (`SolveOptions::lambda0`).
+    pub lambda: Option<(Vec<f64>, Vec<f64>)>,
     /// The step `[output] reference_step` names, if the checkpoint holds it.
     pub reference: Option<StepOutput>,
 }
@@ -51,6 +54,11 @@ impl Restart {
             steps_done: ck.steps.len(),
             displacement: ck.steps.last().map(|s| s.displacement.clone()),
             active: ck.steps.last().map(|s| s.active.clone()),
+            lambda: ck
+                .steps
+                .last()
+                .zip(ck.friction.last().and_then(|f| f.as_ref()))
+                .map(|(s, f)| (s.multipliers.clone(), f.multipliers_t.clone())),
             reference,
         })
     }

@@ -7,7 +7,9 @@
 
 use super::observe::StepObserver;
 use super::output::{check_interrupt, Transaction};
-use super::prepare::{reduce, reduce_active, solve_model_in, step_model_reusing, Prepared};
+use super::prepare::{
+    reduce, reduce_active, reduce_rows, solve_model_in, step_model_reusing, Prepared,
+};
 use super::restart::Restart;
 use super::summary::{StepRow, Summary, Timings};
 use super::RunError;
@@ -344,6 +346,16 @@ impl<'a> Run<'a> {
             .active_prev
             .as_deref()
             .and_then(|a| reduce_active(model_ref, a));
+        o.lambda0 = carry
+            .lambda_prev
+            .as_ref()
+            .filter(|_| model_ref.qp.friction.is_some())
+            .and_then(|(n, t)| {
+                Some(crate::qp::Multipliers {
+                    normal: reduce_rows(model_ref, n)?,
+                    tangential: reduce_rows(model_ref, t)?,
+                })
+            });
         o.stop = Some(&super::output::SIGNAL);
         let t_solve0 = Instant::now();
         let res = solve_model_in(prep, model_ref, method, &o, ws);
@@ -417,6 +429,9 @@ impl<'a> Run<'a> {
             .rows
             .push(step_row(&step, carry.active_prev.as_deref(), t_solve));
         carry.active_prev = Some(solved.output.active.clone());
+        carry.lambda_prev =
+            crate::post::friction::friction_output(solved.model(prep), &solved.result)
+                .map(|f| (solved.output.multipliers.clone(), f.lambda_t));
         carry.certified &= verdict.certified();
         carry.u_prev = Some(solved.output.displacement.clone());
         let timings = Timings {
@@ -663,6 +678,8 @@ fn observe(
 struct Carry {
     u_prev: Option<Vec<[f64; 2]>>,
     active_prev: Option<Vec<u8>>,
+    /// λ_n and λ_t of the last step per contact row (frictional steps).
+    lambda_prev: Option<(Vec<f64>, Vec<f64>)>,
     reference: Option<StepOutput>,
     pending: Vec<String>,
     rows: Vec<StepRow>,
@@ -675,6 +692,7 @@ impl Carry {
         Carry {
             u_prev: r.and_then(|r| r.displacement.clone()),
             active_prev: r.and_then(|r| r.active.clone()),
+            lambda_prev: r.and_then(|r| r.lambda.clone()),
             reference: r.and_then(|r| r.reference.clone()),
             pending: vec![],
             rows: vec![],

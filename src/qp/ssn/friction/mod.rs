@@ -135,9 +135,12 @@ impl TrescaStep for SsnTresca<'_, '_> {
             }
         }
         if st.last.is_none() {
-            st.start_sets();
-            if !st.glued {
-                st.coarse_start();
+            // The coarse start where the dual form has one (it finds the
+            // slip zone's front in a few steps, where the last step's sets
+            // walk it a few rows a step), else the last step's sets.
+            let started = !st.glued && (st.coarse_start() || st.dual.is_none() && st.warm_start());
+            if !started {
+                st.start_sets();
             }
         } else {
             st.fresh = true;
@@ -178,6 +181,23 @@ impl TrescaStep for SsnTresca<'_, '_> {
             st.visited.clear();
         }
         Some(r)
+    }
+
+    fn warm_bound(&mut self, _mu: &[f64]) -> Option<Vec<f64>> {
+        // The sparse path (no coarse start, no direct iteration): the last
+        // load step's sets and its bound μλ_n instead of the glued start.
+        let st = &self.st;
+        if st.dual.is_some() {
+            return None;
+        }
+        let s = st
+            .warm
+            .as_ref()
+            .map(|(_, _, l)| st.fr.slip_bound(&l.normal))?;
+        log::debug!(
+            "ssn: friction: the fixed point starts from the last step's bound μλ_n and sets"
+        );
+        Some(s)
     }
 
     fn complete(&mut self, r: &mut Tresca) -> Result<(), QpError> {
@@ -383,6 +403,9 @@ struct State<'a> {
     /// Coulomb's coefficients while the direct iteration runs (the bound
     /// s = μλ_n of the current iterate, [`TrescaStep::coulomb`]).
     coulomb: Option<Vec<f64>>,
+    /// The multiplier warm start, until the first solve takes it: its sets
+    /// and its λ.
+    warm: Option<(Vec<bool>, Vec<Tangential>, crate::qp::Multipliers)>,
 }
 
 /// Newton steps without a better residual after which the sets of one
@@ -390,6 +413,28 @@ struct State<'a> {
 /// row, and 100 more.
 fn cycle_budget(m: usize) -> usize {
     2 * m + 100
+}
+
+/// The working sets of a multiplier warm start (the last load step's
+/// answer, docs/methods.md §9.5): rows with λ_n > 0 in contact; of those,
+/// a row slips (with the sign of λ_t) where |λ_t| reaches its bound s =
+/// μλ_n (Tresca: the given s) within [`crate::post::friction`]'s margin,
+/// and sticks otherwise.
+fn warm_sets(fr: &Friction, l: &crate::qp::Multipliers) -> (Vec<bool>, Vec<Tangential>) {
+    const MARGIN: f64 = 1e-6;
+    let s = fr.slip_bound(&l.normal);
+    let in_n: Vec<bool> = l.normal.iter().map(|&v| v > 0.0).collect();
+    let tang = (0..in_n.len())
+        .map(|i| {
+            let lt = l.tangential[i];
+            if in_n[i] && s[i] > 0.0 && lt.abs() < (1.0 - MARGIN) * s[i] {
+                Tangential::Stick
+            } else {
+                Tangential::Slip(lt >= 0.0)
+            }
+        })
+        .collect();
+    (in_n, tang)
 }
 
 impl<'a> State<'a> {
@@ -443,7 +488,38 @@ impl<'a> State<'a> {
             x_stale: false,
             rows: vec![],
             coulomb: None,
+            warm: ctx.lambda0.map(|l| {
+                let (n_set, tang) = warm_sets(fr, l);
+                (n_set, tang, l.clone())
+            }),
         }
+    }
+
+    /// Start from the multiplier warm start if there is one (and it is not
+    /// taken yet): its sets and λ. Returns whether it did.
+    fn warm_start(&mut self) -> bool {
+        let Some((n_set, tang, l)) = self.warm.take() else {
+            return false;
+        };
+        let stick = tang
+            .iter()
+            .zip(&n_set)
+            .filter(|(t, n)| **n && **t == Tangential::Stick)
+            .count();
+        let closed = n_set.iter().filter(|n| **n).count();
+        log::debug!(
+            "ssn: friction: the last step's sets: stick {stick}, slip {}, open {}",
+            closed - stick,
+            n_set.len() - closed
+        );
+        self.in_n = n_set;
+        self.tang = tang;
+        self.ln = l.normal;
+        self.lt = l.tangential;
+        self.last = None;
+        self.predicted = None;
+        self.fresh = false;
+        true
     }
 
     /// Form x from the last dual-space answer if it is not yet (one
@@ -890,6 +966,7 @@ impl Iterative for State<'_> {
         match self.solve_set() {
             Ok(None) => {
                 let rec = self.record(it);
+                log::debug!("ssn: friction step {it}: residual {:.3e}", rec.residual);
                 // A Tresca problem whose sets cycle (single changes walking
                 // back and forth) never settles: stop after a budget of
                 // steps without a better residual, counted, never timed.
