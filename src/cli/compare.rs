@@ -2,8 +2,8 @@
 //! of [`crate::run::compare()`], which runs every method (each CGC
 //! preconditioner a variant) on one problem and holds the agreement rules.
 
-use super::solve::{bad_input, EXIT_BAD_INPUT};
 use super::progress::progress;
+use super::solve::{bad_input, EXIT_BAD_INPUT};
 use super::SolverFlags;
 use crate::run::compare::{compare, label, CompareSpec, Event, Table};
 use crate::run::{self, Prepared};

@@ -2,8 +2,8 @@
 //! ([`crate::run`]), print the report, return the exit code
 //! (docs/problem-format.md §8).
 
-use super::SolveArgs;
 use super::progress::progress;
+use super::SolveArgs;
 use crate::post;
 use crate::qp::{MethodId, SolveOptions};
 use crate::run::{

@@ -73,7 +73,14 @@ macro_rules! deserialize_by_from_str {
     )*};
 }
 
-deserialize_by_from_str!(MethodChoice, PrecondKind, Ordering, Release, SsnPath, ByteSize);
+deserialize_by_from_str!(
+    MethodChoice,
+    PrecondKind,
+    Ordering,
+    Release,
+    SsnPath,
+    ByteSize
+);
 
 /// The release strategy of cgc and dual (docs/methods.md §4.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -569,9 +576,15 @@ mod tests {
     #[test]
     fn names_are_parsed_once_with_the_accepted_values() {
         let e = "all".parse::<Release>().unwrap_err();
-        assert!(e.contains("release = \"all\"") && e.contains("\"multiple\""), "{e}");
+        assert!(
+            e.contains("release = \"all\"") && e.contains("\"multiple\""),
+            "{e}"
+        );
         let e = "fast".parse::<SsnPath>().unwrap_err();
-        assert!(e.contains("ssn_path = \"fast\"") && e.contains("\"iterative\""), "{e}");
+        assert!(
+            e.contains("ssn_path = \"fast\"") && e.contains("\"iterative\""),
+            "{e}"
+        );
         let e = "ilu".parse::<PrecondKind>().unwrap_err();
         assert!(e.contains("\"ilu\"") && e.contains("none, jacobi"), "{e}");
         let e = "metis".parse::<Ordering>().unwrap_err();
