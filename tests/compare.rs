@@ -328,7 +328,7 @@ fn frictional_steps_are_compared_along_the_load_path() {
     let (m, opts) = run::options(
         &prep.problem,
         &SolverSection {
-            method: Some("ssn".into()),
+            method: Some("ssn".parse().unwrap()),
             ..Default::default()
         },
     )
@@ -370,7 +370,7 @@ fn frictionless_steps_compare_the_last_step_cold() {
     let (m, opts) = run::options(
         &prep.problem,
         &SolverSection {
-            method: Some("ssn".into()),
+            method: Some("ssn".parse().unwrap()),
             ..Default::default()
         },
     )
@@ -393,7 +393,7 @@ fn tangential_forces_enter_the_agreement() {
     let (m, opts) = run::options(
         &prep.problem,
         &SolverSection {
-            method: Some("ssn".into()),
+            method: Some("ssn".parse().unwrap()),
             ..Default::default()
         },
     )

@@ -26,7 +26,7 @@ fn model_file(dir: &Path, name: &str, msh: &Path, toml: &str) -> PathBuf {
 fn solve(path: &Path, method: &str) -> (Prepared, Option<Model>, QpResult) {
     let prep = run::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
     let flags = SolverSection {
-        method: Some(method.into()),
+        method: Some(method.parse().unwrap()),
         ..Default::default()
     };
     let (m, opts) = run::options(&prep.problem, &flags).unwrap();
@@ -450,7 +450,7 @@ fn a_restart_after_the_first_step_slips_as_the_uninterrupted_run() {
 fn solve_tol(path: &Path, method: &str, tol: f64) -> (Prepared, QpResult) {
     let prep = run::prepare(path, false).unwrap_or_else(|e| panic!("{e}"));
     let flags = SolverSection {
-        method: Some(method.into()),
+        method: Some(method.parse().unwrap()),
         tol: Some(tol),
         ..Default::default()
     };
@@ -694,8 +694,8 @@ fn a_punch_held_by_friction_alone_is_solved_on_one_factor() {
     let mut results = vec![];
     for (method, path) in [("ssn", None), ("ssn", Some("augmented")), ("mprgp", None)] {
         let flags = SolverSection {
-            method: Some(method.into()),
-            ssn_path: path.map(String::from),
+            method: Some(method.parse().unwrap()),
+            ssn_path: path.map(|p| p.parse().unwrap()),
             ..Default::default()
         };
         let (m, opts) = run::options(&prep.problem, &flags).unwrap();
@@ -764,8 +764,8 @@ fn the_punchs_newton_count_does_not_grow_with_the_mesh() {
         let mut results = vec![];
         for path in [None, Some("augmented")] {
             let flags = SolverSection {
-                method: Some("ssn".into()),
-                ssn_path: path.map(String::from),
+                method: Some("ssn".parse().unwrap()),
+                ssn_path: path.map(|p| p.parse().unwrap()),
                 ..Default::default()
             };
             let (m, opts) = run::options(&prep.problem, &flags).unwrap();

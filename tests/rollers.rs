@@ -12,7 +12,7 @@ mod common;
 
 fn solve(method: &str) -> (Prepared, QpResult) {
     let choice = SolverSection {
-        method: Some(method.into()),
+        method: Some(method.parse().unwrap()),
         ..SolverSection::default()
     };
     let (prep, res) = common::solve_file(&common::root().join("meshes/rollers.toml"), &choice);

@@ -366,9 +366,9 @@ fn the_nested_dissection_ordering_changes_the_factor_not_the_answer() {
         for &m in methods {
             let solve = |ordering: &str| {
                 let flags = signorini::qp::SolverSection {
-                    method: Some(m.into()),
-                    preconditioner: (m == "cgc").then(|| "cholesky".into()),
-                    ordering: Some(ordering.into()),
+                    method: Some(m.parse().unwrap()),
+                    preconditioner: (m == "cgc").then(|| "cholesky".parse().unwrap()),
+                    ordering: Some(ordering.parse().unwrap()),
                     ..Default::default()
                 };
                 let (method, opts) = run::options(&prep.problem, &flags).unwrap();

@@ -346,7 +346,7 @@ fn a_gasket_under_a_sliding_plate_balances_at_any_contrast() {
             ("preelim", None),
         ] {
             let choice = SolverSection {
-                preconditioner: pc.map(String::from),
+                preconditioner: pc.map(|p| p.parse().unwrap()),
                 ..SolverSection::default()
             };
             let (_, opts) = run::options(&prep.problem, &choice).expect("options");

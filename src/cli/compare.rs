@@ -2,6 +2,7 @@
 //! of [`crate::run::compare()`], which runs every method (each CGC
 //! preconditioner a variant) on one problem and holds the agreement rules.
 
+use super::progress::progress;
 use super::solve::{bad_input, EXIT_BAD_INPUT};
 use super::SolverFlags;
 use crate::run::compare::{compare, label, CompareSpec, Event, Table};
@@ -76,9 +77,9 @@ pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i3
     }
     let spec = CompareSpec {
         methods: a.methods.clone(),
-        solver: a.solver.section.clone(),
+        solver: a.solver.section(),
         time_limit: a.time_limit,
-        progress: !quiet,
+        progress: progress(quiet),
     };
     let name = &prep.problem.name;
     let mut report = |e: Event<'_>| {

@@ -41,7 +41,7 @@ pub fn run(a: &ExportArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32
     let spec = ExportSpec {
         dir: a.qp.clone(),
         solution: a.solution,
-        solver: a.solver.section.clone(),
+        solver: a.solver.section(),
     };
     let r = match run::export(&prep, &spec) {
         Ok(r) => r,

@@ -3,6 +3,8 @@
 //! yardstick) and its report printed as one JSON line.
 
 use super::solve::bad_input;
+use crate::linalg::ordering::Ordering;
+use crate::qp::ByteSize;
 use crate::run::{self, LimitSpec};
 use clap::Args;
 use std::path::PathBuf;
@@ -22,10 +24,10 @@ pub struct LimitArgs {
     pub repeat: usize,
     /// amd | nested-dissection; overrides [solver] ordering (docs/methods.md §3).
     #[arg(long)]
-    pub ordering: Option<String>,
+    pub ordering: Option<Ordering>,
     /// Largest factor allowed, e.g. "8 GiB"; overrides [solver] memory_limit.
     #[arg(long)]
-    pub memory_limit: Option<String>,
+    pub memory_limit: Option<ByteSize>,
 }
 
 /// A count of at least 1 (`--repeat 0` would time nothing).
@@ -43,8 +45,8 @@ pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32
     };
     let spec = LimitSpec {
         repeat: a.repeat,
-        ordering: a.ordering.clone(),
-        memory_limit: a.memory_limit.clone(),
+        ordering: a.ordering,
+        memory_limit: a.memory_limit,
     };
     match run::limit(&prep, &spec) {
         Ok(r) => {

@@ -10,6 +10,8 @@ pub mod limit;
 pub mod mesh;
 pub mod pack;
 pub mod plot;
+pub mod progress;
+pub mod section;
 pub mod solve;
 
 use clap::{Args, Parser, Subcommand};
@@ -66,10 +68,17 @@ pub enum Command {
 #[derive(Args, Debug, Clone, Default)]
 pub struct SolverFlags {
     #[command(flatten)]
-    pub section: crate::qp::SolverSection,
+    pub flags: section::SectionFlags,
     /// Exit 3 when the KKT certificate fails its target (or any warning).
     #[arg(long)]
     pub strict: bool,
+}
+
+impl SolverFlags {
+    /// The `[solver]` entries given on the command line.
+    pub fn section(&self) -> crate::qp::SolverSection {
+        (&self.flags).into()
+    }
 }
 
 // clap prints these doc comments as `--help`: `[output]` stays as written.

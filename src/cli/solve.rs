@@ -2,6 +2,7 @@
 //! ([`crate::run`]), print the report, return the exit code
 //! (docs/problem-format.md §8).
 
+use super::progress::progress;
 use super::SolveArgs;
 use crate::post;
 use crate::qp::{MethodId, SolveOptions};
@@ -18,7 +19,7 @@ pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 
     let t0 = Instant::now();
     // SIGTERM/SIGINT roll the outputs back (docs/problem-format.md §6).
     run::catch_signals();
-    if let Some(target) = a.solver.section.kkt_target {
+    if let Some(target) = a.solver.flags.kkt_target {
         if !(target > 0.0 && target.is_finite()) {
             return bad_input(&format!(
                 "--kkt-target {target}: the KKT target must be a positive number"
@@ -32,11 +33,11 @@ pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };
-    let (method, mut opts) = match run::options(&prep.problem, &a.solver.section) {
+    let (method, mut opts) = match run::options(&prep.problem, &a.solver.section()) {
         Ok(x) => x,
         Err(e) => return bad_input(&e),
     };
-    opts.progress = !quiet;
+    opts.progress = progress(quiet);
     match solve(a, quiet, t0, &prep, method, &opts) {
         Ok(code) => code,
         Err(e) => {

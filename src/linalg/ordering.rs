@@ -50,6 +50,24 @@ impl Ordering {
     }
 }
 
+/// An ordering's name: the one parser of the problem file's `ordering` and
+/// of `--ordering`; the error lists the names.
+impl std::str::FromStr for Ordering {
+    type Err = String;
+    fn from_str(o: &str) -> Result<Ordering, String> {
+        Ordering::parse(o).ok_or_else(|| {
+            format!(
+                "ordering = \"{o}\": expected {}",
+                Ordering::NAMES
+                    .iter()
+                    .map(|n| format!("\"{n}\""))
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            )
+        })
+    }
+}
+
 /// `ordering` of the symmetric pattern whose lower (or upper) triangle is
 /// `sym` (diagonal entries allowed and ignored; each off-diagonal pair once).
 pub fn order(

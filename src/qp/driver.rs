@@ -87,14 +87,12 @@ impl<'a> Context<'a> {
         }
     }
 
-    /// The executor of method `name`: MAXIT, the caller's deadline and a
-    /// progress bar labelled with the caller's label (or `name`).
+    /// The executor of method `name`: MAXIT, the caller's deadline and
+    /// progress display, labelled with the caller's label (or `name`).
     pub fn executor(&self, name: &str) -> Executor {
-        let label = self.opts.label.clone().unwrap_or_else(|| name.to_string());
-        let mut e = Executor::new(
-            self.settings.max_iter,
-            self.opts.progress.then_some(label.as_str()),
-        );
+        let label = self.opts.label.as_deref().unwrap_or(name);
+        let progress = self.opts.progress.as_ref().map(|p| p.start(label));
+        let mut e = Executor::new(self.settings.max_iter, progress);
         e.deadline = self.opts.deadline;
         e.stop = self.opts.stop;
         for o in &self.opts.observers {

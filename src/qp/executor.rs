@@ -1,9 +1,10 @@
 //! One loop for every iterative method (the `argmin` pattern): a method
 //! implements one iteration ([`Iterative::step`]); the [`Executor`] owns the
-//! MAXIT test, NaN/stagnation guards, the iteration log and progress output.
+//! MAXIT test, NaN/stagnation guards, the iteration log and the observers
+//! (the caller's progress display among them, [`ProgressDisplay`]).
 
 use crate::qp::{Failure, IterRecord, Status};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// What one iteration reports.
 pub enum Step {
@@ -32,50 +33,14 @@ pub trait Observer {
     fn finish(&mut self) {}
 }
 
-/// A progress bar (indicatif) on stderr for solves longer than one second:
-/// iteration, residual, active-set size, inner iterations. Hidden when stderr
-/// is not a terminal.
-pub struct Progress {
-    start: Instant,
-    name: String,
-    bar: Option<indicatif::ProgressBar>,
-}
-
-impl Progress {
-    pub fn new(name: &str) -> Progress {
-        Progress {
-            start: Instant::now(),
-            name: name.to_string(),
-            bar: None,
-        }
-    }
-}
-
-impl Observer for Progress {
-    fn observe(&mut self, rec: &IterRecord) {
-        if self.bar.is_none() && self.start.elapsed() > Duration::from_secs(1) {
-            let bar = indicatif::ProgressBar::new_spinner();
-            if let Ok(style) =
-                indicatif::ProgressStyle::with_template("{spinner} {prefix} [{elapsed}] {msg}")
-            {
-                bar.set_style(style);
-            }
-            bar.set_prefix(self.name.clone());
-            bar.enable_steady_tick(Duration::from_millis(200));
-            self.bar = Some(bar);
-        }
-        if let Some(bar) = &self.bar {
-            bar.set_message(format!(
-                "iteration {}  residual {:.3e}  active {}  inner {}",
-                rec.iter, rec.residual, rec.active, rec.inner
-            ));
-        }
-    }
-    fn finish(&mut self) {
-        if let Some(bar) = self.bar.take() {
-            bar.finish_and_clear();
-        }
-    }
+/// The caller's display of a solve's progress (the command line's spinner
+/// on stderr, `cli::progress`): it makes a fresh [`Observer`] of each
+/// executor's iterations. Only the display may read the clock; no decision
+/// of a method depends on it.
+pub trait ProgressDisplay: Send + Sync + std::fmt::Debug {
+    /// The observer of the iterations of `label` (the caller's label, or
+    /// the method's name), made when its executor is.
+    fn start(&self, label: &str) -> Box<dyn Observer>;
 }
 
 /// Iterations without a new best residual (by a relative 1e-9) after which
@@ -97,14 +62,12 @@ pub struct Executor {
 }
 
 impl Executor {
-    pub fn new(max_iter: usize, progress: Option<&str>) -> Executor {
-        let mut observers: Vec<Box<dyn Observer>> = vec![];
-        if let Some(name) = progress {
-            observers.push(Box::new(Progress::new(name)));
-        }
+    /// An executor of at most `max_iter` iterations, observed by `progress`
+    /// (a [`ProgressDisplay`]'s observer) if any.
+    pub fn new(max_iter: usize, progress: Option<Box<dyn Observer>>) -> Executor {
         Executor {
             max_iter,
-            observers,
+            observers: progress.into_iter().collect(),
             log: vec![],
             log_limit: 10_000,
             deadline: None,

@@ -109,9 +109,11 @@ pub enum MethodChoice {
     Named(MethodId),
 }
 
-impl MethodChoice {
-    /// `"auto"` or a method's name; the error lists what is accepted.
-    pub fn parse(name: &str) -> Result<MethodChoice, String> {
+/// `"auto"` or a method's name: the one parser of the problem file's
+/// `method` and of `--method`; the error lists what is accepted.
+impl std::str::FromStr for MethodChoice {
+    type Err = String;
+    fn from_str(name: &str) -> Result<MethodChoice, String> {
         if name == "auto" {
             return Ok(MethodChoice::Auto);
         }
@@ -124,7 +126,9 @@ impl MethodChoice {
                 )
             })
     }
+}
 
+impl MethodChoice {
     /// The method that solves the problem.
     pub fn resolve(self) -> MethodId {
         match self {
@@ -227,8 +231,9 @@ mod tests {
             assert_eq!(m.method().id(), m, "{m}");
         }
         assert_eq!(MethodId::parse("auto"), None);
-        assert_eq!(MethodChoice::parse("auto"), Ok(MethodChoice::Auto));
-        let e = MethodChoice::parse("cgd").unwrap_err();
+        assert_eq!("auto".parse(), Ok(MethodChoice::Auto));
+        assert_eq!("asm".parse(), Ok(MethodChoice::Named(MethodId::Asm)));
+        let e = "cgd".parse::<MethodChoice>().unwrap_err();
         assert!(e.contains("auto, cgc") && e.contains("ssn"), "{e}");
         assert_eq!(MethodChoice::Auto.resolve(), MethodId::Ssn);
     }

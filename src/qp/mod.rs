@@ -38,8 +38,9 @@ mod tests_methods;
 pub use crate::linalg::sparse::{self, Csr};
 pub use coulomb::CoulombRelaxation;
 pub use driver::{Context, Note, Output};
+pub use executor::{Observer, ProgressDisplay};
 pub use method::{Capabilities, FallbackCause, Method, MethodChoice, MethodId};
-pub use settings::{Settings, SolverSection};
+pub use settings::{ByteSize, Release, Settings, SolverSection};
 
 /// min ½xᵀCx − xᵀd subject to Ax ≤ g  (methods.md §2.8 with b = g).
 #[derive(Debug, Clone, Default)]
@@ -365,9 +366,10 @@ pub type SharedObserver = std::rc::Rc<std::cell::RefCell<dyn executor::Observer>
 #[derive(Clone, Default)]
 pub struct SolveOptions {
     pub settings: Settings,
-    /// Print progress to stderr for long solves.
-    pub progress: bool,
-    /// Prefix of the progress line (e.g. the variant in `compare`).
+    /// The caller's display of the iterations (the command line's spinner
+    /// on stderr for long solves); None: none.
+    pub progress: Option<std::sync::Arc<dyn executor::ProgressDisplay>>,
+    /// Label of the progress display (e.g. the variant in `compare`).
     pub label: Option<String>,
     /// Stop with [`Failure::TimeLimit`] after this instant
     /// (`compare --time-limit`; a budget the user sets, never a decision
@@ -390,7 +392,7 @@ pub struct SolveOptions {
     /// stick / slip / open sets and the first slip bound μλ_n of its
     /// Coulomb loop (docs/methods.md §9.5).
     pub lambda0: Option<Multipliers>,
-    /// Observers of every iteration record, besides the progress bar.
+    /// Observers of every iteration record, besides the progress display.
     pub observers: Vec<SharedObserver>,
 }
 

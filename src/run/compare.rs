@@ -15,9 +15,13 @@ use super::steps::{Run, Step, Verdict};
 use super::{RunError, StepObserver};
 use crate::fem::Model;
 use crate::qp::method::Certificate;
-use crate::qp::{precond::PrecondKind, registry, Kkt, MethodId, Note, QpResult, SolverSection};
+use crate::qp::{
+    precond::PrecondKind, registry, Kkt, MethodChoice, MethodId, Note, ProgressDisplay, QpResult,
+    SolverSection,
+};
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// One variant: a method and, for a preconditioned one, its preconditioner.
@@ -105,8 +109,9 @@ pub struct CompareSpec {
     /// friction); a budget too large for a [`Duration`] or an [`Instant`]
     /// is no deadline.
     pub time_limit: Option<f64>,
-    /// The methods' progress lines on stderr.
-    pub progress: bool,
+    /// The display of the methods' progress (the command line's spinner
+    /// on stderr); None: none.
+    pub progress: Option<Arc<dyn ProgressDisplay>>,
 }
 
 /// What [`compare`] reports while it runs (the CLI prints it on stderr).
@@ -310,12 +315,12 @@ fn solve_variant(
     label: String,
 ) -> Result<VariantResult, String> {
     let mut c = spec.solver.clone();
-    c.method = Some(v.method.name().to_string());
-    c.preconditioner = v.preconditioner.map(|k| k.name().to_string());
+    c.method = Some(MethodChoice::Named(v.method));
+    c.preconditioner = v.preconditioner;
     let (m, mut opts) = options(&prep.problem, &c).map_err(|e| e.to_string())?;
     // Each method pays for its own factorization: every variant gets a
     // fresh workspace (a Run makes one for its steps).
-    opts.progress = spec.progress;
+    opts.progress = spec.progress.clone();
     opts.label = Some(label);
     opts.deadline = spec.time_limit.and_then(|s| deadline(t, s));
     if path {

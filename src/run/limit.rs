@@ -7,7 +7,8 @@
 
 use super::prepare::{options, Prepared};
 use super::RunError;
-use crate::qp::SolverSection;
+use crate::linalg::ordering::Ordering;
+use crate::qp::{ByteSize, SolverSection};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -17,10 +18,10 @@ pub struct LimitSpec {
     /// Factor and solve this many times (0 counts as 1); the report holds
     /// the medians.
     pub repeat: usize,
-    /// `amd` | `nested-dissection`; overrides `[solver] ordering`.
-    pub ordering: Option<String>,
-    /// The largest factor allowed, e.g. "8 GiB"; overrides `[solver] memory_limit`.
-    pub memory_limit: Option<String>,
+    /// Overrides `[solver] ordering`.
+    pub ordering: Option<Ordering>,
+    /// The largest factor allowed; overrides `[solver] memory_limit`.
+    pub memory_limit: Option<ByteSize>,
 }
 
 /// The measurement (times in seconds, medians over `repeat`).
@@ -55,8 +56,8 @@ impl LimitReport {
 /// Factor C and solve C x = d `spec.repeat` times on `prep`'s model.
 pub fn limit(prep: &Prepared, spec: &LimitSpec) -> Result<LimitReport, RunError> {
     let flags = SolverSection {
-        ordering: spec.ordering.clone(),
-        memory_limit: spec.memory_limit.clone(),
+        ordering: spec.ordering,
+        memory_limit: spec.memory_limit,
         ..Default::default()
     };
     let settings = options(&prep.problem, &flags)?.1.settings;

@@ -361,11 +361,7 @@ pub fn options(
         msg,
     };
     let s = problem.file.solver.overlay(flags);
-    let method = match s.method.as_deref() {
-        None => MethodChoice::Auto,
-        Some(name) => MethodChoice::parse(name).map_err(bad)?,
-    }
-    .resolve();
+    let method = s.method.unwrap_or(MethodChoice::Auto).resolve();
     let settings = Settings::from_section(&s).map_err(bad)?;
     for key in s.unused_by(method) {
         log::warn!(

@@ -53,6 +53,20 @@ impl PrecondKind {
     }
 }
 
+/// A preconditioner's name: the one parser of the problem file's
+/// `preconditioner` and of `--preconditioner`; the error lists the names.
+impl std::str::FromStr for PrecondKind {
+    type Err = String;
+    fn from_str(name: &str) -> Result<PrecondKind, String> {
+        PrecondKind::parse(name).ok_or_else(|| {
+            format!(
+                "unknown preconditioner \"{name}\"; known: {}",
+                PrecondKind::ALL.map(PrecondKind::name).join(", ")
+            )
+        })
+    }
+}
+
 /// z = W⁻¹ r for an SPD W ≈ C.
 pub trait Preconditioner: Send + Sync {
     fn name(&self) -> &'static str;

@@ -638,11 +638,7 @@ fn cost_model_counts() {
 #[test]
 fn path_option() {
     let qp = two_blocks(9, 5, false);
-    let bad = crate::qp::SolverSection {
-        ssn_path: Some("diagonal".into()),
-        ..Default::default()
-    };
-    assert!(crate::qp::Settings::from_section(&bad).is_err());
+    assert!("diagonal".parse::<crate::qp::settings::SsnPath>().is_err());
     let mut o = opts();
     o.settings.ssn.path = crate::qp::settings::SsnPath::Schur;
     let (r, trace) =
