@@ -178,3 +178,33 @@ fn sparse_path_load_steps_start_from_the_last_steps_sets() {
         "the restart's last step differs from the whole run's"
     );
 }
+
+/// Issue 42 §2: mprgp with friction past 10 k unknowns says up front that
+/// it will be slow and why (tests/data/ring, 11 k unknowns, with Coulomb
+/// friction on its contacts); ssn does not.
+#[test]
+fn mprgp_with_friction_on_a_large_model_warns_up_front() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = common::root().join("tests/data/ring");
+    let model = model_variant(
+        &dir,
+        "ring.toml",
+        &[("[[contact]]\n", "[[contact]]\nfriction = 0.2\n")],
+        &d.path().join("ring_mu.toml"),
+    );
+    let m = model.display().to_string();
+    let out = d.path().join("o").display().to_string();
+    let (_, text) = run(&[
+        "solve",
+        &m,
+        "--method",
+        "mprgp",
+        "--max-iter",
+        "1",
+        "--out",
+        &out,
+    ]);
+    assert!(text.contains("expect 10–100 times ssn's time"), "{text}");
+    let (_, text) = run(&["solve", &m, "--max-iter", "1", "--out", &out]);
+    assert!(!text.contains("expect 10–100 times"), "{text}");
+}

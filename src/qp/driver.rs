@@ -379,6 +379,11 @@ pub fn run(
     opts.settings.validate().map_err(QpError::BadParameter)?;
     check_problem(qp)?;
     check_capabilities(method, qp)?;
+    if let Some(caveat) = method.capabilities().friction_caveat {
+        if qp.friction.is_some() && qp.n() > crate::qp::method::SLOW_FRICTION_DOFS {
+            log::warn!("{}: {} unknowns: {caveat}", method.id(), qp.n());
+        }
+    }
     // With friction the tangential loads a floating body carries may be held
     // by friction: the frictionless decision does not apply, the method
     // decides (docs/methods.md §9.3).

@@ -178,7 +178,16 @@ pub struct Capabilities {
     /// Starts from the caller's warm start (`SolveOptions::x0`, `active0`:
     /// load steps, restart); the others start from their own first iterate.
     pub warm_start: bool,
+    /// What a user should know before a frictional solve of more than
+    /// [`SLOW_FRICTION_DOFS`] unknowns (the driver warns up front): a
+    /// method that solves friction but far slower than ssn says why.
+    pub friction_caveat: Option<&'static str>,
 }
+
+/// Unknowns above which a method's [`Capabilities::friction_caveat`] is
+/// said before a frictional solve (bench/friction.md: mprgp 3× ssn at
+/// 4 k unknowns, 33× at 15 k, 127× at 58 k on NAFEMS 1 with μ = 0.1).
+pub const SLOW_FRICTION_DOFS: usize = 10_000;
 
 impl Default for Capabilities {
     fn default() -> Self {
@@ -189,6 +198,7 @@ impl Default for Capabilities {
             factor: Factor::Always,
             certificate: Certificate::Kkt,
             warm_start: false,
+            friction_caveat: None,
         }
     }
 }

@@ -34,6 +34,9 @@ impl Method for MprgpMethod {
         Capabilities {
             // Tresca and Coulomb on the dual with box constraints (docs/methods.md §9.2).
             friction: true,
+            friction_caveat: Some(
+                "with friction, mprgp solves every Tresca problem of the Coulomb loop by projected gradients on the dual, whose iterations grow with the mesh: expect 10–100 times ssn's time past ~10 k unknowns (NAFEMS 1 with μ = 0.1 at 58 k unknowns: 105 s against 0.8 s, BENCHMARKS.md); the default method (ssn) solves it exactly in a few Newton steps",
+            ),
             ..Default::default()
         }
     }
