@@ -46,8 +46,8 @@ impl std::ops::Deref for Dual {
 /// rows, the second their tangential rows). The problem's own rows come
 /// from [`Dual::new`]; a coarse level's ([`super::nested`]) are sums of them.
 pub(super) struct DenseDual {
-    /// H = B K⁻¹Bᵀ, 2m × 2m.
-    pub(super) h: Mat<f64>,
+    /// H = B K⁻¹Bᵀ, 2m × 2m (shared with the workspace's [`KeptDual`]).
+    pub(super) h: std::rc::Rc<Mat<f64>>,
     /// B K⁻¹d.
     pub(super) bk0: Vec<f64>,
     /// (B R)ᵢₗ by rows, 2m × k.
@@ -78,6 +78,40 @@ pub(super) struct SetSolution {
     pub(super) alpha: Vec<f64>,
     /// The rows of B in the working set's system.
     pub(super) rows: Vec<usize>,
+}
+
+/// What [`Dual::new`] derives from C, A, T and ker C alone, kept in the
+/// workspace for the next solve of the same matrices (a load step): H.
+pub(crate) struct KeptDual {
+    /// C, A and T (clones share their arrays).
+    c: Csr,
+    a: Csr,
+    t: Csr,
+    /// [`crate::linalg::cholesky::matrix_key`] of ker C's basis.
+    kernel_key: u64,
+    h: std::rc::Rc<Mat<f64>>,
+}
+
+/// The workspace slot of [`KeptDual`].
+const KEPT_DUAL_TAG: u64 = 0x7373_6e5f_6672_6963;
+
+impl KeptDual {
+    /// Whether `qp` has the matrices H was derived from: the same arrays
+    /// (a load step's model shares them), else equal values.
+    fn matches(&self, qp: &QpProblem, fr: &Friction, kernel_key: u64) -> bool {
+        let same = |x: &Csr, y: &Csr| {
+            (x.nrows == y.nrows
+                && x.ncols == y.ncols
+                && x.indptr.ptr_eq(&y.indptr)
+                && x.indices.ptr_eq(&y.indices)
+                && x.data.ptr_eq(&y.data))
+                || x == y
+        };
+        self.kernel_key == kernel_key
+            && same(&self.c, &qp.c)
+            && same(&self.a, &qp.a)
+            && same(&self.t, &fr.t)
+    }
 }
 
 impl Dual {
@@ -119,13 +153,41 @@ impl Dual {
             );
             return Ok(None);
         }
+        let t0 = std::time::Instant::now();
         let fac = ws.cholesky_rows(&qp.c, &qp.kernel, &rb)?;
+        let t_fac = t0.elapsed().as_secs_f64();
         let skip = || {
             log::debug!("ssn: friction: the sparse path: the bordered factor gives no dense H; no coarse start")
         };
-        let Some(h) = fac.border_inverse(&b) else {
-            skip();
-            return Ok(None);
+        // H depends on C, A, T and ker C alone: a load step of the same
+        // model takes the last step's (the same bits a fresh one has).
+        let kernel_key = crate::linalg::cholesky::matrix_key(&[], &qp.kernel);
+        let kept = ws
+            .kept::<KeptDual>(KEPT_DUAL_TAG)
+            .filter(|k| k.matches(qp, fr, kernel_key));
+        let h = match kept {
+            Some(k) => {
+                log::debug!("ssn: friction: H of the last solve of the same matrices");
+                k.h.clone()
+            }
+            None => {
+                let Some(h) = fac.border_inverse(&b) else {
+                    skip();
+                    return Ok(None);
+                };
+                let h = std::rc::Rc::new(h);
+                ws.keep(
+                    KEPT_DUAL_TAG,
+                    std::rc::Rc::new(KeptDual {
+                        c: qp.c.clone(),
+                        a: qp.a.clone(),
+                        t: fr.t.clone(),
+                        kernel_key,
+                        h: h.clone(),
+                    }),
+                );
+                h
+            }
         };
         let Some(fwd) = fac.forward(&qp.d) else {
             skip();
@@ -139,6 +201,10 @@ impl Dual {
             .map(|i| r.iter().map(|rl| b.row_dot(i, rl)).collect())
             .collect();
         let e = r.iter().map(|rl| dot(rl, &qp.d)).collect();
+        log::debug!(
+            "ssn: friction: dual form: bordered factor {t_fac:.3} s, H and B K⁻¹d {:.3} s",
+            t0.elapsed().as_secs_f64() - t_fac
+        );
         let hmax = (0..2 * m).fold(0.0f64, |a, j| a.max(h[(j, j)]));
         let null = (0..2 * m).map(|j| !(h[(j, j)] > NULL_ROW * hmax)).collect();
         Ok(Some(Dual {

@@ -359,7 +359,7 @@ fn aggregate(d: &DenseDual, rows: &Rows, groups: Vec<Vec<usize>>) -> Level {
     };
     Level {
         dense: DenseDual {
-            h,
+            h: std::rc::Rc::new(h),
             bk0,
             br,
             e: d.e.clone(),
@@ -389,7 +389,7 @@ mod tests {
             }
         });
         let d = DenseDual {
-            h,
+            h: std::rc::Rc::new(h),
             bk0: (0..2 * m).map(|j| j as f64).collect(),
             br: vec![vec![]; 2 * m],
             e: vec![],
