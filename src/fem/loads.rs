@@ -9,7 +9,7 @@
 //! elimination) are kept for the reactions R = K u − f.
 
 use super::conditions::PointDofs;
-use super::element;
+use super::element::ElementKind;
 use super::stiffness::Materials;
 use super::topology::{dim_name, group_names, Topology};
 use super::{FemError, Model};
@@ -31,15 +31,15 @@ pub(super) fn nodal_loads(
         dofs,
         nodal: gravity(topo, mats),
         d,
-        axi: false,
+        kind: mats.kind,
     };
-    loads.axi = mats.axi.is_some();
-    loads.add_tractions(mesh, topo, problem, mats.th)?;
-    loads.add_point_forces(mesh, topo, problem, mats.th)?;
+    loads.add_tractions(mesh, topo, problem)?;
+    loads.add_point_forces(mesh, topo, problem)?;
     Ok(loads.nodal)
 }
 
-/// Gravity on each point: th |T|/3 ρ g per vertex, in triangle order.
+/// The body loads on each point: th |T|/3 ρ g per vertex (with the
+/// centrifugal load per radian when axisymmetric), in triangle order.
 fn gravity(topo: &Topology, mats: &Materials) -> Vec<[f64; 2]> {
     let mut loads = vec![[0.0f64; 2]; topo.points.len()];
     for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
@@ -48,19 +48,11 @@ fn gravity(topo: &Topology, mats: &Materials) -> Vec<[f64; 2]> {
             topo.points[tri[1]],
             topo.points[tri[2]],
         ];
-        if let Some((_, rw2)) = &mats.axi {
-            for (a, &p) in tri.iter().enumerate() {
-                let f = element::axi_body_load(&pts, a, mats.bforce[mi as usize], rw2[mi as usize]);
-                loads[p][0] += f[0];
-                loads[p][1] += f[1];
-            }
-            continue;
-        }
-        let w = mats.th * element::area2(&pts) / 6.0;
-        let fb = mats.bforce[mi as usize];
-        for &p in tri {
-            loads[p][0] += w * fb[0];
-            loads[p][1] += w * fb[1];
+        let (fb, c) = (mats.bforce[mi as usize], mats.spin[mi as usize]);
+        for (a, &p) in tri.iter().enumerate() {
+            let f = mats.kind.nodal_body_load(&pts, a, fb, c);
+            loads[p][0] += f[0];
+            loads[p][1] += f[1];
         }
     }
     loads
@@ -76,7 +68,7 @@ pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<()
     let err = |msg: String| FemError::new(&problem.path, msg);
     let g = f.model.gravity.unwrap_or([0.0, 0.0]);
     let w = f.model.omega.unwrap_or(0.0);
-    let axi = f.model.plane.is_axisymmetric();
+    let has_axis = ElementKind::of(&f.model).has_axis();
     let mut r_max = vec![0.0f64; topo.material_names.len()];
     for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
         for &p in tri {
@@ -97,7 +89,7 @@ pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<()
                 num(m.rho)
             )));
         }
-        if axi && w != 0.0 {
+        if has_axis && w != 0.0 {
             let c = m.rho * w * w * r_max[mi];
             if !(c <= MAX_MAGNITUDE) {
                 return Err(err(format!(
@@ -117,7 +109,7 @@ pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<()
 /// on the axis r = 0: it carries no area there (∫ N r ds = 0 on every
 /// segment), so it adds no load at all.
 pub(super) fn warn_axis_tractions(mesh: &Mesh, problem: &Problem) {
-    if !problem.file.model.plane.is_axisymmetric() {
+    if !ElementKind::of(&problem.file.model).has_axis() {
         return;
     }
     for (i, tr) in problem.file.traction.iter().enumerate() {
@@ -146,8 +138,8 @@ struct Loads<'a> {
     dofs: &'a [PointDofs],
     nodal: Vec<[f64; 2]>,
     d: &'a mut [f64],
-    /// Axisymmetric: tractions weighted by r (∫ N_a P r ds, per radian).
-    axi: bool,
+    /// The measure of the tractions: ½ th ℓ, or ∫ N_a r ds per radian.
+    kind: ElementKind,
 }
 
 impl Loads<'_> {
@@ -168,7 +160,6 @@ impl Loads<'_> {
         mesh: &Mesh,
         topo: &Topology,
         problem: &Problem,
-        th: f64,
     ) -> Result<(), FemError> {
         for (i, tr) in problem.file.traction.iter().enumerate() {
             let what = format!("[[traction]] #{} (on = \"{}\")", i + 1, tr.on);
@@ -195,18 +186,10 @@ impl Loads<'_> {
                         [pn * nrm[0], pn * nrm[1]]
                     }
                 };
-                // Axisymmetric: ∫ N_p r ds = ℓ(2r_p + r_q)/6 per radian
-                // (docs/methods.md §10); th = 1 there.
-                let w = if self.axi {
-                    let (rp, rq) = if v == a {
-                        (pa[0], pb[0])
-                    } else {
-                        (pb[0], pa[0])
-                    };
-                    len * (2.0 * rp + rq) / 6.0
-                } else {
-                    0.5 * th * len
-                };
+                // ½ th ℓ, or ∫ N_p r ds = ℓ(2r_p + r_q)/6 per radian
+                // (docs/methods.md §10).
+                let (xp, xq) = if v == a { (pa, pb) } else { (pb, pa) };
+                let w = self.kind.traction_weight(len, xp, xq);
                 self.add(p, [w * pv[0], w * pv[1]]);
             }
         }
@@ -220,8 +203,8 @@ impl Loads<'_> {
         mesh: &Mesh,
         topo: &Topology,
         problem: &Problem,
-        th: f64,
     ) -> Result<(), FemError> {
+        let th = self.kind.thickness();
         for (i, fo) in problem.file.force.iter().enumerate() {
             let what = format!("[[force]] #{} (on = \"{}\")", i + 1, fo.on);
             let g = mesh

@@ -29,8 +29,9 @@ pub use conditions::PointDofs;
 pub use topology::Topology;
 
 use crate::mesh::Mesh;
-use crate::problem::{Plane, Problem};
+use crate::problem::Problem;
 use crate::qp::QpProblem;
+pub use element::ElementKind;
 use std::path::{Path, PathBuf};
 
 /// How [`build_with`] runs; the default (and [`build`]) assembles on
@@ -58,8 +59,9 @@ pub struct Model {
     pub qp_rows: Vec<usize>,
     /// Kernel vectors and the body each belongs to.
     pub kernel_body: Vec<u32>,
-    pub plane: Plane,
-    pub thickness: f64,
+    /// The kind of model: plane strain, plane stress (with its thickness)
+    /// or axisymmetric.
+    pub kind: ElementKind,
     /// The Dirichlet and slip conditions r·u = v, kept for the reactions:
     /// (point, unit direction r, index into `cond_groups`).
     pub conditions: Vec<(usize, [f64; 2], u32)>,
@@ -121,7 +123,7 @@ impl Model {
 
     /// The effective thickness for forces → pressures (1 in plane strain).
     pub fn t_eff(&self) -> f64 {
-        self.plane.t_eff(self.thickness)
+        self.kind.thickness()
     }
 }
 
@@ -151,15 +153,14 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     lap.lap("loads");
     let (a, g, qp_rows) = contact::reduced_rows(mesh, &topo, &dofs, n, problem)?;
     lap.lap("contact rows");
-    let t_eff = problem.file.model.plane.t_eff(problem.file.model.thickness);
+    let kind = ElementKind::of(&problem.file.model);
+    let t_eff = kind.thickness();
     let conditions = conds.list();
     let symmetry_rows = friction::symmetry_rows(&topo, &dofs, &conditions, &conds.groups, problem);
     let friction = friction::build(&topo, &dofs, n, problem, &qp_rows, t_eff, &symmetry_rows)?;
     lap.lap("friction rows");
-    let axi = problem.file.model.plane.is_axisymmetric();
-    let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n, axi);
+    let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n, kind);
     let near = rigid::near_kernel(&topo, &dofs, n);
-    let f = &problem.file;
     let model = Model {
         topo: std::sync::Arc::new(topo),
         dofs,
@@ -174,8 +175,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
         },
         qp_rows,
         kernel_body,
-        plane: f.model.plane,
-        thickness: f.model.thickness,
+        kind,
         conditions,
         cond_groups: conds.groups,
         loads,

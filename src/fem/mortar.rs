@@ -167,7 +167,7 @@ impl Topology {
         let mut dj: HashMap<(usize, u32), f64> = HashMap::new();
         let mut mj: HashMap<(usize, u32), BTreeMap<usize, f64>> = HashMap::new();
         let mut gj: HashMap<(usize, u32), f64> = HashMap::new();
-        let axi = problem.file.model.plane.is_axisymmetric();
+        let kind = super::element::ElementKind::of(&problem.file.model);
         let mut body_sizes: Option<Vec<f64>> = None;
         for &(a, b, sb, ns) in ssegs {
             let geom = SlaveGeom {
@@ -182,7 +182,7 @@ impl Topology {
             // Axisymmetric: every integral carries r (per radian; the dual
             // basis is then biorthogonal in the r-weighted product), so a
             // segment on the axis has no weight (docs/methods.md §10).
-            let rw = |s: f64| if axi { geom.point(s)[0] } else { 1.0 };
+            let rw = |s: f64| kind.line_density(geom.point(s));
             if pieces.is_empty() {
                 continue;
             }

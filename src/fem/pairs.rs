@@ -11,6 +11,7 @@
 
 use super::contact::{ContactRow, RowKind};
 use super::edges::NONE32;
+use super::element::ElementKind;
 use super::topology::{curve_group, Topology};
 use super::FemError;
 use crate::mesh::{Mesh, PhysicalGroup};
@@ -141,10 +142,10 @@ impl Topology {
             let n = self.outward_normal(mesh, tk, a, b);
             let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
             let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
-            let axi = problem.file.model.plane.is_axisymmetric();
+            let kind = ElementKind::of(&problem.file.model);
             for (v, w) in [
-                (a, trib_weight(axi, len, pa, pb)),
-                (b, trib_weight(axi, len, pb, pa)),
+                (a, kind.boundary_weight(len, pa, pb)),
+                (b, kind.boundary_weight(len, pb, pa)),
             ] {
                 let e = acc.entry((v, k, l)).or_insert(Acc {
                     normals: vec![],
@@ -360,12 +361,12 @@ impl Topology {
         let mut stack = vec![];
         // Slave nodes with owner body and tributary length.
         let mut slave: HashMap<(usize, u32), f64> = HashMap::new();
-        let axi = problem.file.model.plane.is_axisymmetric();
+        let kind = ElementKind::of(&problem.file.model);
         for &(a, b, body, _) in ssegs {
             let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
             let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
-            *slave.entry((a, body)).or_insert(0.0) += trib_weight(axi, len, pa, pb);
-            *slave.entry((b, body)).or_insert(0.0) += trib_weight(axi, len, pb, pa);
+            *slave.entry((a, body)).or_insert(0.0) += kind.boundary_weight(len, pa, pb);
+            *slave.entry((b, body)).or_insert(0.0) += kind.boundary_weight(len, pb, pa);
         }
         let mut snodes: Vec<((usize, u32), f64)> = slave.into_iter().collect();
         snodes.sort_unstable_by_key(|((v, b), _)| (*b, mesh.node_tags[*v]));
@@ -468,17 +469,6 @@ fn segment_set(segs: &[MasterSeg]) -> Segments {
 /// does not depend on hashing).
 fn shared(a: &Segments, b: &Segments) -> Option<(usize, usize)> {
     a.intersection(b).min().copied()
-}
-
-/// The tributary weight of node `x` on a segment (x, y) of length `len`:
-/// ∫ N_x ds = ℓ/2, or ∫ N_x r ds = ℓ(2r_x + r_y)/6 per radian when
-/// axisymmetric (docs/methods.md §10).
-fn trib_weight(axi: bool, len: f64, x: [f64; 2], y: [f64; 2]) -> f64 {
-    if axi {
-        len * (2.0 * x[0] + y[0]) / 6.0
-    } else {
-        len / 2.0
-    }
 }
 
 /// Orthogonal projection of `xs` on the segment (pa, pb): (distance, ξ) if

@@ -9,6 +9,7 @@
 //! (translation direction or centre of rotation).
 
 use super::conditions::{normalize, Cond, PointDofs};
+use super::element::ElementKind;
 use super::topology::Topology;
 use super::{FemError, Model};
 use crate::linalg::dense::sym_eigen;
@@ -57,14 +58,15 @@ pub(super) fn rigid_modes(
     dofs: &[PointDofs],
     conds: &[Vec<Cond>],
     n: usize,
-    axi: bool,
+    kind: ElementKind,
 ) -> (Vec<Vec<f64>>, Vec<u32>) {
     let nb = topo.nbodies;
     let basis = RigidBasis::new(topo);
     // Axisymmetric bodies move rigidly along the axis only (a radial
     // translation strains the hoop, u_r/r ≠ 0; docs/methods.md §10): the
     // other two motions are left out of the search below.
-    let skip = |i: usize| axi && i != 1;
+    let modes = kind.rigid_modes();
+    let skip = |i: usize| !modes[i];
     // GᵀG per body (3×3) from every condition row.
     let mut gtg = vec![[[0.0f64; 3]; 3]; nb];
     for (p, cs) in conds.iter().enumerate() {

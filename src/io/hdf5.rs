@@ -94,18 +94,26 @@ pub struct Checkpoint {
 /// Root attributes that are not user strings.
 const RESERVED_ROOT_ATTRS: [&str; 4] = ["plane_strain", "last_step", "axisymmetric", "model"];
 
-/// The root attribute `model`: "plane_strain", "plane_stress" or
-/// "axisymmetric". `plane_strain` (1 when the stress has a fourth
-/// component, σzz or, axisymmetric, σθθ) alone reads as plane strain for
-/// an axisymmetric model; readers of the kind use this one.
-pub(crate) fn model_kind(mesh: &OutMesh) -> &'static str {
-    if mesh.axisymmetric {
-        "axisymmetric"
-    } else if mesh.plane_strain {
-        "plane_strain"
-    } else {
-        "plane_stress"
+/// The root attributes of the mesh's kind: `plane_strain` (1 when the
+/// stress has a fourth component, σzz or, axisymmetric, σθθ), `model`
+/// ("plane_strain", "plane_stress" or "axisymmetric"; `plane_strain` alone
+/// reads as plane strain for an axisymmetric model, readers of the kind
+/// use this one) when `with_model`, and `axisymmetric` = 1 when it is.
+fn set_kind_attrs(
+    ctx: &Ctx,
+    root: &Group,
+    kind: crate::fem::ElementKind,
+    with_model: bool,
+) -> Result<(), IoError> {
+    let (plane_strain, axisymmetric) = kind.file_flags();
+    set_attr_scalar(ctx, root, "plane_strain", &plane_strain)?;
+    if with_model {
+        set_attr_str(ctx, root, "model", kind.model_name())?;
     }
+    if let Some(a) = axisymmetric {
+        set_attr_scalar(ctx, root, "axisymmetric", &a)?;
+    }
+    Ok(())
 }
 
 /// Error context: the file the user named plus an HDF5 location.
@@ -293,11 +301,7 @@ pub fn create_checkpoint(
             for (k, v) in attrs {
                 set_attr_str(&ctx, root, k, v)?;
             }
-            set_attr_scalar(&ctx, root, "plane_strain", &u8::from(mesh.plane_strain))?;
-            set_attr_str(&ctx, root, "model", model_kind(mesh))?;
-            if mesh.axisymmetric {
-                set_attr_scalar(&ctx, root, "axisymmetric", &1u8)?;
-            }
+            set_kind_attrs(&ctx, root, mesh.kind, true)?;
             let g = file.create_group("mesh").map_err(ctx.h5("/mesh"))?;
             write_mesh(&ctx, &g, mesh)?;
         }
@@ -818,8 +822,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
     }
     let g = file.group("mesh").map_err(|e| linked(&ctx, "/mesh", e))?;
     let mut mesh = read_mesh(&ctx.of_file(&g), &g)?;
-    mesh.plane_strain = plane_strain;
-    mesh.axisymmetric = axisymmetric;
+    mesh.kind = crate::fem::ElementKind::from_file_flags(plane_strain, axisymmetric);
 
     let mut steps = Vec::new();
     let mut friction = Vec::new();
@@ -884,8 +887,7 @@ fn read_mesh(ctx: &Ctx, g: &Group) -> Result<OutMesh, IoError> {
         triangles,
         material,
         material_names,
-        plane_strain: false,
-        axisymmetric: false,
+        kind: crate::fem::ElementKind::from_file_flags(false, false),
         contact: ContactGeometry {
             points: pairs(&cpoints),
             first,

@@ -27,11 +27,10 @@ pub struct OutMesh {
     /// Material index of each triangle (into `material_names`).
     pub material: Vec<u32>,
     pub material_names: Vec<String>,
-    /// Plane strain (true) writes σzz too.
-    pub plane_strain: bool,
-    /// Axisymmetric (x = r, y = z): the 4th stress component is the hoop
-    /// stress σθθ, named "stt" (docs/problem-format.md §6).
-    pub axisymmetric: bool,
+    /// The kind of model: which stress components are written (σzz in
+    /// plane strain, the hoop stress σθθ named "stt" when axisymmetric,
+    /// docs/problem-format.md §6) and under which names.
+    pub kind: crate::fem::ElementKind,
     /// The contact constraints: one contact point per constraint row.
     pub contact: ContactGeometry,
 }

@@ -142,7 +142,8 @@ const CHUNK: usize = 1 << 15;
 /// C_e u_e summed at each vertex. Elements are computed in parallel chunk
 /// by chunk and summed into the points in element order: the same bits as
 /// the sequential loop on any number of threads, and as
-/// [`element::stress`] and [`element::stiffness_in`] element by element.
+/// [`ElementKind::stress`](element::ElementKind::stress) and
+/// [`ElementKind::stiffness`](element::ElementKind::stiffness) element by element.
 pub(crate) fn element_pass(
     model: &Model,
     problem: &Problem,
@@ -152,15 +153,12 @@ pub(crate) fn element_pass(
     use rayon::prelude::*;
     let t = &model.topo;
     let f = &problem.file;
-    let th = model.t_eff();
-    // Material and D once per material index, not a map lookup per element.
-    let mats: Vec<(&crate::problem::Material, [[f64; 3]; 3])> = t
+    let kind = model.kind;
+    // D once per material index, not a map lookup per element.
+    let mats: Vec<element::MaterialMatrix> = t
         .material_names
         .iter()
-        .map(|m| {
-            let mat = &f.materials[m];
-            (mat, element::d_matrix(mat, f.model.plane))
-        })
+        .map(|m| kind.material(&f.materials[m]))
         .collect();
     let mut stress = Vec::with_capacity(if stresses { t.triangles.len() } else { 0 });
     let mut ku = vec![[0.0f64; 2]; t.points.len()];
@@ -169,7 +167,7 @@ pub(crate) fn element_pass(
         tris.par_iter()
             .zip(tmat.par_iter())
             .map(|(tri, &mi)| {
-                let (m, d) = &mats[mi as usize];
+                let d = &mats[mi as usize];
                 let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
                 let ue = [
                     u[tri[0]][0],
@@ -180,11 +178,11 @@ pub(crate) fn element_pass(
                     u[tri[2]][1],
                 ];
                 let s = if stresses {
-                    element::stress(&p, d, m, f.model.plane, &ue)
+                    kind.stress(&p, d, &ue)
                 } else {
                     [0.0; 4]
                 };
-                let ke = element::stiffness_in(&p, m, d, model.plane, th);
+                let ke = kind.stiffness(&p, d);
                 let mut fe = [[0.0f64; 2]; 3];
                 for (a, fa) in fe.iter_mut().enumerate() {
                     for (k, fak) in fa.iter_mut().enumerate() {

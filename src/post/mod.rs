@@ -41,9 +41,7 @@ pub fn out_mesh(model: &Model, mesh: &crate::mesh::Mesh) -> OutMesh {
         triangles: t.triangles.clone(),
         material: t.tri_material.clone(),
         material_names: t.material_names.clone(),
-        // Axisymmetric stresses have four components too (σθθ the 4th).
-        plane_strain: model.plane != crate::problem::Plane::Stress,
-        axisymmetric: model.plane.is_axisymmetric(),
+        kind: model.kind,
         contact,
     }
 }
@@ -106,11 +104,8 @@ pub fn step_output_with_forces(
         reaction: std::mem::take(&mut forces.point_reaction),
         von_mises: {
             use rayon::prelude::*;
-            if model.plane.is_axisymmetric() {
-                stress.par_iter().map(element::von_mises_axi).collect()
-            } else {
-                stress.par_iter().map(element::von_mises).collect()
-            }
+            let kind = model.kind;
+            stress.par_iter().map(|s| kind.von_mises(s)).collect()
         },
         principal: {
             use rayon::prelude::*;

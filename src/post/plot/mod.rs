@@ -28,6 +28,7 @@ pub use contact::{arc_lengths, interface_chains, Tangential};
 pub use mesh::auto_scale;
 pub use style::{fmt_num, viridis};
 
+use crate::fem::ElementKind;
 use crate::io::atomic::write_atomic_bytes;
 use crate::io::hdf5::{read_checkpoint, Checkpoint};
 use crate::io::{OutMesh, StepOutput};
@@ -144,24 +145,30 @@ impl Field {
     /// (`szz` drawing the fourth component would label σθθ as σzz). The
     /// axisymmetric names on a plane checkpoint are refused, naming the
     /// plane one.
-    pub fn for_model(self, axisymmetric: bool) -> Result<Field, PlotError> {
-        Ok(match (self, axisymmetric) {
-            (Field::Sxx, true) => Field::Srr,
-            (Field::Syy | Field::Szz, true) => Field::SzzAxial,
-            (Field::Sxy, true) => Field::Srz,
-            (Field::Srr | Field::Srz | Field::Stt, false) => {
-                let plane = match self {
-                    Field::Srr => "sxx",
-                    Field::Srz => "sxy",
-                    _ => "szz",
-                };
-                return Err(err(format!(
-                    "field \"{}\" is a stress of an axisymmetric model; this checkpoint is plane: use \"{plane}\"",
-                    self.name()
-                )));
-            }
-            (f, _) => f,
-        })
+    pub fn for_model(self, kind: ElementKind) -> Result<Field, PlotError> {
+        match kind.stress_component(self.name()) {
+            None => Ok(self),
+            Some(Ok(i)) => Ok(Field::stress(i, kind.stress_names()[i])),
+            Some(Err(plane)) => Err(err(format!(
+                "field \"{}\" is a stress of an axisymmetric model; this checkpoint is plane: use \"{plane}\"",
+                self.name()
+            ))),
+        }
+    }
+
+    /// The stress field of component `i` named `name` (the name the
+    /// checkpoint's kind gives it).
+    fn stress(i: usize, name: &str) -> Field {
+        match (i, name) {
+            (0, "srr") => Field::Srr,
+            (1, "szz") => Field::SzzAxial,
+            (2, "srz") => Field::Srz,
+            (3, "stt") => Field::Stt,
+            (0, _) => Field::Sxx,
+            (1, _) => Field::Syy,
+            (2, _) => Field::Sxy,
+            _ => Field::Szz,
+        }
     }
 
     /// The field named `s`, or an error listing the known names.
@@ -402,7 +409,7 @@ pub fn render(
     let mesh = &ck.mesh;
     let problem_toml = ck.attrs.iter().find(|(k, _)| k == "problem_toml");
     let resolved = PlotOptions {
-        field: opts.field.for_model(mesh.axisymmetric)?,
+        field: opts.field.for_model(mesh.kind)?,
         units: problem_toml.map_or_else(Units::default, |(_, t)| Units::of_problem_text(t)),
         ..opts.clone()
     };
