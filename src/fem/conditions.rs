@@ -58,7 +58,7 @@ impl Conditions {
         };
         c.add_dirichlet(mesh, topo, problem)?;
         c.add_slip(mesh, topo, problem)?;
-        if super::element::ElementKind::of(&problem.file.model).has_axis() {
+        if topo.kind.has_axis() {
             c.add_axis(mesh, topo, problem)?;
         }
         Ok(c)

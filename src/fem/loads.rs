@@ -68,7 +68,7 @@ pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<()
     let err = |msg: String| FemError::new(&problem.path, msg);
     let g = f.model.gravity.unwrap_or([0.0, 0.0]);
     let w = f.model.omega.unwrap_or(0.0);
-    let has_axis = ElementKind::of(&f.model).has_axis();
+    let has_axis = topo.kind.has_axis();
     let mut r_max = vec![0.0f64; topo.material_names.len()];
     for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
         for &p in tri {
@@ -108,8 +108,8 @@ pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<()
 /// Warns of each `[[traction]]` of an axisymmetric model whose curve lies
 /// on the axis r = 0: it carries no area there (∫ N r ds = 0 on every
 /// segment), so it adds no load at all.
-pub(super) fn warn_axis_tractions(mesh: &Mesh, problem: &Problem) {
-    if !ElementKind::of(&problem.file.model).has_axis() {
+pub(super) fn warn_axis_tractions(mesh: &Mesh, kind: ElementKind, problem: &Problem) {
+    if !kind.has_axis() {
         return;
     }
     for (i, tr) in problem.file.traction.iter().enumerate() {

@@ -144,7 +144,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let n = dofs.last().map_or(0, |pd| pd.start + pd.ndof);
     lap.lap("elimination");
     loads::check_body_forces(&topo, problem)?;
-    loads::warn_axis_tractions(mesh, problem);
+    loads::warn_axis_tractions(mesh, topo.kind, problem);
     let mats = stiffness::Materials::new(&topo, problem);
     let (c, mut d) = stiffness::assemble(&topo, &dofs, n, &mats, opts.parallel);
     lap.lap("stiffness");
@@ -153,7 +153,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     lap.lap("loads");
     let (a, g, qp_rows) = contact::reduced_rows(mesh, &topo, &dofs, n, problem)?;
     lap.lap("contact rows");
-    let kind = ElementKind::of(&problem.file.model);
+    let kind = topo.kind;
     let t_eff = kind.thickness();
     let conditions = conds.list();
     let symmetry_rows = friction::symmetry_rows(&topo, &dofs, &conditions, &conds.groups, problem);

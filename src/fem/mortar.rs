@@ -167,7 +167,7 @@ impl Topology {
         let mut dj: HashMap<(usize, u32), f64> = HashMap::new();
         let mut mj: HashMap<(usize, u32), BTreeMap<usize, f64>> = HashMap::new();
         let mut gj: HashMap<(usize, u32), f64> = HashMap::new();
-        let kind = super::element::ElementKind::of(&problem.file.model);
+        let kind = self.kind;
         let mut body_sizes: Option<Vec<f64>> = None;
         for &(a, b, sb, ns) in ssegs {
             let geom = SlaveGeom {

@@ -11,7 +11,6 @@
 
 use super::contact::{ContactRow, RowKind};
 use super::edges::NONE32;
-use super::element::ElementKind;
 use super::topology::{curve_group, Topology};
 use super::FemError;
 use crate::mesh::{Mesh, PhysicalGroup};
@@ -142,7 +141,7 @@ impl Topology {
             let n = self.outward_normal(mesh, tk, a, b);
             let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
             let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
-            let kind = ElementKind::of(&problem.file.model);
+            let kind = self.kind;
             for (v, w) in [
                 (a, kind.boundary_weight(len, pa, pb)),
                 (b, kind.boundary_weight(len, pb, pa)),
@@ -361,7 +360,7 @@ impl Topology {
         let mut stack = vec![];
         // Slave nodes with owner body and tributary length.
         let mut slave: HashMap<(usize, u32), f64> = HashMap::new();
-        let kind = ElementKind::of(&problem.file.model);
+        let kind = self.kind;
         for &(a, b, body, _) in ssegs {
             let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
             let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();

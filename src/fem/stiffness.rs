@@ -13,16 +13,16 @@
 
 use super::conditions::PointDofs;
 
-use super::element::{ElementKind, MaterialMatrix};
+use super::element::MaterialMatrix;
 use super::topology::Topology;
 use crate::problem::{Material, Problem};
 use crate::qp::Csr;
 
 /// What the element matrices need of each material in the model's
-/// [`ElementKind`]: D, the body force ρ g and the centrifugal coefficient
+/// [`ElementKind`](super::element::ElementKind): D, the body force ρ g and the centrifugal coefficient
 /// ρω² (a spin about the axis, docs/methods.md §10).
 pub(super) struct Materials {
-    pub(super) kind: ElementKind,
+    pub(super) kind: super::element::ElementKind,
     pub(super) dmats: Vec<MaterialMatrix>,
     pub(super) bforce: Vec<[f64; 2]>,
     pub(super) spin: Vec<f64>,
@@ -32,7 +32,7 @@ impl Materials {
     /// The materials of `topo.material_names`, in that order.
     pub(super) fn new(topo: &Topology, problem: &Problem) -> Materials {
         let f = &problem.file;
-        let kind = ElementKind::of(&f.model);
+        let kind = topo.kind;
         let mats: Vec<&Material> = topo
             .material_names
             .iter()

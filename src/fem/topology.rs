@@ -43,6 +43,9 @@ pub struct Topology {
     /// The rows of each interface (same order as `interface_names`):
     /// conforming, node-to-segment or mortar; the outputs record it.
     pub interface_kinds: Vec<super::contact::RowKind>,
+    /// The kind of model: the measure of the triangles and of the contact
+    /// rows' tributary weights (docs/design.md §"Element kinds").
+    pub kind: super::element::ElementKind,
 }
 
 /// A point of a physical group: (point, mesh node, Some((segment node a,
@@ -166,6 +169,7 @@ impl Topology {
             contact_segments: vec![],
             interface_kinds: vec![super::contact::RowKind::Conforming; interface_names.len()],
             interface_names,
+            kind: super::element::ElementKind::of(&problem.file.model),
         };
         topo.triangles = topo.point_triangles();
         lap.lap("points");
