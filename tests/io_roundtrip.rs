@@ -6,7 +6,7 @@ use signorini::fem::ElementKind;
 use signorini::io::atomic::{write_atomic, IoError};
 use signorini::io::hdf5::{append_step, create_checkpoint, read_checkpoint};
 use signorini::io::vtu::{read_pvd, read_vtu_arrays, write_contact_vtu, write_pvd, write_vtu};
-use signorini::io::{Change, ContactGeometry, OutMesh, StepInfo, StepOutput};
+use signorini::output::{Change, ContactGeometry, OutMesh, StepInfo, StepOutput};
 
 /// Two bodies, one triangle each, touching along y = 0 from x = 0 to x = 1.
 /// The two interface nodes are duplicated (points 0,1 in body 0 and 3,4 in

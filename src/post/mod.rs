@@ -7,7 +7,7 @@ pub mod friction;
 pub mod plot;
 
 use crate::fem::{element, Model};
-use crate::io::{ContactGeometry, OutMesh, StepInfo, StepOutput};
+use crate::output::{ContactGeometry, OutMesh, StepInfo, StepOutput};
 use crate::problem::Problem;
 use crate::qp::QpResult;
 

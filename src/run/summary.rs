@@ -4,7 +4,7 @@
 
 use super::prepare::{probes, Prepared};
 use crate::fem::Model;
-use crate::io::StepOutput;
+use crate::output::StepOutput;
 use crate::post::forces::{Forces, GroupReaction, InterfaceForce, Resultant};
 use crate::qp::{Kkt, QpResult};
 use serde::Serialize;

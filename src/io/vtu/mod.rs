@@ -20,7 +20,7 @@ use vtkio::model::{
 };
 
 use super::atomic::{write_atomic, write_atomic_with, IoError};
-use super::{OutMesh, StepOutput};
+use crate::output::{OutMesh, StepOutput};
 
 /// zlib level used when compression is requested (1 fastest … 9 smallest).
 const ZLIB_LEVEL: u32 = 6;
@@ -790,7 +790,7 @@ mod tests {
             };
             if k >= 2 {
                 step.reaction = vec![[1.0, 2.0]; 4];
-                step.change = Some(crate::io::Change {
+                step.change = Some(crate::output::Change {
                     reference_step: 1,
                     displacement: vec![[0.125, -0.5]; 4],
                     stress: vec![[9.0; 4]; 2],

@@ -29,9 +29,7 @@ pub use mesh::auto_scale;
 pub use style::{fmt_num, viridis};
 
 use crate::fem::ElementKind;
-use crate::io::atomic::write_atomic_bytes;
-use crate::io::hdf5::{read_checkpoint, Checkpoint};
-use crate::io::{OutMesh, StepOutput};
+use crate::output::{Checkpoint, OutMesh, StepOutput};
 pub use crate::problem::Units;
 use contact::draw_contact;
 use mesh::draw_mesh;
@@ -320,23 +318,8 @@ pub struct PlotSummary {
     pub units: Units,
 }
 
-/// Reads `h5`, draws the figure and writes it to `out` (format from its
-/// extension) atomically.
-pub fn plot_file(h5: &Path, out: &Path, opts: &PlotOptions) -> Result<PlotSummary, PlotError> {
-    let format = Format::from_path(out)?;
-    check_options(opts)?;
-    let ck = read_checkpoint(h5).map_err(|e| err(e.to_string()))?;
-    let name = h5
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "checkpoint".to_string());
-    let (bytes, summary) =
-        render(&ck, &name, opts, format).map_err(|e| err(format!("{}: {}", h5.display(), e.0)))?;
-    write_atomic_bytes(out, &bytes).map_err(|e| err(e.to_string()))?;
-    Ok(summary)
-}
-
-fn check_options(opts: &PlotOptions) -> Result<(), PlotError> {
+/// Refuses options out of range or that exclude each other.
+pub fn check_options(opts: &PlotOptions) -> Result<(), PlotError> {
     for (what, v) in [("width", opts.width), ("height", opts.height)] {
         if !(MIN_SIDE..=MAX_SIDE).contains(&v) {
             return Err(err(format!(
@@ -578,7 +561,7 @@ fn tangential_of(
     change: bool,
 ) -> Result<Option<Vec<Tangential>>, PlotError> {
     let rows = ck.mesh.contact.points.len();
-    let of = |k: usize| -> Result<Option<&crate::io::hdf5::StepFriction>, PlotError> {
+    let of = |k: usize| -> Result<Option<&crate::output::StepFriction>, PlotError> {
         match ck.friction.get(k.wrapping_sub(1)).and_then(|f| f.as_ref()) {
             None => Ok(None),
             Some(f) if f.tangential_traction.len() == rows && f.state.len() == rows => Ok(Some(f)),
