@@ -1,6 +1,6 @@
 //! The HDF5 checkpoint (`model.h5`, docs/problem-format.md §6): the mesh once,
 //! then one group per load step; its layout is below (§ Layout); what it holds is
-//! [`Checkpoint`](crate::output::Checkpoint).
+//! [`Checkpoint`].
 //!
 //! Every write is crash-safe: the file is built (or copied and extended) in
 //! a private staging directory, closed, fsynced and renamed over the target.
