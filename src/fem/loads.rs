@@ -14,8 +14,12 @@ use super::stiffness::Materials;
 use super::topology::{dim_name, group_names, Topology};
 use super::{FemError, Model};
 use crate::mesh::Mesh;
-use crate::problem::{num, shorten, Problem, TractionLoad, MAX_MAGNITUDE};
+use crate::problem::{
+    num, shorten, Material, ModelSection, Problem, Traction, TractionLoad, MAX_MAGNITUDE,
+};
 use crate::qp::Csr;
+use std::collections::BTreeMap;
+use std::path::Path;
 
 /// The nodal loads on every point [N] (thickness included), and their
 /// tractions and point forces added to `d` (gravity is in d already).
@@ -63,11 +67,15 @@ fn gravity(topo: &Topology, mats: &Materials) -> Vec<[f64; 2]> {
 /// the centrifugal ρω²·r_max (r_max the largest radius of the material's
 /// triangles). Names the key and the material: a load past the bound
 /// overflows in the solver's products (a stagnation far from the cause).
-pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<(), FemError> {
-    let f = &problem.file;
-    let err = |msg: String| FemError::new(&problem.path, msg);
-    let g = f.model.gravity.unwrap_or([0.0, 0.0]);
-    let w = f.model.omega.unwrap_or(0.0);
+pub(super) fn check_body_forces(
+    topo: &Topology,
+    materials: &BTreeMap<String, Material>,
+    model: &ModelSection,
+    path: &Path,
+) -> Result<(), FemError> {
+    let err = |msg: String| FemError::new(path, msg);
+    let g = model.gravity.unwrap_or([0.0, 0.0]);
+    let w = model.omega.unwrap_or(0.0);
     let has_axis = topo.kind.has_axis();
     let mut r_max = vec![0.0f64; topo.material_names.len()];
     for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
@@ -78,7 +86,7 @@ pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<()
         }
     }
     for (mi, name) in topo.material_names.iter().enumerate() {
-        let Some(m) = f.materials.get(name) else {
+        let Some(m) = materials.get(name) else {
             continue;
         };
         let rg = m.rho * g[0].hypot(g[1]);
@@ -108,11 +116,16 @@ pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<()
 /// Warns of each `[[traction]]` of an axisymmetric model whose curve lies
 /// on the axis r = 0: it carries no area there (∫ N r ds = 0 on every
 /// segment), so it adds no load at all.
-pub(super) fn warn_axis_tractions(mesh: &Mesh, kind: ElementKind, problem: &Problem) {
+pub(super) fn warn_axis_tractions(
+    mesh: &Mesh,
+    kind: ElementKind,
+    tractions: &[Traction],
+    path: &Path,
+) {
     if !kind.has_axis() {
         return;
     }
-    for (i, tr) in problem.file.traction.iter().enumerate() {
+    for (i, tr) in tractions.iter().enumerate() {
         let Some(g) = mesh.group_any(&tr.on).filter(|g| g.dim == 1) else {
             continue;
         };
@@ -125,7 +138,7 @@ pub(super) fn warn_axis_tractions(mesh: &Mesh, kind: ElementKind, problem: &Prob
         if !lines.is_empty() && lines.iter().all(|l| on_axis(l[0]) && on_axis(l[1])) {
             log::warn!(
                 "{}: [[traction]] #{} (on = \"{}\"): the curve lies on the axis r = 0 of the axisymmetric model, where a traction acts on no area; it adds no load",
-                problem.path.display(),
+                path.display(),
                 i + 1,
                 shorten(&tr.on)
             );
@@ -260,13 +273,13 @@ pub(super) fn step_loads(
     }
     lap.lap("conditions");
     let n = base.qp.n();
-    let mats = Materials::new(topo, problem);
+    let mats = Materials::new(topo, &problem.file.materials, &problem.file.model);
     let mut d = element_d(topo, &dofs, n, &mats);
     lap.lap("element loads");
     let loads = nodal_loads(mesh, topo, &dofs, problem, &mats, &mut d)?;
     lap.lap("nodal loads");
     // C is the base's, checked when it was built: only d is checked here.
-    check_d(&base.qp.c, &d, &dofs, topo, mesh, problem)?;
+    check_d(&base.qp.c, &d, &dofs, topo, mesh, &problem.path)?;
     // The rows of A are the same (same T); g and the check of the rows
     // whose points are all fixed depend on u0.
     let (_, g, _) = super::contact::reduced_rows(mesh, topo, &dofs, n, problem)?;
@@ -381,9 +394,9 @@ pub(super) fn check_scale(
     dofs: &[PointDofs],
     topo: &Topology,
     mesh: &Mesh,
-    problem: &Problem,
+    path: &Path,
 ) -> Result<(), FemError> {
-    let err = |msg: String| FemError::new(&problem.path, msg);
+    let err = |msg: String| FemError::new(path, msg);
     let at = |j: usize| unknown_at(j, dofs, topo, mesh);
     if let Some(k) = c.data.iter().position(|v| !v.is_finite()) {
         let row = c.indptr.partition_point(|&s| s <= k).saturating_sub(1);
@@ -392,7 +405,7 @@ pub(super) fn check_scale(
             at(row)
         )));
     }
-    check_d(c, d, dofs, topo, mesh, problem)
+    check_d(c, d, dofs, topo, mesh, path)
 }
 
 /// The part of [`check_scale`] on d (C finite already).
@@ -402,9 +415,9 @@ fn check_d(
     dofs: &[PointDofs],
     topo: &Topology,
     mesh: &Mesh,
-    problem: &Problem,
+    path: &Path,
 ) -> Result<(), FemError> {
-    let err = |msg: String| FemError::new(&problem.path, msg);
+    let err = |msg: String| FemError::new(path, msg);
     let at = |j: usize| unknown_at(j, dofs, topo, mesh);
     if let Some(j) = d.iter().position(|v| !v.is_finite()) {
         return Err(err(format!(

@@ -143,13 +143,14 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let dofs = conds.eliminate(mesh, &topo, &body_names, problem)?;
     let n = dofs.last().map_or(0, |pd| pd.start + pd.ndof);
     lap.lap("elimination");
-    loads::check_body_forces(&topo, problem)?;
-    loads::warn_axis_tractions(mesh, topo.kind, problem);
-    let mats = stiffness::Materials::new(&topo, problem);
+    let f = &problem.file;
+    loads::check_body_forces(&topo, &f.materials, &f.model, &problem.path)?;
+    loads::warn_axis_tractions(mesh, topo.kind, &f.traction, &problem.path);
+    let mats = stiffness::Materials::new(&topo, &f.materials, &f.model);
     let (c, mut d) = stiffness::assemble(&topo, &dofs, n, &mats, opts.parallel);
     lap.lap("stiffness");
     let loads = loads::nodal_loads(mesh, &topo, &dofs, problem, &mats, &mut d)?;
-    loads::check_scale(&c, &d, &dofs, &topo, mesh, problem)?;
+    loads::check_scale(&c, &d, &dofs, &topo, mesh, &problem.path)?;
     lap.lap("loads");
     let (a, g, qp_rows) = contact::reduced_rows(mesh, &topo, &dofs, n, problem)?;
     lap.lap("contact rows");
@@ -185,7 +186,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let mut model = model;
     friction::start_step(&mut model, None);
     lap.lap("rigid modes");
-    rigid::check_semicoercive(&model, problem)?;
+    rigid::check_semicoercive(&model, &problem.path)?;
     lap.lap("semicoercivity check");
     Ok(model)
 }
@@ -233,7 +234,7 @@ pub fn step_model_reusing(
     model.qp.g = s.g;
     model.loads = s.loads;
     friction::start_step(&mut model, None);
-    rigid::check_semicoercive(&model, problem)?;
+    rigid::check_semicoercive(&model, &problem.path)?;
     lap.lap("copy and checks");
     Ok(model)
 }

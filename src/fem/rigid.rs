@@ -13,7 +13,7 @@ use super::element::ElementKind;
 use super::topology::Topology;
 use super::{FemError, Model};
 use crate::linalg::dense::sym_eigen;
-use crate::problem::Problem;
+use std::path::Path;
 
 /// The rigid motions of each body at a point: translations along x and y
 /// and a rotation about the centre of the body's bounding box, scaled by its
@@ -287,22 +287,22 @@ fn describe_mode(m: &Model, c: &[f64]) -> String {
 /// with free rigid motions and no contact at all, and a rigid motion that
 /// leaves every contact row unchanged (Az = 0) while the loads work on it
 /// (dᵀz ≠ 0): f is then unbounded below.
-pub(super) fn check_semicoercive(m: &Model, problem: &Problem) -> Result<(), FemError> {
+pub(super) fn check_semicoercive(m: &Model, path: &Path) -> Result<(), FemError> {
     if m.qp.kernel.is_empty() {
         return Ok(());
     }
-    check_supported(m, problem)?;
+    check_supported(m, path)?;
     if m.qp.friction.is_some() {
         // Friction may hold a sliding motion: the solver decides
         // (docs/methods.md §9.3).
         return Ok(());
     }
-    check_sliding(m, problem)
+    check_sliding(m, path)
 }
 
 /// A body with a kernel and no contact row touching it is refused.
-fn check_supported(m: &Model, problem: &Problem) -> Result<(), FemError> {
-    let err = |msg: String| FemError::new(&problem.path, msg);
+fn check_supported(m: &Model, path: &Path) -> Result<(), FemError> {
+    let err = |msg: String| FemError::new(path, msg);
     let qp = &m.qp;
     let mut touched = vec![false; m.topo.nbodies];
     for &r in &m.qp_rows {
@@ -351,8 +351,8 @@ fn check_supported(m: &Model, problem: &Problem) -> Result<(), FemError> {
 
 /// A rigid motion with Az = 0 is refused if the loads work on it (dᵀz ≠ 0)
 /// and reported (a warning) otherwise.
-fn check_sliding(m: &Model, problem: &Problem) -> Result<(), FemError> {
-    let err = |msg: String| FemError::new(&problem.path, msg);
+fn check_sliding(m: &Model, path: &Path) -> Result<(), FemError> {
+    let err = |msg: String| FemError::new(path, msg);
     let qp = &m.qp;
     let k = qp.kernel.len();
     // Null space of A Z (k small): eigenvectors of (AZ)ᵀ(AZ) with ~0 eigenvalue.

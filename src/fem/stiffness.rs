@@ -15,8 +15,9 @@ use super::conditions::PointDofs;
 
 use super::element::MaterialMatrix;
 use super::topology::Topology;
-use crate::problem::{Material, Problem};
+use crate::problem::{Material, ModelSection};
 use crate::qp::Csr;
+use std::collections::BTreeMap;
 
 /// What the element matrices need of each material in the model's
 /// [`ElementKind`](super::element::ElementKind): D, the body force ρ g and the centrifugal coefficient
@@ -30,18 +31,17 @@ pub(super) struct Materials {
 
 impl Materials {
     /// The materials of `topo.material_names`, in that order.
-    pub(super) fn new(topo: &Topology, problem: &Problem) -> Materials {
-        let f = &problem.file;
+    pub(super) fn new(
+        topo: &Topology,
+        materials: &BTreeMap<String, Material>,
+        model: &ModelSection,
+    ) -> Materials {
         let kind = topo.kind;
-        let mats: Vec<&Material> = topo
-            .material_names
-            .iter()
-            .map(|m| &f.materials[m])
-            .collect();
-        let gvec = f.model.gravity.unwrap_or([0.0, 0.0]);
-        let w = f.model.omega.unwrap_or(0.0);
+        let mats: Vec<&Material> = topo.material_names.iter().map(|m| &materials[m]).collect();
+        let gvec = model.gravity.unwrap_or([0.0, 0.0]);
+        let w = model.omega.unwrap_or(0.0);
         // A load step scales ρω²r like every other load.
-        let lf = f.model.centrifugal_factor.unwrap_or(1.0);
+        let lf = model.centrifugal_factor.unwrap_or(1.0);
         Materials {
             kind,
             dmats: mats.iter().map(|m| kind.material(m)).collect(),
@@ -737,7 +737,7 @@ mod tests {
     fn gathered_assembly_matches_triplets_on_shipped_models() {
         for (path, problem, mesh) in crate::shipped_examples() {
             let m = super::super::build(&mesh, &problem).unwrap();
-            let mats = Materials::new(&m.topo, &problem);
+            let mats = Materials::new(&m.topo, &problem.file.materials, &problem.file.model);
             let n = m.qp.n();
             let (cr, dr) = reference_stiffness(&m.topo, &m.dofs, n, &mats);
             let (cs, ds) = assemble(&m.topo, &m.dofs, n, &mats, false);

@@ -16,7 +16,8 @@
 //! (docs/methods.md §9.5), and the couple is reported per interface.
 
 use crate::fem::{element, Model};
-use crate::problem::Problem;
+use crate::problem::{Material, Problem};
+use std::collections::BTreeMap;
 
 /// A force resultant and its moment about the origin.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
@@ -129,7 +130,7 @@ pub struct Forces {
 
 /// (K u)_p per point: the element forces C_e u_e summed at each vertex.
 fn internal_forces(model: &Model, problem: &Problem, u: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    element_pass(model, problem, u, false).1
+    element_pass(model, &problem.file.materials, u, false).1
 }
 
 /// Elements per chunk of [`element_pass`]: its per-element results (a few
@@ -146,19 +147,18 @@ const CHUNK: usize = 1 << 15;
 /// [`ElementKind::stiffness`](element::ElementKind::stiffness) element by element.
 pub(crate) fn element_pass(
     model: &Model,
-    problem: &Problem,
+    materials: &BTreeMap<String, Material>,
     u: &[[f64; 2]],
     stresses: bool,
 ) -> (Vec<[f64; 4]>, Vec<[f64; 2]>) {
     use rayon::prelude::*;
     let t = &model.topo;
-    let f = &problem.file;
     let kind = model.kind;
     // D once per material index, not a map lookup per element.
     let mats: Vec<element::MaterialMatrix> = t
         .material_names
         .iter()
-        .map(|m| kind.material(&f.materials[m]))
+        .map(|m| kind.material(&materials[m]))
         .collect();
     let mut stress = Vec::with_capacity(if stresses { t.triangles.len() } else { 0 });
     let mut ku = vec![[0.0f64; 2]; t.points.len()];

@@ -64,7 +64,7 @@ pub fn step_output_with_forces(
     let u = model.displacements(&res.x);
     lap.lap("displacements");
     // Stresses and the element forces of the reactions in one pass.
-    let (stress, ku) = forces::element_pass(model, problem, &u, true);
+    let (stress, ku) = forces::element_pass(model, &problem.file.materials, &u, true);
     lap.lap("stresses and element forces");
     let nrow = t.contact.len();
     let mut multipliers = vec![0.0; nrow];
