@@ -4,11 +4,13 @@
 //! reads it (VTU, HDF5, JSON) and `post::plot` draws it; it knows nothing
 //! of the solver, the mesh reader or the file formats.
 
+use crate::fem::element::{Point, Vector};
+
 /// The output mesh: contact nodes appear once per side (one point per body copy).
 #[derive(Debug, Clone, Default)]
 pub struct OutMesh {
     /// Point coordinates (x, y) of the duplicated mesh.
-    pub points: Vec<[f64; 2]>,
+    pub points: Vec<Point>,
     /// Gmsh node tag each point came from.
     pub point_tags: Vec<u64>,
     /// Body number of each point (0-based).
@@ -31,13 +33,13 @@ pub struct OutMesh {
 /// points of consecutive rows along the same interface.
 #[derive(Debug, Clone, Default)]
 pub struct ContactGeometry {
-    pub points: Vec<[f64; 2]>,
+    pub points: Vec<Point>,
     /// Output-mesh point index of the first side (k / slave) of each row.
     pub first: Vec<usize>,
     /// Output-mesh point indices of the other side: one point (conforming),
     /// or two master points with weights (1-ξ, ξ) (non-matching).
     pub second: Vec<[(usize, f64); 2]>,
-    pub normal: Vec<[f64; 2]>,
+    pub normal: Vec<Vector>,
     /// Initial gap g of each row.
     pub gap0: Vec<f64>,
     /// Line cells in contact-point indices.
@@ -60,7 +62,7 @@ pub struct StepOutput {
     /// Pseudo-time of the step (1.0 for a single solve).
     pub time: f64,
     /// Nodal displacement per output point.
-    pub displacement: Vec<[f64; 2]>,
+    pub displacement: Vec<Vector>,
     /// Per triangle: σxx, σyy, σxy, σzz (σzz = 0 in plane stress).
     pub stress: Vec<[f64; 4]>,
     /// Per triangle: the report's τe = sqrt(σxx² + σyy² − σxxσyy + 3σxy²).
@@ -74,7 +76,7 @@ pub struct StepOutput {
     pub active: Vec<u8>,
     /// Per point: the reaction force of the Dirichlet/slip conditions
     /// (zero where nothing is prescribed; empty if not computed).
-    pub reaction: Vec<[f64; 2]>,
+    pub reaction: Vec<Vector>,
     /// Solver record stored as attributes.
     pub info: StepInfo,
     /// The change since the reference step (`[output] reference_step`), on
@@ -89,7 +91,7 @@ pub struct Change {
     /// The reference step (1-based).
     pub reference_step: usize,
     /// Per output point: u − u_ref.
-    pub displacement: Vec<[f64; 2]>,
+    pub displacement: Vec<Vector>,
     /// Per triangle: σ − σ_ref (σxx, σyy, σxy, σzz).
     pub stress: Vec<[f64; 4]>,
     /// Per contact row: p − p_ref.
@@ -99,7 +101,7 @@ pub struct Change {
 impl Change {
     /// The fields of `step` minus those of `reference` (same mesh).
     pub fn between(step: &StepOutput, reference: &StepOutput, reference_step: usize) -> Change {
-        let sub2 = |a: &[f64; 2], b: &[f64; 2]| [a[0] - b[0], a[1] - b[1]];
+        let sub2 = |a: &Vector, b: &Vector| [a[0] - b[0], a[1] - b[1]];
         Change {
             reference_step,
             displacement: step

@@ -363,12 +363,12 @@ fn d_plane_stress(m: &Material) -> [[f64; 3]; 3] {
 }
 
 /// Twice the signed area: positive for counter-clockwise vertices.
-pub fn area2(p: &[[f64; 2]; 3]) -> f64 {
+pub fn area2(p: &[Point; 3]) -> f64 {
     (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1])
 }
 
 /// B (3×6) of §2.2 for counter-clockwise vertices, and |T|.
-pub fn b_matrix(p: &[[f64; 2]; 3]) -> ([[f64; 6]; 3], f64) {
+pub fn b_matrix(p: &[Point; 3]) -> ([[f64; 6]; 3], f64) {
     let a2 = area2(p);
     let b = [p[1][1] - p[2][1], p[2][1] - p[0][1], p[0][1] - p[1][1]];
     let c = [p[2][0] - p[1][0], p[0][0] - p[2][0], p[1][0] - p[0][0]];
@@ -402,7 +402,7 @@ fn ke_entry(b: &[[f64; 6]; 3], db: &[[f64; 6]; 3], th: f64, area: f64, i: usize,
 }
 
 /// C_e = t_h |T| BᵀDB (6×6).
-pub fn stiffness(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64) -> [[f64; 6]; 6] {
+pub fn stiffness(p: &[Point; 3], d: &[[f64; 3]; 3], th: f64) -> [[f64; 6]; 6] {
     let (b, area) = b_matrix(p);
     let db = d_times_b(d, &b);
     let mut k = [[0.0; 6]; 6];
@@ -417,7 +417,7 @@ pub fn stiffness(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64) -> [[f64; 6]; 6]
 /// Rows 2a and 2a+1 of C_e (the two rows of vertex `a`), bit for bit equal
 /// to those of [`stiffness`].
 #[inline]
-pub fn stiffness_rows(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64, a: usize) -> [[f64; 6]; 2] {
+pub fn stiffness_rows(p: &[Point; 3], d: &[[f64; 3]; 3], th: f64, a: usize) -> [[f64; 6]; 2] {
     let (b, area) = b_matrix(p);
     let db = d_times_b(d, &b);
     let mut k = [[0.0; 6]; 2];
@@ -472,7 +472,7 @@ pub fn d_axi(m: &Material) -> [[f64; 4]; 4] {
 }
 
 /// The centroid radius r̄ = (r₁ + r₂ + r₃)/3 of a triangle (x = r).
-pub fn centroid_r(p: &[[f64; 2]; 3]) -> f64 {
+pub fn centroid_r(p: &[Point; 3]) -> f64 {
     (p[0][0] + p[1][0] + p[2][0]) / 3.0
 }
 
@@ -483,7 +483,7 @@ pub fn centroid_r(p: &[[f64; 2]; 3]) -> f64 {
 /// "Axisymmetric stress analysis") give this centroid approximation; the
 /// in-plane rows are constant, so r̄|T| BᵀD4B is the one-point rule of
 /// ∫ BᵀD4B r dA (docs/methods.md §10).
-pub fn axi_b(p: &[[f64; 2]; 3]) -> ([[f64; 6]; 4], f64, f64) {
+pub fn axi_b(p: &[Point; 3]) -> ([[f64; 6]; 4], f64, f64) {
     let (b3, area) = b_matrix(p);
     let rbar = centroid_r(p);
     let mut b = [[0.0; 6]; 4];
@@ -495,7 +495,7 @@ pub fn axi_b(p: &[[f64; 2]; 3]) -> ([[f64; 6]; 4], f64, f64) {
 }
 
 /// C_e = r̄ |T| B4ᵀ D4 B4 (6×6, per radian) of the axisymmetric triangle.
-pub fn axi_stiffness(p: &[[f64; 2]; 3], d4: &[[f64; 4]; 4]) -> [[f64; 6]; 6] {
+pub fn axi_stiffness(p: &[Point; 3], d4: &[[f64; 4]; 4]) -> [[f64; 6]; 6] {
     let (b, area, rbar) = axi_b(p);
     let mut db = [[0.0; 6]; 4];
     for i in 0..4 {
@@ -516,7 +516,7 @@ pub fn axi_stiffness(p: &[[f64; 2]; 3], d4: &[[f64; 4]; 4]) -> [[f64; 6]; 6] {
 /// (∫ λ₁^i λ₂^j λ₃^k dA = 2|T| i! j! k! / (i + j + k + 2)!): the nodal force
 /// per radian of vertex `a` from a body force f_b (gravity, along z) and a
 /// centrifugal load c r along r (c = ρω²).
-pub fn axi_body_load(p: &[[f64; 2]; 3], a: usize, fb: [f64; 2], c: f64) -> [f64; 2] {
+pub fn axi_body_load(p: &[Point; 3], a: usize, fb: Vector, c: f64) -> Vector {
     let area = area2(p) / 2.0;
     let r = [p[0][0], p[1][0], p[2][0]];
     let w1 = area / 12.0 * (r[a] + r[0] + r[1] + r[2]);

@@ -10,6 +10,7 @@
 
 use super::conditions::PointDofs;
 use super::element::ElementKind;
+use super::element::Vector;
 use super::stiffness::Materials;
 use super::topology::{dim_name, group_names, Topology};
 use super::{FemError, Model};
@@ -30,7 +31,7 @@ pub(super) fn nodal_loads(
     problem: &Problem,
     mats: &Materials,
     d: &mut [f64],
-) -> Result<Vec<[f64; 2]>, FemError> {
+) -> Result<Vec<Vector>, FemError> {
     let mut loads = Loads {
         dofs,
         nodal: gravity(topo, mats),
@@ -44,7 +45,7 @@ pub(super) fn nodal_loads(
 
 /// The body loads on each point: th |T|/3 ρ g per vertex (with the
 /// centrifugal load per radian when axisymmetric), in triangle order.
-fn gravity(topo: &Topology, mats: &Materials) -> Vec<[f64; 2]> {
+fn gravity(topo: &Topology, mats: &Materials) -> Vec<Vector> {
     let mut loads = vec![[0.0f64; 2]; topo.points.len()];
     for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
         let pts = [
@@ -149,7 +150,7 @@ pub(super) fn warn_axis_tractions(
 /// The nodal loads being summed, and d.
 struct Loads<'a> {
     dofs: &'a [PointDofs],
-    nodal: Vec<[f64; 2]>,
+    nodal: Vec<Vector>,
     d: &'a mut [f64],
     /// The measure of the tractions: ½ th ℓ, or ∫ N_a r ds per radian.
     kind: ElementKind,
@@ -157,7 +158,7 @@ struct Loads<'a> {
 
 impl Loads<'_> {
     /// A force `fv` on point `p`: on the nodal loads, and Tᵀfv on d.
-    fn add(&mut self, p: usize, fv: [f64; 2]) {
+    fn add(&mut self, p: usize, fv: Vector) {
         self.nodal[p][0] += fv[0];
         self.nodal[p][1] += fv[1];
         let pd = self.dofs[p];
@@ -252,7 +253,7 @@ pub(super) struct StepLoads {
     pub(super) dofs: Vec<PointDofs>,
     pub(super) d: Vec<f64>,
     pub(super) g: Vec<f64>,
-    pub(super) loads: Vec<[f64; 2]>,
+    pub(super) loads: Vec<Vector>,
 }
 
 /// The d, g, u0 and nodal loads of `problem` (a load step of the problem
@@ -321,7 +322,7 @@ fn element_d(topo: &Topology, dofs: &[PointDofs], n: usize, mats: &Materials) ->
     let free_at: Vec<bool> = dofs.iter().map(is_free).collect();
     let start: Vec<usize> = dofs.iter().map(|pd| pd.start).collect();
     // The load of triangle t on its vertex a, f_e − C_e u0_e.
-    let term = |t: usize, a: usize, free: [bool; 3], constrained: bool| -> [f64; 2] {
+    let term = |t: usize, a: usize, free: [bool; 3], constrained: bool| -> Vector {
         let tri = topo.triangles[t];
         let mi = topo.tri_material[t] as usize;
         let pts = tri.map(|p| topo.points[p]);

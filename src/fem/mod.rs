@@ -32,6 +32,7 @@ use crate::mesh::Mesh;
 use crate::problem::Problem;
 use crate::qp::QpProblem;
 pub use element::ElementKind;
+use element::Vector;
 use std::path::{Path, PathBuf};
 
 /// How [`build_with`] runs; the default (and [`build`]) assembles on
@@ -64,13 +65,13 @@ pub struct Model {
     pub kind: ElementKind,
     /// The Dirichlet and slip conditions r·u = v, kept for the reactions:
     /// (point, unit direction r, index into `cond_groups`).
-    pub conditions: Vec<(usize, [f64; 2], u32)>,
+    pub conditions: Vec<(usize, Vector, u32)>,
     /// What set each condition: (kind "dirichlet" | "slip", physical group name).
     pub cond_groups: Vec<(&'static str, String)>,
     /// Nodal external force on each point (N; tractions, point forces,
     /// gravity; thickness included), before the elimination: the load side
     /// of the balance R = K u − f.
-    pub loads: Vec<[f64; 2]>,
+    pub loads: Vec<Vector>,
     /// The name of each body: its physical surface name(s), "+"-joined,
     /// with " #b" when bodies share a material.
     pub body_names: Vec<String>,
@@ -90,7 +91,7 @@ impl Model {
 
     /// Point displacements of a change `dx` of the QP unknowns (u0 left out):
     /// the motion along a direction such as a rigid mode.
-    pub fn motions(&self, dx: &[f64]) -> Vec<[f64; 2]> {
+    pub fn motions(&self, dx: &[f64]) -> Vec<Vector> {
         self.dofs
             .iter()
             .map(|p| {
@@ -106,7 +107,7 @@ impl Model {
     }
 
     /// Full point displacements from the QP unknowns.
-    pub fn displacements(&self, x: &[f64]) -> Vec<[f64; 2]> {
+    pub fn displacements(&self, x: &[f64]) -> Vec<Vector> {
         self.dofs
             .iter()
             .map(|p| {

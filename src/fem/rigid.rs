@@ -10,6 +10,7 @@
 
 use super::conditions::{normalize, Cond, PointDofs};
 use super::element::ElementKind;
+use super::element::{Point, Vector};
 use super::topology::Topology;
 use super::{FemError, Model};
 use crate::linalg::dense::sym_eigen;
@@ -19,8 +20,8 @@ use std::path::Path;
 /// and a rotation about the centre of the body's bounding box, scaled by its
 /// size so that the three are of one magnitude.
 struct RigidBasis {
-    lo: Vec<[f64; 2]>,
-    hi: Vec<[f64; 2]>,
+    lo: Vec<Point>,
+    hi: Vec<Point>,
 }
 
 impl RigidBasis {
@@ -39,7 +40,7 @@ impl RigidBasis {
     }
 
     /// The three motions of body `b` at the point `x`.
-    fn at(&self, b: usize, x: [f64; 2]) -> [[f64; 2]; 3] {
+    fn at(&self, b: usize, x: Point) -> [Vector; 3] {
         let (lo, hi) = (self.lo[b], self.hi[b]);
         let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
         let l = ((hi[0] - lo[0]).max(hi[1] - lo[1])).max(1e-300);
@@ -184,7 +185,7 @@ impl Model {
     /// The bodies that the point motions `u` move (by more than 10⁻³ of the
     /// largest motion), each with the rigid motion that fits it best:
     /// `body 1 (translation along (1, 0))` or `body 1 (rotation about (0.5, 0.25))`.
-    pub fn describe_rigid_motion(&self, u: &[[f64; 2]]) -> String {
+    pub fn describe_rigid_motion(&self, u: &[Vector]) -> String {
         let umax = u
             .iter()
             .fold(0.0f64, |m, v| m.max(v[0].hypot(v[1])))
@@ -205,7 +206,7 @@ impl Model {
     /// The rigid motion that fits the point motions `u` of body `b` best
     /// (least squares): "translation along (dx, dy)" or "rotation about
     /// (x, y)"; None if no point of the body moves by more than `min`.
-    pub fn body_motion(&self, u: &[[f64; 2]], b: usize, min: f64) -> Option<String> {
+    pub fn body_motion(&self, u: &[Vector], b: usize, min: f64) -> Option<String> {
         let pts: Vec<usize> = (0..u.len().min(self.topo.points.len()))
             .filter(|&p| self.topo.point_body[p] as usize == b)
             .collect();

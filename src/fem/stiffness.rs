@@ -12,6 +12,7 @@
 //! vertices are mostly in cache (Gmsh numbers nodes in no spatial order).
 
 use super::conditions::PointDofs;
+use super::element::{Point, Vector};
 
 use super::element::MaterialMatrix;
 use super::topology::Topology;
@@ -25,7 +26,7 @@ use std::collections::BTreeMap;
 pub(super) struct Materials {
     pub(super) kind: super::element::ElementKind,
     pub(super) dmats: Vec<MaterialMatrix>,
-    pub(super) bforce: Vec<[f64; 2]>,
+    pub(super) bforce: Vec<Vector>,
     pub(super) spin: Vec<f64>,
 }
 
@@ -59,13 +60,13 @@ impl Materials {
     /// th |T|/3 ρg, or ∫ N_a (ρg r + ρω² r² e_r) dA per radian when
     /// axisymmetric (docs/methods.md §2.2, §10). The one definition of the
     /// assembly and of a load step's d (`loads::element_d`).
-    pub(super) fn body_load(&self, pts: &[[f64; 2]; 3], mi: usize, a: usize) -> [f64; 2] {
+    pub(super) fn body_load(&self, pts: &[Point; 3], mi: usize, a: usize) -> Vector {
         self.kind.body_load(pts, a, self.bforce[mi], self.spin[mi])
     }
 
     /// Rows 2a and 2a + 1 of the element stiffness of a triangle `pts` of
     /// material `mi` (per radian when axisymmetric).
-    pub(super) fn stiffness_rows(&self, pts: &[[f64; 2]; 3], mi: usize, a: usize) -> [[f64; 6]; 2] {
+    pub(super) fn stiffness_rows(&self, pts: &[Point; 3], mi: usize, a: usize) -> [[f64; 6]; 2] {
         self.kind.stiffness_rows(pts, &self.dmats[mi], a)
     }
 }
@@ -129,12 +130,12 @@ fn is_free(pd: &PointDofs) -> bool {
 /// Z-order (Morton) keys of 2D positions: 16 bits per axis over the box of
 /// all of them. Sorting by key puts nearby positions near each other.
 struct Morton {
-    lo: [f64; 2],
-    scale: [f64; 2],
+    lo: Point,
+    scale: Point,
 }
 
 impl Morton {
-    fn new(pts: &[[f64; 2]]) -> Morton {
+    fn new(pts: &[Point]) -> Morton {
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
         for x in pts {
@@ -154,7 +155,7 @@ impl Morton {
         Morton { lo, scale }
     }
 
-    fn key(&self, x: [f64; 2]) -> u64 {
+    fn key(&self, x: Point) -> u64 {
         let q = [0, 1].map(|k| ((x[k] - self.lo[k]) * self.scale[k]).clamp(0.0, 65535.0) as u64);
         let spread = |mut v: u64| {
             v = (v | (v << 8)) & 0x00FF_00FF;
@@ -184,7 +185,7 @@ fn sorted_by_key(parallel: bool, keys: impl Iterator<Item = u64>) -> Vec<u32> {
 /// A point as the assembly reads it, stored in Z-order.
 #[derive(Clone, Copy, Default)]
 struct RankPoint {
-    x: [f64; 2],
+    x: Point,
     start: usize,
     /// The point's index.
     p: u32,

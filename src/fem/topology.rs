@@ -10,6 +10,7 @@
 
 pub use super::contact::{ContactRow, RowKind};
 use super::edges::{Edges, UnionFind, NONE32};
+use super::element::{Point, Vector};
 use super::FemError;
 use crate::mesh::Mesh;
 use crate::problem::{ContactPair, Problem};
@@ -17,7 +18,7 @@ use crate::problem::{ContactPair, Problem};
 #[derive(Debug, Clone, Default)]
 pub struct Topology {
     /// Coordinates of each point.
-    pub points: Vec<[f64; 2]>,
+    pub points: Vec<Point>,
     /// Mesh node index of each point.
     pub point_node: Vec<usize>,
     pub point_body: Vec<u32>,
@@ -94,7 +95,7 @@ impl Topology {
     }
 
     /// Unit outward normal of mesh triangle `t` on its edge (a, b).
-    pub fn outward_normal(&self, mesh: &Mesh, t: usize, a: usize, b: usize) -> [f64; 2] {
+    pub fn outward_normal(&self, mesh: &Mesh, t: usize, a: usize, b: usize) -> Vector {
         let tri = self.mesh_tris[t];
         let c = tri.iter().copied().find(|&v| v != a && v != b).unwrap_or(a);
         let (pa, pb, pc) = (mesh.nodes[a], mesh.nodes[b], mesh.nodes[c]);
