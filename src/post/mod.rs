@@ -6,6 +6,7 @@ pub mod forces;
 pub mod friction;
 pub mod plot;
 
+use crate::fem::element::Point;
 use crate::fem::{element, Model};
 use crate::output::{ContactGeometry, OutMesh, StepInfo, StepOutput};
 use crate::problem::Problem;
@@ -155,7 +156,7 @@ impl Located {
 /// The triangle of `triangles` (point indices into `points`) that `x` lies
 /// in, or else the one it is nearest to relative to that triangle's size
 /// (None without triangles). Deterministic: the first of equals wins.
-pub fn locate(points: &[[f64; 2]], triangles: &[[usize; 3]], x: [f64; 2]) -> Option<Located> {
+pub fn locate(points: &[Point], triangles: &[[usize; 3]], x: Point) -> Option<Located> {
     let mut best: Option<(f64, Located)> = None;
     for (t, tri) in triangles.iter().enumerate() {
         let v = tri.map(|i| points[i]);
@@ -189,8 +190,8 @@ pub fn locate(points: &[[f64; 2]], triangles: &[[usize; 3]], x: [f64; 2]) -> Opt
 }
 
 /// The distance from `x` to the closed triangle `v` (0 inside or on it).
-fn distance_to_triangle(v: [[f64; 2]; 3], x: [f64; 2]) -> f64 {
-    let cross = |a: [f64; 2], b: [f64; 2], p: [f64; 2]| {
+fn distance_to_triangle(v: [Point; 3], x: Point) -> f64 {
+    let cross = |a: Point, b: Point, p: Point| {
         (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
     };
     let orient = cross(v[0], v[1], v[2]);
@@ -218,7 +219,7 @@ fn distance_to_triangle(v: [[f64; 2]; 3], x: [f64; 2]) -> f64 {
 }
 
 /// The point nearest to (x, y).
-pub fn nearest_point(points: &[[f64; 2]], x: [f64; 2]) -> usize {
+pub fn nearest_point(points: &[Point], x: Point) -> usize {
     points
         .iter()
         .enumerate()
