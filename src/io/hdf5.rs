@@ -94,12 +94,12 @@ fn set_kind_attrs(
     kind: crate::fem::ElementKind,
     with_model: bool,
 ) -> Result<(), IoError> {
-    let (plane_strain, axisymmetric) = kind.file_flags();
-    set_attr_scalar(ctx, root, "plane_strain", &plane_strain)?;
+    let (four_components, on_axis) = kind.file_flags();
+    set_attr_scalar(ctx, root, "plane_strain", &four_components)?;
     if with_model {
         set_attr_str(ctx, root, "model", kind.model_name())?;
     }
-    if let Some(a) = axisymmetric {
+    if let Some(a) = on_axis {
         set_attr_scalar(ctx, root, "axisymmetric", &a)?;
     }
     Ok(())
@@ -791,16 +791,18 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
             }
         }
     }
-    let plane_strain = get_attr::<u8>(&ctx, &file, "plane_strain")? != 0;
-    let axisymmetric =
-        has_attr(&ctx, &file, "axisymmetric")? && get_attr::<u8>(&ctx, &file, "axisymmetric")? != 0;
+    // The kind from the root flags (`model` is for other readers).
+    let kind = crate::fem::ElementKind::from_file_flags(
+        get_attr::<u8>(&ctx, &file, "plane_strain")? != 0,
+        has_attr(&ctx, &file, "axisymmetric")? && get_attr::<u8>(&ctx, &file, "axisymmetric")? != 0,
+    );
 
     if !file.link_exists("mesh") {
         return Err(ctx.missing("group /mesh"));
     }
     let g = file.group("mesh").map_err(|e| linked(&ctx, "/mesh", e))?;
     let mut mesh = read_mesh(&ctx.of_file(&g), &g)?;
-    mesh.kind = crate::fem::ElementKind::from_file_flags(plane_strain, axisymmetric);
+    mesh.kind = kind;
 
     let mut steps = Vec::new();
     let mut friction = Vec::new();
