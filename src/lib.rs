@@ -20,6 +20,7 @@ pub mod fem;
 pub mod io;
 pub mod linalg;
 pub mod mesh;
+pub mod output;
 pub mod post;
 pub mod problem;
 pub mod qp;

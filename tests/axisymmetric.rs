@@ -104,7 +104,7 @@ fn write_model(dir: &Path, name: &str, blocks: &[Block], body: &str) -> PathBuf 
 fn solve_with(
     path: &Path,
     method: Option<&str>,
-) -> (Prepared, QpResult, signorini::io::StepOutput) {
+) -> (Prepared, QpResult, signorini::output::StepOutput) {
     let choice = match method {
         None => SolverSection::default(),
         Some(m) => {

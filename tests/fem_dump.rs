@@ -49,7 +49,7 @@ fn dump_model(m: &fem::Model) -> String {
     let _ = writeln!(s, "kernel_body {:?}", m.kernel_body);
     let _ = writeln!(s, "qp_rows {:?}", m.qp_rows);
     let _ = writeln!(s, "dofs {:?}", m.dofs);
-    let _ = writeln!(s, "plane {:?} thickness {:?}", m.plane, m.thickness);
+    let _ = writeln!(s, "kind {:?}", m.kind);
     let _ = writeln!(s, "conditions {:?}", m.conditions);
     let _ = writeln!(s, "cond_groups {:?}", m.cond_groups);
     let _ = writeln!(s, "loads {:?}", m.loads);

@@ -2,10 +2,11 @@
 
 use std::path::Path;
 
+use signorini::fem::ElementKind;
 use signorini::io::atomic::{write_atomic, IoError};
 use signorini::io::hdf5::{append_step, create_checkpoint, read_checkpoint};
 use signorini::io::vtu::{read_pvd, read_vtu_arrays, write_contact_vtu, write_pvd, write_vtu};
-use signorini::io::{Change, ContactGeometry, OutMesh, StepInfo, StepOutput};
+use signorini::output::{Change, ContactGeometry, OutMesh, StepInfo, StepOutput};
 
 /// Two bodies, one triangle each, touching along y = 0 from x = 0 to x = 1.
 /// The two interface nodes are duplicated (points 0,1 in body 0 and 3,4 in
@@ -25,8 +26,11 @@ fn mesh(plane_strain: bool) -> OutMesh {
         triangles: vec![[0, 2, 1], [3, 4, 5]],
         material: vec![0, 1],
         material_names: vec!["crust".into(), "block β".into()],
-        plane_strain,
-        axisymmetric: false,
+        kind: if plane_strain {
+            ElementKind::PlaneStrain
+        } else {
+            ElementKind::PlaneStress { thickness: 1.0 }
+        },
         contact: ContactGeometry {
             points: vec![[0.0, 0.0], [1.0, 0.0]],
             first: vec![0, 1],
@@ -149,7 +153,7 @@ fn check_bulk_vtu(path: &Path, m: &OutMesh, s: &StepOutput) {
         (1, vec![0., 0., 0., 1., 1., 1.])
     );
 
-    let nc = if m.plane_strain { 4 } else { 3 };
+    let nc = m.kind.stress_len();
     let st = r.cell_array("stress").unwrap();
     assert_eq!(st.num_comp, nc);
     let want: Vec<f64> = s.stress.iter().flat_map(|x| x[..nc].to_vec()).collect();
@@ -370,7 +374,7 @@ fn hdf5_roundtrip_two_steps() {
     assert_eq!(rm.triangles, m.triangles);
     assert_eq!(rm.material, m.material);
     assert_eq!(rm.material_names, m.material_names);
-    assert_eq!(rm.plane_strain, m.plane_strain);
+    assert_eq!(rm.kind, m.kind);
     let (a, b) = (&rm.contact, &m.contact);
     assert_eq!(a.points, b.points);
     assert_eq!(a.first, b.first);
@@ -469,7 +473,7 @@ fn hdf5_append_replaces_later_steps() {
     let c = read_checkpoint(&p).unwrap();
     assert_eq!(c.steps.len(), 2);
     assert_eq!(c.steps[1].time, 0.75);
-    assert!(!c.mesh.plane_strain);
+    assert_eq!(c.mesh.kind.stress_len(), 3);
     append_step(&p, 1, &step(0.25, 1.0)).unwrap();
     let c = read_checkpoint(&p).unwrap();
     assert_eq!(c.steps.len(), 1);

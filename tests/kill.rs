@@ -12,7 +12,8 @@
 //! after a checkpoint exists. Whatever a kill hits, the assertions are the
 //! same.
 
-use signorini::io::hdf5::{read_checkpoint, Checkpoint};
+use signorini::io::hdf5::read_checkpoint;
+use signorini::output::Checkpoint;
 use std::path::{Path, PathBuf};
 use std::process::Stdio;
 use std::time::{Duration, Instant};

@@ -12,7 +12,7 @@ use signorini::run::{self, Prepared};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-fn solve(path: &Path) -> (Prepared, QpResult, signorini::io::StepOutput) {
+fn solve(path: &Path) -> (Prepared, QpResult, signorini::output::StepOutput) {
     let (prep, res) = common::solve_file(path, &SolverSection::default());
     let step = signorini::post::step_output(&prep.model, &prep.problem, &res, 1.0);
     (prep, res, step)

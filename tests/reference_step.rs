@@ -8,7 +8,8 @@
 mod common;
 
 use common::{meshes, run};
-use signorini::io::hdf5::{read_checkpoint, Checkpoint};
+use signorini::io::hdf5::read_checkpoint;
+use signorini::output::Checkpoint;
 use std::path::{Path, PathBuf};
 
 const NAME: &str = "geodynamic_steps";

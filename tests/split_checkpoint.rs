@@ -8,8 +8,9 @@ mod common;
 
 use common::run;
 use signorini::io::hdf5::{
-    append_step, append_step_with_friction_in_place, create_checkpoint, read_checkpoint, Checkpoint,
+    append_step, append_step_with_friction_in_place, create_checkpoint, read_checkpoint,
 };
+use signorini::output::Checkpoint;
 use std::os::unix::fs::MetadataExt;
 use std::path::Path;
 
@@ -34,7 +35,7 @@ fn solve(out: &Path, extra: &[&str]) {
 }
 
 /// The bits of a step's displacements, stresses and multipliers.
-fn bits(s: &signorini::io::StepOutput) -> Vec<u64> {
+fn bits(s: &signorini::output::StepOutput) -> Vec<u64> {
     s.displacement
         .iter()
         .flatten()

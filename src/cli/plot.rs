@@ -109,7 +109,7 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
         // Set from the checkpoint's problem by the renderer.
         units: Default::default(),
     };
-    match plot::plot_file(&a.checkpoint, &a.output, &opts) {
+    match crate::run::plot_file(&a.checkpoint, &a.output, &opts) {
         Ok(s) => {
             if !quiet {
                 let what = if a.contact && s.stick_slip.is_some() {

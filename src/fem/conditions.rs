@@ -10,6 +10,7 @@
 //! combines Dirichlet and slip at corners. The unknowns ξ are numbered point
 //! by point (§2.3).
 
+use super::element::Vector;
 use super::topology::{dim_name, Topology};
 use super::FemError;
 use crate::mesh::Mesh;
@@ -21,15 +22,15 @@ pub struct PointDofs {
     pub start: usize,
     pub ndof: usize,
     /// Columns of T (unit, orthogonal); only the first `ndof` are used.
-    pub t: [[f64; 2]; 2],
-    pub u0: [f64; 2],
+    pub t: [Vector; 2],
+    pub u0: Vector,
 }
 
 /// One linear condition r·u = v at a point; `src` indexes the names of the
 /// TOML entries that set conditions (for messages).
 #[derive(Clone, Copy)]
 pub(super) struct Cond {
-    pub(super) r: [f64; 2],
+    pub(super) r: Vector,
     pub(super) v: f64,
     pub(super) src: usize,
 }
@@ -58,7 +59,7 @@ impl Conditions {
         };
         c.add_dirichlet(mesh, topo, problem)?;
         c.add_slip(mesh, topo, problem)?;
-        if problem.file.model.plane.is_axisymmetric() {
+        if topo.kind.has_axis() {
             c.add_axis(mesh, topo, problem)?;
         }
         Ok(c)
@@ -171,7 +172,7 @@ impl Conditions {
                 }
             }
             // Averaged unit normal per point over the segments of this line.
-            let mut sum: std::collections::BTreeMap<usize, [f64; 2]> = Default::default();
+            let mut sum: std::collections::BTreeMap<usize, Vector> = Default::default();
             for (p, _, seg) in topo.group_points(mesh, problem, &s.on, &what)? {
                 if let Some((a, b, t)) = seg {
                     let n = topo.outward_normal(mesh, t, a, b);
@@ -236,7 +237,7 @@ impl Conditions {
     }
 
     /// The conditions as (point, unit direction r, index into `groups`).
-    pub(super) fn list(&self) -> Vec<(usize, [f64; 2], u32)> {
+    pub(super) fn list(&self) -> Vec<(usize, Vector, u32)> {
         self.at
             .iter()
             .enumerate()
@@ -306,12 +307,12 @@ fn eliminate(cs: &[Cond]) -> Result<PointDofs, String> {
 }
 
 /// |r|.
-fn norm2(r: [f64; 2]) -> f64 {
+fn norm2(r: Vector) -> f64 {
     (r[0] * r[0] + r[1] * r[1]).sqrt()
 }
 
 /// r / |r|.
-pub(super) fn normalize(r: [f64; 2]) -> [f64; 2] {
+pub(super) fn normalize(r: Vector) -> Vector {
     let l = norm2(r);
     [r[0] / l, r[1] / l]
 }
@@ -320,7 +321,7 @@ pub(super) fn normalize(r: [f64; 2]) -> [f64; 2] {
 mod tests {
     use super::*;
 
-    fn cond(r: [f64; 2], v: f64) -> Cond {
+    fn cond(r: Vector, v: f64) -> Cond {
         Cond { r, v, src: 0 }
     }
 

@@ -3,6 +3,7 @@
 //! unknowns, the rows of A and g of the QP (docs/methods.md §2.7–2.8, §7).
 
 use super::conditions::PointDofs;
+use super::element::Vector;
 use super::topology::Topology;
 use super::FemError;
 use crate::mesh::Mesh;
@@ -42,7 +43,7 @@ pub struct ContactRow {
     /// Point of body l (weight 1), or the two master points with (1−ξ, ξ).
     pub second: [(usize, f64); 2],
     /// Contract normal: outward of body k, or of the master segment.
-    pub normal: [f64; 2],
+    pub normal: Vector,
     /// Initial gap g ≥ 0.
     pub gap0: f64,
     /// Length that the row's force acts on (half the adjacent segments), or
@@ -76,7 +77,7 @@ impl std::fmt::Debug for ContactRow {
 
 impl ContactRow {
     /// Coefficients c_p (2-vectors) of the row Σ c_p·u_p ≤ g.
-    pub fn coefficients(&self) -> Vec<(usize, [f64; 2])> {
+    pub fn coefficients(&self) -> Vec<(usize, Vector)> {
         let n = self.normal;
         match self.kind {
             RowKind::Conforming => vec![(self.first, n), (self.second[0].0, [-n[0], -n[1]])],
@@ -160,7 +161,7 @@ mod tests {
         kind: RowKind,
         first: usize,
         second: [(usize, f64); 2],
-        normal: [f64; 2],
+        normal: Vector,
         gap0: f64,
         trib: f64,
         interface: u32,

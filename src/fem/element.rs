@@ -1,39 +1,374 @@
 //! The P1 element of docs/methods.md §1.4 and §2.2: material matrix D, strain
-//! matrix B, element stiffness C_e = t_h|T| BᵀDB, stresses τ̄ = D B x_e.
+//! matrix B, element stiffness C_e = t_h|T| BᵀDB, stresses τ̄ = D B x_e, and
+//! [`ElementKind`], the one place that knows which kind of model (plane
+//! strain, plane stress, axisymmetric) an element belongs to (docs/design.md
+//! §"Element kinds").
 
-use crate::problem::{Material, Plane};
+use crate::problem::{Material, ModelSection, Plane};
 
-/// D for ē = (e11, e22, 2e12) (methods.md §1.4).
-pub fn d_matrix(m: &Material, plane: Plane) -> [[f64; 3]; 3] {
-    let (e, nu) = (m.e, m.nu);
-    match plane {
-        // The in-plane block of the axisymmetric D4 is that of plane strain.
-        Plane::Strain | Plane::Axisymmetric => {
-            let f = e / ((1.0 + nu) * (1.0 - 2.0 * nu));
-            [
-                [f * (1.0 - nu), f * nu, 0.0],
-                [f * nu, f * (1.0 - nu), 0.0],
-                [0.0, 0.0, f * (1.0 - 2.0 * nu) / 2.0],
-            ]
+/// A point (x, y) of the plane, or (r, z) of an axisymmetric model.
+pub type Point = [f64; 2];
+
+/// A vector of the plane: a displacement, a force, a normal.
+pub type Vector = [f64; 2];
+
+/// The kind of model an element belongs to, and everything that depends
+/// on it: the material matrix and the strain operator (through
+/// [`ElementKind::material`], [`ElementKind::stiffness`],
+/// [`ElementKind::stress`]), the integration measure of a triangle (area ×
+/// thickness, or r dA per radian), the boundary measure of a segment
+/// (ℓ/2 per node, or ∫N r ds), the rigid modes, and the stress components
+/// and their names (docs/design.md §"Element kinds"; docs/methods.md §1.4,
+/// §2.2, §10). Nothing outside this module asks which kind a model is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ElementKind {
+    /// Plane strain: ε_zz = 0, σ_zz = ν(σ_xx + σ_yy), per unit thickness.
+    PlaneStrain,
+    /// Plane stress: σ_zz = 0; every integral is over the thickness t_h.
+    PlaneStress { thickness: f64 },
+    /// Axisymmetric about the y axis (x = r ≥ 0, y = z): every integral is
+    /// per radian, ∫ · r dr dz (docs/methods.md §10).
+    Axisymmetric,
+}
+
+impl Default for ElementKind {
+    /// Plane strain, as `[model] plane` defaults to.
+    fn default() -> ElementKind {
+        ElementKind::PlaneStrain
+    }
+}
+
+/// The names of the stress components of a plane model: σxx, σyy, σxy, σzz.
+const PLANE_STRESS_NAMES: [&str; 4] = ["sxx", "syy", "sxy", "szz"];
+
+/// The names of the stress components of an axisymmetric model: σrr, σzz,
+/// σrz, σθθ (docs/problem-format.md §11).
+const AXI_STRESS_NAMES: [&str; 4] = ["srr", "szz", "srz", "stt"];
+
+/// Component names of the multi-component output arrays (VTU), per array.
+pub type ComponentNames = &'static [(&'static str, &'static [&'static str])];
+
+/// [`ComponentNames`] of a plane model.
+pub const PLANE_COMPONENT_NAMES: ComponentNames = &[
+    ("displacement", &["ux", "uy", "uz"]),
+    ("displacement_change", &["dux", "duy", "duz"]),
+    ("reaction", &["Rx", "Ry", "Rz"]),
+    ("stress", &["sxx", "syy", "sxy", "szz"]),
+    ("stress_change", &["dsxx", "dsyy", "dsxy", "dszz"]),
+    ("principal_stress", &["s1", "s2"]),
+    ("normal", &["nx", "ny", "nz"]),
+    ("tangent", &["tx", "ty", "tz"]),
+];
+
+/// [`ComponentNames`] of an axisymmetric model (x = r, y = z): (σrr, σzz,
+/// σrz, σθθ), the 4th the hoop stress (docs/problem-format.md §6).
+const AXI_COMPONENT_NAMES: ComponentNames = &[
+    ("displacement", &["ur", "uz", "u3"]),
+    ("displacement_change", &["dur", "duz", "du3"]),
+    ("reaction", &["Rr", "Rz", "R3"]),
+    ("stress", &["srr", "szz", "srz", "stt"]),
+    ("stress_change", &["dsrr", "dszz", "dsrz", "dstt"]),
+    ("principal_stress", &["s1", "s2"]),
+    ("normal", &["nx", "ny", "nz"]),
+    ("tangent", &["tx", "ty", "tz"]),
+];
+
+impl ElementKind {
+    /// The kind of `[model]` (its `plane` and `thickness`).
+    pub fn of(model: &ModelSection) -> ElementKind {
+        match model.plane {
+            Plane::Strain => ElementKind::PlaneStrain,
+            Plane::Stress => ElementKind::PlaneStress {
+                thickness: model.thickness,
+            },
+            Plane::Axisymmetric => ElementKind::Axisymmetric,
         }
-        Plane::Stress => {
-            let f = e / (1.0 - nu * nu);
-            [
-                [f, f * nu, 0.0],
-                [f * nu, f, 0.0],
-                [0.0, 0.0, f * (1.0 - nu) / 2.0],
-            ]
+    }
+
+    /// The thickness that turns a force per unit length into a pressure
+    /// (and multiplies every stiffness and load): t_h in plane stress, 1
+    /// in plane strain and per radian (methods.md §2.2, §10).
+    pub fn thickness(self) -> f64 {
+        match self {
+            ElementKind::PlaneStress { thickness } => thickness,
+            ElementKind::PlaneStrain | ElementKind::Axisymmetric => 1.0,
+        }
+    }
+
+    /// The name of the kind in the files (HDF5 root attribute `model`):
+    /// "plane_strain", "plane_stress" or "axisymmetric".
+    pub fn model_name(self) -> &'static str {
+        match self {
+            ElementKind::PlaneStrain => "plane_strain",
+            ElementKind::PlaneStress { .. } => "plane_stress",
+            ElementKind::Axisymmetric => "axisymmetric",
+        }
+    }
+
+    /// The HDF5 root flags of the kind (docs/problem-format.md): the value
+    /// of `plane_strain` (1 when the stress has a fourth component, σzz
+    /// or, axisymmetric, σθθ) and of `axisymmetric` when written (only 1).
+    pub fn file_flags(self) -> (u8, Option<u8>) {
+        match self {
+            ElementKind::PlaneStrain => (1, None),
+            ElementKind::PlaneStress { .. } => (0, None),
+            ElementKind::Axisymmetric => (1, Some(1)),
+        }
+    }
+
+    /// The kind of a file's root flags [`ElementKind::file_flags`]; the
+    /// thickness of plane stress is not in the file (the written fields
+    /// do not depend on it), 1 here.
+    pub fn from_file_flags(plane_strain: bool, axisymmetric: bool) -> ElementKind {
+        match (plane_strain, axisymmetric) {
+            (_, true) => ElementKind::Axisymmetric,
+            (true, false) => ElementKind::PlaneStrain,
+            (false, false) => ElementKind::PlaneStress { thickness: 1.0 },
+        }
+    }
+
+    /// The unit of forces when it is not N (per unit thickness): "N/rad"
+    /// for an axisymmetric model.
+    pub fn force_unit(self) -> Option<&'static str> {
+        match self {
+            ElementKind::Axisymmetric => Some("N/rad"),
+            _ => None,
+        }
+    }
+
+    /// Whether the model revolves about the axis x = r = 0: the mesh lies
+    /// in r ≥ 0, points on the axis get u_r = 0, a spin ω about it loads
+    /// ρω²r, and a traction on it acts on no area (methods.md §10).
+    pub fn has_axis(self) -> bool {
+        self == ElementKind::Axisymmetric
+    }
+
+    /// The number of stress components the files keep: 4 (σzz or σθθ)
+    /// or 3 in plane stress (σzz = 0).
+    pub fn stress_len(self) -> usize {
+        match self {
+            ElementKind::PlaneStress { .. } => 3,
+            ElementKind::PlaneStrain | ElementKind::Axisymmetric => 4,
+        }
+    }
+
+    /// The names of the four stress components of [`ElementKind::stress`].
+    pub fn stress_names(self) -> [&'static str; 4] {
+        match self {
+            ElementKind::Axisymmetric => AXI_STRESS_NAMES,
+            _ => PLANE_STRESS_NAMES,
+        }
+    }
+
+    /// The component of the stress that `name` denotes in this kind: its
+    /// own names, and on an axisymmetric model also the plane names (sxx =
+    /// σrr, syy = σzz, sxy = σrz; szz is its own σzz). Some(Err(the plane
+    /// name of the same component)) for an axisymmetric name on a plane
+    /// model; None when `name` names no stress component.
+    pub fn stress_component(self, name: &str) -> Option<Result<usize, &'static str>> {
+        let own = self.stress_names();
+        if let Some(i) = own.iter().position(|n| *n == name) {
+            return Some(Ok(i));
+        }
+        let plane = PLANE_STRESS_NAMES.iter().position(|n| *n == name);
+        let axi = AXI_STRESS_NAMES.iter().position(|n| *n == name);
+        match (self, plane, axi) {
+            (ElementKind::Axisymmetric, Some(i), _) => Some(Ok(i)),
+            (_, _, Some(i)) => Some(Err(PLANE_STRESS_NAMES[i])),
+            _ => None,
+        }
+    }
+
+    /// The component names of the output arrays (displacement, stress, …).
+    pub fn component_names(self) -> ComponentNames {
+        match self {
+            ElementKind::Axisymmetric => AXI_COMPONENT_NAMES,
+            _ => PLANE_COMPONENT_NAMES,
+        }
+    }
+
+    /// Which of the three rigid motions of a plane body (the translations
+    /// along x and y, the rotation) are rigid modes of this kind: all
+    /// three in the plane, the axial translation only when axisymmetric (a
+    /// radial translation strains the hoop, u_r/r ≠ 0; methods.md §1.7,
+    /// §10).
+    pub fn rigid_modes(self) -> [bool; 3] {
+        match self {
+            ElementKind::Axisymmetric => [false, true, false],
+            _ => [true, true, true],
+        }
+    }
+
+    /// The number of rigid modes of a free body ([`ElementKind::rigid_modes`]).
+    pub fn n_rigid_modes(self) -> usize {
+        self.rigid_modes().iter().filter(|m| **m).count()
+    }
+
+    /// The material matrix of `m` in this kind (methods.md §1.4, §10).
+    pub fn material(self, m: &Material) -> MaterialMatrix {
+        MaterialMatrix {
+            d: match self {
+                ElementKind::PlaneStrain => Elasticity::Plane(d_plane_strain(m)),
+                ElementKind::PlaneStress { .. } => Elasticity::Plane(d_plane_stress(m)),
+                ElementKind::Axisymmetric => Elasticity::Axisymmetric(d_axi(m)),
+            },
+            nu: m.nu,
+            out_of_plane: self.stress_len() == 4,
+        }
+    }
+
+    /// The element stiffness C_e (6×6): t_h|T| BᵀDB, or r̄|T| B4ᵀD4B4 per
+    /// radian (methods.md §2.2, §10).
+    pub fn stiffness(self, p: &[Point; 3], d: &MaterialMatrix) -> [[f64; 6]; 6] {
+        match &d.d {
+            Elasticity::Plane(d3) => stiffness(p, d3, self.thickness()),
+            Elasticity::Axisymmetric(d4) => axi_stiffness(p, d4),
+        }
+    }
+
+    /// Rows 2a and 2a + 1 of [`ElementKind::stiffness`] (vertex `a`), bit
+    /// for bit.
+    #[inline]
+    pub fn stiffness_rows(self, p: &[Point; 3], d: &MaterialMatrix, a: usize) -> [[f64; 6]; 2] {
+        match &d.d {
+            Elasticity::Plane(d3) => stiffness_rows(p, d3, self.thickness(), a),
+            Elasticity::Axisymmetric(d4) => {
+                let k = axi_stiffness(p, d4);
+                [k[2 * a], k[2 * a + 1]]
+            }
+        }
+    }
+
+    /// The four stress components of [`ElementKind::stress_names`] at the
+    /// element (constant, or at the centroid when axisymmetric) from its
+    /// displacements `u`.
+    pub fn stress(self, p: &[Point; 3], d: &MaterialMatrix, u: &[f64; 6]) -> [f64; 4] {
+        match &d.d {
+            Elasticity::Plane(d3) => plane_stress_of(p, d3, d.nu, d.out_of_plane, u),
+            Elasticity::Axisymmetric(d4) => axi_stress(p, d4, u),
+        }
+    }
+
+    /// The equivalent (von Mises) stress of [`ElementKind::stress`]: the
+    /// report's τe in the plane, with σθθ when axisymmetric.
+    pub fn von_mises(self, s: &[f64; 4]) -> f64 {
+        match self {
+            ElementKind::Axisymmetric => von_mises_axi(s),
+            _ => von_mises(s),
+        }
+    }
+
+    /// The body load of vertex `a` of a triangle `p` (the element part of
+    /// d): th |T|/3 f_b, or ∫ N_a (f_b r + c r² e_r) dA per radian with the
+    /// centrifugal coefficient c = ρω² (methods.md §2.2, §10).
+    #[inline]
+    pub fn body_load(self, p: &[Point; 3], a: usize, fb: Vector, c: f64) -> Vector {
+        match self {
+            ElementKind::Axisymmetric => axi_body_load(p, a, fb, c),
+            _ => {
+                let area = area2(p) / 2.0;
+                let th = self.thickness();
+                [th * area / 3.0 * fb[0], th * area / 3.0 * fb[1]]
+            }
+        }
+    }
+
+    /// [`ElementKind::body_load`] as the nodal loads sum it (th·2|T|/6 per
+    /// vertex: the same value, rounded as the reactions' balance has
+    /// always been).
+    #[inline]
+    pub fn nodal_body_load(self, p: &[Point; 3], a: usize, fb: Vector, c: f64) -> Vector {
+        match self {
+            ElementKind::Axisymmetric => axi_body_load(p, a, fb, c),
+            _ => {
+                let w = self.thickness() * area2(p) / 6.0;
+                [w * fb[0], w * fb[1]]
+            }
+        }
+    }
+
+    /// The boundary measure of node `x` on a segment (x, y) of length
+    /// `len`, ∫ N_x ds = ℓ/2, or ∫ N_x r ds = ℓ(2r_x + r_y)/6 per radian
+    /// (methods.md §10): the tributary weight of a contact row, without
+    /// the thickness.
+    #[inline]
+    pub fn boundary_weight(self, len: f64, x: Point, y: Point) -> f64 {
+        match self {
+            ElementKind::Axisymmetric => len * (2.0 * x[0] + y[0]) / 6.0,
+            _ => len / 2.0,
+        }
+    }
+
+    /// The weight of a constant traction at node `x` of a segment (x, y):
+    /// ½ th ℓ, or [`ElementKind::boundary_weight`] per radian.
+    #[inline]
+    pub fn traction_weight(self, len: f64, x: Point, y: Point) -> f64 {
+        match self {
+            ElementKind::Axisymmetric => self.boundary_weight(len, x, y),
+            _ => 0.5 * self.thickness() * len,
+        }
+    }
+
+    /// The density of the boundary measure at a point `x` of a segment:
+    /// r when axisymmetric (the mortar integrals, methods.md §7.1, §10), 1
+    /// otherwise.
+    #[inline]
+    pub fn line_density(self, x: Point) -> f64 {
+        match self {
+            ElementKind::Axisymmetric => x[0],
+            _ => 1.0,
         }
     }
 }
 
+/// The material matrix of one material in one [`ElementKind`]
+/// ([`ElementKind::material`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MaterialMatrix {
+    d: Elasticity,
+    /// ν: σzz = ν(σxx + σyy) of plane strain.
+    nu: f64,
+    /// Whether σzz is ν(σxx + σyy) (plane strain) rather than 0.
+    out_of_plane: bool,
+}
+
+/// D (3×3) of a plane model or D4 (4×4) of an axisymmetric one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Elasticity {
+    Plane([[f64; 3]; 3]),
+    Axisymmetric([[f64; 4]; 4]),
+}
+
+/// D of plane strain for ē = (e11, e22, 2e12) (methods.md §1.4); also the
+/// in-plane block of the axisymmetric D4.
+fn d_plane_strain(m: &Material) -> [[f64; 3]; 3] {
+    let (e, nu) = (m.e, m.nu);
+    let f = e / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    [
+        [f * (1.0 - nu), f * nu, 0.0],
+        [f * nu, f * (1.0 - nu), 0.0],
+        [0.0, 0.0, f * (1.0 - 2.0 * nu) / 2.0],
+    ]
+}
+
+/// D of plane stress for ē = (e11, e22, 2e12) (methods.md §1.4).
+fn d_plane_stress(m: &Material) -> [[f64; 3]; 3] {
+    let (e, nu) = (m.e, m.nu);
+    let f = e / (1.0 - nu * nu);
+    [
+        [f, f * nu, 0.0],
+        [f * nu, f, 0.0],
+        [0.0, 0.0, f * (1.0 - nu) / 2.0],
+    ]
+}
+
 /// Twice the signed area: positive for counter-clockwise vertices.
-pub fn area2(p: &[[f64; 2]; 3]) -> f64 {
+pub fn area2(p: &[Point; 3]) -> f64 {
     (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1])
 }
 
 /// B (3×6) of §2.2 for counter-clockwise vertices, and |T|.
-pub fn b_matrix(p: &[[f64; 2]; 3]) -> ([[f64; 6]; 3], f64) {
+pub fn b_matrix(p: &[Point; 3]) -> ([[f64; 6]; 3], f64) {
     let a2 = area2(p);
     let b = [p[1][1] - p[2][1], p[2][1] - p[0][1], p[0][1] - p[1][1]];
     let c = [p[2][0] - p[1][0], p[0][0] - p[2][0], p[1][0] - p[0][0]];
@@ -67,7 +402,7 @@ fn ke_entry(b: &[[f64; 6]; 3], db: &[[f64; 6]; 3], th: f64, area: f64, i: usize,
 }
 
 /// C_e = t_h |T| BᵀDB (6×6).
-pub fn stiffness(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64) -> [[f64; 6]; 6] {
+pub fn stiffness(p: &[Point; 3], d: &[[f64; 3]; 3], th: f64) -> [[f64; 6]; 6] {
     let (b, area) = b_matrix(p);
     let db = d_times_b(d, &b);
     let mut k = [[0.0; 6]; 6];
@@ -82,7 +417,7 @@ pub fn stiffness(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64) -> [[f64; 6]; 6]
 /// Rows 2a and 2a+1 of C_e (the two rows of vertex `a`), bit for bit equal
 /// to those of [`stiffness`].
 #[inline]
-pub fn stiffness_rows(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64, a: usize) -> [[f64; 6]; 2] {
+pub fn stiffness_rows(p: &[Point; 3], d: &[[f64; 3]; 3], th: f64, a: usize) -> [[f64; 6]; 2] {
     let (b, area) = b_matrix(p);
     let db = d_times_b(d, &b);
     let mut k = [[0.0; 6]; 2];
@@ -94,12 +429,14 @@ pub fn stiffness_rows(p: &[[f64; 2]; 3], d: &[[f64; 3]; 3], th: f64, a: usize) -
     k
 }
 
-/// Stresses (σxx, σyy, σxy, σzz) from the element displacements.
-pub fn stress(
-    p: &[[f64; 2]; 3],
+/// Stresses (σxx, σyy, σxy, σzz) of a plane element from its
+/// displacements: σzz = ν(σxx + σyy) when `out_of_plane` (plane strain),
+/// else 0.
+fn plane_stress_of(
+    p: &[Point; 3],
     d: &[[f64; 3]; 3],
-    m: &Material,
-    plane: Plane,
+    nu: f64,
+    out_of_plane: bool,
     u: &[f64; 6],
 ) -> [f64; 4] {
     let (b, _) = b_matrix(p);
@@ -111,10 +448,10 @@ pub fn stress(
     for (i, si) in s.iter_mut().enumerate() {
         *si = (0..3).map(|k| d[i][k] * e[k]).sum();
     }
-    let szz = match plane {
-        Plane::Strain => m.nu * (s[0] + s[1]),
-        Plane::Stress => 0.0,
-        Plane::Axisymmetric => return axi_stress(p, m, u),
+    let szz = if out_of_plane {
+        nu * (s[0] + s[1])
+    } else {
+        0.0
     };
     [s[0], s[1], s[2], szz]
 }
@@ -135,7 +472,7 @@ pub fn d_axi(m: &Material) -> [[f64; 4]; 4] {
 }
 
 /// The centroid radius r̄ = (r₁ + r₂ + r₃)/3 of a triangle (x = r).
-pub fn centroid_r(p: &[[f64; 2]; 3]) -> f64 {
+pub fn centroid_r(p: &[Point; 3]) -> f64 {
     (p[0][0] + p[1][0] + p[2][0]) / 3.0
 }
 
@@ -146,7 +483,7 @@ pub fn centroid_r(p: &[[f64; 2]; 3]) -> f64 {
 /// "Axisymmetric stress analysis") give this centroid approximation; the
 /// in-plane rows are constant, so r̄|T| BᵀD4B is the one-point rule of
 /// ∫ BᵀD4B r dA (docs/methods.md §10).
-pub fn axi_b(p: &[[f64; 2]; 3]) -> ([[f64; 6]; 4], f64, f64) {
+pub fn axi_b(p: &[Point; 3]) -> ([[f64; 6]; 4], f64, f64) {
     let (b3, area) = b_matrix(p);
     let rbar = centroid_r(p);
     let mut b = [[0.0; 6]; 4];
@@ -158,7 +495,7 @@ pub fn axi_b(p: &[[f64; 2]; 3]) -> ([[f64; 6]; 4], f64, f64) {
 }
 
 /// C_e = r̄ |T| B4ᵀ D4 B4 (6×6, per radian) of the axisymmetric triangle.
-pub fn axi_stiffness(p: &[[f64; 2]; 3], d4: &[[f64; 4]; 4]) -> [[f64; 6]; 6] {
+pub fn axi_stiffness(p: &[Point; 3], d4: &[[f64; 4]; 4]) -> [[f64; 6]; 6] {
     let (b, area, rbar) = axi_b(p);
     let mut db = [[0.0; 6]; 4];
     for i in 0..4 {
@@ -175,25 +512,11 @@ pub fn axi_stiffness(p: &[[f64; 2]; 3], d4: &[[f64; 4]; 4]) -> [[f64; 6]; 6] {
     k
 }
 
-/// The element stiffness of any `plane` (per radian when axisymmetric).
-pub fn stiffness_in(
-    p: &[[f64; 2]; 3],
-    m: &Material,
-    d: &[[f64; 3]; 3],
-    plane: Plane,
-    th: f64,
-) -> [[f64; 6]; 6] {
-    match plane {
-        Plane::Axisymmetric => axi_stiffness(p, &d_axi(m)),
-        _ => stiffness(p, d, th),
-    }
-}
-
 /// ∫ N_a (f_b r + c r² e_r) dA over an axisymmetric triangle, exactly
 /// (∫ λ₁^i λ₂^j λ₃^k dA = 2|T| i! j! k! / (i + j + k + 2)!): the nodal force
 /// per radian of vertex `a` from a body force f_b (gravity, along z) and a
 /// centrifugal load c r along r (c = ρω²).
-pub fn axi_body_load(p: &[[f64; 2]; 3], a: usize, fb: [f64; 2], c: f64) -> [f64; 2] {
+pub fn axi_body_load(p: &[Point; 3], a: usize, fb: Vector, c: f64) -> Vector {
     let area = area2(p) / 2.0;
     let r = [p[0][0], p[1][0], p[2][0]];
     let w1 = area / 12.0 * (r[a] + r[0] + r[1] + r[2]);
@@ -212,9 +535,8 @@ pub fn axi_body_load(p: &[[f64; 2]; 3], a: usize, fb: [f64; 2], c: f64) -> [f64;
 }
 
 /// (σ_rr, σ_zz, σ_rz, σ_θθ) at the centroid of an axisymmetric triangle.
-fn axi_stress(p: &[[f64; 2]; 3], m: &Material, u: &[f64; 6]) -> [f64; 4] {
+fn axi_stress(p: &[Point; 3], d4: &[[f64; 4]; 4], u: &[f64; 6]) -> [f64; 4] {
     let (b, _, _) = axi_b(p);
-    let d4 = d_axi(m);
     let mut e = [0.0; 4];
     for (i, ei) in e.iter_mut().enumerate() {
         *ei = (0..6).map(|j| b[i][j] * u[j]).sum();
@@ -261,7 +583,7 @@ mod tests {
             nu: 0.3,
             rho: 0.0,
         };
-        let d = d_matrix(&m, Plane::Strain);
+        let d = d_plane_strain(&m);
         let k = stiffness(&p, &d, 1.0);
         for i in 0..6 {
             for j in 0..6 {
@@ -290,8 +612,7 @@ mod tests {
             nu: 0.27,
             rho: 0.0,
         };
-        for plane in [Plane::Strain, Plane::Stress] {
-            let d = d_matrix(&m, plane);
+        for d in [d_plane_strain(&m), d_plane_stress(&m)] {
             let k = stiffness(&p, &d, 0.7);
             for a in 0..3 {
                 let r = stiffness_rows(&p, &d, 0.7, a);
@@ -333,13 +654,8 @@ mod tests {
             assert!(f(&radial) > 1e-3 * k[0][0]);
             let eps = 1e-3;
             let u = [eps * p[0][0], 0.0, eps * p[1][0], 0.0, eps * p[2][0], 0.0];
-            let s = stress(
-                &p,
-                &d_matrix(&m, Plane::Axisymmetric),
-                &m,
-                Plane::Axisymmetric,
-                &u,
-            );
+            let kind = ElementKind::Axisymmetric;
+            let s = kind.stress(&p, &kind.material(&m), &u);
             let want = (d4[0][0] + d4[0][1]) * eps;
             assert!((s[0] - want).abs() < 1e-9 * want, "{s:?}");
             assert!((s[3] - want).abs() < 1e-9 * want, "{s:?}");
@@ -389,10 +705,10 @@ mod tests {
             nu: 0.25,
             rho: 0.0,
         };
-        let d = d_matrix(&m, Plane::Stress);
+        let kind = ElementKind::PlaneStress { thickness: 1.0 };
         let eps = 1e-3;
         let u = [0.0, 0.0, eps, 0.0, 0.0, 0.0];
-        let s = stress(&p, &d, &m, Plane::Stress, &u);
+        let s = kind.stress(&p, &kind.material(&m), &u);
         let sxx = 200.0 / (1.0 - 0.0625) * eps;
         assert!((s[0] - sxx).abs() < 1e-12);
         assert!((s[1] - 0.25 * sxx).abs() < 1e-12);

@@ -9,6 +9,7 @@
 
 use super::conditions::PointDofs;
 use super::contact::{ContactRow, RowKind};
+use super::element::Vector;
 use super::topology::Topology;
 use super::{FemError, Model};
 use crate::problem::{ContactPair, FrictionLaw, Problem};
@@ -26,7 +27,7 @@ fn tangential(row: &ContactRow) -> ContactRow {
 
 /// Coefficients c_p of the tangential relative displacement Σ c_p·u_p of
 /// `row` (its own coefficients with n turned by +90°).
-pub fn tangential_coefficients(row: &ContactRow) -> Vec<(usize, [f64; 2])> {
+pub fn tangential_coefficients(row: &ContactRow) -> Vec<(usize, Vector)> {
     tangential(row).coefficients()
 }
 
@@ -53,7 +54,7 @@ pub fn on_symmetry_line(model: &Model, r: usize) -> bool {
 pub(super) fn symmetry_rows(
     topo: &Topology,
     dofs: &[PointDofs],
-    conditions: &[(usize, [f64; 2], u32)],
+    conditions: &[(usize, Vector, u32)],
     groups: &[(&'static str, String)],
     problem: &Problem,
 ) -> Vec<bool> {
@@ -70,7 +71,7 @@ pub(super) fn symmetry_rows(
                 .iter()
                 .all(|st| st.dirichlet.get(name).is_none_or(|u| u[k] == 0.0))
     };
-    let mut at: std::collections::HashMap<usize, Vec<([f64; 2], u32)>> =
+    let mut at: std::collections::HashMap<usize, Vec<(Vector, u32)>> =
         std::collections::HashMap::new();
     let firsts: std::collections::HashSet<usize> = topo
         .contact
@@ -215,7 +216,7 @@ pub(super) fn build(
 
 /// The tangential relative displacement of every QP row for the point
 /// displacements `u` (docs/methods.md §9.5).
-pub fn tangential_displacement(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
+pub fn tangential_displacement(model: &Model, u: &[Vector]) -> Vec<f64> {
     model
         .qp_rows
         .iter()
@@ -236,8 +237,8 @@ pub fn tangential_displacement(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
 /// displacements `u_prev` (the previous load step's; None: the reference
 /// configuration): the tangential displacement of `u_prev` less the part
 /// the prescribed displacements u0 of this model contribute.
-pub fn offset(model: &Model, u_prev: Option<&[[f64; 2]]>) -> Vec<f64> {
-    let u0: Vec<[f64; 2]> = model.dofs.iter().map(|p| p.u0).collect();
+pub fn offset(model: &Model, u_prev: Option<&[Vector]>) -> Vec<f64> {
+    let u0: Vec<Vector> = model.dofs.iter().map(|p| p.u0).collect();
     let from_u0 = tangential_displacement(model, &u0);
     match u_prev {
         None => from_u0.iter().map(|v| -v).collect(),
@@ -251,7 +252,7 @@ pub fn offset(model: &Model, u_prev: Option<&[[f64; 2]]>) -> Vec<f64> {
 
 /// Set the slip offset of `model`'s friction from the previous step's point
 /// displacements (no-op without friction).
-pub fn start_step(model: &mut Model, u_prev: Option<&[[f64; 2]]>) {
+pub fn start_step(model: &mut Model, u_prev: Option<&[Vector]>) {
     if model.qp.friction.is_some() {
         let t0 = offset(model, u_prev);
         if let Some(f) = model.qp.friction.as_mut() {

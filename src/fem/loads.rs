@@ -9,13 +9,18 @@
 //! elimination) are kept for the reactions R = K u − f.
 
 use super::conditions::PointDofs;
-use super::element;
+use super::element::ElementKind;
+use super::element::Vector;
 use super::stiffness::Materials;
 use super::topology::{dim_name, group_names, Topology};
 use super::{FemError, Model};
 use crate::mesh::Mesh;
-use crate::problem::{num, shorten, Problem, TractionLoad, MAX_MAGNITUDE};
+use crate::problem::{
+    num, shorten, Material, ModelSection, Problem, Traction, TractionLoad, MAX_MAGNITUDE,
+};
 use crate::qp::Csr;
+use std::collections::BTreeMap;
+use std::path::Path;
 
 /// The nodal loads on every point [N] (thickness included), and their
 /// tractions and point forces added to `d` (gravity is in d already).
@@ -26,21 +31,21 @@ pub(super) fn nodal_loads(
     problem: &Problem,
     mats: &Materials,
     d: &mut [f64],
-) -> Result<Vec<[f64; 2]>, FemError> {
+) -> Result<Vec<Vector>, FemError> {
     let mut loads = Loads {
         dofs,
         nodal: gravity(topo, mats),
         d,
-        axi: false,
+        kind: mats.kind,
     };
-    loads.axi = mats.axi.is_some();
-    loads.add_tractions(mesh, topo, problem, mats.th)?;
-    loads.add_point_forces(mesh, topo, problem, mats.th)?;
+    loads.add_tractions(mesh, topo, problem)?;
+    loads.add_point_forces(mesh, topo, problem)?;
     Ok(loads.nodal)
 }
 
-/// Gravity on each point: th |T|/3 ρ g per vertex, in triangle order.
-fn gravity(topo: &Topology, mats: &Materials) -> Vec<[f64; 2]> {
+/// The body loads on each point: th |T|/3 ρ g per vertex (with the
+/// centrifugal load per radian when axisymmetric), in triangle order.
+fn gravity(topo: &Topology, mats: &Materials) -> Vec<Vector> {
     let mut loads = vec![[0.0f64; 2]; topo.points.len()];
     for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
         let pts = [
@@ -48,19 +53,11 @@ fn gravity(topo: &Topology, mats: &Materials) -> Vec<[f64; 2]> {
             topo.points[tri[1]],
             topo.points[tri[2]],
         ];
-        if let Some((_, rw2)) = &mats.axi {
-            for (a, &p) in tri.iter().enumerate() {
-                let f = element::axi_body_load(&pts, a, mats.bforce[mi as usize], rw2[mi as usize]);
-                loads[p][0] += f[0];
-                loads[p][1] += f[1];
-            }
-            continue;
-        }
-        let w = mats.th * element::area2(&pts) / 6.0;
-        let fb = mats.bforce[mi as usize];
-        for &p in tri {
-            loads[p][0] += w * fb[0];
-            loads[p][1] += w * fb[1];
+        let (fb, c) = (mats.bforce[mi as usize], mats.spin[mi as usize]);
+        for (a, &p) in tri.iter().enumerate() {
+            let f = mats.kind.nodal_body_load(&pts, a, fb, c);
+            loads[p][0] += f[0];
+            loads[p][1] += f[1];
         }
     }
     loads
@@ -71,12 +68,16 @@ fn gravity(topo: &Topology, mats: &Materials) -> Vec<[f64; 2]> {
 /// the centrifugal ρω²·r_max (r_max the largest radius of the material's
 /// triangles). Names the key and the material: a load past the bound
 /// overflows in the solver's products (a stagnation far from the cause).
-pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<(), FemError> {
-    let f = &problem.file;
-    let err = |msg: String| FemError::new(&problem.path, msg);
-    let g = f.model.gravity.unwrap_or([0.0, 0.0]);
-    let w = f.model.omega.unwrap_or(0.0);
-    let axi = f.model.plane.is_axisymmetric();
+pub(super) fn check_body_forces(
+    topo: &Topology,
+    materials: &BTreeMap<String, Material>,
+    model: &ModelSection,
+    path: &Path,
+) -> Result<(), FemError> {
+    let err = |msg: String| FemError::new(path, msg);
+    let g = model.gravity.unwrap_or([0.0, 0.0]);
+    let w = model.omega.unwrap_or(0.0);
+    let has_axis = topo.kind.has_axis();
     let mut r_max = vec![0.0f64; topo.material_names.len()];
     for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
         for &p in tri {
@@ -86,7 +87,7 @@ pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<()
         }
     }
     for (mi, name) in topo.material_names.iter().enumerate() {
-        let Some(m) = f.materials.get(name) else {
+        let Some(m) = materials.get(name) else {
             continue;
         };
         let rg = m.rho * g[0].hypot(g[1]);
@@ -97,7 +98,7 @@ pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<()
                 num(m.rho)
             )));
         }
-        if axi && w != 0.0 {
+        if has_axis && w != 0.0 {
             let c = m.rho * w * w * r_max[mi];
             if !(c <= MAX_MAGNITUDE) {
                 return Err(err(format!(
@@ -116,11 +117,16 @@ pub(super) fn check_body_forces(topo: &Topology, problem: &Problem) -> Result<()
 /// Warns of each `[[traction]]` of an axisymmetric model whose curve lies
 /// on the axis r = 0: it carries no area there (∫ N r ds = 0 on every
 /// segment), so it adds no load at all.
-pub(super) fn warn_axis_tractions(mesh: &Mesh, problem: &Problem) {
-    if !problem.file.model.plane.is_axisymmetric() {
+pub(super) fn warn_axis_tractions(
+    mesh: &Mesh,
+    kind: ElementKind,
+    tractions: &[Traction],
+    path: &Path,
+) {
+    if !kind.has_axis() {
         return;
     }
-    for (i, tr) in problem.file.traction.iter().enumerate() {
+    for (i, tr) in tractions.iter().enumerate() {
         let Some(g) = mesh.group_any(&tr.on).filter(|g| g.dim == 1) else {
             continue;
         };
@@ -133,7 +139,7 @@ pub(super) fn warn_axis_tractions(mesh: &Mesh, problem: &Problem) {
         if !lines.is_empty() && lines.iter().all(|l| on_axis(l[0]) && on_axis(l[1])) {
             log::warn!(
                 "{}: [[traction]] #{} (on = \"{}\"): the curve lies on the axis r = 0 of the axisymmetric model, where a traction acts on no area; it adds no load",
-                problem.path.display(),
+                path.display(),
                 i + 1,
                 shorten(&tr.on)
             );
@@ -144,15 +150,15 @@ pub(super) fn warn_axis_tractions(mesh: &Mesh, problem: &Problem) {
 /// The nodal loads being summed, and d.
 struct Loads<'a> {
     dofs: &'a [PointDofs],
-    nodal: Vec<[f64; 2]>,
+    nodal: Vec<Vector>,
     d: &'a mut [f64],
-    /// Axisymmetric: tractions weighted by r (∫ N_a P r ds, per radian).
-    axi: bool,
+    /// The measure of the tractions: ½ th ℓ, or ∫ N_a r ds per radian.
+    kind: ElementKind,
 }
 
 impl Loads<'_> {
     /// A force `fv` on point `p`: on the nodal loads, and Tᵀfv on d.
-    fn add(&mut self, p: usize, fv: [f64; 2]) {
+    fn add(&mut self, p: usize, fv: Vector) {
         self.nodal[p][0] += fv[0];
         self.nodal[p][1] += fv[1];
         let pd = self.dofs[p];
@@ -168,7 +174,6 @@ impl Loads<'_> {
         mesh: &Mesh,
         topo: &Topology,
         problem: &Problem,
-        th: f64,
     ) -> Result<(), FemError> {
         for (i, tr) in problem.file.traction.iter().enumerate() {
             let what = format!("[[traction]] #{} (on = \"{}\")", i + 1, tr.on);
@@ -195,18 +200,10 @@ impl Loads<'_> {
                         [pn * nrm[0], pn * nrm[1]]
                     }
                 };
-                // Axisymmetric: ∫ N_p r ds = ℓ(2r_p + r_q)/6 per radian
-                // (docs/methods.md §10); th = 1 there.
-                let w = if self.axi {
-                    let (rp, rq) = if v == a {
-                        (pa[0], pb[0])
-                    } else {
-                        (pb[0], pa[0])
-                    };
-                    len * (2.0 * rp + rq) / 6.0
-                } else {
-                    0.5 * th * len
-                };
+                // ½ th ℓ, or ∫ N_p r ds = ℓ(2r_p + r_q)/6 per radian
+                // (docs/methods.md §10).
+                let (xp, xq) = if v == a { (pa, pb) } else { (pb, pa) };
+                let w = self.kind.traction_weight(len, xp, xq);
                 self.add(p, [w * pv[0], w * pv[1]]);
             }
         }
@@ -220,8 +217,8 @@ impl Loads<'_> {
         mesh: &Mesh,
         topo: &Topology,
         problem: &Problem,
-        th: f64,
     ) -> Result<(), FemError> {
+        let th = self.kind.thickness();
         for (i, fo) in problem.file.force.iter().enumerate() {
             let what = format!("[[force]] #{} (on = \"{}\")", i + 1, fo.on);
             let g = mesh
@@ -256,7 +253,7 @@ pub(super) struct StepLoads {
     pub(super) dofs: Vec<PointDofs>,
     pub(super) d: Vec<f64>,
     pub(super) g: Vec<f64>,
-    pub(super) loads: Vec<[f64; 2]>,
+    pub(super) loads: Vec<Vector>,
 }
 
 /// The d, g, u0 and nodal loads of `problem` (a load step of the problem
@@ -277,13 +274,13 @@ pub(super) fn step_loads(
     }
     lap.lap("conditions");
     let n = base.qp.n();
-    let mats = Materials::new(topo, problem);
+    let mats = Materials::new(topo, &problem.file.materials, &problem.file.model);
     let mut d = element_d(topo, &dofs, n, &mats);
     lap.lap("element loads");
     let loads = nodal_loads(mesh, topo, &dofs, problem, &mats, &mut d)?;
     lap.lap("nodal loads");
     // C is the base's, checked when it was built: only d is checked here.
-    check_d(&base.qp.c, &d, &dofs, topo, mesh, problem)?;
+    check_d(&base.qp.c, &d, &dofs, topo, mesh, &problem.path)?;
     // The rows of A are the same (same T); g and the check of the rows
     // whose points are all fixed depend on u0.
     let (_, g, _) = super::contact::reduced_rows(mesh, topo, &dofs, n, problem)?;
@@ -325,7 +322,7 @@ fn element_d(topo: &Topology, dofs: &[PointDofs], n: usize, mats: &Materials) ->
     let free_at: Vec<bool> = dofs.iter().map(is_free).collect();
     let start: Vec<usize> = dofs.iter().map(|pd| pd.start).collect();
     // The load of triangle t on its vertex a, f_e − C_e u0_e.
-    let term = |t: usize, a: usize, free: [bool; 3], constrained: bool| -> [f64; 2] {
+    let term = |t: usize, a: usize, free: [bool; 3], constrained: bool| -> Vector {
         let tri = topo.triangles[t];
         let mi = topo.tri_material[t] as usize;
         let pts = tri.map(|p| topo.points[p]);
@@ -398,9 +395,9 @@ pub(super) fn check_scale(
     dofs: &[PointDofs],
     topo: &Topology,
     mesh: &Mesh,
-    problem: &Problem,
+    path: &Path,
 ) -> Result<(), FemError> {
-    let err = |msg: String| FemError::new(&problem.path, msg);
+    let err = |msg: String| FemError::new(path, msg);
     let at = |j: usize| unknown_at(j, dofs, topo, mesh);
     if let Some(k) = c.data.iter().position(|v| !v.is_finite()) {
         let row = c.indptr.partition_point(|&s| s <= k).saturating_sub(1);
@@ -409,7 +406,7 @@ pub(super) fn check_scale(
             at(row)
         )));
     }
-    check_d(c, d, dofs, topo, mesh, problem)
+    check_d(c, d, dofs, topo, mesh, path)
 }
 
 /// The part of [`check_scale`] on d (C finite already).
@@ -419,9 +416,9 @@ fn check_d(
     dofs: &[PointDofs],
     topo: &Topology,
     mesh: &Mesh,
-    problem: &Problem,
+    path: &Path,
 ) -> Result<(), FemError> {
-    let err = |msg: String| FemError::new(&problem.path, msg);
+    let err = |msg: String| FemError::new(path, msg);
     let at = |j: usize| unknown_at(j, dofs, topo, mesh);
     if let Some(j) = d.iter().position(|v| !v.is_finite()) {
         return Err(err(format!(

@@ -29,8 +29,10 @@ pub use conditions::PointDofs;
 pub use topology::Topology;
 
 use crate::mesh::Mesh;
-use crate::problem::{Plane, Problem};
+use crate::problem::Problem;
 use crate::qp::QpProblem;
+pub use element::ElementKind;
+use element::Vector;
 use std::path::{Path, PathBuf};
 
 /// How [`build_with`] runs; the default (and [`build`]) assembles on
@@ -58,17 +60,18 @@ pub struct Model {
     pub qp_rows: Vec<usize>,
     /// Kernel vectors and the body each belongs to.
     pub kernel_body: Vec<u32>,
-    pub plane: Plane,
-    pub thickness: f64,
+    /// The kind of model: plane strain, plane stress (with its thickness)
+    /// or axisymmetric.
+    pub kind: ElementKind,
     /// The Dirichlet and slip conditions r·u = v, kept for the reactions:
     /// (point, unit direction r, index into `cond_groups`).
-    pub conditions: Vec<(usize, [f64; 2], u32)>,
+    pub conditions: Vec<(usize, Vector, u32)>,
     /// What set each condition: (kind "dirichlet" | "slip", physical group name).
     pub cond_groups: Vec<(&'static str, String)>,
     /// Nodal external force on each point (N; tractions, point forces,
     /// gravity; thickness included), before the elimination: the load side
     /// of the balance R = K u − f.
-    pub loads: Vec<[f64; 2]>,
+    pub loads: Vec<Vector>,
     /// The name of each body: its physical surface name(s), "+"-joined,
     /// with " #b" when bodies share a material.
     pub body_names: Vec<String>,
@@ -88,7 +91,7 @@ impl Model {
 
     /// Point displacements of a change `dx` of the QP unknowns (u0 left out):
     /// the motion along a direction such as a rigid mode.
-    pub fn motions(&self, dx: &[f64]) -> Vec<[f64; 2]> {
+    pub fn motions(&self, dx: &[f64]) -> Vec<Vector> {
         self.dofs
             .iter()
             .map(|p| {
@@ -104,7 +107,7 @@ impl Model {
     }
 
     /// Full point displacements from the QP unknowns.
-    pub fn displacements(&self, x: &[f64]) -> Vec<[f64; 2]> {
+    pub fn displacements(&self, x: &[f64]) -> Vec<Vector> {
         self.dofs
             .iter()
             .map(|p| {
@@ -121,7 +124,7 @@ impl Model {
 
     /// The effective thickness for forces → pressures (1 in plane strain).
     pub fn t_eff(&self) -> f64 {
-        self.plane.t_eff(self.thickness)
+        self.kind.thickness()
     }
 }
 
@@ -141,25 +144,25 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let dofs = conds.eliminate(mesh, &topo, &body_names, problem)?;
     let n = dofs.last().map_or(0, |pd| pd.start + pd.ndof);
     lap.lap("elimination");
-    loads::check_body_forces(&topo, problem)?;
-    loads::warn_axis_tractions(mesh, problem);
-    let mats = stiffness::Materials::new(&topo, problem);
+    let f = &problem.file;
+    loads::check_body_forces(&topo, &f.materials, &f.model, &problem.path)?;
+    loads::warn_axis_tractions(mesh, topo.kind, &f.traction, &problem.path);
+    let mats = stiffness::Materials::new(&topo, &f.materials, &f.model);
     let (c, mut d) = stiffness::assemble(&topo, &dofs, n, &mats, opts.parallel);
     lap.lap("stiffness");
     let loads = loads::nodal_loads(mesh, &topo, &dofs, problem, &mats, &mut d)?;
-    loads::check_scale(&c, &d, &dofs, &topo, mesh, problem)?;
+    loads::check_scale(&c, &d, &dofs, &topo, mesh, &problem.path)?;
     lap.lap("loads");
     let (a, g, qp_rows) = contact::reduced_rows(mesh, &topo, &dofs, n, problem)?;
     lap.lap("contact rows");
-    let t_eff = problem.file.model.plane.t_eff(problem.file.model.thickness);
+    let kind = topo.kind;
+    let t_eff = kind.thickness();
     let conditions = conds.list();
     let symmetry_rows = friction::symmetry_rows(&topo, &dofs, &conditions, &conds.groups, problem);
     let friction = friction::build(&topo, &dofs, n, problem, &qp_rows, t_eff, &symmetry_rows)?;
     lap.lap("friction rows");
-    let axi = problem.file.model.plane.is_axisymmetric();
-    let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n, axi);
+    let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n, kind);
     let near = rigid::near_kernel(&topo, &dofs, n);
-    let f = &problem.file;
     let model = Model {
         topo: std::sync::Arc::new(topo),
         dofs,
@@ -174,8 +177,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
         },
         qp_rows,
         kernel_body,
-        plane: f.model.plane,
-        thickness: f.model.thickness,
+        kind,
         conditions,
         cond_groups: conds.groups,
         loads,
@@ -185,7 +187,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let mut model = model;
     friction::start_step(&mut model, None);
     lap.lap("rigid modes");
-    rigid::check_semicoercive(&model, problem)?;
+    rigid::check_semicoercive(&model, &problem.path)?;
     lap.lap("semicoercivity check");
     Ok(model)
 }
@@ -233,7 +235,7 @@ pub fn step_model_reusing(
     model.qp.g = s.g;
     model.loads = s.loads;
     friction::start_step(&mut model, None);
-    rigid::check_semicoercive(&model, problem)?;
+    rigid::check_semicoercive(&model, &problem.path)?;
     lap.lap("copy and checks");
     Ok(model)
 }

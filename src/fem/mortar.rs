@@ -13,6 +13,7 @@
 //! mortar multiplier, a traction (the row's `trib` is D_jj).
 
 use super::contact::{ContactRow, RowKind};
+use super::element::{Point, Vector};
 use super::pairs::{BoundarySeg, Pair};
 use super::topology::Topology;
 use super::FemError;
@@ -39,19 +40,19 @@ const GL_W2: f64 = 0.236_926_885_056_189_08;
 /// Overlaps shorter than this fraction of the slave segment are round-off.
 const MIN_OVERLAP: f64 = 1e-12;
 
-fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+fn cross(a: Vector, b: Vector) -> f64 {
     a[0] * b[1] - a[1] * b[0]
 }
 
-fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+fn sub(a: Vector, b: Vector) -> Vector {
     [a[0] - b[0], a[1] - b[1]]
 }
 
-fn lerp(a: [f64; 2], b: [f64; 2], s: f64) -> [f64; 2] {
+fn lerp(a: Point, b: Point, s: f64) -> Point {
     [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])]
 }
 
-fn unit(v: [f64; 2]) -> [f64; 2] {
+fn unit(v: Vector) -> Vector {
     let l = (v[0] * v[0] + v[1] * v[1]).sqrt();
     [v[0] / l, v[1] / l]
 }
@@ -59,24 +60,24 @@ fn unit(v: [f64; 2]) -> [f64; 2] {
 /// A slave segment: end points, their averaged unit normals.
 #[derive(Clone, Copy)]
 struct SlaveGeom {
-    x: [[f64; 2]; 2],
-    n: [[f64; 2]; 2],
+    x: [Point; 2],
+    n: [Vector; 2],
 }
 
 impl SlaveGeom {
-    fn point(&self, s: f64) -> [f64; 2] {
+    fn point(&self, s: f64) -> Point {
         lerp(self.x[0], self.x[1], s)
     }
 
     /// The interpolated normal field n(s) = N₁ n₁ + N₂ n₂ (not unit).
-    fn normal(&self, s: f64) -> [f64; 2] {
+    fn normal(&self, s: f64) -> Vector {
         lerp(self.n[0], self.n[1], s)
     }
 
     /// The slave coordinate s whose normal ray passes through `y`:
     /// (x(s) − y) × n(s) = 0, a quadratic in s; the root nearest to the
     /// segment (Popp et al. 2009, the projection of master nodes).
-    fn project(&self, y: [f64; 2]) -> Option<f64> {
+    fn project(&self, y: Point) -> Option<f64> {
         let (e, dn) = (sub(self.x[1], self.x[0]), sub(self.n[1], self.n[0]));
         let d = sub(self.x[0], y);
         let c0 = cross(d, self.n[0]);
@@ -98,7 +99,7 @@ impl SlaveGeom {
 
     /// Where the normal ray at s meets the line of master segment (y₁, y₂):
     /// (ξ, gap along the unit normal; > 0 open).
-    fn ray(&self, s: f64, y: [[f64; 2]; 2]) -> Option<(f64, f64)> {
+    fn ray(&self, s: f64, y: [Point; 2]) -> Option<(f64, f64)> {
         let x = self.point(s);
         let n = self.normal(s);
         let em = sub(y[1], y[0]);
@@ -167,7 +168,7 @@ impl Topology {
         let mut dj: HashMap<(usize, u32), f64> = HashMap::new();
         let mut mj: HashMap<(usize, u32), BTreeMap<usize, f64>> = HashMap::new();
         let mut gj: HashMap<(usize, u32), f64> = HashMap::new();
-        let axi = problem.file.model.plane.is_axisymmetric();
+        let kind = self.kind;
         let mut body_sizes: Option<Vec<f64>> = None;
         for &(a, b, sb, ns) in ssegs {
             let geom = SlaveGeom {
@@ -182,7 +183,7 @@ impl Topology {
             // Axisymmetric: every integral carries r (per radian; the dual
             // basis is then biorthogonal in the r-weighted product), so a
             // segment on the axis has no weight (docs/methods.md §10).
-            let rw = |s: f64| if axi { geom.point(s)[0] } else { 1.0 };
+            let rw = |s: f64| kind.line_density(geom.point(s));
             if pieces.is_empty() {
                 continue;
             }
@@ -303,8 +304,8 @@ impl Topology {
 
 /// Averaged slave normals: the sum of the adjacent segments' unit outward
 /// normals, normalized (docs/methods.md §7.1); `Err(node)` where they cancel.
-fn slave_normals(ssegs: &[BoundarySeg]) -> Result<HashMap<(usize, u32), [f64; 2]>, usize> {
-    let mut nsum: HashMap<(usize, u32), [f64; 2]> = HashMap::new();
+fn slave_normals(ssegs: &[BoundarySeg]) -> Result<HashMap<(usize, u32), Vector>, usize> {
+    let mut nsum: HashMap<(usize, u32), Vector> = HashMap::new();
     for &(a, b, body, n) in ssegs {
         for v in [a, b] {
             let e = nsum.entry((v, body)).or_insert([0.0, 0.0]);
@@ -312,7 +313,7 @@ fn slave_normals(ssegs: &[BoundarySeg]) -> Result<HashMap<(usize, u32), [f64; 2]
             e[1] += n[1];
         }
     }
-    let mut normal: HashMap<(usize, u32), [f64; 2]> = HashMap::new();
+    let mut normal: HashMap<(usize, u32), Vector> = HashMap::new();
     for (&(v, body), s) in &nsum {
         let len = (s[0] * s[0] + s[1] * s[1]).sqrt();
         if len.is_nan() || len <= 1e-12 {
@@ -373,7 +374,7 @@ fn overlap_pieces(
     msegs: &[BoundarySeg],
     geom: &SlaveGeom,
     sbody: u32,
-    ns: [f64; 2],
+    ns: Vector,
 ) -> Vec<Piece> {
     let mut cand: Vec<(f64, usize, f64, f64)> = vec![];
     for (mi, &(ma, mb, mbody, nm)) in msegs.iter().enumerate() {

@@ -11,6 +11,7 @@
 
 use super::contact::{ContactRow, RowKind};
 use super::edges::NONE32;
+use super::element::{Point, Vector};
 use super::topology::{curve_group, Topology};
 use super::FemError;
 use crate::mesh::{Mesh, PhysicalGroup};
@@ -23,12 +24,12 @@ type NodePair = (usize, u32, u32);
 /// What the segments of a conforming curve leave at one of their nodes: the
 /// segment normals with half their lengths, and the interface.
 struct Acc {
-    normals: Vec<([f64; 2], f64)>,
+    normals: Vec<(Vector, f64)>,
     interface: u32,
 }
 
 /// A conforming segment: nodes a, b, bodies k < l, normal outward of k.
-type ConformingSeg = (usize, usize, u32, u32, [f64; 2]);
+type ConformingSeg = (usize, usize, u32, u32, Vector);
 
 /// A pair without `discretization` whose slave is more than this many times
 /// stiffer than its master gets node-to-segment rows (measured: mortar with
@@ -58,7 +59,7 @@ impl Topology {
         let mut keys: Vec<NodePair> = acc.keys().copied().collect();
         keys.sort_unstable_by_key(|&(v, k, l)| (k, l, mesh.node_tags[v]));
         // The rows of each node pair, with their normal (to pick a segment's row).
-        let mut rows_at: HashMap<NodePair, Vec<(usize, [f64; 2])>> = HashMap::new();
+        let mut rows_at: HashMap<NodePair, Vec<(usize, Vector)>> = HashMap::new();
         for key in keys {
             let (v, k, l) = key;
             let a = &acc[&key];
@@ -141,10 +142,10 @@ impl Topology {
             let n = self.outward_normal(mesh, tk, a, b);
             let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
             let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
-            let axi = problem.file.model.plane.is_axisymmetric();
+            let kind = self.kind;
             for (v, w) in [
-                (a, trib_weight(axi, len, pa, pb)),
-                (b, trib_weight(axi, len, pb, pa)),
+                (a, kind.boundary_weight(len, pa, pb)),
+                (b, kind.boundary_weight(len, pb, pa)),
             ] {
                 let e = acc.entry((v, k, l)).or_insert(Acc {
                     normals: vec![],
@@ -166,9 +167,9 @@ impl Topology {
         v: usize,
         a: &Acc,
         kind: NormalKind,
-    ) -> Result<Vec<([f64; 2], f64)>, FemError> {
+    ) -> Result<Vec<(Vector, f64)>, FemError> {
         let trib: f64 = a.normals.iter().map(|x| x.1).sum();
-        let mut normals: Vec<([f64; 2], f64)> = vec![];
+        let mut normals: Vec<(Vector, f64)> = vec![];
         match kind {
             NormalKind::Averaged => {
                 let s = a
@@ -360,12 +361,12 @@ impl Topology {
         let mut stack = vec![];
         // Slave nodes with owner body and tributary length.
         let mut slave: HashMap<(usize, u32), f64> = HashMap::new();
-        let axi = problem.file.model.plane.is_axisymmetric();
+        let kind = self.kind;
         for &(a, b, body, _) in ssegs {
             let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
             let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
-            *slave.entry((a, body)).or_insert(0.0) += trib_weight(axi, len, pa, pb);
-            *slave.entry((b, body)).or_insert(0.0) += trib_weight(axi, len, pb, pa);
+            *slave.entry((a, body)).or_insert(0.0) += kind.boundary_weight(len, pa, pb);
+            *slave.entry((b, body)).or_insert(0.0) += kind.boundary_weight(len, pb, pa);
         }
         let mut snodes: Vec<((usize, u32), f64)> = slave.into_iter().collect();
         snodes.sort_unstable_by_key(|((v, b), _)| (*b, mesh.node_tags[*v]));
@@ -444,7 +445,7 @@ impl Topology {
 
 /// A boundary segment of a non-matching pair (master or slave): nodes,
 /// owner body, outward normal.
-type MasterSeg = (usize, usize, u32, [f64; 2]);
+type MasterSeg = (usize, usize, u32, Vector);
 pub(super) type BoundarySeg = MasterSeg;
 
 /// A non-matching pair: its interface, its name in messages, its segments.
@@ -470,21 +471,10 @@ fn shared(a: &Segments, b: &Segments) -> Option<(usize, usize)> {
     a.intersection(b).min().copied()
 }
 
-/// The tributary weight of node `x` on a segment (x, y) of length `len`:
-/// ∫ N_x ds = ℓ/2, or ∫ N_x r ds = ℓ(2r_x + r_y)/6 per radian when
-/// axisymmetric (docs/methods.md §10).
-fn trib_weight(axi: bool, len: f64, x: [f64; 2], y: [f64; 2]) -> f64 {
-    if axi {
-        len * (2.0 * x[0] + y[0]) / 6.0
-    } else {
-        len / 2.0
-    }
-}
-
 /// Orthogonal projection of `xs` on the segment (pa, pb): (distance, ξ) if
 /// ξ ∈ [−1e-9, 1 + 1e-9] (ξ clamped to [0, 1]).
 #[inline]
-fn project_on_segment(xs: [f64; 2], pa: [f64; 2], pb: [f64; 2]) -> Option<(f64, f64)> {
+fn project_on_segment(xs: Point, pa: Point, pb: Point) -> Option<(f64, f64)> {
     let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
     let l2 = dx * dx + dy * dy;
     let xi = ((xs[0] - pa[0]) * dx + (xs[1] - pa[1]) * dy) / l2;
@@ -508,8 +498,8 @@ struct SegmentTree {
 /// A tree node: bounding box (enlarged by far more than round-off) and
 /// either two children or a range of segments.
 struct BoxNode {
-    lo: [f64; 2],
-    hi: [f64; 2],
+    lo: Point,
+    hi: Point,
     start: u32,
     end: u32,
     /// Children (NONE32: a leaf).
@@ -532,7 +522,7 @@ impl SegmentTree {
             })
             .fold(0.0f64, f64::max);
         let pad = 1e-9 * scale;
-        let mid: Vec<[f64; 2]> = segs
+        let mid: Vec<Point> = segs
             .iter()
             .map(|s| {
                 let (a, b) = ends(s);
@@ -597,7 +587,7 @@ impl SegmentTree {
 
     /// Distance from `x` to the box of node `ni`.
     #[inline]
-    fn box_dist(&self, ni: usize, x: [f64; 2]) -> f64 {
+    fn box_dist(&self, ni: usize, x: Point) -> f64 {
         let n = &self.nodes[ni];
         let dx = (n.lo[0] - x[0]).max(x[0] - n.hi[0]).max(0.0);
         let dy = (n.lo[1] - x[1]).max(x[1] - n.hi[1]).max(0.0);
@@ -612,7 +602,7 @@ impl SegmentTree {
         &self,
         mesh: &Mesh,
         segs: &[MasterSeg],
-        xs: [f64; 2],
+        xs: Point,
         body: u32,
         stack: &mut Vec<u32>,
     ) -> Option<(f64, usize, f64)> {
@@ -674,7 +664,7 @@ impl SegmentTree {
 fn nearest_brute_force(
     mesh: &Mesh,
     segs: &[MasterSeg],
-    xs: [f64; 2],
+    xs: Point,
     body: u32,
 ) -> Option<(f64, usize, f64)> {
     let mut best: Option<(f64, usize, f64)> = None;
@@ -703,7 +693,7 @@ fn nearest_brute_force(
 mod tests {
     use super::*;
 
-    fn check_nearest(mesh: &Mesh, segs: &[MasterSeg], queries: &[([f64; 2], u32)]) -> usize {
+    fn check_nearest(mesh: &Mesh, segs: &[MasterSeg], queries: &[(Point, u32)]) -> usize {
         let tree = SegmentTree::build(mesh, segs);
         let mut stack = vec![];
         let mut found = 0;
@@ -739,7 +729,7 @@ mod tests {
                     let n = topo.outward_normal(&mesh, ts[0], a, b);
                     segs.push((a, b, topo.mesh_triangle_body(ts[0]), n));
                 }
-                let queries: Vec<([f64; 2], u32)> = mesh
+                let queries: Vec<(Point, u32)> = mesh
                     .nodes
                     .iter()
                     .flat_map(|&x| [(x, 0), (x, 1), (x, NONE32)])
@@ -748,7 +738,7 @@ mod tests {
                 all.extend(segs);
             }
             // All curves at once (overlapping and duplicated segments).
-            let queries: Vec<([f64; 2], u32)> = mesh.nodes.iter().map(|&x| (x, NONE32)).collect();
+            let queries: Vec<(Point, u32)> = mesh.nodes.iter().map(|&x| (x, NONE32)).collect();
             check_nearest(&mesh, &all, &queries);
         }
     }
@@ -785,7 +775,7 @@ mod tests {
                     )
                 })
                 .collect();
-            let mut queries: Vec<([f64; 2], u32)> = (0..200)
+            let mut queries: Vec<(Point, u32)> = (0..200)
                 .map(|_| {
                     let x = [
                         (next(4 * grid) as f64 / 2.0 - grid as f64 / 2.0) * scale,

@@ -9,17 +9,19 @@
 //! (translation direction or centre of rotation).
 
 use super::conditions::{normalize, Cond, PointDofs};
+use super::element::ElementKind;
+use super::element::{Point, Vector};
 use super::topology::Topology;
 use super::{FemError, Model};
 use crate::linalg::dense::sym_eigen;
-use crate::problem::Problem;
+use std::path::Path;
 
 /// The rigid motions of each body at a point: translations along x and y
 /// and a rotation about the centre of the body's bounding box, scaled by its
 /// size so that the three are of one magnitude.
 struct RigidBasis {
-    lo: Vec<[f64; 2]>,
-    hi: Vec<[f64; 2]>,
+    lo: Vec<Point>,
+    hi: Vec<Point>,
 }
 
 impl RigidBasis {
@@ -38,7 +40,7 @@ impl RigidBasis {
     }
 
     /// The three motions of body `b` at the point `x`.
-    fn at(&self, b: usize, x: [f64; 2]) -> [[f64; 2]; 3] {
+    fn at(&self, b: usize, x: Point) -> [Vector; 3] {
         let (lo, hi) = (self.lo[b], self.hi[b]);
         let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
         let l = ((hi[0] - lo[0]).max(hi[1] - lo[1])).max(1e-300);
@@ -57,14 +59,15 @@ pub(super) fn rigid_modes(
     dofs: &[PointDofs],
     conds: &[Vec<Cond>],
     n: usize,
-    axi: bool,
+    kind: ElementKind,
 ) -> (Vec<Vec<f64>>, Vec<u32>) {
     let nb = topo.nbodies;
     let basis = RigidBasis::new(topo);
     // Axisymmetric bodies move rigidly along the axis only (a radial
     // translation strains the hoop, u_r/r ≠ 0; docs/methods.md §10): the
     // other two motions are left out of the search below.
-    let skip = |i: usize| axi && i != 1;
+    let modes = kind.rigid_modes();
+    let skip = |i: usize| !modes[i];
     // GᵀG per body (3×3) from every condition row.
     let mut gtg = vec![[[0.0f64; 3]; 3]; nb];
     for (p, cs) in conds.iter().enumerate() {
@@ -182,7 +185,7 @@ impl Model {
     /// The bodies that the point motions `u` move (by more than 10⁻³ of the
     /// largest motion), each with the rigid motion that fits it best:
     /// `body 1 (translation along (1, 0))` or `body 1 (rotation about (0.5, 0.25))`.
-    pub fn describe_rigid_motion(&self, u: &[[f64; 2]]) -> String {
+    pub fn describe_rigid_motion(&self, u: &[Vector]) -> String {
         let umax = u
             .iter()
             .fold(0.0f64, |m, v| m.max(v[0].hypot(v[1])))
@@ -203,7 +206,7 @@ impl Model {
     /// The rigid motion that fits the point motions `u` of body `b` best
     /// (least squares): "translation along (dx, dy)" or "rotation about
     /// (x, y)"; None if no point of the body moves by more than `min`.
-    pub fn body_motion(&self, u: &[[f64; 2]], b: usize, min: f64) -> Option<String> {
+    pub fn body_motion(&self, u: &[Vector], b: usize, min: f64) -> Option<String> {
         let pts: Vec<usize> = (0..u.len().min(self.topo.points.len()))
             .filter(|&p| self.topo.point_body[p] as usize == b)
             .collect();
@@ -285,22 +288,22 @@ fn describe_mode(m: &Model, c: &[f64]) -> String {
 /// with free rigid motions and no contact at all, and a rigid motion that
 /// leaves every contact row unchanged (Az = 0) while the loads work on it
 /// (dᵀz ≠ 0): f is then unbounded below.
-pub(super) fn check_semicoercive(m: &Model, problem: &Problem) -> Result<(), FemError> {
+pub(super) fn check_semicoercive(m: &Model, path: &Path) -> Result<(), FemError> {
     if m.qp.kernel.is_empty() {
         return Ok(());
     }
-    check_supported(m, problem)?;
+    check_supported(m, path)?;
     if m.qp.friction.is_some() {
         // Friction may hold a sliding motion: the solver decides
         // (docs/methods.md §9.3).
         return Ok(());
     }
-    check_sliding(m, problem)
+    check_sliding(m, path)
 }
 
 /// A body with a kernel and no contact row touching it is refused.
-fn check_supported(m: &Model, problem: &Problem) -> Result<(), FemError> {
-    let err = |msg: String| FemError::new(&problem.path, msg);
+fn check_supported(m: &Model, path: &Path) -> Result<(), FemError> {
+    let err = |msg: String| FemError::new(path, msg);
     let qp = &m.qp;
     let mut touched = vec![false; m.topo.nbodies];
     for &r in &m.qp_rows {
@@ -349,8 +352,8 @@ fn check_supported(m: &Model, problem: &Problem) -> Result<(), FemError> {
 
 /// A rigid motion with Az = 0 is refused if the loads work on it (dᵀz ≠ 0)
 /// and reported (a warning) otherwise.
-fn check_sliding(m: &Model, problem: &Problem) -> Result<(), FemError> {
-    let err = |msg: String| FemError::new(&problem.path, msg);
+fn check_sliding(m: &Model, path: &Path) -> Result<(), FemError> {
+    let err = |msg: String| FemError::new(path, msg);
     let qp = &m.qp;
     let k = qp.kernel.len();
     // Null space of A Z (k small): eigenvectors of (AZ)ᵀ(AZ) with ~0 eigenvalue.

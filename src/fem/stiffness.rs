@@ -12,53 +12,45 @@
 //! vertices are mostly in cache (Gmsh numbers nodes in no spatial order).
 
 use super::conditions::PointDofs;
-use super::element;
+use super::element::{Point, Vector};
+
+use super::element::MaterialMatrix;
 use super::topology::Topology;
-use crate::problem::{Material, Plane, Problem};
+use crate::problem::{Material, ModelSection};
 use crate::qp::Csr;
+use std::collections::BTreeMap;
 
-/// What the element matrices need of each material: D and the body force
-/// ρ g, and the thickness th (1 in plane strain).
+/// What the element matrices need of each material in the model's
+/// [`ElementKind`](super::element::ElementKind): D, the body force ρ g and the centrifugal coefficient
+/// ρω² (a spin about the axis, docs/methods.md §10).
 pub(super) struct Materials {
-    pub(super) dmats: Vec<[[f64; 3]; 3]>,
-    pub(super) bforce: Vec<[f64; 2]>,
-    pub(super) th: f64,
-    /// Axisymmetric models: D4 and ρω² of each material (docs/methods.md §10).
-    pub(super) axi: Option<AxiMaterials>,
+    pub(super) kind: super::element::ElementKind,
+    pub(super) dmats: Vec<MaterialMatrix>,
+    pub(super) bforce: Vec<Vector>,
+    pub(super) spin: Vec<f64>,
 }
-
-/// D4 and ρω² of each material of an axisymmetric model.
-pub(super) type AxiMaterials = (Vec<[[f64; 4]; 4]>, Vec<f64>);
 
 impl Materials {
     /// The materials of `topo.material_names`, in that order.
-    pub(super) fn new(topo: &Topology, problem: &Problem) -> Materials {
-        let f = &problem.file;
-        let mats: Vec<&Material> = topo
-            .material_names
-            .iter()
-            .map(|m| &f.materials[m])
-            .collect();
-        let gvec = f.model.gravity.unwrap_or([0.0, 0.0]);
+    pub(super) fn new(
+        topo: &Topology,
+        materials: &BTreeMap<String, Material>,
+        model: &ModelSection,
+    ) -> Materials {
+        let kind = topo.kind;
+        let mats: Vec<&Material> = topo.material_names.iter().map(|m| &materials[m]).collect();
+        let gvec = model.gravity.unwrap_or([0.0, 0.0]);
+        let w = model.omega.unwrap_or(0.0);
+        // A load step scales ρω²r like every other load.
+        let lf = model.centrifugal_factor.unwrap_or(1.0);
         Materials {
-            dmats: mats
-                .iter()
-                .map(|m| element::d_matrix(m, f.model.plane))
-                .collect(),
+            kind,
+            dmats: mats.iter().map(|m| kind.material(m)).collect(),
             bforce: mats
                 .iter()
                 .map(|m| [m.rho * gvec[0], m.rho * gvec[1]])
                 .collect(),
-            th: f.model.plane.t_eff(f.model.thickness),
-            axi: (f.model.plane == Plane::Axisymmetric).then(|| {
-                let w = f.model.omega.unwrap_or(0.0);
-                // A load step scales ρω²r like every other load.
-                let lf = f.model.centrifugal_factor.unwrap_or(1.0);
-                (
-                    mats.iter().map(|m| element::d_axi(m)).collect(),
-                    mats.iter().map(|m| m.rho * w * w * lf).collect(),
-                )
-            }),
+            spin: mats.iter().map(|m| m.rho * w * w * lf).collect(),
         }
     }
 }
@@ -68,27 +60,14 @@ impl Materials {
     /// th |T|/3 ρg, or ∫ N_a (ρg r + ρω² r² e_r) dA per radian when
     /// axisymmetric (docs/methods.md §2.2, §10). The one definition of the
     /// assembly and of a load step's d (`loads::element_d`).
-    pub(super) fn body_load(&self, pts: &[[f64; 2]; 3], mi: usize, a: usize) -> [f64; 2] {
-        match &self.axi {
-            None => {
-                let area = element::area2(pts) / 2.0;
-                let fb = self.bforce[mi];
-                [self.th * area / 3.0 * fb[0], self.th * area / 3.0 * fb[1]]
-            }
-            Some((_, rw2)) => element::axi_body_load(pts, a, self.bforce[mi], rw2[mi]),
-        }
+    pub(super) fn body_load(&self, pts: &[Point; 3], mi: usize, a: usize) -> Vector {
+        self.kind.body_load(pts, a, self.bforce[mi], self.spin[mi])
     }
 
     /// Rows 2a and 2a + 1 of the element stiffness of a triangle `pts` of
     /// material `mi` (per radian when axisymmetric).
-    pub(super) fn stiffness_rows(&self, pts: &[[f64; 2]; 3], mi: usize, a: usize) -> [[f64; 6]; 2] {
-        match &self.axi {
-            None => element::stiffness_rows(pts, &self.dmats[mi], self.th, a),
-            Some((d4, _)) => {
-                let k = element::axi_stiffness(pts, &d4[mi]);
-                [k[2 * a], k[2 * a + 1]]
-            }
-        }
+    pub(super) fn stiffness_rows(&self, pts: &[Point; 3], mi: usize, a: usize) -> [[f64; 6]; 2] {
+        self.kind.stiffness_rows(pts, &self.dmats[mi], a)
     }
 }
 
@@ -151,12 +130,12 @@ fn is_free(pd: &PointDofs) -> bool {
 /// Z-order (Morton) keys of 2D positions: 16 bits per axis over the box of
 /// all of them. Sorting by key puts nearby positions near each other.
 struct Morton {
-    lo: [f64; 2],
-    scale: [f64; 2],
+    lo: Point,
+    scale: Point,
 }
 
 impl Morton {
-    fn new(pts: &[[f64; 2]]) -> Morton {
+    fn new(pts: &[Point]) -> Morton {
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
         for x in pts {
@@ -176,7 +155,7 @@ impl Morton {
         Morton { lo, scale }
     }
 
-    fn key(&self, x: [f64; 2]) -> u64 {
+    fn key(&self, x: Point) -> u64 {
         let q = [0, 1].map(|k| ((x[k] - self.lo[k]) * self.scale[k]).clamp(0.0, 65535.0) as u64);
         let spread = |mut v: u64| {
             v = (v | (v << 8)) & 0x00FF_00FF;
@@ -206,7 +185,7 @@ fn sorted_by_key(parallel: bool, keys: impl Iterator<Item = u64>) -> Vec<u32> {
 /// A point as the assembly reads it, stored in Z-order.
 #[derive(Clone, Copy, Default)]
 struct RankPoint {
-    x: [f64; 2],
+    x: Point,
     start: usize,
     /// The point's index.
     p: u32,
@@ -705,10 +684,9 @@ mod tests {
         topo: &Topology,
         dofs: &[PointDofs],
         n: usize,
-        dmats: &[[[f64; 3]; 3]],
-        bforce: &[[f64; 2]],
-        th: f64,
+        mats: &Materials,
     ) -> (Csr, Vec<f64>) {
+        let (bforce, th) = (&mats.bforce, mats.kind.thickness());
         let mut trip: Vec<(usize, usize, f64)> = Vec::with_capacity(topo.triangles.len() * 36);
         let mut d = vec![0.0; n];
         for (t, tri) in topo.triangles.iter().enumerate() {
@@ -718,8 +696,8 @@ mod tests {
                 topo.points[tri[1]],
                 topo.points[tri[2]],
             ];
-            let ke = element::stiffness(&pts, &dmats[mi], th);
-            let area = element::area2(&pts) / 2.0;
+            let ke = mats.kind.stiffness(&pts, &mats.dmats[mi]);
+            let area = super::super::element::area2(&pts) / 2.0;
             let fb = bforce[mi];
             let mut fe = [0.0; 6];
             for a in 0..3 {
@@ -760,10 +738,9 @@ mod tests {
     fn gathered_assembly_matches_triplets_on_shipped_models() {
         for (path, problem, mesh) in crate::shipped_examples() {
             let m = super::super::build(&mesh, &problem).unwrap();
-            let mats = Materials::new(&m.topo, &problem);
-            let (dmats, bforce, th) = (&mats.dmats, &mats.bforce, mats.th);
+            let mats = Materials::new(&m.topo, &problem.file.materials, &problem.file.model);
             let n = m.qp.n();
-            let (cr, dr) = reference_stiffness(&m.topo, &m.dofs, n, dmats, bforce, th);
+            let (cr, dr) = reference_stiffness(&m.topo, &m.dofs, n, &mats);
             let (cs, ds) = assemble(&m.topo, &m.dofs, n, &mats, false);
             let (cp, dp) = assemble(&m.topo, &m.dofs, n, &mats, true);
             // Threads change nothing, bit for bit.

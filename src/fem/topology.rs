@@ -10,6 +10,7 @@
 
 pub use super::contact::{ContactRow, RowKind};
 use super::edges::{Edges, UnionFind, NONE32};
+use super::element::{Point, Vector};
 use super::FemError;
 use crate::mesh::Mesh;
 use crate::problem::{ContactPair, Problem};
@@ -17,7 +18,7 @@ use crate::problem::{ContactPair, Problem};
 #[derive(Debug, Clone, Default)]
 pub struct Topology {
     /// Coordinates of each point.
-    pub points: Vec<[f64; 2]>,
+    pub points: Vec<Point>,
     /// Mesh node index of each point.
     pub point_node: Vec<usize>,
     pub point_body: Vec<u32>,
@@ -43,6 +44,9 @@ pub struct Topology {
     /// The rows of each interface (same order as `interface_names`):
     /// conforming, node-to-segment or mortar; the outputs record it.
     pub interface_kinds: Vec<super::contact::RowKind>,
+    /// The kind of model: the measure of the triangles and of the contact
+    /// rows' tributary weights (docs/design.md §"Element kinds").
+    pub kind: super::element::ElementKind,
 }
 
 /// A point of a physical group: (point, mesh node, Some((segment node a,
@@ -91,7 +95,7 @@ impl Topology {
     }
 
     /// Unit outward normal of mesh triangle `t` on its edge (a, b).
-    pub fn outward_normal(&self, mesh: &Mesh, t: usize, a: usize, b: usize) -> [f64; 2] {
+    pub fn outward_normal(&self, mesh: &Mesh, t: usize, a: usize, b: usize) -> Vector {
         let tri = self.mesh_tris[t];
         let c = tri.iter().copied().find(|&v| v != a && v != b).unwrap_or(a);
         let (pa, pb, pc) = (mesh.nodes[a], mesh.nodes[b], mesh.nodes[c]);
@@ -166,6 +170,7 @@ impl Topology {
             contact_segments: vec![],
             interface_kinds: vec![super::contact::RowKind::Conforming; interface_names.len()],
             interface_names,
+            kind: super::element::ElementKind::of(&problem.file.model),
         };
         topo.triangles = topo.point_triangles();
         lap.lap("points");

@@ -1,14 +1,67 @@
 //! The HDF5 checkpoint (`model.h5`, docs/problem-format.md §6): the mesh once,
-//! then one group per load step; its layout is documented on [`Checkpoint`].
+//! then one group per load step; its layout is below (§ Layout); what it holds is
+//! [`Checkpoint`].
 //!
 //! Every write is crash-safe: the file is built (or copied and extended) in
 //! a private staging directory, closed, fsynced and renamed over the target.
-//! A run with load steps writes the split layout (see [`Checkpoint`]): each
+//! A run with load steps writes the split layout (§ Layout): each
 //! step its own file and a new small index, so no step copies the earlier
 //! ones.
 //! Every read is bounded by the file: a dataset or attribute whose shape
 //! needs more bytes than the file holds is refused before any allocation
 //! (checkpoints are written uncompressed, so a genuine one always fits).
+//!
+//! # Layout
+//!
+//! Layout (indices are 0-based; "rows" = contact constraint rows):
+//!
+//! ```text
+//! /                       attrs: one string attribute per `attrs` entry
+//!                                (e.g. problem, toml, version, and the
+//!                                fingerprint `--restart` compares),
+//!                                plane_strain (u8 0/1: the stress has a 4th component,
+//!                                also 1 for an axisymmetric model), model (string:
+//!                                plane_strain | plane_stress | axisymmetric),
+//!                                last_step (u64, once a step exists)
+//! /mesh/nodes             f64  [n, 2]   undeformed point coordinates
+//! /mesh/node_tags         u64  [n]      Gmsh node tag of each point
+//! /mesh/body              u32  [n]      body of each point
+//! /mesh/triangles         u64  [m, 3]   point indices, counter-clockwise
+//! /mesh/material          u32  [m]      index into material_names
+//! /mesh/contact_points    f64  [rows, 2]
+//! /mesh/contact_first     u64  [rows]   point index of the first side
+//! /mesh/contact_second    u64  [rows, 2] point indices of the other side
+//! /mesh/contact_weights   f64  [rows, 2] their weights
+//! /mesh/contact_normal    f64  [rows, 2]
+//! /mesh/contact_gap0      f64  [rows]
+//! /mesh/contact_interface u32  [rows]   index into interface_names
+//! /mesh/contact_segments  u64  [k, 2]   contact-point indices
+//! /mesh                   attrs: material_names, interface_names,
+//!                                interface_discretizations ("node-to-node",
+//!                                "nts" or "mortar" per interface; absent in
+//!                                checkpoints written before it)
+//!                                (1-D arrays of variable-length UTF-8 strings)
+//! /steps/NNNN             one group per step (4+ digits, 1-based):
+//!     displacement f64 [n, 2], stress f64 [m, 4], von_mises f64 [m],
+//!     principal_stress f64 [m, 2], multipliers f64 [rows],
+//!     contact_pressure f64 [rows], gap f64 [rows], active u8 [rows]
+//!     attrs: time, energy, kkt_* (every residual of `qp::Kkt`), time_* (f64); iterations (u64);
+//!            converged (u8 0/1); method, preconditioner (strings)
+//!     with `[output] reference_step` (that step and later ones):
+//!     displacement_change f64 [n, 2], stress_change f64 [m, 4],
+//!     contact_pressure_change f64 [rows]; attr reference_step (u64)
+//!     with friction (docs/methods.md §9): multipliers_t f64 [rows],
+//!     tangential_traction f64 [rows], slip f64 [rows], state u8 [rows]
+//! ```
+//!
+//! Two layouts hold this tree. A single solve writes it as one file. A run
+//! with load steps writes it split, so that a step writes its own data and
+//! nothing else ([`write_mesh_file`], [`write_step_file`], [`write_index`]):
+//! `NAME_mesh.h5` holds `/mesh`, `NAME_NNNN.h5` holds `/steps/NNNN`, and
+//! `NAME.h5` holds the root attributes and HDF5 external links `/mesh` and
+//! `/steps/NNNN` to them (relative file names, resolved next to `NAME.h5`),
+//! so h5py and [`read_checkpoint`] see the same tree. The small index is
+//! rewritten and renamed into place at each step: it is the step's commit.
 
 use std::path::Path;
 use std::str::FromStr;
@@ -17,7 +70,9 @@ use ::hdf5::types::VarLenUnicode;
 use ::hdf5::{File, Group, H5Type, Location};
 
 use super::atomic::{write_atomic, IoError};
-use super::{Change, ContactGeometry, OutMesh, StepInfo, StepOutput};
+use crate::output::{
+    Change, Checkpoint, ContactGeometry, OutMesh, StepFriction, StepInfo, StepOutput,
+};
 
 mod split;
 pub use split::{
@@ -25,87 +80,29 @@ pub use split::{
     write_step_file, CheckpointFiles, Packed,
 };
 
-/// Everything a checkpoint holds.
-///
-/// Layout (indices are 0-based; "rows" = contact constraint rows):
-///
-/// ```text
-/// /                       attrs: one string attribute per `attrs` entry
-///                                (e.g. problem, toml, version, and the
-///                                fingerprint `--restart` compares),
-///                                plane_strain (u8 0/1: the stress has a 4th component,
-///                                also 1 for an axisymmetric model), model (string:
-///                                plane_strain | plane_stress | axisymmetric),
-///                                last_step (u64, once a step exists)
-/// /mesh/nodes             f64  [n, 2]   undeformed point coordinates
-/// /mesh/node_tags         u64  [n]      Gmsh node tag of each point
-/// /mesh/body              u32  [n]      body of each point
-/// /mesh/triangles         u64  [m, 3]   point indices, counter-clockwise
-/// /mesh/material          u32  [m]      index into material_names
-/// /mesh/contact_points    f64  [rows, 2]
-/// /mesh/contact_first     u64  [rows]   point index of the first side
-/// /mesh/contact_second    u64  [rows, 2] point indices of the other side
-/// /mesh/contact_weights   f64  [rows, 2] their weights
-/// /mesh/contact_normal    f64  [rows, 2]
-/// /mesh/contact_gap0      f64  [rows]
-/// /mesh/contact_interface u32  [rows]   index into interface_names
-/// /mesh/contact_segments  u64  [k, 2]   contact-point indices
-/// /mesh                   attrs: material_names, interface_names,
-///                                interface_discretizations ("node-to-node",
-///                                "nts" or "mortar" per interface; absent in
-///                                checkpoints written before it)
-///                                (1-D arrays of variable-length UTF-8 strings)
-/// /steps/NNNN             one group per step (4+ digits, 1-based):
-///     displacement f64 [n, 2], stress f64 [m, 4], von_mises f64 [m],
-///     principal_stress f64 [m, 2], multipliers f64 [rows],
-///     contact_pressure f64 [rows], gap f64 [rows], active u8 [rows]
-///     attrs: time, energy, kkt_* (every residual of `qp::Kkt`), time_* (f64); iterations (u64);
-///            converged (u8 0/1); method, preconditioner (strings)
-///     with `[output] reference_step` (that step and later ones):
-///     displacement_change f64 [n, 2], stress_change f64 [m, 4],
-///     contact_pressure_change f64 [rows]; attr reference_step (u64)
-///     with friction (docs/methods.md §9): multipliers_t f64 [rows],
-///     tangential_traction f64 [rows], slip f64 [rows], state u8 [rows]
-/// ```
-///
-/// Two layouts hold this tree. A single solve writes it as one file. A run
-/// with load steps writes it split, so that a step writes its own data and
-/// nothing else ([`write_mesh_file`], [`write_step_file`], [`write_index`]):
-/// `NAME_mesh.h5` holds `/mesh`, `NAME_NNNN.h5` holds `/steps/NNNN`, and
-/// `NAME.h5` holds the root attributes and HDF5 external links `/mesh` and
-/// `/steps/NNNN` to them (relative file names, resolved next to `NAME.h5`),
-/// so h5py and [`read_checkpoint`] see the same tree. The small index is
-/// rewritten and renamed into place at each step: it is the step's commit.
-#[derive(Debug, Clone, Default)]
-pub struct Checkpoint {
-    pub mesh: OutMesh,
-    /// The steps in increasing index order (1, 2, …).
-    pub steps: Vec<StepOutput>,
-    /// The name of each step's group under `/steps` (same order): a
-    /// restart continues by these names, not by the count
-    /// (`run::Restart` refuses a gap, a `0000` or a duplicate).
-    pub step_groups: Vec<String>,
-    /// The friction arrays of each step (same order; None: frictionless).
-    pub friction: Vec<Option<StepFriction>>,
-    /// The string attributes of the root group (alphabetical order).
-    pub attrs: Vec<(String, String)>,
-}
-
 /// Root attributes that are not user strings.
 const RESERVED_ROOT_ATTRS: [&str; 4] = ["plane_strain", "last_step", "axisymmetric", "model"];
 
-/// The root attribute `model`: "plane_strain", "plane_stress" or
-/// "axisymmetric". `plane_strain` (1 when the stress has a fourth
-/// component, σzz or, axisymmetric, σθθ) alone reads as plane strain for
-/// an axisymmetric model; readers of the kind use this one.
-pub(crate) fn model_kind(mesh: &OutMesh) -> &'static str {
-    if mesh.axisymmetric {
-        "axisymmetric"
-    } else if mesh.plane_strain {
-        "plane_strain"
-    } else {
-        "plane_stress"
+/// The root attributes of the mesh's kind: `plane_strain` (1 when the
+/// stress has a fourth component, σzz or, axisymmetric, σθθ), `model`
+/// ("plane_strain", "plane_stress" or "axisymmetric"; `plane_strain` alone
+/// reads as plane strain for an axisymmetric model, readers of the kind
+/// use this one) when `with_model`, and `axisymmetric` = 1 when it is.
+fn set_kind_attrs(
+    ctx: &Ctx,
+    root: &Group,
+    kind: crate::fem::ElementKind,
+    with_model: bool,
+) -> Result<(), IoError> {
+    let (four_components, on_axis) = kind.file_flags();
+    set_attr_scalar(ctx, root, "plane_strain", &four_components)?;
+    if with_model {
+        set_attr_str(ctx, root, "model", kind.model_name())?;
     }
+    if let Some(a) = on_axis {
+        set_attr_scalar(ctx, root, "axisymmetric", &a)?;
+    }
+    Ok(())
 }
 
 /// Error context: the file the user named plus an HDF5 location.
@@ -293,11 +290,7 @@ pub fn create_checkpoint(
             for (k, v) in attrs {
                 set_attr_str(&ctx, root, k, v)?;
             }
-            set_attr_scalar(&ctx, root, "plane_strain", &u8::from(mesh.plane_strain))?;
-            set_attr_str(&ctx, root, "model", model_kind(mesh))?;
-            if mesh.axisymmetric {
-                set_attr_scalar(&ctx, root, "axisymmetric", &1u8)?;
-            }
+            set_kind_attrs(&ctx, root, mesh.kind, true)?;
             let g = file.create_group("mesh").map_err(ctx.h5("/mesh"))?;
             write_mesh(&ctx, &g, mesh)?;
         }
@@ -483,17 +476,6 @@ pub fn read_step_of(
     let step = read_step(&gctx, &g, mesh)?;
     let friction = read_step_friction(&gctx, &g, mesh.contact.points.len())?;
     Ok((step, friction))
-}
-
-/// The friction arrays of a step, per contact row (docs/problem-format.md
-/// §6): λ_t (N), the tangential traction (Pa), the slip of the step (m) and
-/// the state 0 open, 1 stick, 2 slip.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct StepFriction {
-    pub multipliers_t: Vec<f64>,
-    pub tangential_traction: Vec<f64>,
-    pub slip: Vec<f64>,
-    pub state: Vec<u8>,
 }
 
 /// [`append_step_in_place`] with the friction arrays of the step.
@@ -809,17 +791,18 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
             }
         }
     }
-    let plane_strain = get_attr::<u8>(&ctx, &file, "plane_strain")? != 0;
-    let axisymmetric =
-        has_attr(&ctx, &file, "axisymmetric")? && get_attr::<u8>(&ctx, &file, "axisymmetric")? != 0;
+    // The kind from the root flags (`model` is for other readers).
+    let kind = crate::fem::ElementKind::from_file_flags(
+        get_attr::<u8>(&ctx, &file, "plane_strain")? != 0,
+        has_attr(&ctx, &file, "axisymmetric")? && get_attr::<u8>(&ctx, &file, "axisymmetric")? != 0,
+    );
 
     if !file.link_exists("mesh") {
         return Err(ctx.missing("group /mesh"));
     }
     let g = file.group("mesh").map_err(|e| linked(&ctx, "/mesh", e))?;
     let mut mesh = read_mesh(&ctx.of_file(&g), &g)?;
-    mesh.plane_strain = plane_strain;
-    mesh.axisymmetric = axisymmetric;
+    mesh.kind = kind;
 
     let mut steps = Vec::new();
     let mut friction = Vec::new();
@@ -884,8 +867,7 @@ fn read_mesh(ctx: &Ctx, g: &Group) -> Result<OutMesh, IoError> {
         triangles,
         material,
         material_names,
-        plane_strain: false,
-        axisymmetric: false,
+        kind: crate::fem::ElementKind::from_file_flags(false, false),
         contact: ContactGeometry {
             points: pairs(&cpoints),
             first,

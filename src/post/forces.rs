@@ -15,19 +15,21 @@
 //! row): the moment balance is loads + reactions + contact couple = 0
 //! (docs/methods.md §9.5), and the couple is reported per interface.
 
+use crate::fem::element::{Point, Vector};
 use crate::fem::{element, Model};
-use crate::problem::Problem;
+use crate::problem::{Material, Problem};
+use std::collections::BTreeMap;
 
 /// A force resultant and its moment about the origin.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct Resultant {
-    pub force: [f64; 2],
+    pub force: Vector,
     pub moment: f64,
 }
 
 impl Resultant {
     /// Add the force `f` acting at `x`.
-    pub fn add(&mut self, x: [f64; 2], f: [f64; 2]) {
+    pub fn add(&mut self, x: Point, f: Vector) {
         self.force[0] += f[0];
         self.force[1] += f[1];
         self.moment += x[0] * f[1] - x[1] * f[0];
@@ -93,8 +95,8 @@ pub struct InterfaceForce {
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Extent {
     /// The first and the last active row's point (undeformed coordinates).
-    pub start: [f64; 2],
-    pub end: [f64; 2],
+    pub start: Point,
+    pub end: Point,
     /// Arc length from `start` to `end` along the interface, open stretches
     /// between contact zones included; summed over the pieces of an
     /// interface made of disjoint curves.
@@ -109,9 +111,9 @@ pub struct Extent {
 #[derive(Debug, Clone, Default)]
 pub struct Forces {
     /// Reaction force at each point (zero where nothing is prescribed).
-    pub point_reaction: Vec<[f64; 2]>,
+    pub point_reaction: Vec<Vector>,
     /// Contact force on each point (from every row touching it).
-    pub point_contact: Vec<[f64; 2]>,
+    pub point_contact: Vec<Vector>,
     pub groups: Vec<GroupReaction>,
     pub interfaces: Vec<InterfaceForce>,
     /// The applied loads (tractions, point forces, gravity) summed.
@@ -128,8 +130,8 @@ pub struct Forces {
 }
 
 /// (K u)_p per point: the element forces C_e u_e summed at each vertex.
-fn internal_forces(model: &Model, problem: &Problem, u: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    element_pass(model, problem, u, false).1
+fn internal_forces(model: &Model, problem: &Problem, u: &[Vector]) -> Vec<Vector> {
+    element_pass(model, &problem.file.materials, u, false).1
 }
 
 /// Elements per chunk of [`element_pass`]: its per-element results (a few
@@ -142,34 +144,31 @@ const CHUNK: usize = 1 << 15;
 /// C_e u_e summed at each vertex. Elements are computed in parallel chunk
 /// by chunk and summed into the points in element order: the same bits as
 /// the sequential loop on any number of threads, and as
-/// [`element::stress`] and [`element::stiffness_in`] element by element.
+/// [`ElementKind::stress`](element::ElementKind::stress) and
+/// [`ElementKind::stiffness`](element::ElementKind::stiffness) element by element.
 pub(crate) fn element_pass(
     model: &Model,
-    problem: &Problem,
-    u: &[[f64; 2]],
+    materials: &BTreeMap<String, Material>,
+    u: &[Vector],
     stresses: bool,
-) -> (Vec<[f64; 4]>, Vec<[f64; 2]>) {
+) -> (Vec<[f64; 4]>, Vec<Vector>) {
     use rayon::prelude::*;
     let t = &model.topo;
-    let f = &problem.file;
-    let th = model.t_eff();
-    // Material and D once per material index, not a map lookup per element.
-    let mats: Vec<(&crate::problem::Material, [[f64; 3]; 3])> = t
+    let kind = model.kind;
+    // D once per material index, not a map lookup per element.
+    let mats: Vec<element::MaterialMatrix> = t
         .material_names
         .iter()
-        .map(|m| {
-            let mat = &f.materials[m];
-            (mat, element::d_matrix(mat, f.model.plane))
-        })
+        .map(|m| kind.material(&materials[m]))
         .collect();
     let mut stress = Vec::with_capacity(if stresses { t.triangles.len() } else { 0 });
     let mut ku = vec![[0.0f64; 2]; t.points.len()];
-    let mut buf: Vec<([f64; 4], [[f64; 2]; 3])> = Vec::with_capacity(CHUNK);
+    let mut buf: Vec<([f64; 4], [Vector; 3])> = Vec::with_capacity(CHUNK);
     for (tris, tmat) in t.triangles.chunks(CHUNK).zip(t.tri_material.chunks(CHUNK)) {
         tris.par_iter()
             .zip(tmat.par_iter())
             .map(|(tri, &mi)| {
-                let (m, d) = &mats[mi as usize];
+                let d = &mats[mi as usize];
                 let p = [t.points[tri[0]], t.points[tri[1]], t.points[tri[2]]];
                 let ue = [
                     u[tri[0]][0],
@@ -180,11 +179,11 @@ pub(crate) fn element_pass(
                     u[tri[2]][1],
                 ];
                 let s = if stresses {
-                    element::stress(&p, d, m, f.model.plane, &ue)
+                    kind.stress(&p, d, &ue)
                 } else {
                     [0.0; 4]
                 };
-                let ke = element::stiffness_in(&p, m, d, model.plane, th);
+                let ke = kind.stiffness(&p, d);
                 let mut fe = [[0.0f64; 2]; 3];
                 for (a, fa) in fe.iter_mut().enumerate() {
                     for (k, fak) in fa.iter_mut().enumerate() {
@@ -214,7 +213,7 @@ pub(crate) fn element_pass(
 pub fn compute(
     model: &Model,
     problem: &Problem,
-    u: &[[f64; 2]],
+    u: &[Vector],
     lambda: &[f64],
     pressure: &[f64],
 ) -> Forces {
@@ -227,7 +226,7 @@ pub fn compute(
 pub fn compute_with_friction(
     model: &Model,
     problem: &Problem,
-    u: &[[f64; 2]],
+    u: &[Vector],
     lambda: &[f64],
     lambda_t: &[f64],
     pressure: &[f64],
@@ -240,8 +239,8 @@ pub fn compute_with_friction(
 /// ([`element_pass`]).
 pub(crate) fn compute_from(
     model: &Model,
-    u: &[[f64; 2]],
-    ku: &[[f64; 2]],
+    u: &[Vector],
+    ku: &[Vector],
     lambda: &[f64],
     lambda_t: &[f64],
     pressure: &[f64],
@@ -303,13 +302,13 @@ pub(crate) fn compute_from(
         ];
         // An orthonormal basis of the fixed directions: the complement of T.
         let pd = &model.dofs[p];
-        let fixed: Vec<[f64; 2]> = match pd.ndof {
+        let fixed: Vec<Vector> = match pd.ndof {
             0 => vec![[1.0, 0.0], [0.0, 1.0]],
             1 => vec![[-pd.t[0][1], pd.t[0][0]]],
             _ => vec![],
         };
         // Each group's fixed directions at p, orthonormalised.
-        let mut gs: Vec<(usize, Vec<[f64; 2]>)> = vec![];
+        let mut gs: Vec<(usize, Vec<Vector>)> = vec![];
         for &(_, dir, src) in here {
             let g = group_of[src as usize];
             let k = match gs.iter().position(|x| x.0 == g) {
@@ -625,11 +624,7 @@ type Adjacency = std::collections::BTreeMap<usize, Vec<usize>>;
 
 /// The extent of a path of rows (in order): from its first active row to
 /// its last, the zones being the runs of active rows.
-fn path_extent(
-    path: &[usize],
-    on: &dyn Fn(usize) -> bool,
-    x: &dyn Fn(usize) -> [f64; 2],
-) -> Extent {
+fn path_extent(path: &[usize], on: &dyn Fn(usize) -> bool, x: &dyn Fn(usize) -> Point) -> Extent {
     let dist = |a: usize, b: usize| {
         let (p, q) = (x(a), x(b));
         (q[0] - p[0]).hypot(q[1] - p[1])
@@ -663,7 +658,7 @@ fn branch_extent(
     comp: &[usize],
     adj: &Adjacency,
     on: &dyn Fn(usize) -> bool,
-    x: &dyn Fn(usize) -> [f64; 2],
+    x: &dyn Fn(usize) -> Point,
 ) -> Extent {
     let dist = |a: usize, b: usize| {
         let (p, q) = (x(a), x(b));

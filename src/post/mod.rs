@@ -6,8 +6,9 @@ pub mod forces;
 pub mod friction;
 pub mod plot;
 
+use crate::fem::element::Point;
 use crate::fem::{element, Model};
-use crate::io::{ContactGeometry, OutMesh, StepInfo, StepOutput};
+use crate::output::{ContactGeometry, OutMesh, StepInfo, StepOutput};
 use crate::problem::Problem;
 use crate::qp::QpResult;
 
@@ -41,9 +42,7 @@ pub fn out_mesh(model: &Model, mesh: &crate::mesh::Mesh) -> OutMesh {
         triangles: t.triangles.clone(),
         material: t.tri_material.clone(),
         material_names: t.material_names.clone(),
-        // Axisymmetric stresses have four components too (σθθ the 4th).
-        plane_strain: model.plane != crate::problem::Plane::Stress,
-        axisymmetric: model.plane.is_axisymmetric(),
+        kind: model.kind,
         contact,
     }
 }
@@ -66,7 +65,7 @@ pub fn step_output_with_forces(
     let u = model.displacements(&res.x);
     lap.lap("displacements");
     // Stresses and the element forces of the reactions in one pass.
-    let (stress, ku) = forces::element_pass(model, problem, &u, true);
+    let (stress, ku) = forces::element_pass(model, &problem.file.materials, &u, true);
     lap.lap("stresses and element forces");
     let nrow = t.contact.len();
     let mut multipliers = vec![0.0; nrow];
@@ -106,11 +105,8 @@ pub fn step_output_with_forces(
         reaction: std::mem::take(&mut forces.point_reaction),
         von_mises: {
             use rayon::prelude::*;
-            if model.plane.is_axisymmetric() {
-                stress.par_iter().map(element::von_mises_axi).collect()
-            } else {
-                stress.par_iter().map(element::von_mises).collect()
-            }
+            let kind = model.kind;
+            stress.par_iter().map(|s| kind.von_mises(s)).collect()
         },
         principal: {
             use rayon::prelude::*;
@@ -160,7 +156,7 @@ impl Located {
 /// The triangle of `triangles` (point indices into `points`) that `x` lies
 /// in, or else the one it is nearest to relative to that triangle's size
 /// (None without triangles). Deterministic: the first of equals wins.
-pub fn locate(points: &[[f64; 2]], triangles: &[[usize; 3]], x: [f64; 2]) -> Option<Located> {
+pub fn locate(points: &[Point], triangles: &[[usize; 3]], x: Point) -> Option<Located> {
     let mut best: Option<(f64, Located)> = None;
     for (t, tri) in triangles.iter().enumerate() {
         let v = tri.map(|i| points[i]);
@@ -194,8 +190,8 @@ pub fn locate(points: &[[f64; 2]], triangles: &[[usize; 3]], x: [f64; 2]) -> Opt
 }
 
 /// The distance from `x` to the closed triangle `v` (0 inside or on it).
-fn distance_to_triangle(v: [[f64; 2]; 3], x: [f64; 2]) -> f64 {
-    let cross = |a: [f64; 2], b: [f64; 2], p: [f64; 2]| {
+fn distance_to_triangle(v: [Point; 3], x: Point) -> f64 {
+    let cross = |a: Point, b: Point, p: Point| {
         (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
     };
     let orient = cross(v[0], v[1], v[2]);
@@ -223,7 +219,7 @@ fn distance_to_triangle(v: [[f64; 2]; 3], x: [f64; 2]) -> f64 {
 }
 
 /// The point nearest to (x, y).
-pub fn nearest_point(points: &[[f64; 2]], x: [f64; 2]) -> usize {
+pub fn nearest_point(points: &[Point], x: Point) -> usize {
     points
         .iter()
         .enumerate()

@@ -106,22 +106,6 @@ pub enum Plane {
     Axisymmetric,
 }
 
-impl Plane {
-    /// Whether the model is axisymmetric (x = r, y = z).
-    pub fn is_axisymmetric(self) -> bool {
-        self == Plane::Axisymmetric
-    }
-
-    /// The effective thickness of forces → pressures: t_h in plane stress,
-    /// 1 in plane strain. Axisymmetric models weight by r instead (1 here).
-    pub fn t_eff(self, thickness: f64) -> f64 {
-        match self {
-            Plane::Stress => thickness,
-            Plane::Strain | Plane::Axisymmetric => 1.0,
-        }
-    }
-}
-
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelSection {

@@ -16,6 +16,7 @@ pub mod export;
 pub mod limit;
 mod observe;
 mod output;
+mod plot;
 mod prepare;
 mod restart;
 mod steps;
@@ -29,6 +30,7 @@ pub use output::{
     catch_signals, create_checkpoint, interrupted, output_paths, CheckpointWriter, Concurrent,
     Outputs, SummaryWriter, Transaction, VtuWriter,
 };
+pub use plot::plot_file;
 pub use prepare::{
     fingerprint, fingerprint_before_mortar, fingerprint_diff, fnv1a, options, prepare,
     prepare_with, probes, reduce, reduce_active, solve, solve_model, solve_model_in, step_model,

@@ -13,7 +13,8 @@ use super::steps::Step;
 use super::summary::Summary;
 use super::RunError;
 use crate::io::atomic::{self, OutputLock, Stage};
-use crate::io::{self, IoError, OutMesh};
+use crate::io::{self, IoError};
+use crate::output::OutMesh;
 use std::path::{Path, PathBuf};
 
 /// The signal `signorini solve` received (SIGTERM, SIGINT; 0: none), set
@@ -318,7 +319,7 @@ pub fn create_checkpoint(
 
 /// The checkpoint `NAME.h5`. A single solve writes one file (created at
 /// the step, or copied from the checkpoint of a restart and extended). A
-/// run with load steps writes the split layout of [`io::hdf5::Checkpoint`]:
+/// run with load steps writes the split layout of [`crate::io::hdf5`]:
 /// the mesh file once, each step's own file, and the small index `NAME.h5`
 /// rewritten at every step, which the commit renames last; so a step
 /// writes its own data and the index, never the earlier steps again.
@@ -465,7 +466,7 @@ impl<'a> CheckpointWriter<'a> {
 impl StepObserver for CheckpointWriter<'_> {
     fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
         let fo = crate::post::friction::friction_output(step.model, step.result);
-        let friction = fo.map(|f| io::hdf5::StepFriction {
+        let friction = fo.map(|f| crate::output::StepFriction {
             multipliers_t: f.lambda_t,
             tangential_traction: f.tangential_traction,
             slip: f.slip,
@@ -641,7 +642,7 @@ impl<'a> VtuWriter<'a> {
     fn write_pair(
         &mut self,
         paths: &Outputs,
-        out: &io::StepOutput,
+        out: &crate::output::StepOutput,
         arrays: Option<&io::vtu::FrictionArrays<'_>>,
         series: bool,
     ) -> Result<(), RunError> {

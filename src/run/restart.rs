@@ -9,8 +9,9 @@ use super::prepare::{
     fingerprint, fingerprint_before_mortar, fingerprint_diff, has_default_discretization, Prepared,
 };
 use super::RunError;
-use crate::io::hdf5::{read_checkpoint, step_name, Checkpoint};
-use crate::io::StepOutput;
+use crate::io::hdf5::{read_checkpoint, step_name};
+use crate::output::Checkpoint;
+use crate::output::StepOutput;
 use std::path::{Path, PathBuf};
 
 /// A checkpoint to continue from.

@@ -4,7 +4,7 @@
 
 use super::prepare::{probes, Prepared};
 use crate::fem::Model;
-use crate::io::StepOutput;
+use crate::output::StepOutput;
 use crate::post::forces::{Forces, GroupReaction, InterfaceForce, Resultant};
 use crate::qp::{Kkt, QpResult};
 use serde::Serialize;
@@ -223,7 +223,7 @@ impl Summary {
             triangles: model.topo.triangles.len(),
             bodies: model.topo.nbodies,
             rigid_modes: model.qp.kernel.len(),
-            force_unit: model.plane.is_axisymmetric().then_some("N/rad"),
+            force_unit: model.kind.force_unit(),
             dofs: model.qp.n(),
             constraints: model.qp.m(),
             active: res.active.iter().filter(|a| **a).count(),

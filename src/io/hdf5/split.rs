@@ -94,11 +94,7 @@ pub fn write_index(
         for (k, v) in attrs {
             set_attr_str(&ctx, root, k, v)?;
         }
-        set_attr_scalar(&ctx, root, "plane_strain", &u8::from(mesh.plane_strain))?;
-        set_attr_str(&ctx, root, "model", super::model_kind(mesh))?;
-        if mesh.axisymmetric {
-            set_attr_scalar(&ctx, root, "axisymmetric", &1u8)?;
-        }
+        super::set_kind_attrs(&ctx, root, mesh.kind, true)?;
         root.link_external(mesh_file, "/mesh", "mesh")
             .map_err(ctx.h5("/mesh"))?;
         let g = file.create_group("steps").map_err(ctx.h5("/steps"))?;
@@ -209,10 +205,7 @@ pub fn pack(src: &Path, dst: &Path) -> Result<Packed, IoError> {
             for (k, v) in &ck.attrs {
                 set_attr_str(&wctx, root, k, v)?;
             }
-            set_attr_scalar(&wctx, root, "plane_strain", &u8::from(ck.mesh.plane_strain))?;
-            if ck.mesh.axisymmetric {
-                set_attr_scalar(&wctx, root, "axisymmetric", &1u8)?;
-            }
+            super::set_kind_attrs(&wctx, root, ck.mesh.kind, false)?;
             let mesh = from.group("mesh").map_err(|e| linked(&rctx, "/mesh", e))?;
             mesh.copy_to(root, "mesh").map_err(wctx.h5("/mesh"))?;
             if let Some((sg, names)) = step_names(&rctx, &from)? {

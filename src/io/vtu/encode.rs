@@ -15,32 +15,14 @@ use vtkio::xml::Compressor;
 use super::super::atomic::{write_atomic, IoError};
 use super::ZLIB_LEVEL;
 
-/// Component names of the multi-component arrays, as ParaView shows them.
-pub(super) type Names = &'static [(&'static str, &'static [&'static str])];
+/// Component names of the multi-component arrays, as ParaView shows them
+/// (those of a model's fields are its kind's,
+/// [`ElementKind::component_names`](crate::fem::ElementKind::component_names)).
+pub(super) type Names = crate::fem::element::ComponentNames;
 
-pub(super) const COMPONENT_NAMES: Names = &[
-    ("displacement", &["ux", "uy", "uz"]),
-    ("displacement_change", &["dux", "duy", "duz"]),
-    ("reaction", &["Rx", "Ry", "Rz"]),
-    ("stress", &["sxx", "syy", "sxy", "szz"]),
-    ("stress_change", &["dsxx", "dsyy", "dsxy", "dszz"]),
-    ("principal_stress", &["s1", "s2"]),
-    ("normal", &["nx", "ny", "nz"]),
-    ("tangent", &["tx", "ty", "tz"]),
-];
-
-/// The same in an axisymmetric model (x = r, y = z): (σrr, σzz, σrz, σθθ),
-/// the 4th the hoop stress (docs/problem-format.md §6).
-pub(super) const AXI_COMPONENT_NAMES: Names = &[
-    ("displacement", &["ur", "uz", "u3"]),
-    ("displacement_change", &["dur", "duz", "du3"]),
-    ("reaction", &["Rr", "Rz", "R3"]),
-    ("stress", &["srr", "szz", "srz", "stt"]),
-    ("stress_change", &["dsrr", "dszz", "dsrz", "dstt"]),
-    ("principal_stress", &["s1", "s2"]),
-    ("normal", &["nx", "ny", "nz"]),
-    ("tangent", &["tx", "ty", "tz"]),
-];
+/// The names of the arrays whose names do not depend on the kind (the
+/// mesh, the contact points' normals and tangents): a plane model's.
+pub(super) const COMPONENT_NAMES: Names = crate::fem::element::PLANE_COMPONENT_NAMES;
 
 /// vtkio 0.7's `DataArray` has no component names, so they are added to
 /// the XML it writes: `ComponentName0="sxx"`, … on each `<DataArray>` whose

@@ -20,7 +20,7 @@ use vtkio::model::{
 };
 
 use super::atomic::{write_atomic, write_atomic_with, IoError};
-use super::{OutMesh, StepOutput};
+use crate::output::{OutMesh, StepOutput};
 
 /// zlib level used when compression is requested (1 fastest … 9 smallest).
 const ZLIB_LEVEL: u32 = 6;
@@ -223,11 +223,7 @@ pub fn write_vtu_with(
     check_len(path, "stress", step.stress.len(), m)?;
     check_len(path, "von_mises", step.von_mises.len(), m)?;
     check_len(path, "principal", step.principal.len(), m)?;
-    let names = if mesh.axisymmetric {
-        AXI_COMPONENT_NAMES
-    } else {
-        COMPONENT_NAMES
-    };
+    let names = mesh.kind.component_names();
     for t in &mesh.triangles {
         for &i in t {
             check_index(path, "triangle", i, n)?;
@@ -238,7 +234,7 @@ pub fn write_vtu_with(
         check_len(path, "stress_change", c.stress.len(), m)?;
     }
     let vec3 = |v: &[[f64; 2]]| -> Vec<f64> { v.iter().flat_map(|u| [u[0], u[1], 0.0]).collect() };
-    let ncomp: usize = if mesh.plane_strain { 4 } else { 3 };
+    let ncomp: usize = mesh.kind.stress_len();
     let has_reaction = step.reaction.len() == n;
     if let Some(p) = parts.filter(|p| !compress && p.n == n && p.m == m) {
         // The step's fields straight from the step where they lie as
@@ -775,8 +771,7 @@ mod tests {
             triangles: vec![[0, 1, 2], [1, 3, 2]],
             material: vec![0, 1],
             material_names: vec!["a".into(), "b".into()],
-            plane_strain: true,
-            axisymmetric: false,
+            kind: crate::fem::ElementKind::PlaneStrain,
             contact: Default::default(),
         };
         let mut step = StepOutput {
@@ -788,10 +783,14 @@ mod tests {
         };
         for k in 0..4 {
             let mut mesh = mesh.clone();
-            mesh.plane_strain = k % 2 == 0;
+            mesh.kind = if k % 2 == 0 {
+                crate::fem::ElementKind::PlaneStrain
+            } else {
+                crate::fem::ElementKind::PlaneStress { thickness: 1.0 }
+            };
             if k >= 2 {
                 step.reaction = vec![[1.0, 2.0]; 4];
-                step.change = Some(crate::io::Change {
+                step.change = Some(crate::output::Change {
                     reference_step: 1,
                     displacement: vec![[0.125, -0.5]; 4],
                     stress: vec![[9.0; 4]; 2],

@@ -4,7 +4,7 @@
 
 use super::style::{category_color, de, fmt_num, viridis};
 use super::{err, Field, PlotError, PlotOptions, Units};
-use crate::io::{OutMesh, StepOutput};
+use crate::output::{OutMesh, StepOutput};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};

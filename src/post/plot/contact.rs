@@ -3,7 +3,7 @@
 
 use super::style::{category_color, de, fmt_num, tick, titled, viridis};
 use super::{err, PlotError, Units};
-use crate::io::{ContactGeometry, StepOutput};
+use crate::output::{ContactGeometry, StepOutput};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::collections::HashMap;

@@ -5,7 +5,7 @@
 use super::colorbar::{color_scale, draw_colorbar, draw_legend, field_values, ColorScale, Values};
 use super::style::{category_color, de, fmt_num, tick, titled, viridis};
 use super::{err, PlotError, PlotOptions};
-use crate::io::{OutMesh, StepOutput};
+use crate::output::{OutMesh, StepOutput};
 use plotters::coord::cartesian::Cartesian2d;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;

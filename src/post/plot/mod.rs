@@ -28,9 +28,8 @@ pub use contact::{arc_lengths, interface_chains, Tangential};
 pub use mesh::auto_scale;
 pub use style::{fmt_num, viridis};
 
-use crate::io::atomic::write_atomic_bytes;
-use crate::io::hdf5::{read_checkpoint, Checkpoint};
-use crate::io::{OutMesh, StepOutput};
+use crate::fem::ElementKind;
+use crate::output::{Checkpoint, OutMesh, StepOutput};
 pub use crate::problem::Units;
 use contact::draw_contact;
 use mesh::draw_mesh;
@@ -144,24 +143,30 @@ impl Field {
     /// (`szz` drawing the fourth component would label σθθ as σzz). The
     /// axisymmetric names on a plane checkpoint are refused, naming the
     /// plane one.
-    pub fn for_model(self, axisymmetric: bool) -> Result<Field, PlotError> {
-        Ok(match (self, axisymmetric) {
-            (Field::Sxx, true) => Field::Srr,
-            (Field::Syy | Field::Szz, true) => Field::SzzAxial,
-            (Field::Sxy, true) => Field::Srz,
-            (Field::Srr | Field::Srz | Field::Stt, false) => {
-                let plane = match self {
-                    Field::Srr => "sxx",
-                    Field::Srz => "sxy",
-                    _ => "szz",
-                };
-                return Err(err(format!(
-                    "field \"{}\" is a stress of an axisymmetric model; this checkpoint is plane: use \"{plane}\"",
-                    self.name()
-                )));
-            }
-            (f, _) => f,
-        })
+    pub fn for_model(self, kind: ElementKind) -> Result<Field, PlotError> {
+        match kind.stress_component(self.name()) {
+            None => Ok(self),
+            Some(Ok(i)) => Ok(Field::stress(i, kind.stress_names()[i])),
+            Some(Err(plane)) => Err(err(format!(
+                "field \"{}\" is a stress of an axisymmetric model; this checkpoint is plane: use \"{plane}\"",
+                self.name()
+            ))),
+        }
+    }
+
+    /// The stress field of component `i` named `name` (the name the
+    /// checkpoint's kind gives it).
+    fn stress(i: usize, name: &str) -> Field {
+        match (i, name) {
+            (0, "srr") => Field::Srr,
+            (1, "szz") => Field::SzzAxial,
+            (2, "srz") => Field::Srz,
+            (3, "stt") => Field::Stt,
+            (0, _) => Field::Sxx,
+            (1, _) => Field::Syy,
+            (2, _) => Field::Sxy,
+            _ => Field::Szz,
+        }
     }
 
     /// The field named `s`, or an error listing the known names.
@@ -313,23 +318,8 @@ pub struct PlotSummary {
     pub units: Units,
 }
 
-/// Reads `h5`, draws the figure and writes it to `out` (format from its
-/// extension) atomically.
-pub fn plot_file(h5: &Path, out: &Path, opts: &PlotOptions) -> Result<PlotSummary, PlotError> {
-    let format = Format::from_path(out)?;
-    check_options(opts)?;
-    let ck = read_checkpoint(h5).map_err(|e| err(e.to_string()))?;
-    let name = h5
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "checkpoint".to_string());
-    let (bytes, summary) =
-        render(&ck, &name, opts, format).map_err(|e| err(format!("{}: {}", h5.display(), e.0)))?;
-    write_atomic_bytes(out, &bytes).map_err(|e| err(e.to_string()))?;
-    Ok(summary)
-}
-
-fn check_options(opts: &PlotOptions) -> Result<(), PlotError> {
+/// Refuses options out of range or that exclude each other.
+pub fn check_options(opts: &PlotOptions) -> Result<(), PlotError> {
     for (what, v) in [("width", opts.width), ("height", opts.height)] {
         if !(MIN_SIDE..=MAX_SIDE).contains(&v) {
             return Err(err(format!(
@@ -402,7 +392,7 @@ pub fn render(
     let mesh = &ck.mesh;
     let problem_toml = ck.attrs.iter().find(|(k, _)| k == "problem_toml");
     let resolved = PlotOptions {
-        field: opts.field.for_model(mesh.axisymmetric)?,
+        field: opts.field.for_model(mesh.kind)?,
         units: problem_toml.map_or_else(Units::default, |(_, t)| Units::of_problem_text(t)),
         ..opts.clone()
     };
@@ -571,7 +561,7 @@ fn tangential_of(
     change: bool,
 ) -> Result<Option<Vec<Tangential>>, PlotError> {
     let rows = ck.mesh.contact.points.len();
-    let of = |k: usize| -> Result<Option<&crate::io::hdf5::StepFriction>, PlotError> {
+    let of = |k: usize| -> Result<Option<&crate::output::StepFriction>, PlotError> {
         match ck.friction.get(k.wrapping_sub(1)).and_then(|f| f.as_ref()) {
             None => Ok(None),
             Some(f) if f.tangential_traction.len() == rows && f.state.len() == rows => Ok(Some(f)),

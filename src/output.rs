@@ -1,0 +1,169 @@
+//! The output data model: what a solve produces and a checkpoint holds
+//! (the output mesh, the fields of each step, the friction arrays), as
+//! plain arrays. `post` builds it from a solved model, `io` writes and
+//! reads it (VTU, HDF5, JSON) and `post::plot` draws it; it knows nothing
+//! of the solver, the mesh reader or the file formats.
+
+use crate::fem::element::{Point, Vector};
+
+/// The output mesh: contact nodes appear once per side (one point per body copy).
+#[derive(Debug, Clone, Default)]
+pub struct OutMesh {
+    /// Point coordinates (x, y) of the duplicated mesh.
+    pub points: Vec<Point>,
+    /// Gmsh node tag each point came from.
+    pub point_tags: Vec<u64>,
+    /// Body number of each point (0-based).
+    pub point_body: Vec<u32>,
+    /// Triangles (counter-clockwise) in point indices.
+    pub triangles: Vec<[usize; 3]>,
+    /// Material index of each triangle (into `material_names`).
+    pub material: Vec<u32>,
+    pub material_names: Vec<String>,
+    /// The kind of model: which stress components are written (σzz in
+    /// plane strain, the hoop stress σθθ named "stt" when axisymmetric,
+    /// docs/problem-format.md §6) and under which names.
+    pub kind: crate::fem::ElementKind,
+    /// The contact constraints: one contact point per constraint row.
+    pub contact: ContactGeometry,
+}
+
+/// One point per constraint row, placed at the node of the first side
+/// (body k of a conforming pair, or the slave node); segments join the
+/// points of consecutive rows along the same interface.
+#[derive(Debug, Clone, Default)]
+pub struct ContactGeometry {
+    pub points: Vec<Point>,
+    /// Output-mesh point index of the first side (k / slave) of each row.
+    pub first: Vec<usize>,
+    /// Output-mesh point indices of the other side: one point (conforming),
+    /// or two master points with weights (1-ξ, ξ) (non-matching).
+    pub second: Vec<[(usize, f64); 2]>,
+    pub normal: Vec<Vector>,
+    /// Initial gap g of each row.
+    pub gap0: Vec<f64>,
+    /// Line cells in contact-point indices.
+    pub segments: Vec<[usize; 2]>,
+    /// Interface index of each row (into `interface_names`).
+    pub interface: Vec<u32>,
+    pub interface_names: Vec<String>,
+    /// The discretization of each interface (same order as
+    /// `interface_names`): `"node-to-node"`, `"nts"` or `"mortar"`; empty
+    /// when read from a checkpoint that did not record it.
+    pub interface_discretizations: Vec<String>,
+    /// Whether each row is node-to-segment (slave point, two master points)
+    /// rather than a conforming node pair.
+    pub nonmatching: Vec<bool>,
+}
+
+/// The fields of one solved (load) step.
+#[derive(Debug, Clone, Default)]
+pub struct StepOutput {
+    /// Pseudo-time of the step (1.0 for a single solve).
+    pub time: f64,
+    /// Nodal displacement per output point.
+    pub displacement: Vec<Vector>,
+    /// Per triangle: σxx, σyy, σxy, σzz (σzz = 0 in plane stress).
+    pub stress: Vec<[f64; 4]>,
+    /// Per triangle: the report's τe = sqrt(σxx² + σyy² − σxxσyy + 3σxy²).
+    pub von_mises: Vec<f64>,
+    /// Per triangle: in-plane principal stresses (σ1 ≥ σ2).
+    pub principal: Vec<[f64; 2]>,
+    /// Per contact row: λ (nodal force), pressure (λ / tributary length), current gap, active flag.
+    pub multipliers: Vec<f64>,
+    pub contact_pressure: Vec<f64>,
+    pub gap: Vec<f64>,
+    pub active: Vec<u8>,
+    /// Per point: the reaction force of the Dirichlet/slip conditions
+    /// (zero where nothing is prescribed; empty if not computed).
+    pub reaction: Vec<Vector>,
+    /// Solver record stored as attributes.
+    pub info: StepInfo,
+    /// The change since the reference step (`[output] reference_step`), on
+    /// that step and every later one.
+    pub change: Option<Change>,
+}
+
+/// A step's fields minus those of the reference step: what the loads added
+/// since then (e.g. plate motion on top of the gravity state).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Change {
+    /// The reference step (1-based).
+    pub reference_step: usize,
+    /// Per output point: u − u_ref.
+    pub displacement: Vec<Vector>,
+    /// Per triangle: σ − σ_ref (σxx, σyy, σxy, σzz).
+    pub stress: Vec<[f64; 4]>,
+    /// Per contact row: p − p_ref.
+    pub contact_pressure: Vec<f64>,
+}
+
+impl Change {
+    /// The fields of `step` minus those of `reference` (same mesh).
+    pub fn between(step: &StepOutput, reference: &StepOutput, reference_step: usize) -> Change {
+        let sub2 = |a: &Vector, b: &Vector| [a[0] - b[0], a[1] - b[1]];
+        Change {
+            reference_step,
+            displacement: step
+                .displacement
+                .iter()
+                .zip(&reference.displacement)
+                .map(|(a, b)| sub2(a, b))
+                .collect(),
+            stress: step
+                .stress
+                .iter()
+                .zip(&reference.stress)
+                .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2], a[3] - b[3]])
+                .collect(),
+            contact_pressure: step
+                .contact_pressure
+                .iter()
+                .zip(&reference.contact_pressure)
+                .map(|(a, b)| a - b)
+                .collect(),
+        }
+    }
+}
+
+/// Scalars of one step, written as HDF5 attributes and into the JSON summary.
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
+pub struct StepInfo {
+    pub method: String,
+    pub preconditioner: String,
+    pub converged: bool,
+    pub iterations: usize,
+    pub energy: f64,
+    /// Every residual of the step's KKT certificate (docs/methods.md §8.4).
+    pub kkt: crate::qp::Kkt,
+    pub time_assemble: f64,
+    pub time_solve: f64,
+    pub time_total: f64,
+}
+
+/// The friction arrays of a step, per contact row (docs/problem-format.md
+/// §6): λ_t (N), the tangential traction (Pa), the slip of the step (m) and
+/// the state 0 open, 1 stick, 2 slip.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepFriction {
+    pub multipliers_t: Vec<f64>,
+    pub tangential_traction: Vec<f64>,
+    pub slip: Vec<f64>,
+    pub state: Vec<u8>,
+}
+
+/// Everything a checkpoint holds (its HDF5 layout: [`crate::io::hdf5`]).
+#[derive(Debug, Clone, Default)]
+pub struct Checkpoint {
+    pub mesh: OutMesh,
+    /// The steps in increasing index order (1, 2, …).
+    pub steps: Vec<StepOutput>,
+    /// The name of each step's group under `/steps` (same order): a
+    /// restart continues by these names, not by the count
+    /// (`run::Restart` refuses a gap, a `0000` or a duplicate).
+    pub step_groups: Vec<String>,
+    /// The friction arrays of each step (same order; None: frictionless).
+    pub friction: Vec<Option<StepFriction>>,
+    /// The string attributes of the root group (alphabetical order).
+    pub attrs: Vec<(String, String)>,
+}
