@@ -66,14 +66,15 @@ pub(crate) fn solve_friction<S: BoundStep>(
     // model's plates do) has a prescribed slip v = −t0 ≠ 0 in a load step.
     // In the dual its gradient is the constant t0 (H's row is zero): its
     // multiplier can only run to its bound, ᾱ·|t0| an expansion step
-    // (10¹² away, or none when glued), while the constant stays in ‖gᴾ‖;
-    // at 1.7–6.8·10⁻¹⁰ of its scale it held every Tresca solve of the
-    // geodynamic model at μ = 0.1 and 0.2 above tol = 10⁻¹⁰ until it
-    // stagnated, and the Coulomb loop gave up (docs/methods.md §9.1). Its
-    // answer is known: it slips, λ_t = s·sign v (0 when glued). So the
-    // host sees it with a zero offset (it holds nothing and moves nothing)
-    // and its λ_t is set after each solve ([`DualTresca::prescribed`]).
-    // A zero row without an offset (a symmetry line) is left as it was.
+    // (~10¹² away, never when glued), while the constant stays in ‖gᴾ‖:
+    // at 1.7–6.8·10⁻¹⁰ of its scale it held the Tresca solves of the
+    // geodynamic model's load steps above tol = 10⁻¹⁰ until they
+    // stagnated, and at μ = 0.1, 0.2 and 0.3 the Coulomb loop gave up
+    // (docs/methods.md §9.1). Its answer is known: it slips,
+    // λ_t = s·sign v (0 when glued). So the host sees it with a zero
+    // offset (it holds nothing and moves nothing) and its λ_t is set after
+    // each solve ([`DualTresca::prescribed`]). A zero row without an
+    // offset (a symmetry line) is left as it was.
     let mut prescribed = vec![];
     for i in m..2 * m {
         if g[i] != 0.0 && b.row(i).1.iter().all(|&v| v == 0.0) {
