@@ -60,6 +60,38 @@ fn every_step_of_the_geodynamic_mu_scan_is_certified() {
     }
 }
 
+/// mprgp certifies every step at μ = 0.1 and 0.2, where its Tresca
+/// solves used to stagnate at a projected gradient of 2–7·10⁻¹⁰ (tol
+/// 10⁻¹⁰): the tangential rows where fault_cont_base and fault_ocean_base
+/// end on the moving plates have all their unknowns prescribed, so their
+/// slip is prescribed and their dual gradient a constant no multiplier
+/// could cancel (docs/methods.md §9.1). Then the Coulomb loop stopped
+/// after three stagnated solves (step 5 at μ = 0.1, steps 3–4 at 0.2).
+#[test]
+fn mprgp_certifies_every_step_at_mu_0_1_and_0_2() {
+    let d = tempfile::tempdir().unwrap();
+    for mu in [0.1, 0.2] {
+        let model = frictional(mu, d.path());
+        let out = d.path().join(format!("out_{mu}"));
+        let (code, text) = run(&[
+            "solve",
+            &model,
+            "--method",
+            "mprgp",
+            "--out",
+            &out.display().to_string(),
+        ]);
+        assert_eq!(code, 0, "μ = {mu}:\n{text}");
+        let steps: Vec<&str> = text.lines().filter(|l| l.starts_with("step ")).collect();
+        assert_eq!(steps.len(), 5, "μ = {mu}:\n{text}");
+        for s in &steps {
+            assert!(s.contains(" converged in "), "μ = {mu}: {s}");
+        }
+        assert!(text.contains("→ certified"), "μ = {mu}:\n{text}");
+        assert!(!text.contains("NOT certified"), "μ = {mu}:\n{text}");
+    }
+}
+
 /// meshes/two_blocks with the upper block held only by friction μ = 0.12
 /// and sheared by a traction p = [1.1·10⁵, −10⁶] Pa in three load steps.
 fn sheared_steps(dir: &std::path::Path) -> String {

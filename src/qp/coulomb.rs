@@ -333,11 +333,13 @@ enum Use {
 /// `kkt_target` (docs/methods.md §9.1: the certificate, not the Tresca
 /// solve's own rule, decides the end); go on (at most [`MAX_STALLED`]
 /// times) from one that stagnated (a method returns its best iterate:
-/// mprgp on the dependent rows where three faults meet stalled at
-/// 5·10⁻¹⁰ against its 10⁻¹⁰) or whose sets cycled (ssn's sets flipped
-/// one of those rows at a KKT residual of 3·10⁻¹²): an inexact Tresca
-/// answer still moves s towards μλ_n. Any other stop ends the loop with
-/// its status. `r` is completed unless it converged.
+/// mprgp stalled at 5·10⁻¹⁰ against its 10⁻¹⁰ on the geodynamic model's
+/// rows of prescribed slip before their λ_t was set outside the dual,
+/// docs/methods.md §9.1) or whose sets cycled (ssn's sets flipped one
+/// of the dependent rows where three faults meet at a KKT residual of
+/// 3·10⁻¹²): an inexact Tresca answer still moves s towards μλ_n. Any
+/// other stop ends the loop with its status. `r` is completed unless it
+/// converged.
 fn usable(
     r: &mut Tresca,
     step: &mut (impl TrescaStep + ?Sized),

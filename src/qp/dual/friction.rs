@@ -55,12 +55,33 @@ pub(crate) fn solve_friction<S: BoundStep>(
             *v *= si;
         }
     }
-    let g: Vec<f64> =
+    let mut g: Vec<f64> =
         qp.g.iter()
             .chain(&fr.t0)
             .zip(&sc)
             .map(|(g, s)| g * s)
             .collect();
+    // A tangential row whose unknowns are all prescribed (B's row is empty:
+    // where a fault ends on a boundary that moves it, as the geodynamic
+    // model's plates do) has a prescribed slip v = −t0 ≠ 0 in a load step.
+    // In the dual its gradient is the constant t0 (H's row is zero): its
+    // multiplier can only run to its bound, ᾱ·|t0| an expansion step
+    // (~10¹² away, never when glued), while the constant stays in ‖gᴾ‖:
+    // at 1.7–6.8·10⁻¹⁰ of its scale it held the Tresca solves of the
+    // geodynamic model's load steps above tol = 10⁻¹⁰ until they
+    // stagnated, and at μ = 0.1, 0.2 and 0.3 the Coulomb loop gave up
+    // (docs/methods.md §9.1). Its answer is known: it slips,
+    // λ_t = s·sign v (0 when glued). So the host sees it with a zero
+    // offset (it holds nothing and moves nothing) and its λ_t is set after
+    // each solve ([`DualTresca::prescribed`]). A zero row without an
+    // offset (a symmetry line) is left as it was.
+    let mut prescribed = vec![];
+    for i in m..2 * m {
+        if g[i] != 0.0 && b.row(i).1.iter().all(|&v| v == 0.0) {
+            prescribed.push((i - m, -g[i].signum()));
+            g[i] = 0.0;
+        }
+    }
     let sq = QpProblem {
         c: Csr::zeros(0, 0),
         d: qp.d.clone(),
@@ -78,6 +99,7 @@ pub(crate) fn solve_friction<S: BoundStep>(
         make,
         name,
         lam0: None,
+        prescribed,
     };
     let target = ctx.settings.kkt_target;
     let proven = coulomb::certificate(qp);
@@ -99,6 +121,10 @@ struct DualTresca<'q, 'c, 'a, F> {
     name: &'static str,
     /// The scaled multipliers of the last solve (the next one's start).
     lam0: Option<Vec<f64>>,
+    /// Tangential rows whose slip is prescribed (an empty row of B with
+    /// an offset): (row, sign of the slip −t0). Their λ_t is s·sign v
+    /// (0 in the glued solve), not the host's.
+    prescribed: Vec<(usize, f64)>,
 }
 
 impl<S: BoundStep, F: FnMut() -> S> TrescaStep for DualTresca<'_, '_, '_, F> {
@@ -136,7 +162,13 @@ impl<S: BoundStep, F: FnMut() -> S> TrescaStep for DualTresca<'_, '_, '_, F> {
             .collect();
         self.lam0 = Some(out.lambda);
         // The host solved the stacked rows [A; T] (docs/methods.md §9.2).
-        let lambda_t = lambda.split_off(m);
+        let mut lambda_t = lambda.split_off(m);
+        for &(k, sign) in &self.prescribed {
+            lambda_t[k] = match bound {
+                Bound::Glued => 0.0,
+                Bound::Given(s) => sign * s[k],
+            };
+        }
         Ok(Tresca {
             x: out.x,
             lambda_n: lambda,

@@ -458,8 +458,10 @@ struct Smalbe<'a, S> {
     /// (rows scaled), for `into_result` not to recover them again.
     recovered: Option<(Vec<f64>, Vec<f64>)>,
     /// λ̂ at the best residual so far ([`Iterative::best`]): a run that
-    /// stagnates returns it, not the last λ̂ (on the geodynamic faults'
-    /// dependent rows the last was 10⁻⁷–10⁻³ where the best was 5·10⁻¹⁰).
+    /// stagnates returns it, not the last λ̂ (on the geodynamic model,
+    /// before its rows of prescribed slip were set outside the dual,
+    /// docs/methods.md §9.1, the last was 10⁻⁷–10⁻³ where the best was
+    /// 5·10⁻¹⁰).
     best_lam: Option<Vec<f64>>,
     /// λ̂ where the current step measured its residual (the record's
     /// iterate: the step moves λ̂ after measuring).
