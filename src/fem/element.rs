@@ -180,6 +180,29 @@ impl ElementKind {
         }
     }
 
+    /// Why a (finite) gravity `g` of `[model]` does not suit this kind: an
+    /// axisymmetric model (x = r, y = z) takes gravity along z only (a
+    /// radial body force is not axisymmetric); None when it does.
+    pub fn gravity_misfit(self, g: Vector) -> Option<&'static str> {
+        match self {
+            ElementKind::Axisymmetric if g[0] != 0.0 => Some(
+                "an axisymmetric model (x = r, y = z) takes gravity along z only; give [0, gz]",
+            ),
+            _ => None,
+        }
+    }
+
+    /// Why a spin ω about the axis (`[model] omega`) does not suit this
+    /// kind: a plane model has no axis; None when it does (axisymmetric).
+    pub fn spin_misfit(self) -> Option<&'static str> {
+        match self {
+            ElementKind::Axisymmetric => None,
+            ElementKind::PlaneStrain | ElementKind::PlaneStress { .. } => {
+                Some("applies to plane = \"axisymmetric\" only")
+            }
+        }
+    }
+
     /// Why a boundary segment (a, b) has no measure in this kind, so that
     /// a traction on it adds no load: both ends on the axis r = 0 of an
     /// axisymmetric model (∫ N r ds = 0 there); None when the segment has

@@ -16,7 +16,8 @@ use super::topology::{dim_name, group_names, Topology};
 use super::{FemError, Model};
 use crate::mesh::Mesh;
 use crate::problem::{
-    num, shorten, Force, Material, ModelSection, ProblemFile, Traction, TractionLoad, MAX_MAGNITUDE,
+    num, shorten, Dirichlet, Force, Material, ModelSection, Slip, Traction, TractionLoad,
+    MAX_MAGNITUDE,
 };
 use crate::qp::Csr;
 use std::collections::BTreeMap;
@@ -274,33 +275,32 @@ pub(super) struct StepLoads {
 }
 
 /// The d, g, u0 and nodal loads of a load step of the problem `base` was
-/// built from (`f`, that problem's file at the step; messages name `path`)
-/// on `base`'s topology, with the checks a full build makes on them, in
-/// the same order; None when the step's conditions give a point other
-/// DOFs than in `base` (C and A would differ).
+/// built from (its `[[dirichlet]]`, `[[slip]]`, boundary loads `bl` and
+/// materials with the body forces `mats` at the step; messages name
+/// `path`) on `base`'s topology, with the checks a full build makes on
+/// them, in the same order; None when the step's conditions give a point
+/// other DOFs than in `base` (C and A would differ).
 pub(super) fn step_loads(
     base: &Model,
     mesh: &Mesh,
     path: &Path,
-    f: &ProblemFile,
+    dirichlet: &[Dirichlet],
+    slip: &[Slip],
+    bl: BoundaryLoads,
+    mats: &Materials,
 ) -> Result<Option<StepLoads>, FemError> {
     let mut lap = super::Lap::new("fem::step_loads");
     let topo = &base.topo;
-    let conds = super::conditions::Conditions::collect(mesh, topo, path, &f.dirichlet, &f.slip)?;
+    let conds = super::conditions::Conditions::collect(mesh, topo, path, dirichlet, slip)?;
     let dofs = conds.eliminate(mesh, topo, &base.body_names, path)?;
     if !same_dofs(&dofs, &base.dofs) {
         return Ok(None);
     }
     lap.lap("conditions");
     let n = base.qp.n();
-    let mats = Materials::new(topo, &f.materials, &f.model);
-    let mut d = element_d(topo, &dofs, n, &mats);
+    let mut d = element_d(topo, &dofs, n, mats);
     lap.lap("element loads");
-    let bl = BoundaryLoads {
-        traction: &f.traction,
-        force: &f.force,
-    };
-    let loads = nodal_loads(mesh, topo, &dofs, path, bl, &mats, &mut d)?;
+    let loads = nodal_loads(mesh, topo, &dofs, path, bl, mats, &mut d)?;
     lap.lap("nodal loads");
     // C is the base's, checked when it was built: only d is checked here.
     check_d(&base.qp.c, &d, &dofs, topo, mesh, path)?;

@@ -230,7 +230,14 @@ pub fn step_model_reusing(
     opts: &BuildOptions,
 ) -> Result<Model, FemError> {
     let mut lap = Lap::new("fem::step_model");
-    let Some(s) = loads::step_loads(base, mesh, &problem.path, &problem.file)? else {
+    let f = &problem.file;
+    let mats = stiffness::Materials::new(&base.topo, &f.materials, &f.model);
+    let bl = loads::BoundaryLoads {
+        traction: &f.traction,
+        force: &f.force,
+    };
+    let path = problem.path.as_path();
+    let Some(s) = loads::step_loads(base, mesh, path, &f.dirichlet, &f.slip, bl, &mats)? else {
         log::debug!("fem::step_model: the DOFs changed, full assembly");
         return build_with(mesh, problem, opts);
     };
@@ -245,7 +252,7 @@ pub fn step_model_reusing(
     model.qp.g = s.g;
     model.loads = s.loads;
     friction::start_step(&mut model, None);
-    rigid::check_semicoercive(&model, &problem.path)?;
+    rigid::check_semicoercive(&model, path)?;
     lap.lap("copy and checks");
     Ok(model)
 }
