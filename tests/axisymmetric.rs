@@ -113,7 +113,7 @@ fn solve_with(
         }
     };
     let (prep, res) = common::solve_file(path, &choice);
-    let step = signorini::post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let step = signorini::post::step_output(&prep.model, &prep.problem.file.materials, &res, 1.0);
     (prep, res, step)
 }
 

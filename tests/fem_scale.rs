@@ -190,7 +190,14 @@ fn phase_breakdown() {
     let rss_read = peak_rss_mb().unwrap_or(f64::NAN);
     let nt = mesh.triangles.len();
     let t1 = Instant::now();
-    let topo = signorini::fem::topology::Topology::build(&mesh, &problem).unwrap();
+    let topo = signorini::fem::topology::Topology::build(
+        &mesh,
+        &problem.path,
+        signorini::fem::ElementKind::of(&problem.file.model),
+        &problem.file.materials,
+        &problem.file.contact,
+    )
+    .unwrap();
     let t_topo = t1.elapsed().as_secs_f64();
     let np = topo.points.len();
     drop(topo);

@@ -20,10 +20,10 @@ fn solved(name: &str) -> (run::Prepared, forces::Forces) {
     let (method, opts) = run::options(&prep.problem, &SolverSection::default()).unwrap();
     let res = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{e}"));
     assert!(res.status.converged(), "{name}: {:?}", res.status);
-    let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let step = post::step_output(&prep.model, &prep.problem.file.materials, &res, 1.0);
     let f = forces::compute(
         &prep.model,
-        &prep.problem,
+        &prep.problem.file.materials,
         &step.displacement,
         &step.multipliers,
         &step.contact_pressure,
@@ -208,7 +208,7 @@ fn vtu_names_components_and_writes_reactions() {
     let path = root().join("meshes/column.toml");
     let (method, opts) = run::options(&prep.problem, &SolverSection::default()).unwrap();
     let res = run::solve(&prep, method, &opts).unwrap();
-    let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let step = post::step_output(&prep.model, &prep.problem.file.materials, &res, 1.0);
     let om = post::out_mesh(&prep.model, &prep.mesh);
     let dir = tempfile::tempdir().unwrap();
     let out = run::output_paths(dir.path(), "column", None);
@@ -245,10 +245,10 @@ fn a_slave_curve_over_two_bodies_names_both() {
     let (method, opts) = run::options(&prep.problem, &SolverSection::default()).unwrap();
     let res = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{e}"));
     assert!(res.status.converged() && res.kkt.within(1e-6));
-    let step = post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let step = post::step_output(&prep.model, &prep.problem.file.materials, &res, 1.0);
     let f = forces::compute(
         &prep.model,
-        &prep.problem,
+        &prep.problem.file.materials,
         &step.displacement,
         &step.multipliers,
         &step.contact_pressure,
@@ -285,7 +285,8 @@ fn solved_with_friction(
     assert!(out.certified);
     let last = out.last.unwrap();
     let model = last.model.as_ref().unwrap_or(&prep.model);
-    let (step, mut f) = post::step_output_with_forces(model, &prep.problem, &last.result, 1.0);
+    let (step, mut f) =
+        post::step_output_with_forces(model, &prep.problem.file.materials, &last.result, 1.0);
     f.point_reaction = step.reaction;
     let lt = post::friction::friction_output(model, &last.result)
         .expect("friction")
@@ -393,7 +394,8 @@ fn the_extent_and_mean_pressure_of_each_interface() {
         let prep = run::prepare(&path, false).unwrap_or_else(|e| panic!("{e}"));
         let (method, opts) = run::options(&prep.problem, &SolverSection::default()).unwrap();
         let res = run::solve(&prep, method, &opts).unwrap_or_else(|e| panic!("{e}"));
-        let (step, f) = post::step_output_with_forces(&prep.model, &prep.problem, &res, 1.0);
+        let (step, f) =
+            post::step_output_with_forces(&prep.model, &prep.problem.file.materials, &res, 1.0);
         // cantilevers: its zone count is the sorted reading only.
         let z = (name != "cantilevers").then_some(1);
         cases.push((name.to_string(), prep, None, f, step.multipliers, z));

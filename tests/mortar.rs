@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 fn solve(path: &Path) -> (Prepared, QpResult, signorini::output::StepOutput) {
     let (prep, res) = common::solve_file(path, &SolverSection::default());
-    let step = signorini::post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let step = signorini::post::step_output(&prep.model, &prep.problem.file.materials, &res, 1.0);
     (prep, res, step)
 }
 

@@ -86,7 +86,7 @@ tol = 1e-12
             );
         }
     }
-    let step = signorini::post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let step = signorini::post::step_output(&prep.model, &prep.problem.file.materials, &res, 1.0);
     for st in &step.stress {
         assert!(
             (st[0] - s).abs() < 1e-9 * s.abs()
@@ -175,7 +175,7 @@ fn eccentric_load_opens_part_of_the_interface_with_tight_kkt() {
         "partly open: {na} of {}",
         res.active.len()
     );
-    let step = signorini::post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let step = signorini::post::step_output(&prep.model, &prep.problem.file.materials, &res, 1.0);
     let gmax = step.gap.iter().fold(0.0f64, |m, g| m.max(*g));
     for (i, (&l, &g)) in res.lambda.iter().zip(&step.gap).enumerate() {
         assert!(l >= 0.0, "row {i}: λ = {l}");
@@ -251,7 +251,7 @@ fn floating_block_is_in_equilibrium_through_contact() {
 #[test]
 fn hertz_contact_width_and_peak_pressure() {
     let (prep, res) = solve_example("hertz");
-    let step = signorini::post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let step = signorini::post::step_output(&prep.model, &prep.problem.file.materials, &res, 1.0);
     let (e, nu) = (2.0e11, 0.3);
     let estar = 1.0 / (2.0 * (1.0 - nu * nu) / e);
     // Full-model force per unit thickness = 2 × the half model's contact force.

@@ -35,7 +35,7 @@ const ROLLERS: [(f64, f64); 4] = [(-6.0, 0.6), (-2.0, 0.8), (2.0, 1.0), (6.0, 1.
 #[test]
 fn rollers_carry_their_load_with_hertz_zones() {
     let (prep, res) = solve("ssn");
-    let step = signorini::post::step_output(&prep.model, &prep.problem, &res, 1.0);
+    let step = signorini::post::step_output(&prep.model, &prep.problem.file.materials, &res, 1.0);
     let t = &prep.model.topo;
     // E* of steel on the foundation (rollers.toml): 1/E* = Σ (1 − ν²)/E.
     let estar = 1.0 / ((1.0 - 0.09) / 2.0e11 + (1.0 - 0.0625) / 2.0e9);

@@ -359,7 +359,8 @@ fn a_gasket_under_a_sliding_plate_balances_at_any_contrast() {
                     assert!(dx < 1e-6 && dl < 1e-6, "{what}: x {dx:.2e}, λ {dl:.2e}");
                 }
             }
-            let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
+            let (_, f) =
+                post::step_output_with_forces(&prep.model, &prep.problem.file.materials, &r, 1.0);
             let on = |name: &str| interface_resultant(&f, name, &what);
             let floor = on("gasket_bottom->groove_floor");
             let top = on("gasket_top->plate_bottom");
@@ -457,7 +458,8 @@ fn a_block_on_a_rubber_slope_is_certified_and_balanced_at_any_contrast() {
                     );
                 }
             }
-            let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
+            let (_, f) =
+                post::step_output_with_forces(&prep.model, &prep.problem.file.materials, &r, 1.0);
             let on = |name: &str| interface_resultant(&f, name, &what);
             let (slope, stop) = (on("block_bottom->slope"), on("block_left->stop"));
             for (got, want, name) in [(slope, slope_force, "slope"), (stop, stop_force, "stop")] {
@@ -504,7 +506,8 @@ fn a_block_held_on_a_rubber_slope_by_friction_alone_is_certified() {
     let mut xs = vec![];
     for method in ["ssn", "mprgp"] {
         let r = solve_certified(&prep, method, &opts, method);
-        let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
+        let (_, f) =
+            post::step_output_with_forces(&prep.model, &prep.problem.file.materials, &r, 1.0);
         let on = interface_resultant(&f, "block_bottom->slope", method);
         assert!(
             on.force[0].abs() < 1e-6 * w && (on.force[1] - w).abs() < 1e-6 * w,
@@ -593,7 +596,8 @@ fn an_arch_of_voussoirs_slides_without_friction_and_stands_with_it() {
     let mut xs = vec![];
     for method in ["ssn", "mprgp"] {
         let r = solve_certified(&prep, method, &opts, method);
-        let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
+        let (_, f) =
+            post::step_output_with_forces(&prep.model, &prep.problem.file.materials, &r, 1.0);
         // The force on body `on` across interface `name`.
         let on = |name: &str, body: &str| {
             let i = f
@@ -654,7 +658,8 @@ fn a_ring_free_to_slide_between_two_plates_gets_one_answer() {
     let methods = ["asm", "ssn", "mprgp", "dual", "preelim"];
     let runs = one_answer(&prep, &opts, &methods, "unique only up to 1 rigid motion");
     for (method, r) in methods.iter().zip(&runs) {
-        let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, r, 1.0);
+        let (_, f) =
+            post::step_output_with_forces(&prep.model, &prep.problem.file.materials, r, 1.0);
         for pair in ["ring_out->bottom_face", "ring_out->top_face"] {
             let on = interface_resultant(&f, pair, method);
             assert!(
@@ -802,7 +807,8 @@ fn a_steel_deck_on_rubber_bearings_is_certified_at_any_contrast() {
                 dx < 1e-6 && dl < 1e-6,
                 "{what}: {m}: x {dx:.2e}, λ {dl:.2e}"
             );
-            let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &r, 1.0);
+            let (_, f) =
+                post::step_output_with_forces(&prep.model, &prep.problem.file.materials, &r, 1.0);
             let total: f64 = ["bear_l_top->deck_bottom", "bear_r_top->deck_bottom"]
                 .iter()
                 .map(|p| interface_resultant(&f, p, m).force[1])
@@ -902,7 +908,8 @@ fn a_ring_under_tresca_friction_whose_ssn_sets_cycle_is_solved_by_the_dual() {
     let again = solve_certified(&prep, "ssn", &opts, "ssn again");
     assert_eq!(ssn.x, again.x, "same input, same bits");
     let load = 1e3 * 2.0;
-    let (_, f) = post::step_output_with_forces(&prep.model, &prep.problem, &ssn, 1.0);
+    let (_, f) =
+        post::step_output_with_forces(&prep.model, &prep.problem.file.materials, &ssn, 1.0);
     for pair in ["ring_out->bottom_face", "ring_out->top_face"] {
         let on = interface_resultant(&f, pair, "ssn");
         assert!(

@@ -14,7 +14,8 @@ use super::element::Vector;
 use super::topology::{dim_name, Topology};
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::problem::Problem;
+use crate::problem::{Dirichlet, Slip};
+use std::path::Path;
 
 /// Per-point elimination: u = u0 + T ξ with `ndof` columns of T used.
 #[derive(Debug, Clone, Copy, Default)]
@@ -50,18 +51,18 @@ impl Conditions {
     pub(super) fn collect(
         mesh: &Mesh,
         topo: &Topology,
-        problem: &Problem,
+        path: &Path,
+        dirichlet: &[Dirichlet],
+        slip: &[Slip],
     ) -> Result<Conditions, FemError> {
         let mut c = Conditions {
             at: vec![vec![]; topo.points.len()],
             src: vec![],
             groups: vec![],
         };
-        c.add_dirichlet(mesh, topo, problem)?;
-        c.add_slip(mesh, topo, problem)?;
-        if topo.kind.has_axis() {
-            c.add_axis(mesh, topo, problem)?;
-        }
+        c.add_dirichlet(mesh, topo, path, dirichlet)?;
+        c.add_slip(mesh, topo, path, slip)?;
+        c.add_implied(mesh, topo, path)?;
         Ok(c)
     }
 
@@ -70,13 +71,14 @@ impl Conditions {
         &mut self,
         mesh: &Mesh,
         topo: &Topology,
-        problem: &Problem,
+        path: &Path,
+        dirichlet: &[Dirichlet],
     ) -> Result<(), FemError> {
-        for (i, dch) in problem.file.dirichlet.iter().enumerate() {
+        for (i, dch) in dirichlet.iter().enumerate() {
             let what = format!("[[dirichlet]] #{} (on = \"{}\")", i + 1, dch.on);
             let [ux, uy] = dch.value.components();
             let mut pts: Vec<usize> = topo
-                .group_points(mesh, problem, &dch.on, &what)?
+                .group_points(mesh, path, &dch.on, &what)?
                 .into_iter()
                 .map(|x| x.0)
                 .collect();
@@ -105,46 +107,25 @@ impl Conditions {
         Ok(())
     }
 
-    /// Axisymmetric models: u_r = 0 on every point on the axis r = x = 0
-    /// (within 1e-9 of the largest |x|), added without a TOML entry
-    /// (docs/methods.md §10); a point at r < 0 is an error.
-    fn add_axis(
-        &mut self,
-        mesh: &Mesh,
-        topo: &Topology,
-        problem: &Problem,
-    ) -> Result<(), FemError> {
-        let rmax = topo.points.iter().fold(0.0f64, |m, x| m.max(x[0].abs()));
-        let tol = 1e-9 * rmax;
+    /// The conditions the element kind imposes by itself (u_r = 0 on the
+    /// axis of an axisymmetric model, docs/methods.md §10), added without
+    /// a TOML entry; a point outside the kind's domain is an error.
+    fn add_implied(&mut self, mesh: &Mesh, topo: &Topology, path: &Path) -> Result<(), FemError> {
+        let implied = topo.kind.implied_conditions(&topo.points).map_err(|e| {
+            FemError::new(path, e.message(mesh.node_tags[topo.point_node[e.point]]))
+        })?;
+        let Some(ic) = implied else {
+            return Ok(());
+        };
         let src = self.src.len();
-        self.src
-            .push("the axis r = 0 (axisymmetric: u_r = 0)".into());
-        self.groups.push(("axis", "r = 0".into()));
-        let mut on_axis = false;
-        for (p, x) in topo.points.iter().enumerate() {
-            if x[0] < -tol {
-                return Err(FemError::new(
-                    &problem.path,
-                    format!(
-                        "[model] plane = \"axisymmetric\" takes x = r >= 0, but node {} lies at x = {:e}; mirror the mesh to r >= 0",
-                        mesh.node_tags[topo.point_node[p]],
-                        x[0]
-                    ),
-                ));
-            }
-            if x[0] <= tol {
-                on_axis = true;
-                self.at[p].push(Cond {
-                    r: [1.0, 0.0],
-                    v: 0.0,
-                    src,
-                });
-            }
-        }
-        if !on_axis {
-            // No node on the axis (a tube): no condition, no reaction group.
-            self.src.pop();
-            self.groups.pop();
+        self.src.push(ic.what.into());
+        self.groups.push((ic.group.0, ic.group.1.into()));
+        for p in ic.points {
+            self.at[p].push(Cond {
+                r: ic.direction,
+                v: 0.0,
+                src,
+            });
         }
         Ok(())
     }
@@ -155,14 +136,15 @@ impl Conditions {
         &mut self,
         mesh: &Mesh,
         topo: &Topology,
-        problem: &Problem,
+        path: &Path,
+        slip: &[Slip],
     ) -> Result<(), FemError> {
-        for (i, s) in problem.file.slip.iter().enumerate() {
+        for (i, s) in slip.iter().enumerate() {
             let what = format!("[[slip]] #{} (on = \"{}\")", i + 1, s.on);
             if let Some(g) = mesh.group_any(&s.on) {
                 if g.dim != 1 {
                     return Err(FemError::new(
-                        &problem.path,
+                        path,
                         format!(
                             "{what}: \"{}\" is a physical {}, expected a curve",
                             s.on,
@@ -173,7 +155,7 @@ impl Conditions {
             }
             // Averaged unit normal per point over the segments of this line.
             let mut sum: std::collections::BTreeMap<usize, Vector> = Default::default();
-            for (p, _, seg) in topo.group_points(mesh, problem, &s.on, &what)? {
+            for (p, _, seg) in topo.group_points(mesh, path, &s.on, &what)? {
                 if let Some((a, b, t)) = seg {
                     let n = topo.outward_normal(mesh, t, a, b);
                     let e = sum.entry(p).or_insert([0.0, 0.0]);
@@ -206,7 +188,7 @@ impl Conditions {
         mesh: &Mesh,
         topo: &Topology,
         body_names: &[String],
-        problem: &Problem,
+        path: &Path,
     ) -> Result<Vec<PointDofs>, FemError> {
         let mut dofs = Vec::with_capacity(self.at.len());
         let mut next = 0usize;
@@ -217,7 +199,7 @@ impl Conditions {
                 from.dedup();
                 let from: Vec<&str> = from.iter().map(|&i| self.src[i].as_str()).collect();
                 FemError::new(
-                    &problem.path,
+                    path,
                     format!(
                         "conflicting conditions at node {} ({}) from {}: {m}",
                         mesh.node_tags[topo.point_node[p]],

@@ -7,8 +7,8 @@ use super::element::Vector;
 use super::topology::Topology;
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::problem::Problem;
 use crate::qp::Csr;
+use std::path::Path;
 
 /// How a contact row couples points: n·(u_first − u_second) ≤ g (conforming,
 /// n outward of the lower body), n·(Σ w u_master − u_slave) ≤ g (non-matching
@@ -108,7 +108,7 @@ pub(super) fn reduced_rows(
     topo: &Topology,
     dofs: &[PointDofs],
     n: usize,
-    problem: &Problem,
+    path: &Path,
 ) -> Result<(Csr, Vec<f64>, Vec<usize>), FemError> {
     let mut atrip = vec![];
     let mut g = vec![];
@@ -129,7 +129,7 @@ pub(super) fn reduced_rows(
         if entries.is_empty() {
             if gr < -1e-12 * (1.0 + row.gap0.abs()) {
                 return Err(FemError::new(
-                    &problem.path,
+                    path,
                     format!(
                         "contact row at node {} of \"{}\" is violated by the prescribed displacements alone",
                         mesh.node_tags[topo.point_node[row.first]],

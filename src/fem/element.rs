@@ -136,11 +136,84 @@ impl ElementKind {
         }
     }
 
-    /// Whether the model revolves about the axis x = r = 0: the mesh lies
-    /// in r ≥ 0, points on the axis get u_r = 0, a spin ω about it loads
-    /// ρω²r, and a traction on it acts on no area (methods.md §10).
-    pub fn has_axis(self) -> bool {
-        self == ElementKind::Axisymmetric
+    /// The conditions this kind imposes by itself, without a TOML entry,
+    /// on the points `points` of a model: u_r = 0 on every point on the
+    /// axis r = x = 0 (within 1e-9 of the largest |x|) of an axisymmetric
+    /// model (methods.md §10); None for a plane model, or when no point
+    /// lies on the axis (a tube). A point at r < 0 is outside the domain
+    /// of the kind: the first one is the error.
+    pub fn implied_conditions(
+        self,
+        points: &[Point],
+    ) -> Result<Option<ImpliedConditions>, OutsideDomain> {
+        if let ElementKind::PlaneStrain | ElementKind::PlaneStress { .. } = self {
+            return Ok(None);
+        }
+        let rmax = points.iter().fold(0.0f64, |m, x| m.max(x[0].abs()));
+        let tol = 1e-9 * rmax;
+        let mut on_axis = vec![];
+        for (p, x) in points.iter().enumerate() {
+            if x[0] < -tol {
+                return Err(OutsideDomain { point: p, at: *x });
+            }
+            if x[0] <= tol {
+                on_axis.push(p);
+            }
+        }
+        Ok((!on_axis.is_empty()).then_some(ImpliedConditions {
+            what: "the axis r = 0 (axisymmetric: u_r = 0)",
+            group: ("axis", "r = 0"),
+            direction: [1.0, 0.0],
+            points: on_axis,
+        }))
+    }
+
+    /// The largest body force of a spin ω about the axis of the kind on a
+    /// material of density `rho` whose points reach the distance `r_max`
+    /// from the axis (r_max the largest |x|): the centrifugal ρω²r_max of
+    /// an axisymmetric model (methods.md §10); None for a plane model,
+    /// which has no axis for a spin to load.
+    pub fn centrifugal_force(self, rho: f64, omega: f64, r_max: f64) -> Option<f64> {
+        match self {
+            ElementKind::Axisymmetric => Some(rho * omega * omega * r_max),
+            ElementKind::PlaneStrain | ElementKind::PlaneStress { .. } => None,
+        }
+    }
+
+    /// Why a (finite) gravity `g` of `[model]` does not suit this kind: an
+    /// axisymmetric model (x = r, y = z) takes gravity along z only (a
+    /// radial body force is not axisymmetric); None when it does.
+    pub fn gravity_misfit(self, g: Vector) -> Option<&'static str> {
+        match self {
+            ElementKind::Axisymmetric if g[0] != 0.0 => Some(
+                "an axisymmetric model (x = r, y = z) takes gravity along z only; give [0, gz]",
+            ),
+            _ => None,
+        }
+    }
+
+    /// Why a spin ω about the axis (`[model] omega`) does not suit this
+    /// kind: a plane model has no axis; None when it does (axisymmetric).
+    pub fn spin_misfit(self) -> Option<&'static str> {
+        match self {
+            ElementKind::Axisymmetric => None,
+            ElementKind::PlaneStrain | ElementKind::PlaneStress { .. } => {
+                Some("applies to plane = \"axisymmetric\" only")
+            }
+        }
+    }
+
+    /// Why a boundary segment (a, b) has no measure in this kind, so that
+    /// a traction on it adds no load: both ends on the axis r = 0 of an
+    /// axisymmetric model (∫ N r ds = 0 there); None when the segment has
+    /// a measure (every segment of a plane model).
+    pub fn measureless_segment(self, a: Point, b: Point) -> Option<&'static str> {
+        match self {
+            ElementKind::Axisymmetric if a[0] == 0.0 && b[0] == 0.0 => {
+                Some("the axis r = 0 of the axisymmetric model")
+            }
+            _ => None,
+        }
     }
 
     /// The number of stress components the files keep: 4 (σzz or σθθ)
@@ -318,6 +391,41 @@ impl ElementKind {
             ElementKind::Axisymmetric => x[0],
             _ => 1.0,
         }
+    }
+}
+
+/// The conditions r·u = 0 an [`ElementKind`] imposes by itself
+/// ([`ElementKind::implied_conditions`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImpliedConditions {
+    /// What sets them, in messages ("the axis r = 0 (…)").
+    pub what: &'static str,
+    /// The group of their reactions: (kind, name).
+    pub group: (&'static str, &'static str),
+    /// The unit direction r of the condition r·u = 0.
+    pub direction: Vector,
+    /// The points they hold, in increasing order.
+    pub points: Vec<usize>,
+}
+
+/// A point outside the domain of an [`ElementKind`] (x = r < 0 in an
+/// axisymmetric model).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutsideDomain {
+    /// The point.
+    pub point: usize,
+    /// Where it lies.
+    pub at: Point,
+}
+
+impl OutsideDomain {
+    /// The message of the error, naming the point by its mesh node tag
+    /// `node`.
+    pub fn message(&self, node: u64) -> String {
+        format!(
+            "[model] plane = \"axisymmetric\" takes x = r >= 0, but node {node} lies at x = {:e}; mirror the mesh to r >= 0",
+            self.at[0]
+        )
     }
 }
 

@@ -12,8 +12,9 @@ use super::contact::{ContactRow, RowKind};
 use super::element::Vector;
 use super::topology::Topology;
 use super::{FemError, Model};
-use crate::problem::{ContactPair, FrictionLaw, Problem};
+use crate::problem::{Contact, ContactPair, Dirichlet, FrictionLaw, LoadStep};
 use crate::qp::{Csr, Friction, SlipBound};
+use std::path::Path;
 
 /// The row with its normal turned by +90°: its coefficients are those of
 /// the tangential relative displacement.
@@ -56,18 +57,17 @@ pub(super) fn symmetry_rows(
     dofs: &[PointDofs],
     conditions: &[(usize, Vector, u32)],
     groups: &[(&'static str, String)],
-    problem: &Problem,
+    dirichlet: &[Dirichlet],
+    steps: &[LoadStep],
 ) -> Vec<bool> {
-    let file = &problem.file;
     // Whether Dirichlet group `name`'s component k is 0 as given and in
     // every step that names it explicitly (factors keep a zero zero).
     let zero_always = |name: &str, k: usize| {
-        file.dirichlet
+        dirichlet
             .iter()
             .filter(|d| d.on == name)
             .all(|d| d.value.components()[k].unwrap_or(0.0) == 0.0)
-            && file
-                .steps
+            && steps
                 .iter()
                 .all(|st| st.dirichlet.get(name).is_none_or(|u| u[k] == 0.0))
     };
@@ -116,8 +116,7 @@ pub(super) fn symmetry_rows(
 
 /// Index of the `[[contact]]` entry of each interface id (conforming
 /// pairs are numbered first, then the non-matching ones; `topology`, `pairs`).
-fn contact_of_interface(problem: &Problem) -> Vec<usize> {
-    let c = &problem.file.contact;
+fn contact_of_interface(c: &[Contact]) -> Vec<usize> {
     let conforming = |i: &usize| matches!(c[*i].pair, ContactPair::Conforming { .. });
     (0..c.len())
         .filter(conforming)
@@ -131,25 +130,25 @@ pub(super) fn build(
     topo: &Topology,
     dofs: &[PointDofs],
     n: usize,
-    problem: &Problem,
+    path: &Path,
+    contacts: &[Contact],
     qp_rows: &[usize],
-    t_eff: f64,
     symmetry: &[bool],
 ) -> Result<Option<Friction>, FemError> {
-    if !problem.has_friction() {
+    if !contacts.iter().any(Contact::has_friction) {
         return Ok(None);
     }
-    let contacts = &problem.file.contact;
+    let t_eff = topo.kind.thickness();
     let law = |l: fn(&FrictionLaw) -> bool| contacts.iter().any(|c| l(&c.friction));
     let tresca = law(|f| matches!(f, FrictionLaw::Tresca(_)));
     let coulomb = law(|f| matches!(f, FrictionLaw::Coulomb(_)));
     if tresca && coulomb {
         return Err(FemError::new(
-            &problem.path,
+            path,
             "[[contact]]: Tresca (tresca = s) and Coulomb (friction = μ) pairs in one problem are not supported; use one law for every pair".into(),
         ));
     }
-    let owner = contact_of_interface(problem);
+    let owner = contact_of_interface(contacts);
     let mut trip = vec![];
     let mut bound = Vec::with_capacity(qp_rows.len());
     let mut rows_of = vec![0usize; contacts.len()];
@@ -167,7 +166,7 @@ pub(super) fn build(
                 let b = s * row.trib * t_eff;
                 if !b.is_finite() {
                     return Err(FemError::new(
-                        &problem.path,
+                        path,
                         format!(
                             "[[contact]] #{} ({}): tresca = {s:e} times the tributary length {:.3e} and the thickness {t_eff:e} overflows; change the units",
                             ci + 1,
@@ -194,7 +193,7 @@ pub(super) fn build(
     for (ci, c) in contacts.iter().enumerate() {
         if c.has_friction() && rows_of[ci] == 0 {
             return Err(FemError::new(
-                &problem.path,
+                path,
                 format!(
                     "[[contact]] #{} ({}): friction is given but the pair has no contact rows (every point fixed, or no slave node projects onto the master)",
                     ci + 1,

@@ -16,19 +16,30 @@ use super::topology::{dim_name, group_names, Topology};
 use super::{FemError, Model};
 use crate::mesh::Mesh;
 use crate::problem::{
-    num, shorten, Material, ModelSection, Problem, Traction, TractionLoad, MAX_MAGNITUDE,
+    num, shorten, Dirichlet, Force, Material, ModelSection, Slip, Traction, TractionLoad,
+    MAX_MAGNITUDE,
 };
 use crate::qp::Csr;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// The boundary loads of a problem: its `[[traction]]` and `[[force]]`
+/// entries.
+#[derive(Clone, Copy)]
+pub(super) struct BoundaryLoads<'a> {
+    pub(super) traction: &'a [Traction],
+    pub(super) force: &'a [Force],
+}
+
 /// The nodal loads on every point [N] (thickness included), and their
-/// tractions and point forces added to `d` (gravity is in d already).
+/// tractions and point forces (`bl`) added to `d` (gravity is in d
+/// already); messages name `path`, the TOML file.
 pub(super) fn nodal_loads(
     mesh: &Mesh,
     topo: &Topology,
     dofs: &[PointDofs],
-    problem: &Problem,
+    path: &Path,
+    bl: BoundaryLoads,
     mats: &Materials,
     d: &mut [f64],
 ) -> Result<Vec<Vector>, FemError> {
@@ -38,8 +49,8 @@ pub(super) fn nodal_loads(
         d,
         kind: mats.kind,
     };
-    loads.add_tractions(mesh, topo, problem)?;
-    loads.add_point_forces(mesh, topo, problem)?;
+    loads.add_tractions(mesh, topo, path, bl.traction)?;
+    loads.add_point_forces(mesh, topo, path, bl.force)?;
     Ok(loads.nodal)
 }
 
@@ -77,7 +88,6 @@ pub(super) fn check_body_forces(
     let err = |msg: String| FemError::new(path, msg);
     let g = model.gravity.unwrap_or([0.0, 0.0]);
     let w = model.omega.unwrap_or(0.0);
-    let has_axis = topo.kind.has_axis();
     let mut r_max = vec![0.0f64; topo.material_names.len()];
     for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
         for &p in tri {
@@ -98,8 +108,10 @@ pub(super) fn check_body_forces(
                 num(m.rho)
             )));
         }
-        if has_axis && w != 0.0 {
-            let c = m.rho * w * w * r_max[mi];
+        if w != 0.0 {
+            let Some(c) = topo.kind.centrifugal_force(m.rho, w, r_max[mi]) else {
+                continue;
+            };
             if !(c <= MAX_MAGNITUDE) {
                 return Err(err(format!(
                     "[model] omega = {}: the centrifugal body force ρω²r of [materials.{}] (rho = {}, r up to {:.3e}) reaches {c:.3e}, beyond ±{MAX_MAGNITUDE:e}; change the units or the spin",
@@ -114,31 +126,35 @@ pub(super) fn check_body_forces(
     Ok(())
 }
 
-/// Warns of each `[[traction]]` of an axisymmetric model whose curve lies
-/// on the axis r = 0: it carries no area there (∫ N r ds = 0 on every
-/// segment), so it adds no load at all.
-pub(super) fn warn_axis_tractions(
+/// Warns of each `[[traction]]` whose every segment has no measure in the
+/// model's kind ([`ElementKind::measureless_segment`]: the axis r = 0 of
+/// an axisymmetric model, ∫ N r ds = 0 there), so that it adds no load at
+/// all.
+pub(super) fn warn_measureless_tractions(
     mesh: &Mesh,
     kind: ElementKind,
     tractions: &[Traction],
     path: &Path,
 ) {
-    if !kind.has_axis() {
-        return;
-    }
     for (i, tr) in tractions.iter().enumerate() {
         let Some(g) = mesh.group_any(&tr.on).filter(|g| g.dim == 1) else {
             continue;
         };
-        let on_axis = |v: usize| mesh.nodes.get(v).is_some_and(|p| p[0] == 0.0);
+        let why = |l: &[usize; 2]| match (mesh.nodes.get(l[0]), mesh.nodes.get(l[1])) {
+            (Some(&a), Some(&b)) => kind.measureless_segment(a, b),
+            _ => None,
+        };
         let lines: Vec<[usize; 2]> = g
             .elements
             .iter()
             .filter_map(|&li| mesh.lines.get(li).copied())
             .collect();
-        if !lines.is_empty() && lines.iter().all(|l| on_axis(l[0]) && on_axis(l[1])) {
+        let Some(where_) = lines.first().and_then(why) else {
+            continue;
+        };
+        if lines.iter().all(|l| why(l).is_some()) {
             log::warn!(
-                "{}: [[traction]] #{} (on = \"{}\"): the curve lies on the axis r = 0 of the axisymmetric model, where a traction acts on no area; it adds no load",
+                "{}: [[traction]] #{} (on = \"{}\"): the curve lies on {where_}, where a traction acts on no area; it adds no load",
                 path.display(),
                 i + 1,
                 shorten(&tr.on)
@@ -173,14 +189,15 @@ impl Loads<'_> {
         &mut self,
         mesh: &Mesh,
         topo: &Topology,
-        problem: &Problem,
+        path: &Path,
+        traction: &[Traction],
     ) -> Result<(), FemError> {
-        for (i, tr) in problem.file.traction.iter().enumerate() {
+        for (i, tr) in traction.iter().enumerate() {
             let what = format!("[[traction]] #{} (on = \"{}\")", i + 1, tr.on);
             if let Some(g) = mesh.group_any(&tr.on) {
                 if g.dim != 1 {
                     return Err(FemError::new(
-                        &problem.path,
+                        path,
                         format!(
                             "{what}: \"{}\" is a physical {}, expected a curve",
                             tr.on,
@@ -189,7 +206,7 @@ impl Loads<'_> {
                     ));
                 }
             }
-            for (p, v, seg) in topo.group_points(mesh, problem, &tr.on, &what)? {
+            for (p, v, seg) in topo.group_points(mesh, path, &tr.on, &what)? {
                 let Some((a, b, t)) = seg else { continue };
                 let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
                 let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
@@ -216,17 +233,18 @@ impl Loads<'_> {
         &mut self,
         mesh: &Mesh,
         topo: &Topology,
-        problem: &Problem,
+        path: &Path,
+        force: &[Force],
     ) -> Result<(), FemError> {
         let th = self.kind.thickness();
-        for (i, fo) in problem.file.force.iter().enumerate() {
+        for (i, fo) in force.iter().enumerate() {
             let what = format!("[[force]] #{} (on = \"{}\")", i + 1, fo.on);
             let g = mesh
                 .group_any(&fo.on)
                 .filter(|g| g.dim == 0)
                 .ok_or_else(|| {
                     FemError::new(
-                        &problem.path,
+                        path,
                         format!(
                             "{what}: no physical point named \"{}\" in {} (points: {})",
                             fo.on,
@@ -256,34 +274,39 @@ pub(super) struct StepLoads {
     pub(super) loads: Vec<Vector>,
 }
 
-/// The d, g, u0 and nodal loads of `problem` (a load step of the problem
-/// `base` was built from) on `base`'s topology, with the checks a full build
-/// makes on them, in the same order; None when the step's conditions give a
-/// point other DOFs than in `base` (C and A would differ).
+/// The d, g, u0 and nodal loads of a load step of the problem `base` was
+/// built from (its `[[dirichlet]]`, `[[slip]]`, boundary loads `bl` and
+/// materials with the body forces `mats` at the step; messages name
+/// `path`) on `base`'s topology, with the checks a full build makes on
+/// them, in the same order; None when the step's conditions give a point
+/// other DOFs than in `base` (C and A would differ).
 pub(super) fn step_loads(
     base: &Model,
     mesh: &Mesh,
-    problem: &Problem,
+    path: &Path,
+    dirichlet: &[Dirichlet],
+    slip: &[Slip],
+    bl: BoundaryLoads,
+    mats: &Materials,
 ) -> Result<Option<StepLoads>, FemError> {
     let mut lap = super::Lap::new("fem::step_loads");
     let topo = &base.topo;
-    let conds = super::conditions::Conditions::collect(mesh, topo, problem)?;
-    let dofs = conds.eliminate(mesh, topo, &base.body_names, problem)?;
+    let conds = super::conditions::Conditions::collect(mesh, topo, path, dirichlet, slip)?;
+    let dofs = conds.eliminate(mesh, topo, &base.body_names, path)?;
     if !same_dofs(&dofs, &base.dofs) {
         return Ok(None);
     }
     lap.lap("conditions");
     let n = base.qp.n();
-    let mats = Materials::new(topo, &problem.file.materials, &problem.file.model);
-    let mut d = element_d(topo, &dofs, n, &mats);
+    let mut d = element_d(topo, &dofs, n, mats);
     lap.lap("element loads");
-    let loads = nodal_loads(mesh, topo, &dofs, problem, &mats, &mut d)?;
+    let loads = nodal_loads(mesh, topo, &dofs, path, bl, mats, &mut d)?;
     lap.lap("nodal loads");
     // C is the base's, checked when it was built: only d is checked here.
-    check_d(&base.qp.c, &d, &dofs, topo, mesh, &problem.path)?;
+    check_d(&base.qp.c, &d, &dofs, topo, mesh, path)?;
     // The rows of A are the same (same T); g and the check of the rows
     // whose points are all fixed depend on u0.
-    let (_, g, _) = super::contact::reduced_rows(mesh, topo, &dofs, n, problem)?;
+    let (_, g, _) = super::contact::reduced_rows(mesh, topo, &dofs, n, path)?;
     lap.lap("checks and gaps");
     Ok(Some(StepLoads { dofs, d, g, loads }))
 }

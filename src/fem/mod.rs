@@ -136,30 +136,40 @@ pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Model, FemError> {
 /// Build the whole model: topology, conditions, QP, checks.
 pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result<Model, FemError> {
     let mut lap = Lap::new("fem::build");
-    let topo = Topology::build(mesh, problem)?;
+    let (f, path) = (&problem.file, problem.path.as_path());
+    let kind = ElementKind::of(&f.model);
+    let topo = Topology::build(mesh, path, kind, &f.materials, &f.contact)?;
     lap.lap("topology");
-    let conds = conditions::Conditions::collect(mesh, &topo, problem)?;
+    let conds = conditions::Conditions::collect(mesh, &topo, path, &f.dirichlet, &f.slip)?;
     lap.lap("conditions");
     let body_names = topo.body_names();
-    let dofs = conds.eliminate(mesh, &topo, &body_names, problem)?;
+    let dofs = conds.eliminate(mesh, &topo, &body_names, path)?;
     let n = dofs.last().map_or(0, |pd| pd.start + pd.ndof);
     lap.lap("elimination");
-    let f = &problem.file;
-    loads::check_body_forces(&topo, &f.materials, &f.model, &problem.path)?;
-    loads::warn_axis_tractions(mesh, topo.kind, &f.traction, &problem.path);
+    loads::check_body_forces(&topo, &f.materials, &f.model, path)?;
+    loads::warn_measureless_tractions(mesh, kind, &f.traction, path);
     let mats = stiffness::Materials::new(&topo, &f.materials, &f.model);
     let (c, mut d) = stiffness::assemble(&topo, &dofs, n, &mats, opts.parallel);
     lap.lap("stiffness");
-    let loads = loads::nodal_loads(mesh, &topo, &dofs, problem, &mats, &mut d)?;
-    loads::check_scale(&c, &d, &dofs, &topo, mesh, &problem.path)?;
+    let bl = loads::BoundaryLoads {
+        traction: &f.traction,
+        force: &f.force,
+    };
+    let loads = loads::nodal_loads(mesh, &topo, &dofs, path, bl, &mats, &mut d)?;
+    loads::check_scale(&c, &d, &dofs, &topo, mesh, path)?;
     lap.lap("loads");
-    let (a, g, qp_rows) = contact::reduced_rows(mesh, &topo, &dofs, n, problem)?;
+    let (a, g, qp_rows) = contact::reduced_rows(mesh, &topo, &dofs, n, path)?;
     lap.lap("contact rows");
-    let kind = topo.kind;
-    let t_eff = kind.thickness();
     let conditions = conds.list();
-    let symmetry_rows = friction::symmetry_rows(&topo, &dofs, &conditions, &conds.groups, problem);
-    let friction = friction::build(&topo, &dofs, n, problem, &qp_rows, t_eff, &symmetry_rows)?;
+    let symmetry_rows = friction::symmetry_rows(
+        &topo,
+        &dofs,
+        &conditions,
+        &conds.groups,
+        &f.dirichlet,
+        &f.steps,
+    );
+    let friction = friction::build(&topo, &dofs, n, path, &f.contact, &qp_rows, &symmetry_rows)?;
     lap.lap("friction rows");
     let (kernel, kernel_body) = rigid::rigid_modes(&topo, &dofs, &conds.at, n, kind);
     let near = rigid::near_kernel(&topo, &dofs, n);
@@ -187,7 +197,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let mut model = model;
     friction::start_step(&mut model, None);
     lap.lap("rigid modes");
-    rigid::check_semicoercive(&model, &problem.path)?;
+    rigid::check_semicoercive(&model, path)?;
     lap.lap("semicoercivity check");
     Ok(model)
 }
@@ -220,7 +230,14 @@ pub fn step_model_reusing(
     opts: &BuildOptions,
 ) -> Result<Model, FemError> {
     let mut lap = Lap::new("fem::step_model");
-    let Some(s) = loads::step_loads(base, mesh, problem)? else {
+    let f = &problem.file;
+    let mats = stiffness::Materials::new(&base.topo, &f.materials, &f.model);
+    let bl = loads::BoundaryLoads {
+        traction: &f.traction,
+        force: &f.force,
+    };
+    let path = problem.path.as_path();
+    let Some(s) = loads::step_loads(base, mesh, path, &f.dirichlet, &f.slip, bl, &mats)? else {
         log::debug!("fem::step_model: the DOFs changed, full assembly");
         return build_with(mesh, problem, opts);
     };
@@ -235,7 +252,7 @@ pub fn step_model_reusing(
     model.qp.g = s.g;
     model.loads = s.loads;
     friction::start_step(&mut model, None);
-    rigid::check_semicoercive(&model, &problem.path)?;
+    rigid::check_semicoercive(&model, path)?;
     lap.lap("copy and checks");
     Ok(model)
 }

@@ -18,8 +18,9 @@ use super::pairs::{BoundarySeg, Pair};
 use super::topology::Topology;
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::problem::{NonMatchingPair, Problem};
+use crate::problem::NonMatchingPair;
 use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
 
 /// Gauss–Legendre points and weights on [0, 1] (5 points: exact to degree
 /// 9, so D, M and g̃ are exact on straight interfaces, where the integrands
@@ -150,13 +151,13 @@ impl Topology {
     pub(super) fn mortar_rows(
         &mut self,
         mesh: &Mesh,
-        problem: &Problem,
+        path: &Path,
         c: &NonMatchingPair,
         pair: &Pair,
     ) -> Result<(), FemError> {
         let (id, what) = (pair.id, &pair.what);
         let (msegs, ssegs) = (&pair.masters[..], &pair.slaves[..]);
-        let err = |msg: String| FemError::new(&problem.path, msg);
+        let err = |msg: String| FemError::new(path, msg);
         let (sname, mname) = (c.slave.as_str(), c.master.as_str());
         let normal = slave_normals(ssegs).map_err(|v| {
             err(format!(

@@ -15,8 +15,9 @@ use super::element::{Point, Vector};
 use super::topology::{curve_group, Topology};
 use super::FemError;
 use crate::mesh::{Mesh, PhysicalGroup};
-use crate::problem::{ContactPair, Discretization, NonMatchingPair, NormalKind, Problem};
-use std::collections::{HashMap, HashSet};
+use crate::problem::{Contact, ContactPair, Discretization, Material, NonMatchingPair, NormalKind};
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::path::Path;
 
 /// A conforming node on one pair of bodies: (mesh node, body k, body l), k < l.
 type NodePair = (usize, u32, u32);
@@ -43,19 +44,18 @@ impl Topology {
     pub(super) fn build_conforming(
         &mut self,
         mesh: &Mesh,
-        problem: &Problem,
+        path: &Path,
+        contact: &[Contact],
         contact_edges: &[((usize, usize), u32)],
     ) -> Result<(), FemError> {
-        let kind_of: Vec<NormalKind> = problem
-            .file
-            .contact
+        let kind_of: Vec<NormalKind> = contact
             .iter()
             .filter_map(|c| match c.pair {
                 ContactPair::Conforming { normals, .. } => Some(normals),
                 ContactPair::NonMatching(_) => None,
             })
             .collect();
-        let (acc, segs) = self.conforming_nodes(mesh, problem, contact_edges)?;
+        let (acc, segs) = self.conforming_nodes(mesh, path, contact_edges)?;
         let mut keys: Vec<NodePair> = acc.keys().copied().collect();
         keys.sort_unstable_by_key(|&(v, k, l)| (k, l, mesh.node_tags[v]));
         // The rows of each node pair, with their normal (to pick a segment's row).
@@ -69,7 +69,7 @@ impl Topology {
                 .get(a.interface as usize)
                 .copied()
                 .unwrap_or_default();
-            for (n, t) in self.row_normals(mesh, problem, v, a, kind)? {
+            for (n, t) in self.row_normals(mesh, path, v, a, kind)? {
                 let r = self.contact.len();
                 self.contact.push(ContactRow {
                     kind: RowKind::Conforming,
@@ -111,10 +111,10 @@ impl Topology {
     fn conforming_nodes(
         &self,
         mesh: &Mesh,
-        problem: &Problem,
+        path: &Path,
         contact_edges: &[((usize, usize), u32)],
     ) -> Result<(HashMap<NodePair, Acc>, Vec<ConformingSeg>), FemError> {
-        let err = |msg: String| FemError::new(&problem.path, msg);
+        let err = |msg: String| FemError::new(path, msg);
         let mut acc: HashMap<NodePair, Acc> = HashMap::new();
         let mut segs = vec![];
         for &((a, b), id) in contact_edges {
@@ -163,7 +163,7 @@ impl Topology {
     fn row_normals(
         &self,
         mesh: &Mesh,
-        problem: &Problem,
+        path: &Path,
         v: usize,
         a: &Acc,
         kind: NormalKind,
@@ -180,7 +180,7 @@ impl Topology {
                 let nonzero = len > 1e-12; // false for NaN too
                 if !nonzero {
                     return Err(FemError::new(
-                        &problem.path,
+                        path,
                         format!(
                             "contact curve \"{}\": the normals at node {} cancel (a cusp); use normals = \"segment\"",
                             self.interface_names[a.interface as usize], mesh.node_tags[v]
@@ -211,28 +211,30 @@ impl Topology {
     pub(super) fn build_nonmatching(
         &mut self,
         mesh: &Mesh,
-        problem: &Problem,
+        path: &Path,
+        materials: &BTreeMap<String, Material>,
+        contact: &[Contact],
     ) -> Result<(), FemError> {
         let mut seen: Vec<(usize, Segments, Segments)> = vec![];
-        for (ci, c) in problem.file.contact.iter().enumerate() {
+        for (ci, c) in contact.iter().enumerate() {
             let ContactPair::NonMatching(nm) = &c.pair else {
                 continue;
             };
             let (sname, mname) = (&nm.slave, &nm.master);
             let what = format!("[[contact]] #{}", ci + 1);
-            let sg = curve_group(mesh, sname, &what, &problem.path)?;
-            let mg = curve_group(mesh, mname, &what, &problem.path)?;
+            let sg = curve_group(mesh, sname, &what, path)?;
+            let mg = curve_group(mesh, mname, &what, path)?;
             let id = self.interface_names.len() as u32;
             self.interface_names.push(format!("{sname}->{mname}"));
             let pair = Pair {
                 id,
-                masters: self.boundary_segments(mesh, problem, mg, &what, "master", mname)?,
-                slaves: self.boundary_segments(mesh, problem, sg, &what, "slave", sname)?,
+                masters: self.boundary_segments(mesh, path, mg, &what, "master", mname)?,
+                slaves: self.boundary_segments(mesh, path, sg, &what, "slave", sname)?,
                 what,
             };
             let disc = match nm.discretization {
                 Some(d) => d,
-                None => self.default_discretization(problem, &pair, sname, mname),
+                None => self.default_discretization(materials, &pair, sname, mname),
             };
             self.interface_kinds.push(match disc {
                 Discretization::Mortar => RowKind::Mortar,
@@ -246,11 +248,11 @@ impl Topology {
                 if let Some(((a, b), (p, q))) = twice {
                     let tag = |v: usize| mesh.node_tags[v];
                     return Err(FemError::new(
-                        &problem.path,
+                        path,
                         format!(
                             "[[contact]] #{} ({}) and #{} ({}) overlap: both pair the segment ({}, {}) with the segment ({}, {}), so its nodes would get their rows twice; give each stretch of curve to one [[contact]]",
                             i + 1,
-                            problem.file.contact[*i].keys(),
+                            contact[*i].keys(),
                             ci + 1,
                             c.keys(),
                             tag(a),
@@ -263,8 +265,8 @@ impl Topology {
             }
             seen.push((ci, ss, ms));
             match disc {
-                Discretization::Mortar => self.mortar_rows(mesh, problem, nm, &pair)?,
-                Discretization::Nts => self.nonmatching_rows(mesh, problem, nm, &pair)?,
+                Discretization::Mortar => self.mortar_rows(mesh, path, nm, &pair)?,
+                Discretization::Nts => self.nonmatching_rows(mesh, path, nm, &pair)?,
             }
         }
         Ok(())
@@ -278,7 +280,7 @@ impl Topology {
     /// then, with a warning (docs/methods.md §7.1, which side is the slave).
     fn default_discretization(
         &self,
-        problem: &Problem,
+        materials: &BTreeMap<String, Material>,
         pair: &Pair,
         sname: &str,
         mname: &str,
@@ -290,7 +292,7 @@ impl Topology {
             let Some(mat) = self
                 .material_names
                 .get(m as usize)
-                .and_then(|n| problem.file.materials.get(n))
+                .and_then(|n| materials.get(n))
             else {
                 continue;
             };
@@ -318,7 +320,7 @@ impl Topology {
     fn boundary_segments(
         &self,
         mesh: &Mesh,
-        problem: &Problem,
+        path: &Path,
         g: &PhysicalGroup,
         what: &str,
         role: &str,
@@ -330,7 +332,7 @@ impl Topology {
             let ts = self.edge_triangles(a, b);
             if ts.len() != 1 {
                 return Err(FemError::new(
-                    &problem.path,
+                    path,
                     format!(
                         "{what}: {role} curve \"{name}\" segment ({}, {}) is not on the boundary of one body",
                         mesh.node_tags[a], mesh.node_tags[b]
@@ -349,13 +351,13 @@ impl Topology {
     fn nonmatching_rows(
         &mut self,
         mesh: &Mesh,
-        problem: &Problem,
+        path: &Path,
         c: &NonMatchingPair,
         pair: &Pair,
     ) -> Result<(), FemError> {
         let (id, what) = (pair.id, &pair.what);
         let (msegs, ssegs) = (&pair.masters[..], &pair.slaves[..]);
-        let err = |msg: String| FemError::new(&problem.path, msg);
+        let err = |msg: String| FemError::new(path, msg);
         let (sname, mname) = (c.slave.as_str(), c.master.as_str());
         let tree = SegmentTree::build(mesh, msegs);
         let mut stack = vec![];
@@ -716,7 +718,14 @@ mod tests {
     #[test]
     fn segment_tree_matches_brute_force_on_shipped_meshes() {
         for (_, problem, mesh) in crate::shipped_examples() {
-            let topo = Topology::build(&mesh, &problem).unwrap();
+            let topo = Topology::build(
+                &mesh,
+                &problem.path,
+                crate::fem::ElementKind::of(&problem.file.model),
+                &problem.file.materials,
+                &problem.file.contact,
+            )
+            .unwrap();
             let mut all = vec![];
             for g in mesh.groups.iter().filter(|g| g.dim == 1) {
                 let mut segs = vec![];

@@ -10,10 +10,13 @@
 
 pub use super::contact::{ContactRow, RowKind};
 use super::edges::{Edges, UnionFind, NONE32};
+use super::element::ElementKind;
 use super::element::{Point, Vector};
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::problem::{ContactPair, Problem};
+use crate::problem::{Contact, ContactPair, Material};
+use std::collections::BTreeMap;
+use std::path::Path;
 
 #[derive(Debug, Clone, Default)]
 pub struct Topology {
@@ -109,15 +112,24 @@ impl Topology {
         n
     }
 
-    /// Build the topology. Checks materials, orientation, contact curves.
-    pub fn build(mesh: &Mesh, problem: &Problem) -> Result<Topology, FemError> {
-        let err = |msg: String| FemError::new(&problem.path, msg);
+    /// Build the topology of a model of kind `kind` whose `[materials]`
+    /// are `materials` and `[[contact]]` entries `contact`: checks
+    /// materials, orientation, contact curves; messages name `path`, the
+    /// TOML file.
+    pub fn build(
+        mesh: &Mesh,
+        path: &Path,
+        kind: ElementKind,
+        materials: &BTreeMap<String, Material>,
+        contact: &[Contact],
+    ) -> Result<Topology, FemError> {
+        let err = |msg: String| FemError::new(path, msg);
         let mpath = mesh.path.display().to_string();
         let (nt, nn) = (mesh.triangles.len(), mesh.nodes.len());
         let mut lap = super::Lap::new("Topology::build");
-        let (material_names, tri_material) = materials(mesh, problem)?;
+        let (material_names, tri_material) = material_of_triangles(mesh, path, materials)?;
         lap.lap("materials");
-        let signs = signed_areas(mesh, problem)?;
+        let signs = signed_areas(mesh, path)?;
         if nn >= NONE32 as usize || nt >= NONE32 as usize / 3 {
             return Err(err(format!(
                 "{mpath}: {nn} nodes and {nt} triangles: more than this program indexes (2^32 - 1 nodes, (2^32 - 1) / 3 triangles)"
@@ -131,13 +143,13 @@ impl Topology {
             ))
         })?;
         lap.lap("edges");
-        let (interface_names, contact_edges) = conforming_edges(mesh, problem)?;
+        let (interface_names, contact_edges) = conforming_edges(mesh, path, contact)?;
         let (mesh_tri_body, nbodies) = bodies(mesh, &edges, &contact_edges);
         lap.lap("bodies");
         let mut mesh_tris = mesh.triangles.clone();
         orient(
             mesh,
-            problem,
+            path,
             &signs,
             &mesh_tri_body,
             nbodies,
@@ -170,13 +182,13 @@ impl Topology {
             contact_segments: vec![],
             interface_kinds: vec![super::contact::RowKind::Conforming; interface_names.len()],
             interface_names,
-            kind: super::element::ElementKind::of(&problem.file.model),
+            kind,
         };
         topo.triangles = topo.point_triangles();
         lap.lap("points");
-        topo.build_conforming(mesh, problem, &contact_edges)?;
+        topo.build_conforming(mesh, path, contact, &contact_edges)?;
         lap.lap("conforming contact");
-        topo.build_nonmatching(mesh, problem)?;
+        topo.build_nonmatching(mesh, path, materials, contact)?;
         lap.lap("non-matching contact");
         Ok(topo)
     }
@@ -245,11 +257,11 @@ impl Topology {
     pub(super) fn group_points(
         &self,
         mesh: &Mesh,
-        problem: &Problem,
+        path: &Path,
         name: &str,
         what: &str,
     ) -> Result<Vec<GroupPoint>, FemError> {
-        let err = |msg: String| FemError::new(&problem.path, msg);
+        let err = |msg: String| FemError::new(path, msg);
         let Some(g) = mesh.group_any(name) else {
             return Err(err(format!(
                 "{what}: no physical group named \"{name}\" in {} (curves: {}; points: {})",
@@ -302,12 +314,16 @@ impl Topology {
 
 /// The material of each triangle (an index into the names, in the order of
 /// `[materials]`): every triangle needs exactly one.
-fn materials(mesh: &Mesh, problem: &Problem) -> Result<(Vec<String>, Vec<u32>), FemError> {
-    let err = |msg: String| FemError::new(&problem.path, msg);
+fn material_of_triangles(
+    mesh: &Mesh,
+    path: &Path,
+    materials: &BTreeMap<String, Material>,
+) -> Result<(Vec<String>, Vec<u32>), FemError> {
+    let err = |msg: String| FemError::new(path, msg);
     let mpath = mesh.path.display().to_string();
     let mut material_names: Vec<String> = vec![];
     let mut tri_material = vec![u32::MAX; mesh.triangles.len()];
-    for name in problem.file.materials.keys() {
+    for name in materials.keys() {
         let Some(g) = mesh.group_any(name) else {
             return Err(err(format!(
                 "[materials.{name}]: no physical surface named \"{name}\" in {mpath} (surfaces: {})",
@@ -352,7 +368,7 @@ fn materials(mesh: &Mesh, problem: &Problem) -> Result<(Vec<String>, Vec<u32>), 
 }
 
 /// Twice the signed area of each mesh triangle; a degenerate one is an error.
-fn signed_areas(mesh: &Mesh, problem: &Problem) -> Result<Vec<f64>, FemError> {
+fn signed_areas(mesh: &Mesh, path: &Path) -> Result<Vec<f64>, FemError> {
     let mut signs: Vec<f64> = Vec::with_capacity(mesh.triangles.len());
     for (t, tri) in mesh.triangles.iter().enumerate() {
         let x = tri.map(|v| mesh.nodes[v]);
@@ -366,7 +382,7 @@ fn signed_areas(mesh: &Mesh, problem: &Problem) -> Result<Vec<f64>, FemError> {
         let proper = a.abs() > 1e-12 * e2; // false for NaN too
         if !proper {
             return Err(FemError::new(
-                &problem.path,
+                path,
                 format!(
                     "{}: triangle {} is degenerate (area {:.3e})",
                     mesh.path.display(),
@@ -387,15 +403,16 @@ fn signed_areas(mesh: &Mesh, problem: &Problem) -> Result<Vec<f64>, FemError> {
 #[allow(clippy::type_complexity)]
 fn conforming_edges(
     mesh: &Mesh,
-    problem: &Problem,
+    path: &Path,
+    contact: &[Contact],
 ) -> Result<(Vec<String>, Vec<((usize, usize), u32)>), FemError> {
     let mut interface_names: Vec<String> = vec![];
     // The [[contact]] entry of each interface.
     let mut entry: Vec<usize> = vec![];
     let mut contact_edges: Vec<((usize, usize), u32)> = vec![];
-    for (ci, c) in problem.file.contact.iter().enumerate() {
+    for (ci, c) in contact.iter().enumerate() {
         if let ContactPair::Conforming { on, .. } = &c.pair {
-            let g = curve_group(mesh, on, &format!("[[contact]] #{}", ci + 1), &problem.path)?;
+            let g = curve_group(mesh, on, &format!("[[contact]] #{}", ci + 1), path)?;
             let id = interface_names.len() as u32;
             interface_names.push(on.clone());
             entry.push(ci);
@@ -413,11 +430,11 @@ fn conforming_edges(
         match dedup.last_mut() {
             Some(last) if last.0 == e.0 && last.1 == e.1 => {}
             Some(last) if last.0 == e.0 => {
-                let c = &problem.file.contact;
+                let c = contact;
                 let (i, j) = (entry[last.1 as usize], entry[e.1 as usize]);
                 let ((a, b), (i, j)) = (e.0, (i.min(j), i.max(j)));
                 return Err(FemError::new(
-                    &problem.path,
+                    path,
                     format!(
                         "[[contact]] #{} ({}) and #{} ({}) overlap: both hold the segment ({}, {}); give each segment of a contact curve to one [[contact]]",
                         i + 1,
@@ -485,7 +502,7 @@ fn bodies(
 /// a mix is an inverted element (`surface(t)` names its physical surface).
 fn orient<'a>(
     mesh: &Mesh,
-    problem: &Problem,
+    path: &Path,
     signs: &[f64],
     tri_body: &[u32],
     nbodies: usize,
@@ -506,7 +523,7 @@ fn orient<'a>(
         let majority_pos = pos[b] >= neg[b];
         if (a > 0.0) != majority_pos {
             return Err(FemError::new(
-                &problem.path,
+                path,
                 format!(
                     "{}: triangle {} of physical surface '{}' is inverted (its orientation differs from the rest of body {b})",
                     mesh.path.display(),

@@ -17,7 +17,7 @@
 
 use crate::fem::element::{Point, Vector};
 use crate::fem::{element, Model};
-use crate::problem::{Material, Problem};
+use crate::problem::Material;
 use std::collections::BTreeMap;
 
 /// A force resultant and its moment about the origin.
@@ -130,8 +130,12 @@ pub struct Forces {
 }
 
 /// (K u)_p per point: the element forces C_e u_e summed at each vertex.
-fn internal_forces(model: &Model, problem: &Problem, u: &[Vector]) -> Vec<Vector> {
-    element_pass(model, &problem.file.materials, u, false).1
+fn internal_forces(
+    model: &Model,
+    materials: &BTreeMap<String, Material>,
+    u: &[Vector],
+) -> Vec<Vector> {
+    element_pass(model, materials, u, false).1
 }
 
 /// Elements per chunk of [`element_pass`]: its per-element results (a few
@@ -209,15 +213,16 @@ pub(crate) fn element_pass(
 
 /// Reactions and interface resultants of a solved step: `u` the point
 /// displacements, `lambda` the multiplier of every contact row (0 for rows
-/// left out of the QP), `pressure` the contact pressure per row.
+/// left out of the QP), `pressure` the contact pressure per row;
+/// `materials` the model's `[materials]`.
 pub fn compute(
     model: &Model,
-    problem: &Problem,
+    materials: &BTreeMap<String, Material>,
     u: &[Vector],
     lambda: &[f64],
     pressure: &[f64],
 ) -> Forces {
-    compute_with_friction(model, problem, u, lambda, &[], pressure)
+    compute_with_friction(model, materials, u, lambda, &[], pressure)
 }
 
 /// [`compute`] with the tangential force λ_t of every contact row (empty:
@@ -225,13 +230,13 @@ pub fn compute(
 /// (docs/methods.md §9).
 pub fn compute_with_friction(
     model: &Model,
-    problem: &Problem,
+    materials: &BTreeMap<String, Material>,
     u: &[Vector],
     lambda: &[f64],
     lambda_t: &[f64],
     pressure: &[f64],
 ) -> Forces {
-    let ku = internal_forces(model, problem, u);
+    let ku = internal_forces(model, materials, u);
     compute_from(model, u, &ku, lambda, lambda_t, pressure)
 }
 

@@ -9,8 +9,9 @@ pub mod plot;
 use crate::fem::element::Point;
 use crate::fem::{element, Model};
 use crate::output::{ContactGeometry, OutMesh, StepInfo, StepOutput};
-use crate::problem::Problem;
+use crate::problem::Material;
 use crate::qp::QpResult;
+use std::collections::BTreeMap;
 
 /// The output mesh of a model (geometry only; no solution).
 pub fn out_mesh(model: &Model, mesh: &crate::mesh::Mesh) -> OutMesh {
@@ -47,16 +48,22 @@ pub fn out_mesh(model: &Model, mesh: &crate::mesh::Mesh) -> OutMesh {
     }
 }
 
-/// Fields of one solved step.
-pub fn step_output(model: &Model, problem: &Problem, res: &QpResult, time: f64) -> StepOutput {
-    step_output_with_forces(model, problem, res, time).0
+/// Fields of one solved step of a model whose `[materials]` are
+/// `materials`.
+pub fn step_output(
+    model: &Model,
+    materials: &BTreeMap<String, Material>,
+    res: &QpResult,
+    time: f64,
+) -> StepOutput {
+    step_output_with_forces(model, materials, res, time).0
 }
 
 /// [`step_output`] and the forces it computed (reactions per group, contact
 /// resultants per interface) for the summary: one pass over the elements.
 pub fn step_output_with_forces(
     model: &Model,
-    problem: &Problem,
+    materials: &BTreeMap<String, Material>,
     res: &QpResult,
     time: f64,
 ) -> (StepOutput, forces::Forces) {
@@ -65,7 +72,7 @@ pub fn step_output_with_forces(
     let u = model.displacements(&res.x);
     lap.lap("displacements");
     // Stresses and the element forces of the reactions in one pass.
-    let (stress, ku) = forces::element_pass(model, &problem.file.materials, &u, true);
+    let (stress, ku) = forces::element_pass(model, materials, &u, true);
     lap.lap("stresses and element forces");
     let nrow = t.contact.len();
     let mut multipliers = vec![0.0; nrow];

@@ -7,8 +7,9 @@
 use super::raw::{RawContact, RawDirichlet, RawFile, RawTraction};
 use super::{
     num, shorten, Contact, ContactPair, Dirichlet, Discretization, FrictionLaw, NonMatchingPair,
-    Plane, Prescribed, ProblemFile, Traction, TractionLoad, MAX_MAGNITUDE, MAX_NAME,
+    Prescribed, ProblemFile, Traction, TractionLoad, MAX_MAGNITUDE, MAX_NAME,
 };
+use crate::fem::ElementKind;
 
 type Check<T = ()> = Result<T, String>;
 
@@ -222,10 +223,11 @@ fn check_model(f: &RawFile) -> Check {
         if !g.iter().all(|v| v.is_finite()) {
             return Err("[model] gravity must be finite".into());
         }
-        if f.model.plane == Plane::Axisymmetric && g[0] != 0.0 {
+        if let Some(why) = ElementKind::of(&f.model).gravity_misfit(g) {
             return Err(format!(
-                "[model] gravity = [{}, {}]: an axisymmetric model (x = r, y = z) takes gravity along z only; give [0, gz]",
-                num(g[0]), num(g[1])
+                "[model] gravity = [{}, {}]: {why}",
+                num(g[0]),
+                num(g[1])
             ));
         }
     }
@@ -239,11 +241,8 @@ fn check_model(f: &RawFile) -> Check {
                 num(w)
             ));
         }
-        if f.model.plane != Plane::Axisymmetric {
-            return Err(
-                "[model] omega (a spin about the axis) applies to plane = \"axisymmetric\" only"
-                    .into(),
-            );
+        if let Some(why) = ElementKind::of(&f.model).spin_misfit() {
+            return Err(format!("[model] omega (a spin about the axis) {why}"));
         }
     }
     Ok(())

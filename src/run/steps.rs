@@ -459,12 +459,11 @@ impl<'a> Run<'a> {
         [t_assemble, t_solve]: [f64; 2],
         ts: Instant,
     ) -> (StepOutput, Forces) {
-        let (prep, file) = (self.prep, &self.prep.problem.file);
+        let file = &self.prep.problem.file;
         let t_p = Instant::now();
-        let mut problem_s = prep.problem.clone();
-        problem_s.file = file.at_step(s);
+        // A step changes loads and prescribed values, not the materials.
         let (mut output, forces) =
-            post::step_output_with_forces(model, &problem_s, res, file.step_time(s));
+            post::step_output_with_forces(model, &file.materials, res, file.step_time(s));
         log::debug!(
             "step {}: post-processing {:.3} s",
             s + 1,
