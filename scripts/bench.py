@@ -747,6 +747,8 @@ def run_friction(args, binary, work: Path) -> int:
     """The friction table (issue 36): ssn vs mprgp vs frictionless ssn."""
     levels = [int(v) for v in args.friction_levels.split(",") if v.strip()]
     models = FRICTION_SCALE if args.friction_scale else ("punch", "nafems1")
+    if args.friction_models:
+        models = [m for m in args.friction_models.split(",") if m]
     if args.friction_scale:
         levels = [3 + lv for lv in levels]
     methods = [m for m in args.friction_methods.split(",") if m]
@@ -884,6 +886,9 @@ def main() -> int:
     ap.add_argument("--friction-scale", action="store_true",
                     help="with --friction: the families of issue 42 §2 (shrink fit push-out, NAFEMS 1, sheared "
                          "blocks) at about 10 k, 50 k, 200 k nodes (--friction-levels 0,1,2)")
+    ap.add_argument("--friction-models", default="",
+                    help="comma list of friction models to run (default: punch,nafems1; with --friction-scale "
+                         "shrinkfit,nafems1,sheared)")
     ap.add_argument("--friction-methods", default="ssn,mprgp",
                     help="frictional variants of --friction (frictionless ssn always runs)")
     ap.add_argument("--mu-scan", default="",
