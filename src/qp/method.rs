@@ -185,8 +185,9 @@ pub struct Capabilities {
 }
 
 /// Unknowns above which a method's [`Capabilities::friction_caveat`] is
-/// said before a frictional solve (bench/friction.md: mprgp 3× ssn at
-/// 4 k unknowns, 33× at 15 k, 127× at 58 k on NAFEMS 1 with μ = 0.1).
+/// said before a frictional solve (NAFEMS 1 with μ = 0.1, BENCHMARKS.md
+/// "Friction at scale": mprgp 30 times ssn's time at 15 k unknowns, 160
+/// times at 58 k).
 pub const SLOW_FRICTION_DOFS: usize = 10_000;
 
 impl Default for Capabilities {

@@ -35,7 +35,7 @@ impl Method for MprgpMethod {
             // Tresca and Coulomb on the dual with box constraints (docs/methods.md §9.2).
             friction: true,
             friction_caveat: Some(
-                "with friction, mprgp solves every Tresca problem of the Coulomb loop by projected gradients on the dual, whose iterations grow with the mesh: expect 10–100 times ssn's time past ~10 k unknowns (NAFEMS 1 with μ = 0.1 at 58 k unknowns: 105 s against 0.8 s, BENCHMARKS.md); the default method (ssn) solves it exactly in a few Newton steps",
+                "with friction, mprgp solves every Tresca problem of the Coulomb loop by projected gradients on the dual, whose iterations grow with the mesh: expect tens to hundreds of times ssn's time past ~10 k unknowns (NAFEMS 1 with μ = 0.1: 30 times at 15 k unknowns, 160 times at 58 k, 141 s against 0.9 s; BENCHMARKS.md); the default method (ssn) solves it exactly in a few Newton steps",
             ),
             ..Default::default()
         }
