@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{meshes, root, run};
+use common::{meshes, root, run, sheared_blocks};
 use signorini::fem::Model;
 use signorini::post::friction::{friction_output, FrictionOutput};
 use signorini::qp::{QpResult, SolverSection};
@@ -278,39 +278,6 @@ fn cattaneo_mindlin_stick_zone() {
             assert!(v * l >= 0.0, "slip {v} against λ_t {l}");
         }
     }
-}
-
-/// meshes/two_blocks with the upper block held only by the contact and a
-/// shear traction on top; `law` is the friction line of the interface.
-fn sheared_blocks(law: &str, contact: bool) -> String {
-    let c = if contact {
-        format!("[[contact]]\non = \"interface\"\n{law}\n")
-    } else {
-        String::new()
-    };
-    format!(
-        r#"[mesh]
-file = "MESH"
-[model]
-plane = "strain"
-[materials.lower]
-E = 2.0e9
-nu = 0.25
-[materials.upper]
-E = 2.0e9
-nu = 0.25
-[[dirichlet]]
-on = "bottom"
-u = [0.0, 0.0]
-[[slip]]
-on = "left_lower"
-[[slip]]
-on = "right_lower"
-[[traction]]
-on = "top"
-p = [1.0e5, -1.0e6]
-{c}"#
-    )
 }
 
 #[test]

@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{meshes, model_variant, run};
+use common::{meshes, model_variant, run, sheared_blocks};
 
 /// The faults of geodynamic_steps.toml with `friction = mu`.
 fn frictional(mu: f64, dir: &std::path::Path) -> String {
@@ -93,41 +93,18 @@ fn mprgp_certifies_every_step_at_mu_0_1_and_0_2() {
 }
 
 /// meshes/two_blocks with the upper block held only by friction μ = 0.12
-/// and sheared by a traction p = [1.1·10⁵, −10⁶] Pa in three load steps.
+/// ([`common::sheared_blocks`]) and sheared by a traction p = [1.1·10⁵,
+/// −10⁶] Pa in three load steps.
 fn sheared_steps(dir: &std::path::Path) -> String {
-    let text = format!(
-        r#"[mesh]
-file = "{}"
-[model]
-plane = "strain"
-[materials.lower]
-E = 2.0e9
-nu = 0.25
-[materials.upper]
-E = 2.0e9
-nu = 0.25
-[[dirichlet]]
-on = "bottom"
-u = [0.0, 0.0]
-[[slip]]
-on = "left_lower"
-[[slip]]
-on = "right_lower"
-[[traction]]
-on = "top"
-p = [1.1e5, -1.0e6]
-[[contact]]
-on = "interface"
-friction = 0.12
-[[steps]]
-factor = 0.4
-[[steps]]
-factor = 0.7
-[[steps]]
-factor = 1.0
-"#,
-        meshes().join("two_blocks.msh").display()
-    );
+    let base = sheared_blocks("friction = 0.12", true);
+    assert!(base.contains("p = [1.0e5, -1.0e6]"));
+    let text = base
+        .replace(
+            "MESH",
+            &meshes().join("two_blocks.msh").display().to_string(),
+        )
+        .replace("p = [1.0e5, -1.0e6]", "p = [1.1e5, -1.0e6]")
+        + "[[steps]]\nfactor = 0.4\n[[steps]]\nfactor = 0.7\n[[steps]]\nfactor = 1.0\n";
     let p = dir.join("sheared_steps.toml");
     std::fs::write(&p, text).unwrap();
     p.display().to_string()

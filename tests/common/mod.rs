@@ -328,3 +328,36 @@ pub fn model_variant(dir: &Path, toml: &str, edits: &[(&str, &str)], out: &Path)
     std::fs::write(out, text).expect("write the variant");
     out.to_path_buf()
 }
+
+/// meshes/two_blocks with the upper block held only by the contact and a
+/// shear traction on top; `law` is the friction line of the interface.
+pub fn sheared_blocks(law: &str, contact: bool) -> String {
+    let c = if contact {
+        format!("[[contact]]\non = \"interface\"\n{law}\n")
+    } else {
+        String::new()
+    };
+    format!(
+        r#"[mesh]
+file = "MESH"
+[model]
+plane = "strain"
+[materials.lower]
+E = 2.0e9
+nu = 0.25
+[materials.upper]
+E = 2.0e9
+nu = 0.25
+[[dirichlet]]
+on = "bottom"
+u = [0.0, 0.0]
+[[slip]]
+on = "left_lower"
+[[slip]]
+on = "right_lower"
+[[traction]]
+on = "top"
+p = [1.0e5, -1.0e6]
+{c}"#
+    )
+}
