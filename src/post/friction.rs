@@ -6,9 +6,7 @@ use crate::fem::friction::on_symmetry_line;
 use crate::fem::Model;
 use crate::qp::QpResult;
 
-/// A row slips when |λ_t| ≥ (1 − STICK_MARGIN)·s (the bound is reached to
-/// the accuracy the certificate asks of it).
-pub const STICK_MARGIN: f64 = 1e-6;
+pub use crate::qp::STICK_MARGIN;
 
 /// Friction fields per contact row (rows left out of the QP: 0).
 #[derive(Debug, Clone, Default, PartialEq)]

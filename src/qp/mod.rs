@@ -82,6 +82,11 @@ pub enum SlipBound {
     Coulomb(Vec<f64>),
 }
 
+/// A row slips when |λ_t| ≥ (1 − STICK_MARGIN)·s (the bound is reached to
+/// the accuracy the certificate asks of it): the outputs' stick / slip
+/// state and a load step's warm-start sets read it alike.
+pub const STICK_MARGIN: f64 = 1e-6;
+
 /// Friction on the contact rows (docs/methods.md §9): one tangential row of
 /// `t` per row of A (same order), the slip v = T x − t0 (t0: the tangential
 /// relative displacement of the previous load step) and its bound. The

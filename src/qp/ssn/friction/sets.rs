@@ -93,16 +93,15 @@ impl Rule<'_> {
 /// The working sets of a multiplier warm start (the last load step's
 /// answer, docs/methods.md §9.5): rows with λ_n > 0 in contact; of those,
 /// a row slips (with the sign of λ_t) where |λ_t| reaches its bound s =
-/// μλ_n (Tresca: the given s) within [`crate::post::friction`]'s margin,
+/// μλ_n (Tresca: the given s) within [`crate::qp::STICK_MARGIN`],
 /// and sticks otherwise.
 pub(super) fn warm_sets(fr: &Friction, l: &crate::qp::Multipliers) -> (Vec<bool>, Vec<Tangential>) {
-    const MARGIN: f64 = 1e-6;
     let s = fr.slip_bound(&l.normal);
     let in_n: Vec<bool> = l.normal.iter().map(|&v| v > 0.0).collect();
     let tang = (0..in_n.len())
         .map(|i| {
             let lt = l.tangential[i];
-            if in_n[i] && s[i] > 0.0 && lt.abs() < (1.0 - MARGIN) * s[i] {
+            if in_n[i] && s[i] > 0.0 && lt.abs() < (1.0 - crate::qp::STICK_MARGIN) * s[i] {
                 Tangential::Stick
             } else {
                 Tangential::Slip(lt >= 0.0)
