@@ -220,3 +220,57 @@ fn mprgp_with_friction_on_a_large_model_warns_up_front() {
     let (_, text) = run(&["solve", &m, "--max-iter", "1", "--out", &out]);
     assert!(!text.contains("expect tens to hundreds"), "{text}");
 }
+
+/// Issue 42 §2: the shrink fit pushed out (scripts/bench_models/
+/// shrinkfit_push.{geo,toml}, here at nz = 200, nr = 6: 201 NTS rows)
+/// takes a bounded number of Newton steps in every load step. Once the
+/// push passes the sliding displacement, the friction forces of the whole
+/// interface move the tube more than the push does: every row slipping
+/// one way makes it slip the other. The coarse levels flipped all their
+/// rows back and forth, stopped on a repeat with every row slipping, and
+/// the problem's own steps then walked the stick zone in from there (93
+/// Newton steps; 177 at nz = 400). A coarse level now sticks a row whose
+/// prediction reverses its slip (docs/methods.md §9.2). The last step
+/// slips everywhere: the axial force on the interface is μ times the
+/// normal one.
+#[test]
+fn the_pushed_shrink_fit_takes_few_newton_steps_a_load_step() {
+    let d = tempfile::tempdir().unwrap();
+    let models = common::root().join("scripts/bench_models");
+    let geo = std::fs::read_to_string(models.join("shrinkfit_push.geo")).unwrap();
+    assert!(geo.contains("nz = {400,") && geo.contains("nr = {12,"));
+    let geo = geo
+        .replace("nz = {400,", "nz = {200,")
+        .replace("nr = {12,", "nr = {6,");
+    std::fs::write(d.path().join("sf.geo"), geo).unwrap();
+    let msh = d.path().join("sf.msh").display().to_string();
+    let geo = d.path().join("sf.geo").display().to_string();
+    let (code, log) = run(&["mesh", &geo, "-o", &msh]);
+    assert_eq!(code, 0, "{log}");
+    let toml = std::fs::read_to_string(models.join("shrinkfit_push.toml")).unwrap();
+    assert!(toml.contains("file = \"shrinkfit_push.msh\""));
+    let toml = toml.replace("shrinkfit_push.msh", "sf.msh");
+    let model = d.path().join("sf.toml");
+    std::fs::write(&model, toml).unwrap();
+    let out = d.path().join("out").display().to_string();
+    let model = model.display().to_string();
+    let (code, text) = run(&["solve", &model, "--log-level", "debug", "--out", &out]);
+    assert_eq!(code, 0, "{text}");
+    assert!(text.matches("coarse start: (rows").count() >= 5, "{text}");
+    let newton = text.matches("|N| = ").count();
+    assert!(newton <= 20, "{newton} Newton steps in six load steps");
+    let steps: Vec<&str> = text.lines().filter(|l| l.starts_with("step ")).collect();
+    assert_eq!(steps.len(), 6, "{text}");
+    assert!(steps.iter().all(|s| s.contains(" converged in ")), "{text}");
+    assert!(text.contains("→ certified"), "{text}");
+    // Full slip in the last step: |F_t| = μ |F_n| over the interface.
+    let ck = signorini::io::hdf5::read_checkpoint(&d.path().join("out/sf.h5")).unwrap();
+    let ln = &ck.steps.last().unwrap().multipliers;
+    let lt = &ck.friction.last().unwrap().as_ref().unwrap().multipliers_t;
+    let (sn, st): (f64, f64) = (ln.iter().sum(), lt.iter().map(|v| v.abs()).sum());
+    assert!(
+        (st - 0.2 * sn).abs() <= 1e-9 * sn,
+        "Σ|λ_t| {st:e} vs μ Σλ_n {:e}",
+        0.2 * sn
+    );
+}

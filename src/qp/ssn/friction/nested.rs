@@ -226,13 +226,30 @@ fn settle(
             rows.bound.clone()
         };
         let bx = dense.bx(&sol.mu, &sol.alpha);
-        let next = rule.predict(&bx, ln, lt, &s, false);
+        let mut next = rule.predict(&bx, ln, lt, &s, false);
+        stick_reversals(&tang, &mut next.1);
         if next.0 == in_n && next.1 == tang {
             break;
         }
         (in_n, tang) = next;
     }
     Some((in_n, tang, steps))
+}
+
+/// A row predicted to slip against the direction it was solved with
+/// sticks instead (docs/methods.md §9.2): a coarse level only chooses where
+/// the Newton steps start, and when the friction forces of the whole
+/// interface move it more than the loads do, the reversed prediction flips
+/// back the next step (a shrink fit pushed out: every row slipping one way,
+/// then the other, for ever; its answer sticks on 283 of 401 rows).
+fn stick_reversals(solved: &[Tangential], next: &mut [Tangential]) {
+    for (t, n) in solved.iter().zip(next.iter_mut()) {
+        if let (Tangential::Slip(a), Tangential::Slip(b)) = (*t, *n) {
+            if a != b {
+                *n = Tangential::Stick;
+            }
+        }
+    }
 }
 
 /// Pairs of rows that couple most (greedy heavy-edge matching on the
