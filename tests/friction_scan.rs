@@ -233,27 +233,32 @@ fn mprgp_with_friction_on_a_large_model_warns_up_front() {
 /// prediction reverses its slip (docs/methods.md §9.2). The last step
 /// slips everywhere: the axial force on the interface is μ times the
 /// normal one.
-#[test]
-fn the_pushed_shrink_fit_takes_few_newton_steps_a_load_step() {
-    let d = tempfile::tempdir().unwrap();
+/// scripts/bench_models/shrinkfit_push.{geo,toml} meshed at `nz`, `nr`
+/// into `dir`: the model's path.
+fn pushed_shrink_fit(dir: &std::path::Path, nz: usize, nr: usize) -> String {
     let models = common::root().join("scripts/bench_models");
     let geo = std::fs::read_to_string(models.join("shrinkfit_push.geo")).unwrap();
     assert!(geo.contains("nz = {400,") && geo.contains("nr = {12,"));
     let geo = geo
-        .replace("nz = {400,", "nz = {200,")
-        .replace("nr = {12,", "nr = {6,");
-    std::fs::write(d.path().join("sf.geo"), geo).unwrap();
-    let msh = d.path().join("sf.msh").display().to_string();
-    let geo = d.path().join("sf.geo").display().to_string();
+        .replace("nz = {400,", &format!("nz = {{{nz},"))
+        .replace("nr = {12,", &format!("nr = {{{nr},"));
+    std::fs::write(dir.join("sf.geo"), geo).unwrap();
+    let msh = dir.join("sf.msh").display().to_string();
+    let geo = dir.join("sf.geo").display().to_string();
     let (code, log) = run(&["mesh", &geo, "-o", &msh]);
     assert_eq!(code, 0, "{log}");
     let toml = std::fs::read_to_string(models.join("shrinkfit_push.toml")).unwrap();
     assert!(toml.contains("file = \"shrinkfit_push.msh\""));
-    let toml = toml.replace("shrinkfit_push.msh", "sf.msh");
-    let model = d.path().join("sf.toml");
-    std::fs::write(&model, toml).unwrap();
+    let model = dir.join("sf.toml");
+    std::fs::write(&model, toml.replace("shrinkfit_push.msh", "sf.msh")).unwrap();
+    model.display().to_string()
+}
+
+#[test]
+fn the_pushed_shrink_fit_takes_few_newton_steps_a_load_step() {
+    let d = tempfile::tempdir().unwrap();
+    let model = pushed_shrink_fit(d.path(), 200, 6);
     let out = d.path().join("out").display().to_string();
-    let model = model.display().to_string();
     let (code, text) = run(&["solve", &model, "--log-level", "debug", "--out", &out]);
     assert_eq!(code, 0, "{text}");
     assert!(text.matches("coarse start: (rows").count() >= 5, "{text}");
@@ -272,5 +277,54 @@ fn the_pushed_shrink_fit_takes_few_newton_steps_a_load_step() {
         (st - 0.2 * sn).abs() <= 1e-9 * sn,
         "Σ|λ_t| {st:e} vs μ Σλ_n {:e}",
         0.2 * sn
+    );
+}
+
+/// A shrink fit with walls four elements thick (nz = 640, nr = 4: 5.8 k
+/// nodes, 641 rows) has a border of B = [A; T] of 2304 = 21·√n unknowns:
+/// over the frictionless path's 12·√n, it took the sparse path (341
+/// Newton steps, 7.3 times the frictionless run). The frictional dual
+/// form allows 48·√n (docs/methods.md §9.2): a few Newton steps a load
+/// step, the second one of a step a low-rank change of the first one's
+/// LU, and the sparse path's answer to 1e-8.
+#[test]
+fn a_thin_walled_shrink_fit_takes_the_dual_form() {
+    let d = tempfile::tempdir().unwrap();
+    let model = pushed_shrink_fit(d.path(), 640, 4);
+    let out = |k: &str| d.path().join(k).display().to_string();
+    let (code, text) = run(&[
+        "solve",
+        &model,
+        "--log-level",
+        "debug",
+        "--out",
+        &out("dual"),
+    ]);
+    assert_eq!(code, 0, "{text}");
+    assert!(!text.contains("the sparse path"), "{text}");
+    assert!(text.contains("as a rank-"), "{text}");
+    let newton = text.matches("|N| = ").count();
+    assert!(newton <= 20, "{newton} Newton steps in six load steps");
+    assert!(text.contains("→ certified"), "{text}");
+    let (code, text) = run(&[
+        "solve",
+        &model,
+        "--ssn-path",
+        "augmented",
+        "--out",
+        &out("sparse"),
+    ]);
+    assert_eq!(code, 0, "{text}");
+    let ud = last_displacement(&d.path().join("dual/sf.h5"));
+    let us = last_displacement(&d.path().join("sparse/sf.h5"));
+    let scale = ud
+        .iter()
+        .fold(0.0f64, |m, u| m.max(u[0].abs()).max(u[1].abs()));
+    let diff = us.iter().zip(&ud).fold(0.0f64, |m, (a, b)| {
+        m.max((a[0] - b[0]).abs()).max((a[1] - b[1]).abs())
+    });
+    assert!(
+        diff <= 1e-8 * scale,
+        "dual vs sparse path: {diff:e} of {scale:e}"
     );
 }

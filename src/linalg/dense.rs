@@ -225,6 +225,11 @@ impl Lu {
     pub fn solve_in_place(&self, b: &mut [f64]) {
         self.lu.solve_in_place(ColMut::from_slice_mut(b));
     }
+
+    /// B ← W⁻¹ B for a block of right-hand sides (one blocked solve).
+    pub fn solve_mat_in_place(&self, b: faer::MatMut<'_, f64>) {
+        self.lu.solve_in_place(b);
+    }
 }
 
 /// Dense lower Cholesky factor S = LLᵀ in packed rows (row i has i+1 entries),

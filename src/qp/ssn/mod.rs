@@ -61,7 +61,7 @@ const GROW_MIN: usize = BLOCK;
 /// Refinement steps of the final KKT solve (module doc).
 const REFINE_MAX: usize = 3;
 /// A border of at most BORDER_RATIO·√n unknowns is eliminated last ([`small_border`]).
-const BORDER_RATIO: f64 = 12.0;
+pub(crate) const BORDER_RATIO: f64 = 12.0;
 /// And at most this many (the dense trailing block: 8·BORDER_MAX² bytes,
 /// 2 GiB). 10 000 sent the three-body model at 5 M nodes (12 296 border
 /// unknowns) to the path of C + AᵀA: 7 Newton steps and 3 refactors (with

@@ -7,6 +7,15 @@ use super::*;
 /// bytes, 512 MiB); more take the sparse path.
 pub(super) const DUAL_ROWS_MAX: usize = 8192;
 
+/// The largest border of B = [A; T] eliminated last, per √n: four times
+/// the frictionless path's ([`super::super::BORDER_RATIO`]). Its dense
+/// factor costs nb³/3 once, where the sparse path refactors K = C + ρBᵀB
+/// at every Newton step and has neither the coarse start nor the direct
+/// Coulomb iteration: a shrink fit with thin walls (5.8 k nodes, 641 rows,
+/// a border of 2 304 = 21·√n) took 341 Newton steps and 7.3 times the
+/// frictionless run there (docs/methods.md §9.2).
+const BORDER_RATIO: f64 = 4.0 * super::super::BORDER_RATIO;
+
 /// A row of B with H_jj ≤ NULL_ROW · max H holds nothing ([`Dual`]).
 pub(super) const NULL_ROW: f64 = 1e-14;
 
@@ -58,6 +67,10 @@ pub(super) struct DenseDual {
     /// of symmetry, whose unknown is eliminated): left out of every
     /// working set's system, their multiplier 0.
     pub(super) null: Vec<bool>,
+    /// The LU of the last Coulomb system solved on this H, for the next
+    /// Newton step's ([`super::update`]; systems of
+    /// [`super::update::UPDATE_MIN`] unknowns or more).
+    pub(super) last_lu: std::cell::RefCell<Option<super::update::Factored>>,
 }
 
 /// The law a working set is solved under ([`DenseDual::set_solve`]).
@@ -143,12 +156,10 @@ impl Dual {
         let rb = RowBorder::new(&qp.c, &qp.kernel, &b);
         let nb = rb.len();
         log::debug!("ssn: friction: border of B = [A; T]: {nb} unknowns");
-        if nb as f64 > super::super::BORDER_RATIO * (n as f64).sqrt()
-            || nb > super::super::BORDER_MAX
-        {
+        if nb as f64 > BORDER_RATIO * (n as f64).sqrt() || nb > super::super::BORDER_MAX {
             log::debug!(
                 "ssn: friction: the sparse path: a border of {nb} unknowns exceeds {} (BORDER_RATIO·√n) or {}; no coarse start, the glued start",
-                (super::super::BORDER_RATIO * (n as f64).sqrt()) as usize,
+                (BORDER_RATIO * (n as f64).sqrt()) as usize,
                 super::super::BORDER_MAX
             );
             return Ok(None);
@@ -217,6 +228,7 @@ impl Dual {
                 br,
                 e,
                 null,
+                last_lu: Default::default(),
             },
             solves: 1,
         }))
@@ -455,8 +467,31 @@ impl DenseDual {
             }
             rhs[q + l] = self.e[l] * hs;
         }
-        let lu = crate::linalg::dense::Lu::from_row_major(&w, size)?;
-        lu.solve_in_place(&mut rhs);
+        let mut last = self.last_lu.borrow_mut();
+        if size >= super::update::UPDATE_MIN {
+            // The unknowns' keys (rows of B; 2m + l for α_l) and slip factors.
+            let keys: Vec<usize> = (0..q).map(erow).chain((0..k).map(|l| 2 * m + l)).collect();
+            let kappa: Vec<f64> = (0..size)
+                .map(|p| if p < nn { normal[p].1 } else { 0.0 })
+                .collect();
+            let changed = last
+                .as_ref()
+                .and_then(|f| f.solve_changed(&keys, &kappa, &w, &rhs, hs));
+            if let Some((x, rank)) = changed {
+                log::debug!(
+                    "ssn: friction: the Coulomb system as a rank-{rank} change of the last LU"
+                );
+                rhs = x;
+            } else {
+                let lu = crate::linalg::dense::Lu::from_row_major(&w, size)?;
+                lu.solve_in_place(&mut rhs);
+                *last = Some(super::update::Factored::new(keys, kappa, w, lu, hs));
+            }
+        } else {
+            let lu = crate::linalg::dense::Lu::from_row_major(&w, size)?;
+            lu.solve_in_place(&mut rhs);
+        }
+        drop(last);
         if !rhs.iter().all(|v| v.is_finite()) {
             return None;
         }

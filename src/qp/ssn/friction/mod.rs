@@ -58,6 +58,7 @@ mod dual;
 mod motions;
 mod nested;
 mod sets;
+mod update;
 use dual::{unfinished, Dual, Law};
 use sets::{start_tang, warm_sets, Rule, Tangential};
 

@@ -381,6 +381,7 @@ fn aggregate(d: &DenseDual, rows: &Rows, groups: Vec<Vec<usize>>) -> Level {
             br,
             e: d.e.clone(),
             null,
+            last_lu: Default::default(),
         },
         rows: rows_c,
         groups,
@@ -411,6 +412,7 @@ mod tests {
             br: vec![vec![]; 2 * m],
             e: vec![],
             null: vec![false; 2 * m],
+            last_lu: Default::default(),
         };
         // Greedy: 5–6, 0–1, 2–3; then 7 and 4, whose neighbours are
         // taken, stay alone instead of being summed with each other.
