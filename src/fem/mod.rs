@@ -138,6 +138,15 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let mut lap = Lap::new("fem::build");
     let (f, path) = (&problem.file, problem.path.as_path());
     let kind = ElementKind::of(&f.model);
+    if mesh.dim() != 2 {
+        return Err(FemError::new(
+            path,
+            format!(
+                "{}: a 3D mesh (tetrahedra): solid models are read and checked, but not yet solved (issue 45)",
+                mesh.path.display()
+            ),
+        ));
+    }
     let topo = Topology::build(mesh, path, kind, &f.materials, &f.contact)?;
     lap.lap("topology");
     let conds = conditions::Conditions::collect(mesh, &topo, path, &f.dirichlet, &f.slip)?;
