@@ -21,6 +21,7 @@ mod loads;
 mod mortar;
 mod pairs;
 mod rigid;
+pub mod solid;
 mod sort;
 mod stiffness;
 pub mod topology;
@@ -142,7 +143,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
         return Err(FemError::new(
             path,
             format!(
-                "{}: a 3D mesh (tetrahedra): solid models are read and checked, but not yet solved (issue 45)",
+                "{}: a 3D mesh (tetrahedra): solid models are read, checked and assembled (fem::solid), but `solve` does not run them yet (issue 45)",
                 mesh.path.display()
             ),
         ));
