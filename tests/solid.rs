@@ -227,3 +227,20 @@ fn solid_vtu_holds_tetrahedra_and_six_stresses() {
         assert_eq!(v.cell_array("von_mises").unwrap().values, out.von_mises);
     }
 }
+
+/// The rigid motions a block keeps, counted scale-invariantly: slip on x = 0
+/// leaves three (two translations in the plane, the rotation about x), on
+/// x = 0 and y = 0 one (the translation along z), on the three planes none.
+#[test]
+fn partial_supports_leave_the_rigid_motions_they_should() {
+    let mesh = read_msh(&data("block.msh")).unwrap();
+    for (slip, left) in [(&["x0"][..], 3), (&["x0", "y0"][..], 1)] {
+        let mut inp = input("block");
+        inp.slip = slip.iter().map(|s| s.to_string()).collect();
+        let e = build(&mesh, Path::new("block.toml"), &inp).err().unwrap().to_string();
+        assert!(e.contains(&format!(": {left} rigid motion(s)")), "{slip:?}: {e}");
+    }
+    let mut inp = input("block");
+    inp.slip = vec!["x0".into(), "y0".into(), "z0".into()];
+    assert!(build(&mesh, Path::new("block.toml"), &inp).is_ok());
+}
