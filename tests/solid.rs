@@ -237,10 +237,38 @@ fn partial_supports_leave_the_rigid_motions_they_should() {
     for (slip, left) in [(&["x0"][..], 3), (&["x0", "y0"][..], 1)] {
         let mut inp = input("block");
         inp.slip = slip.iter().map(|s| s.to_string()).collect();
-        let e = build(&mesh, Path::new("block.toml"), &inp).err().unwrap().to_string();
-        assert!(e.contains(&format!(": {left} rigid motion(s)")), "{slip:?}: {e}");
+        let e = build(&mesh, Path::new("block.toml"), &inp)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains(&format!(": {left} rigid motion(s)")),
+            "{slip:?}: {e}"
+        );
     }
     let mut inp = input("block");
     inp.slip = vec!["x0".into(), "y0".into(), "z0".into()];
     assert!(build(&mesh, Path::new("block.toml"), &inp).is_ok());
+}
+
+/// A traction on a triangle inside the volume mesh (a face two tetrahedra
+/// share) is refused: it is on no boundary.
+#[test]
+fn traction_on_an_interior_face_is_refused() {
+    let msh = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 2 \"mid\"\n3 1 \"block\"\n$EndPhysicalNames\n\
+$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n$EndNodes\n\
+$Elements\n3\n1 2 2 2 10 2 3 4\n2 4 2 1 20 1 2 3 4\n3 4 2 1 20 2 3 4 5\n$EndElements\n";
+    let mesh = signorini::mesh::gmsh::parse_msh(Path::new("two.msh"), msh.as_bytes()).unwrap();
+    let mut inp = input("block");
+    inp.traction = vec![("mid".into(), SolidTraction::Normal(-1.0))];
+    let e = build(&mesh, Path::new("two.toml"), &inp)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.starts_with("two.toml")
+            && e.contains("[[traction]] #1")
+            && e.contains("not on its boundary"),
+        "{e}"
+    );
 }

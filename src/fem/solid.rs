@@ -157,15 +157,16 @@ pub fn eliminate3(cs: &[Cond3]) -> Result<PointDofs<3>, String> {
     })
 }
 
-/// The faces of the tetrahedra: sorted nodes → (tetrahedron, the vertex
-/// opposite), for the outward normal of a boundary triangle.
-fn faces(tets: &[[usize; 4]]) -> HashMap<[usize; 3], (usize, usize)> {
-    let mut f = HashMap::with_capacity(4 * tets.len());
-    for (t, tet) in tets.iter().enumerate() {
+/// The faces of the tetrahedra: sorted nodes → (the vertex opposite, how
+/// many tetrahedra share the face), for the outward normal of a boundary
+/// triangle and to tell an interior face.
+fn faces(tets: &[[usize; 4]]) -> HashMap<[usize; 3], (usize, u8)> {
+    let mut f: HashMap<[usize; 3], (usize, u8)> = HashMap::with_capacity(4 * tets.len());
+    for tet in tets {
         for skip in 0..4 {
             let mut k: Vec<usize> = (0..4).filter(|&i| i != skip).map(|i| tet[i]).collect();
             k.sort_unstable();
-            f.insert([k[0], k[1], k[2]], (t, tet[skip]));
+            f.entry([k[0], k[1], k[2]]).or_insert((tet[skip], 0)).1 += 1;
         }
     }
     f
@@ -176,7 +177,7 @@ fn faces(tets: &[[usize; 4]]) -> HashMap<[usize; 3], (usize, usize)> {
 fn surface(
     mesh: &Mesh,
     points: &[Point3],
-    faces: &HashMap<[usize; 3], (usize, usize)>,
+    faces: &HashMap<[usize; 3], (usize, u8)>,
     path: &Path,
     name: &str,
     what: &str,
@@ -200,8 +201,18 @@ fn surface(
         let (w, mut n) = kind.facet_weight(&tri.map(|v| points[v]));
         let mut key = tri;
         key.sort_unstable();
-        // The reader has checked that every triangle is a face.
-        if let Some(&(_, opp)) = faces.get(&key) {
+        // The reader has checked that every triangle is a face; one inside
+        // a body (two tetrahedra) is on no boundary.
+        if let Some(&(_, 2)) = faces.get(&key) {
+            return Err(FemError::new(
+                path,
+                format!(
+                    "{what}: triangle {} of \"{name}\" lies inside the volume mesh (two tetrahedra share it), not on its boundary",
+                    mesh.triangle_tags[t]
+                ),
+            ));
+        }
+        if let Some(&(opp, _)) = faces.get(&key) {
             let x0 = points[tri[0]];
             let o = points[opp];
             if dot(n, [o[0] - x0[0], o[1] - x0[1], o[2] - x0[2]]) > 0.0 {
