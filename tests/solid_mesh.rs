@@ -136,3 +136,45 @@ $Elements\n1\n1 2 2 1 1 1 2 3\n$EndElements\n";
     assert!(m.z.is_empty() && m.tets.is_empty());
     assert_eq!(m.node::<3>(1), [1.0, 0.0, 0.0]);
 }
+
+/// The block of tests/data/solid/block.geo written by gmsh as MSH 2.2, 4.1
+/// ASCII and 4.1 binary reads as one mesh: nodes with z (to the digits
+/// ASCII keeps), tetrahedra,
+/// boundary triangles and the groups of every dimension.
+#[test]
+fn gmsh_block_reads_alike_in_every_format() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/solid");
+    let read = |f: &str| signorini::mesh::read_msh(&dir.join(f)).unwrap();
+    let a = read("block.msh");
+    assert_eq!(a.dim(), 3);
+    assert!(a.tets.len() > 300 && a.z.len() == a.nodes.len());
+    for f in ["block41.msh", "block41b.msh"] {
+        let b = read(f);
+        // ASCII files round the coordinates to 16 digits, binary ones not.
+        assert_eq!(a.node_tags, b.node_tags, "{f}");
+        for i in 0..a.nodes.len() {
+            let (p, q) = (a.node::<3>(i), b.node::<3>(i));
+            assert!(
+                (0..3).all(|k| (p[k] - q[k]).abs() < 1e-15),
+                "{f}: {p:?} {q:?}"
+            );
+        }
+        assert_eq!((&a.tets, &a.tet_tags), (&b.tets, &b.tet_tags), "{f}");
+        assert_eq!(a.triangles, b.triangles, "{f}");
+        for name in ["x0", "x1", "y0", "z0"] {
+            assert_eq!(
+                a.group(name, 2).map(|g| &g.elements),
+                b.group(name, 2).map(|g| &g.elements)
+            );
+        }
+        assert_eq!(a.group("block", 3).unwrap().elements.len(), a.tets.len());
+        assert_eq!(b.group("block", 3).unwrap().elements.len(), b.tets.len());
+    }
+    let vol: f64 = a
+        .tets
+        .iter()
+        .map(|t| volume6(&a, a.tets.iter().position(|x| x == t).unwrap()))
+        .sum::<f64>()
+        / 6.0;
+    assert!((vol - 0.15).abs() < 1e-12, "{vol}");
+}
