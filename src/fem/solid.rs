@@ -172,6 +172,16 @@ fn faces(tets: &[[usize; 4]]) -> HashMap<[usize; 3], (usize, u8)> {
     f
 }
 
+/// A boundary triangle of a Physical Surface: its nodes, the weight |F|/3
+/// of each, its outward unit normal and its Gmsh tag (for messages).
+#[derive(Debug, Clone, Copy)]
+struct Facet {
+    nodes: [usize; 3],
+    weight: f64,
+    normal: Vector3,
+    tag: u64,
+}
+
 /// The triangles of a Physical Surface `name` with each one's node weight
 /// |F|/3 and outward unit normal; `what` names the TOML entry.
 fn surface(
@@ -181,7 +191,7 @@ fn surface(
     path: &Path,
     name: &str,
     what: &str,
-) -> Result<Vec<([usize; 3], f64, Vector3)>, FemError> {
+) -> Result<Vec<Facet>, FemError> {
     let Some(g) = mesh.group(name, 2) else {
         let other = mesh.group_any(name).map_or(String::new(), |g| {
             format!(" (it is a group of dimension {})", g.dim)
@@ -219,7 +229,12 @@ fn surface(
                 n = n.map(|c| -c);
             }
         }
-        out.push((tri, w, n));
+        out.push(Facet {
+            nodes: tri,
+            weight: w,
+            normal: n,
+            tag: mesh.triangle_tags[t],
+        });
     }
     Ok(out)
 }
@@ -317,20 +332,26 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
     for (i, on) in input.slip.iter().enumerate() {
         let what = format!("[[slip]] #{} (on = \"{on}\")", i + 1);
         let tris = surface(mesh, &points, &fc, path, on, &what)?;
-        let Some(&(t0, _, n0)) = tris.first() else {
+        let Some(&Facet {
+            nodes: t0,
+            normal: n0,
+            ..
+        }) = tris.first()
+        else {
             continue;
         };
         let x0 = points[t0[0]];
         let size = tris
             .iter()
-            .flat_map(|t| t.0)
+            .flat_map(|t| t.nodes)
             .map(|v| {
                 (0..3)
                     .map(|k| (points[v][k] - x0[k]).abs())
                     .fold(0.0, f64::max)
             })
             .fold(0.0, f64::max);
-        for &(tri, _, n) in &tris {
+        for f in &tris {
+            let (tri, n) = (f.nodes, f.normal);
             let off = tri
                 .iter()
                 .map(|&v| dot(n0, [0, 1, 2].map(|k| points[v][k] - x0[k])).abs())
@@ -338,12 +359,12 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
             if dot(n, n0) < 1.0 - 1e-10 || off > 1e-9 * size {
                 return Err(err(format!(
                     "{what}: the surface is not plane (its triangle {} has normal ({:.4}, {:.4}, {:.4}), the first ({:.4}, {:.4}, {:.4})): a slip surface in 3D must be a plane",
-                    mesh.triangle_tags[mesh.group(on, 2).map_or(0, |g| g.elements[tris.iter().position(|x| x.0 == tri).unwrap_or(0)])],
+                    f.tag,
                     n[0], n[1], n[2], n0[0], n0[1], n0[2]
                 )));
             }
         }
-        let mut nodes: Vec<usize> = tris.iter().flat_map(|t| t.0).collect();
+        let mut nodes: Vec<usize> = tris.iter().flat_map(|t| t.nodes).collect();
         nodes.sort_unstable();
         nodes.dedup();
         for v in nodes {
@@ -379,7 +400,13 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
     }
     for (i, (on, load)) in input.traction.iter().enumerate() {
         let what = format!("[[traction]] #{} (on = \"{on}\")", i + 1);
-        for (tri, w, nrm) in surface(mesh, &points, &fc, path, on, &what)? {
+        for Facet {
+            nodes: tri,
+            weight: w,
+            normal: nrm,
+            ..
+        } in surface(mesh, &points, &fc, path, on, &what)?
+        {
             let p = match *load {
                 SolidTraction::Normal(pn) => nrm.map(|c| pn * c),
                 SolidTraction::Vector(p) => p,
