@@ -272,3 +272,57 @@ $Elements\n3\n1 2 2 2 10 2 3 4\n2 4 2 1 20 1 2 3 4\n3 4 2 1 20 2 3 4 5\n$EndElem
         "{e}"
     );
 }
+
+/// The patch test turned: the block rotated by R (about an oblique axis),
+/// so that the three slip planes are oblique and held by the eliminated
+/// T of each node; the answer is the turned uniaxial field R u(Rᵀx),
+/// still exact to round-off.
+#[test]
+fn rotated_block_in_uniaxial_tension_is_exact() {
+    let mut mesh = read_msh(&data("block.msh")).unwrap();
+    let (a, b) = (0.7f64, -0.4f64);
+    let rz = [
+        [a.cos(), -a.sin(), 0.0],
+        [a.sin(), a.cos(), 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let rx = [
+        [1.0, 0.0, 0.0],
+        [0.0, b.cos(), -b.sin()],
+        [0.0, b.sin(), b.cos()],
+    ];
+    let r: Vec<[f64; 3]> = (0..3)
+        .map(|i| [0, 1, 2].map(|j| (0..3).map(|k| rz[i][k] * rx[k][j]).sum()))
+        .collect();
+    let mul = |m: &[[f64; 3]], x: [f64; 3]| {
+        [0, 1, 2].map(|i| (0..3).map(|k| m[i][k] * x[k]).sum::<f64>())
+    };
+    let x0: Vec<[f64; 3]> = (0..mesh.nodes.len()).map(|i| mesh.node::<3>(i)).collect();
+    for (i, x) in x0.iter().enumerate() {
+        let y = mul(&r, *x);
+        mesh.nodes[i] = [y[0], y[1]];
+        mesh.z[i] = y[2];
+    }
+    let sigma = 1.0e8;
+    let mut inp = input("block");
+    inp.slip = vec!["x0".into(), "y0".into(), "z0".into()];
+    inp.traction = vec![("x1".into(), SolidTraction::Normal(sigma))];
+    let m = build(&mesh, Path::new("block.toml"), &inp).unwrap();
+    let u = solve(&m);
+    let (e, nu) = (steel().e, steel().nu);
+    let mut err = 0.0f64;
+    for (x, ui) in x0.iter().zip(&u) {
+        let want = mul(
+            &r,
+            [
+                sigma * x[0] / e,
+                -nu * sigma * x[1] / e,
+                -nu * sigma * x[2] / e,
+            ],
+        );
+        for k in 0..3 {
+            err = err.max((ui[k] - want[k]).abs());
+        }
+    }
+    assert!(err < 1e-10 * sigma / e, "displacement error {err:e}");
+}
