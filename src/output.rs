@@ -56,6 +56,27 @@ pub struct ContactGeometry {
     pub nonmatching: Vec<bool>,
 }
 
+/// A solved solid (3D) model as plain arrays: the tetrahedra and their
+/// fields (docs/design.md §"Adding a kind: solid 3D"; the 2D [`OutMesh`]
+/// and [`StepOutput`] are not dimension-generic yet).
+#[derive(Debug, Clone, Default)]
+pub struct SolidOutput {
+    pub points: Vec<[f64; 3]>,
+    /// Body number of each point (0-based).
+    pub point_body: Vec<u32>,
+    /// Tetrahedra (positively oriented) in point indices.
+    pub tets: Vec<[usize; 4]>,
+    /// Material index of each tetrahedron (into `material_names`).
+    pub material: Vec<u32>,
+    pub material_names: Vec<String>,
+    pub displacement: Vec<[f64; 3]>,
+    /// (σxx, σyy, σzz, σxy, σyz, σxz) of each tetrahedron.
+    pub stress: Vec<[f64; 6]>,
+    pub von_mises: Vec<f64>,
+    /// σ1 ≥ σ2 ≥ σ3 of each tetrahedron.
+    pub principal: Vec<[f64; 3]>,
+}
+
 /// The fields of one solved (load) step.
 #[derive(Debug, Clone, Default)]
 pub struct StepOutput {

@@ -534,9 +534,10 @@ fn bad_element_types() {
         &replace_once(&a, "\n1 7 1 4\n", "\n1 7 8 4\n"),
         &["element 18", "type 8", "3-node second-order line"],
     );
+    // Tetrahedra are read (3D models), but not in a surface's block.
     assert_err(
         &replace_once(&a, "\n2 1 2 22\n", "\n2 1 4 22\n"),
-        &["element 22", "4-node tetrahedron"],
+        &["entity 1", "dimension 2", "4-node tetrahedron"],
     );
     // 2.2: element 26 is the first triangle.
     let c = fixture("square_ascii22.msh");

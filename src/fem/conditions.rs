@@ -17,14 +17,26 @@ use crate::mesh::Mesh;
 use crate::problem::{Dirichlet, Slip};
 use std::path::Path;
 
-/// Per-point elimination: u = u0 + T ξ with `ndof` columns of T used.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct PointDofs {
+/// Per-point elimination: u = u0 + T ξ with `ndof` columns of T used, in
+/// a model of dimension `D` (2: plane and axisymmetric, 3: solid).
+#[derive(Debug, Clone, Copy)]
+pub struct PointDofs<const D: usize = 2> {
     pub start: usize,
     pub ndof: usize,
     /// Columns of T (unit, orthogonal); only the first `ndof` are used.
-    pub t: [Vector; 2],
-    pub u0: Vector,
+    pub t: [[f64; D]; D],
+    pub u0: [f64; D],
+}
+
+impl<const D: usize> Default for PointDofs<D> {
+    fn default() -> Self {
+        PointDofs {
+            start: 0,
+            ndof: 0,
+            t: [[0.0; D]; D],
+            u0: [0.0; D],
+        }
+    }
 }
 
 /// One linear condition r·u = v at a point; `src` indexes the names of the

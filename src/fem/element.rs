@@ -1,16 +1,72 @@
 //! The P1 element of docs/methods.md §1.4 and §2.2: material matrix D, strain
 //! matrix B, element stiffness C_e = t_h|T| BᵀDB, stresses τ̄ = D B x_e, and
 //! [`ElementKind`], the one place that knows which kind of model (plane
-//! strain, plane stress, axisymmetric) an element belongs to (docs/design.md
-//! §"Element kinds").
+//! strain, plane stress, axisymmetric, solid 3D) an element belongs to
+//! (docs/design.md §"Element kinds").
 
 use crate::problem::{Material, ModelSection, Plane};
 
+/// A point of a `D`-dimensional model: (x, y), (r, z) or (x, y, z). The
+/// dimension is a const generic where code is shared by the plane and the
+/// solid kinds (docs/design.md §"Element kinds").
+pub type PointD<const D: usize> = [f64; D];
+
 /// A point (x, y) of the plane, or (r, z) of an axisymmetric model.
-pub type Point = [f64; 2];
+pub type Point = PointD<2>;
 
 /// A vector of the plane: a displacement, a force, a normal.
-pub type Vector = [f64; 2];
+pub type Vector = PointD<2>;
+
+/// A point (x, y, z) of a solid model.
+pub type Point3 = PointD<3>;
+
+/// A vector of a solid model.
+pub type Vector3 = PointD<3>;
+
+/// One rigid motion of a free body: a translation along axis k, or a
+/// rotation about axis k (u = e_k × (x − c)); in the plane the rotation is
+/// about z, `Rotation(2)` (docs/methods.md §1.7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RigidMode {
+    Translation(usize),
+    Rotation(usize),
+}
+
+impl RigidMode {
+    /// The motion at `x` of a body centred at `c`, rotations divided by the
+    /// body's size `l` so that every motion is of one magnitude.
+    #[inline]
+    pub fn at<const D: usize>(self, x: PointD<D>, c: PointD<D>, l: f64) -> PointD<D> {
+        let mut u = [0.0; D];
+        match self {
+            RigidMode::Translation(k) => u[k] = 1.0,
+            RigidMode::Rotation(k) => {
+                // e_k × r with r = x − c: components i = k + 1, j = k + 2.
+                let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+                u[i] = -(x[j] - c[j]) / l;
+                u[j] = (x[i] - c[i]) / l;
+            }
+        }
+        u
+    }
+}
+
+/// The three rigid motions of a plane body.
+pub const PLANE_MODES: [RigidMode; 3] = [
+    RigidMode::Translation(0),
+    RigidMode::Translation(1),
+    RigidMode::Rotation(2),
+];
+
+/// The six rigid motions of a solid body.
+pub const SOLID_MODES: [RigidMode; 6] = [
+    RigidMode::Translation(0),
+    RigidMode::Translation(1),
+    RigidMode::Translation(2),
+    RigidMode::Rotation(0),
+    RigidMode::Rotation(1),
+    RigidMode::Rotation(2),
+];
 
 /// The kind of model an element belongs to, and everything that depends
 /// on it: the material matrix and the strain operator (through
@@ -29,6 +85,9 @@ pub enum ElementKind {
     /// Axisymmetric about the y axis (x = r ≥ 0, y = z): every integral is
     /// per radian, ∫ · r dr dz (docs/methods.md §10).
     Axisymmetric,
+    /// A 3D body of P1 tetrahedra (docs/design.md §"Adding a kind: solid
+    /// 3D"): six stress components, six rigid modes, volume measure.
+    Solid,
 }
 
 impl Default for ElementKind {
@@ -44,6 +103,10 @@ const PLANE_STRESS_NAMES: [&str; 4] = ["sxx", "syy", "sxy", "szz"];
 /// The names of the stress components of an axisymmetric model: σrr, σzz,
 /// σrz, σθθ (docs/problem-format.md §11).
 const AXI_STRESS_NAMES: [&str; 4] = ["srr", "szz", "srz", "stt"];
+
+/// The names of the stress components of a solid model, in VTK's order of
+/// a symmetric tensor: σxx, σyy, σzz, σxy, σyz, σxz.
+const SOLID_STRESS_NAMES: [&str; 6] = ["sxx", "syy", "szz", "sxy", "syz", "sxz"];
 
 /// Component names of the multi-component output arrays (VTU), per array.
 pub type ComponentNames = &'static [(&'static str, &'static [&'static str])];
@@ -73,7 +136,30 @@ const AXI_COMPONENT_NAMES: ComponentNames = &[
     ("tangent", &["tx", "ty", "tz"]),
 ];
 
+/// [`ComponentNames`] of a solid model.
+const SOLID_COMPONENT_NAMES: ComponentNames = &[
+    ("displacement", &["ux", "uy", "uz"]),
+    ("displacement_change", &["dux", "duy", "duz"]),
+    ("reaction", &["Rx", "Ry", "Rz"]),
+    ("stress", &SOLID_STRESS_NAMES),
+    (
+        "stress_change",
+        &["dsxx", "dsyy", "dszz", "dsxy", "dsyz", "dsxz"],
+    ),
+    ("principal_stress", &["s1", "s2", "s3"]),
+    ("normal", &["nx", "ny", "nz"]),
+    ("tangent", &["tx", "ty", "tz"]),
+];
+
 impl ElementKind {
+    /// The dimension of the model's space: 3 for a solid, else 2.
+    pub fn dim(self) -> usize {
+        match self {
+            ElementKind::Solid => 3,
+            _ => 2,
+        }
+    }
+
     /// The kind of `[model]` (its `plane` and `thickness`).
     pub fn of(model: &ModelSection) -> ElementKind {
         match model.plane {
@@ -91,7 +177,7 @@ impl ElementKind {
     pub fn thickness(self) -> f64 {
         match self {
             ElementKind::PlaneStress { thickness } => thickness,
-            ElementKind::PlaneStrain | ElementKind::Axisymmetric => 1.0,
+            ElementKind::PlaneStrain | ElementKind::Axisymmetric | ElementKind::Solid => 1.0,
         }
     }
 
@@ -102,6 +188,7 @@ impl ElementKind {
             ElementKind::PlaneStrain => "plane_strain",
             ElementKind::PlaneStress { .. } => "plane_stress",
             ElementKind::Axisymmetric => "axisymmetric",
+            ElementKind::Solid => "solid",
         }
     }
 
@@ -113,6 +200,9 @@ impl ElementKind {
             ElementKind::PlaneStrain => (1, None),
             ElementKind::PlaneStress { .. } => (0, None),
             ElementKind::Axisymmetric => (1, Some(1)),
+            // Not written yet: a solid checkpoint needs its own root
+            // attribute (docs/design.md, what is left of issue 45).
+            ElementKind::Solid => (1, None),
         }
     }
 
@@ -146,7 +236,9 @@ impl ElementKind {
         self,
         points: &[Point],
     ) -> Result<Option<ImpliedConditions>, OutsideDomain> {
-        if let ElementKind::PlaneStrain | ElementKind::PlaneStress { .. } = self {
+        if let ElementKind::PlaneStrain | ElementKind::PlaneStress { .. } | ElementKind::Solid =
+            self
+        {
             return Ok(None);
         }
         let rmax = points.iter().fold(0.0f64, |m, x| m.max(x[0].abs()));
@@ -176,7 +268,7 @@ impl ElementKind {
     pub fn centrifugal_force(self, rho: f64, omega: f64, r_max: f64) -> Option<f64> {
         match self {
             ElementKind::Axisymmetric => Some(rho * omega * omega * r_max),
-            ElementKind::PlaneStrain | ElementKind::PlaneStress { .. } => None,
+            ElementKind::PlaneStrain | ElementKind::PlaneStress { .. } | ElementKind::Solid => None,
         }
     }
 
@@ -197,7 +289,7 @@ impl ElementKind {
     pub fn spin_misfit(self) -> Option<&'static str> {
         match self {
             ElementKind::Axisymmetric => None,
-            ElementKind::PlaneStrain | ElementKind::PlaneStress { .. } => {
+            ElementKind::PlaneStrain | ElementKind::PlaneStress { .. } | ElementKind::Solid => {
                 Some("applies to plane = \"axisymmetric\" only")
             }
         }
@@ -216,20 +308,23 @@ impl ElementKind {
         }
     }
 
-    /// The number of stress components the files keep: 4 (σzz or σθθ)
-    /// or 3 in plane stress (σzz = 0).
+    /// The number of stress components the files keep: 4 (σzz or σθθ),
+    /// 3 in plane stress (σzz = 0), 6 in a solid.
     pub fn stress_len(self) -> usize {
         match self {
             ElementKind::PlaneStress { .. } => 3,
             ElementKind::PlaneStrain | ElementKind::Axisymmetric => 4,
+            ElementKind::Solid => 6,
         }
     }
 
-    /// The names of the four stress components of [`ElementKind::stress`].
-    pub fn stress_names(self) -> [&'static str; 4] {
+    /// The names of the stress components of [`ElementKind::stress`] (four)
+    /// or of [`ElementKind::tet_stress`] (six, VTK's order).
+    pub fn stress_names(self) -> &'static [&'static str] {
         match self {
-            ElementKind::Axisymmetric => AXI_STRESS_NAMES,
-            _ => PLANE_STRESS_NAMES,
+            ElementKind::Axisymmetric => &AXI_STRESS_NAMES,
+            ElementKind::Solid => &SOLID_STRESS_NAMES,
+            _ => &PLANE_STRESS_NAMES,
         }
     }
 
@@ -256,25 +351,32 @@ impl ElementKind {
     pub fn component_names(self) -> ComponentNames {
         match self {
             ElementKind::Axisymmetric => AXI_COMPONENT_NAMES,
+            ElementKind::Solid => SOLID_COMPONENT_NAMES,
             _ => PLANE_COMPONENT_NAMES,
         }
     }
 
-    /// Which of the three rigid motions of a plane body (the translations
-    /// along x and y, the rotation) are rigid modes of this kind: all
-    /// three in the plane, the axial translation only when axisymmetric (a
-    /// radial translation strains the hoop, u_r/r ≠ 0; methods.md §1.7,
-    /// §10).
-    pub fn rigid_modes(self) -> [bool; 3] {
+    /// The rigid modes of a free body of this kind: the three motions of
+    /// the plane, the axial translation only when axisymmetric (a radial
+    /// translation strains the hoop, u_r/r ≠ 0), three translations and
+    /// three rotations in a solid (methods.md §1.7, §10).
+    pub fn rigid_modes(self) -> &'static [RigidMode] {
         match self {
-            ElementKind::Axisymmetric => [false, true, false],
-            _ => [true, true, true],
+            ElementKind::Axisymmetric => &PLANE_MODES[1..2],
+            ElementKind::Solid => &SOLID_MODES,
+            _ => &PLANE_MODES,
         }
+    }
+
+    /// The motions of the plane that are rigid modes of a 2D kind, as a
+    /// mask over [translation x, translation y, rotation].
+    pub fn plane_mode_mask(self) -> [bool; 3] {
+        PLANE_MODES.map(|m| self.rigid_modes().contains(&m))
     }
 
     /// The number of rigid modes of a free body ([`ElementKind::rigid_modes`]).
     pub fn n_rigid_modes(self) -> usize {
-        self.rigid_modes().iter().filter(|m| **m).count()
+        self.rigid_modes().len()
     }
 
     /// The material matrix of `m` in this kind (methods.md §1.4, §10).
@@ -284,6 +386,7 @@ impl ElementKind {
                 ElementKind::PlaneStrain => Elasticity::Plane(d_plane_strain(m)),
                 ElementKind::PlaneStress { .. } => Elasticity::Plane(d_plane_stress(m)),
                 ElementKind::Axisymmetric => Elasticity::Axisymmetric(d_axi(m)),
+                ElementKind::Solid => Elasticity::Solid(d_solid(m)),
             },
             nu: m.nu,
             out_of_plane: self.stress_len() == 4,
@@ -296,6 +399,7 @@ impl ElementKind {
         match &d.d {
             Elasticity::Plane(d3) => stiffness(p, d3, self.thickness()),
             Elasticity::Axisymmetric(d4) => axi_stiffness(p, d4),
+            Elasticity::Solid(_) => unreachable!("{}", NO_TRIANGLES),
         }
     }
 
@@ -309,6 +413,7 @@ impl ElementKind {
                 let k = axi_stiffness(p, d4);
                 [k[2 * a], k[2 * a + 1]]
             }
+            Elasticity::Solid(_) => unreachable!("{}", NO_TRIANGLES),
         }
     }
 
@@ -319,6 +424,7 @@ impl ElementKind {
         match &d.d {
             Elasticity::Plane(d3) => plane_stress_of(p, d3, d.nu, d.out_of_plane, u),
             Elasticity::Axisymmetric(d4) => axi_stress(p, d4, u),
+            Elasticity::Solid(_) => unreachable!("{}", NO_TRIANGLES),
         }
     }
 
@@ -392,6 +498,51 @@ impl ElementKind {
             _ => 1.0,
         }
     }
+
+    /// C_e = |T| BᵀDB (12×12) of a tetrahedron of a solid model
+    /// (docs/design.md §"Adding a kind: solid 3D"; methods.md §2.2 in 3D).
+    pub fn tet_stiffness(self, p: &[Point3; 4], d: &MaterialMatrix) -> [[f64; 12]; 12] {
+        tet_stiffness(p, &d.solid())
+    }
+
+    /// The six stresses (σxx, σyy, σzz, σxy, σyz, σxz) of a tetrahedron
+    /// from its displacements `u` (3 per vertex).
+    pub fn tet_stress(self, p: &[Point3; 4], d: &MaterialMatrix, u: &[f64; 12]) -> [f64; 6] {
+        tet_stress(p, &d.solid(), u)
+    }
+
+    /// The body load of each vertex of a tetrahedron: |T|/4 f_b.
+    pub fn tet_body_load(self, p: &[Point3; 4], fb: Vector3) -> Vector3 {
+        let w = crate::mesh::gmsh::volume6(p).abs() / 24.0;
+        fb.map(|f| w * f)
+    }
+
+    /// The boundary measure of each node of a boundary triangle, |F|/3,
+    /// and the triangle's unit normal (right-handed to its node order).
+    pub fn facet_weight(self, p: &[Point3; 3]) -> (f64, Vector3) {
+        let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+        let a2 = dot(n, n).sqrt();
+        (a2 / 6.0, n.map(|c| c / a2))
+    }
+}
+
+/// What the triangle methods say when asked for a solid's element.
+const NO_TRIANGLES: &str = "a solid model's cells are tetrahedra (ElementKind::tet_*)";
+
+fn sub(a: Point3, b: Point3) -> Vector3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(a: Vector3, b: Vector3) -> Vector3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot(a: Vector3, b: Vector3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// The conditions r·u = 0 an [`ElementKind`] imposes by itself
@@ -440,11 +591,23 @@ pub struct MaterialMatrix {
     out_of_plane: bool,
 }
 
-/// D (3×3) of a plane model or D4 (4×4) of an axisymmetric one.
+/// D (3×3) of a plane model, D4 (4×4) of an axisymmetric one, D6 (6×6)
+/// of a solid.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Elasticity {
     Plane([[f64; 3]; 3]),
     Axisymmetric([[f64; 4]; 4]),
+    Solid([[f64; 6]; 6]),
+}
+
+impl MaterialMatrix {
+    /// D6 of a solid model's material.
+    fn solid(&self) -> [[f64; 6]; 6] {
+        match self.d {
+            Elasticity::Solid(d6) => d6,
+            _ => unreachable!("a plane model's material asked for its 3D matrix"),
+        }
+    }
 }
 
 /// D of plane strain for ē = (e11, e22, 2e12) (methods.md §1.4); also the
@@ -468,6 +631,111 @@ fn d_plane_stress(m: &Material) -> [[f64; 3]; 3] {
         [f * nu, f, 0.0],
         [0.0, 0.0, f * (1.0 - nu) / 2.0],
     ]
+}
+
+/// D6 of an isotropic solid for ε = (εxx, εyy, εzz, 2εxy, 2εyz, 2εxz):
+/// λ + 2μ on the normal diagonal, λ off it, μ on the shears.
+pub fn d_solid(m: &Material) -> [[f64; 6]; 6] {
+    let (e, nu) = (m.e, m.nu);
+    let f = e / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    let (a, b, g) = (f * (1.0 - nu), f * nu, f * (1.0 - 2.0 * nu) / 2.0);
+    let mut d = [[0.0; 6]; 6];
+    for i in 0..3 {
+        for j in 0..3 {
+            d[i][j] = if i == j { a } else { b };
+        }
+        d[3 + i][3 + i] = g;
+    }
+    d
+}
+
+/// B (6×12) of a tetrahedron, for ε in the order of [`d_solid`], and its
+/// volume |T|: the gradients of the barycentric coordinates are the rows
+/// of J⁻¹, J = [p1 − p0, p2 − p0, p3 − p0] (cofactors over det J = 6|T|).
+pub fn tet_b(p: &[Point3; 4]) -> ([[f64; 12]; 6], f64) {
+    let (e1, e2, e3) = (sub(p[1], p[0]), sub(p[2], p[0]), sub(p[3], p[0]));
+    let det = dot(e1, cross(e2, e3));
+    let g1 = cross(e2, e3).map(|c| c / det);
+    let g2 = cross(e3, e1).map(|c| c / det);
+    let g3 = cross(e1, e2).map(|c| c / det);
+    let g0 = [0, 1, 2].map(|k| -(g1[k] + g2[k] + g3[k]));
+    let mut b = [[0.0; 12]; 6];
+    for (a, g) in [g0, g1, g2, g3].iter().enumerate() {
+        let c = 3 * a;
+        b[0][c] = g[0];
+        b[1][c + 1] = g[1];
+        b[2][c + 2] = g[2];
+        b[3][c] = g[1];
+        b[3][c + 1] = g[0];
+        b[4][c + 1] = g[2];
+        b[4][c + 2] = g[1];
+        b[5][c] = g[2];
+        b[5][c + 2] = g[0];
+    }
+    (b, det.abs() / 6.0)
+}
+
+/// C_e = |T| BᵀD6B (12×12) of a tetrahedron.
+pub fn tet_stiffness(p: &[Point3; 4], d6: &[[f64; 6]; 6]) -> [[f64; 12]; 12] {
+    let (b, vol) = tet_b(p);
+    let mut db = [[0.0; 12]; 6];
+    for i in 0..6 {
+        for j in 0..12 {
+            db[i][j] = (0..6).map(|k| d6[i][k] * b[k][j]).sum();
+        }
+    }
+    let mut k = [[0.0; 12]; 12];
+    for (i, row) in k.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = vol * (0..6).map(|l| b[l][i] * db[l][j]).sum::<f64>();
+        }
+    }
+    k
+}
+
+/// σ = D6 B u of a tetrahedron, (σxx, σyy, σzz, σxy, σyz, σxz).
+pub fn tet_stress(p: &[Point3; 4], d6: &[[f64; 6]; 6], u: &[f64; 12]) -> [f64; 6] {
+    let (b, _) = tet_b(p);
+    let mut e = [0.0; 6];
+    for (i, ei) in e.iter_mut().enumerate() {
+        *ei = (0..12).map(|j| b[i][j] * u[j]).sum();
+    }
+    let mut s = [0.0; 6];
+    for (i, si) in s.iter_mut().enumerate() {
+        *si = (0..6).map(|k| d6[i][k] * e[k]).sum();
+    }
+    s
+}
+
+/// The 3D von Mises stress of (σxx, σyy, σzz, σxy, σyz, σxz):
+/// sqrt(½[(σxx−σyy)² + (σyy−σzz)² + (σzz−σxx)²] + 3(σxy² + σyz² + σxz²)).
+pub fn von_mises_solid(s: &[f64; 6]) -> f64 {
+    let (a, b, c) = (s[0] - s[1], s[1] - s[2], s[2] - s[0]);
+    (0.5 * (a * a + b * b + c * c) + 3.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]))
+        .max(0.0)
+        .sqrt()
+}
+
+/// The principal stresses σ1 ≥ σ2 ≥ σ3 of (σxx, σyy, σzz, σxy, σyz, σxz):
+/// the eigenvalues of the symmetric 3×3 tensor by the trigonometric
+/// formula of the deviator's invariants (Smith, CACM 4 (1961) 168).
+pub fn principal_solid(s: &[f64; 6]) -> [f64; 3] {
+    let (xx, yy, zz, xy, yz, xz) = (s[0], s[1], s[2], s[3], s[4], s[5]);
+    let off = xy * xy + yz * yz + xz * xz;
+    let q = (xx + yy + zz) / 3.0;
+    let (a, b, c) = (xx - q, yy - q, zz - q);
+    let p2 = a * a + b * b + c * c + 2.0 * off;
+    if p2 <= 0.0 || !p2.is_finite() {
+        return [q, q, q];
+    }
+    let p = (p2 / 6.0).sqrt();
+    // det((σ − qI)/p) / 2
+    let det = a * (b * c - yz * yz) - xy * (xy * c - yz * xz) + xz * (xy * yz - b * xz);
+    let r = (det / (p * p * p) / 2.0).clamp(-1.0, 1.0);
+    let phi = r.acos() / 3.0;
+    let s1 = q + 2.0 * p * phi.cos();
+    let s3 = q + 2.0 * p * (phi + 2.0 * std::f64::consts::PI / 3.0).cos();
+    [s1, 3.0 * q - s1 - s3, s3]
 }
 
 /// Twice the signed area: positive for counter-clockwise vertices.
@@ -823,5 +1091,192 @@ mod tests {
         assert_eq!(s[3], 0.0);
         let pr = principal(&s);
         assert!((pr[0] - sxx).abs() < 1e-12 && (pr[1] - 0.25 * sxx).abs() < 1e-12);
+    }
+
+    fn steel() -> Material {
+        Material {
+            e: 2.1e11,
+            nu: 0.3,
+            rho: 7800.0,
+        }
+    }
+
+    /// An irregular tetrahedron, scaled by `s`.
+    fn tet(s: f64) -> [Point3; 4] {
+        [
+            [0.1, -0.2, 0.05],
+            [1.3, 0.1, -0.1],
+            [0.2, 0.9, 0.3],
+            [0.4, 0.35, 1.1],
+        ]
+        .map(|x| x.map(|c| s * c))
+    }
+
+    /// The solid element: symmetric, and its kernel is exactly the six
+    /// rigid motions at every scale: six eigenvalues below 1e-12 of the
+    /// largest, the seventh above 1e-3 of it, and K z = 0 for each motion.
+    #[test]
+    fn solid_stiffness_kernel_is_the_six_rigid_motions() {
+        let kind = ElementKind::Solid;
+        let d = kind.material(&steel());
+        for s in [1e-3, 1.0, 1e3] {
+            let p = tet(s);
+            let k = kind.tet_stiffness(&p, &d);
+            let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+            for i in 0..12 {
+                for j in 0..12 {
+                    assert!((k[i][j] - k[j][i]).abs() <= 1e-13 * kmax);
+                }
+            }
+            let rows: Vec<Vec<f64>> = k.iter().map(|r| r.to_vec()).collect();
+            let (vals, _) = crate::linalg::dense::sym_eigen(&rows);
+            let mut ev: Vec<f64> = vals.iter().map(|v| v.abs()).collect();
+            ev.sort_by(|a, b| a.total_cmp(b));
+            let top = ev[11];
+            assert!(ev[5] < 1e-12 * top, "{ev:?}");
+            assert!(ev[6] > 1e-3 * top, "{ev:?}");
+            let c = p[0];
+            for m in kind.rigid_modes() {
+                let z: Vec<f64> = p.iter().flat_map(|&x| m.at(x, c, s)).collect();
+                let kz = k
+                    .iter()
+                    .map(|r| r.iter().zip(&z).map(|(a, b)| a * b).sum::<f64>().abs())
+                    .fold(0.0, f64::max);
+                assert!(kz < 1e-12 * top, "{m:?}: {kz}");
+            }
+        }
+        assert_eq!(kind.n_rigid_modes(), 6);
+    }
+
+    /// The unit cube cut into 12 tetrahedra about an off-centre interior
+    /// node (node 8): corners 0..8, each face two triangles.
+    fn cube_patch() -> (Vec<Point3>, Vec<[usize; 4]>) {
+        let mut x: Vec<Point3> = (0..8)
+            .map(|i| [(i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64])
+            .collect();
+        x.push([0.37, 0.58, 0.44]);
+        let faces = [
+            [0, 1, 3, 2],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 3, 7, 6],
+            [0, 2, 6, 4],
+            [1, 3, 7, 5],
+        ];
+        let mut tets = vec![];
+        for f in faces {
+            for t in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+                let mut c = [t[0], t[1], t[2], 8];
+                if crate::mesh::gmsh::volume6(&c.map(|v| x[v])) < 0.0 {
+                    c.swap(1, 2);
+                }
+                tets.push(c);
+            }
+        }
+        (x, tets)
+    }
+
+    /// Patch test: a linear displacement u = G x + t on an irregular tet
+    /// patch gives each element the exact stress D ε(G), and the interior
+    /// node is in equilibrium without load (K u = 0 in its rows).
+    #[test]
+    fn solid_patch_test_linear_field_is_exact() {
+        let kind = ElementKind::Solid;
+        let m = steel();
+        let d = kind.material(&m);
+        let (x, tets) = cube_patch();
+        let g = [
+            [1e-3, 2e-4, -3e-4],
+            [5e-4, -7e-4, 1e-4],
+            [-2e-4, 3e-4, 4e-4],
+        ];
+        let u: Vec<Vector3> = x
+            .iter()
+            .map(|p| {
+                [0, 1, 2].map(|i| (0..3).map(|j| g[i][j] * p[j]).sum::<f64>() + 0.01 * i as f64)
+            })
+            .collect();
+        let eps = [
+            g[0][0],
+            g[1][1],
+            g[2][2],
+            g[0][1] + g[1][0],
+            g[1][2] + g[2][1],
+            g[0][2] + g[2][0],
+        ];
+        let d6 = d_solid(&m);
+        let want: Vec<f64> = (0..6)
+            .map(|i| (0..6).map(|k| d6[i][k] * eps[k]).sum())
+            .collect();
+        let smax = want.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let mut r = [0.0; 3];
+        let mut kmax = 0.0f64;
+        for t in &tets {
+            let p = t.map(|v| x[v]);
+            let ue: [f64; 12] = std::array::from_fn(|i| u[t[i / 3]][i % 3]);
+            let s = kind.tet_stress(&p, &d, &ue);
+            for i in 0..6 {
+                assert!((s[i] - want[i]).abs() < 1e-12 * smax, "{s:?} {want:?}");
+            }
+            let k = kind.tet_stiffness(&p, &d);
+            kmax = k.iter().flatten().fold(kmax, |a, v| a.max(v.abs()));
+            let a = t.iter().position(|&v| v == 8).unwrap();
+            for (c, rc) in r.iter_mut().enumerate() {
+                *rc += (0..12).map(|j| k[3 * a + c][j] * ue[j]).sum::<f64>();
+            }
+        }
+        let umax = u.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+        for rc in r {
+            assert!(rc.abs() < 1e-12 * kmax * umax, "{r:?}");
+        }
+    }
+
+    /// Σ over the vertices of |T|/4 ρg is ρg·V; |F|/3 sums to |F| and the
+    /// facet normal is the right-handed unit one.
+    #[test]
+    fn solid_body_load_and_facet_measure() {
+        let kind = ElementKind::Solid;
+        let (x, tets) = cube_patch();
+        let fb = [1.0, -2.0, 9.81];
+        let mut tot = [0.0; 3];
+        for t in &tets {
+            let f = kind.tet_body_load(&t.map(|v| x[v]), fb);
+            for c in 0..3 {
+                tot[c] += 4.0 * f[c];
+            }
+        }
+        for c in 0..3 {
+            assert!((tot[c] - fb[c]).abs() < 1e-14 * 10.0, "{tot:?}");
+        }
+        let (w, n) = kind.facet_weight(&[[0.0, 0.0, 2.0], [3.0, 0.0, 2.0], [0.0, 4.0, 2.0]]);
+        assert!((3.0 * w - 6.0).abs() < 1e-14);
+        assert_eq!(n, [0.0, 0.0, 1.0]);
+    }
+
+    /// von Mises: σ for uniaxial σ, √3 τ for any pure shear; principal
+    /// stresses of R diag(3, −1, 2) Rᵀ are (3, 2, −1).
+    #[test]
+    fn solid_equivalent_and_principal_stresses() {
+        assert!((von_mises_solid(&[5.0, 0.0, 0.0, 0.0, 0.0, 0.0]) - 5.0).abs() < 1e-14);
+        for k in 3..6 {
+            let mut s = [0.0; 6];
+            s[k] = 2.0;
+            assert!((von_mises_solid(&s) - 2.0 * 3f64.sqrt()).abs() < 1e-14);
+        }
+        let (c, sn) = (0.3f64.cos(), 0.3f64.sin());
+        let (c2, s2) = (1.1f64.cos(), 1.1f64.sin());
+        let rz = [[c, -sn, 0.0], [sn, c, 0.0], [0.0, 0.0, 1.0]];
+        let rx = [[1.0, 0.0, 0.0], [0.0, c2, -s2], [0.0, s2, c2]];
+        let r: Vec<[f64; 3]> = (0..3)
+            .map(|i| [0, 1, 2].map(|j| (0..3).map(|k| rz[i][k] * rx[k][j]).sum()))
+            .collect();
+        let l = [3.0, -1.0, 2.0];
+        let t = |i: usize, j: usize| (0..3).map(|k| r[i][k] * l[k] * r[j][k]).sum::<f64>();
+        let s = [t(0, 0), t(1, 1), t(2, 2), t(0, 1), t(1, 2), t(0, 2)];
+        let p = principal_solid(&s);
+        for (a, b) in p.iter().zip([3.0, 2.0, -1.0]) {
+            assert!((a - b).abs() < 1e-12, "{p:?}");
+        }
+        assert_eq!(principal_solid(&[1.0, 1.0, 1.0, 0.0, 0.0, 0.0]), [1.0; 3]);
     }
 }

@@ -21,6 +21,7 @@ mod loads;
 mod mortar;
 mod pairs;
 mod rigid;
+pub mod solid;
 mod sort;
 mod stiffness;
 pub mod topology;
@@ -138,6 +139,15 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     let mut lap = Lap::new("fem::build");
     let (f, path) = (&problem.file, problem.path.as_path());
     let kind = ElementKind::of(&f.model);
+    if mesh.dim() != 2 {
+        return Err(FemError::new(
+            path,
+            format!(
+                "{}: a 3D mesh (tetrahedra): solid models are read, checked and assembled (fem::solid), but `solve` does not run them yet (issue 45)",
+                mesh.path.display()
+            ),
+        ));
+    }
     let topo = Topology::build(mesh, path, kind, &f.materials, &f.contact)?;
     lap.lap("topology");
     let conds = conditions::Conditions::collect(mesh, &topo, path, &f.dirichlet, &f.slip)?;

@@ -10,7 +10,7 @@
 
 use super::conditions::{normalize, Cond, PointDofs};
 use super::element::ElementKind;
-use super::element::{Point, Vector};
+use super::element::{Point, Vector, PLANE_MODES};
 use super::topology::Topology;
 use super::{FemError, Model};
 use crate::linalg::dense::sym_eigen;
@@ -44,11 +44,7 @@ impl RigidBasis {
         let (lo, hi) = (self.lo[b], self.hi[b]);
         let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
         let l = ((hi[0] - lo[0]).max(hi[1] - lo[1])).max(1e-300);
-        [
-            [1.0, 0.0],
-            [0.0, 1.0],
-            [-(x[1] - c[1]) / l, (x[0] - c[0]) / l],
-        ]
+        PLANE_MODES.map(|m| m.at(x, c, l))
     }
 }
 
@@ -66,7 +62,7 @@ pub(super) fn rigid_modes(
     // Axisymmetric bodies move rigidly along the axis only (a radial
     // translation strains the hoop, u_r/r ≠ 0; docs/methods.md §10): the
     // other two motions are left out of the search below.
-    let modes = kind.rigid_modes();
+    let modes = kind.plane_mode_mask();
     let skip = |i: usize| !modes[i];
     // GᵀG per body (3×3) from every condition row.
     let mut gtg = vec![[[0.0f64; 3]; 3]; nb];

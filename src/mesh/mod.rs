@@ -1,5 +1,6 @@
-//! The mesh as read from Gmsh: nodes, P1 triangles, 2-node lines, points, and
-//! physical groups by name. No mechanics here; `fem::topology` cuts it into bodies.
+//! The mesh as read from Gmsh: nodes, P1 triangles, 2-node lines, points,
+//! 4-node tetrahedra (a 3D mesh), and physical groups by name. No mechanics
+//! here; `fem::topology` cuts it into bodies.
 
 pub mod gmsh;
 
@@ -7,11 +8,13 @@ use std::path::PathBuf;
 
 pub use gmsh::read_msh;
 
-/// Dimension of a physical group's entities: 0 points, 1 curves, 2 surfaces.
+/// Dimension of a physical group's entities: 0 points, 1 curves, 2 surfaces,
+/// 3 volumes.
 pub type Dim = u8;
 
 /// A Gmsh physical group: its elements are indices into `Mesh::points`
-/// (dim 0), `Mesh::lines` (dim 1) or `Mesh::triangles` (dim 2).
+/// (dim 0), `Mesh::lines` (dim 1), `Mesh::triangles` (dim 2) or
+/// `Mesh::tets` (dim 3).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PhysicalGroup {
     pub dim: Dim,
@@ -37,12 +40,37 @@ pub struct Mesh {
     /// Gmsh element tag of each triangle (for error messages).
     pub triangle_tags: Vec<u64>,
     pub groups: Vec<PhysicalGroup>,
+    /// z of each node, kept only for a 3D mesh (one with tetrahedra);
+    /// empty for a 2D one, whose z the reader ignores.
+    pub z: Vec<f64>,
+    /// 4-node tetrahedra (Gmsh type 4), positively oriented (the reader
+    /// reorders a volume given the other way round, src/mesh/gmsh/solid.rs).
+    /// In a 3D mesh the triangles are the boundary facets.
+    pub tets: Vec<[usize; 4]>,
+    /// Gmsh element tag of each tetrahedron.
+    pub tet_tags: Vec<u64>,
 }
 
 impl Mesh {
     /// The group named `name` of dimension `dim`, if any.
     pub fn group(&self, name: &str, dim: Dim) -> Option<&PhysicalGroup> {
         self.groups.iter().find(|g| g.dim == dim && g.name == name)
+    }
+
+    /// The dimension of the model the mesh holds: 3 with tetrahedra, else 2.
+    pub fn dim(&self) -> usize {
+        if self.tets.is_empty() {
+            2
+        } else {
+            3
+        }
+    }
+
+    /// Node `i` as a point of the model's `D`-dimensional space: (x, y)
+    /// or (x, y, z) (docs/design.md §"Element kinds").
+    pub fn node<const D: usize>(&self, i: usize) -> [f64; D] {
+        let (xy, z) = (self.nodes[i], self.z.get(i).copied().unwrap_or(0.0));
+        std::array::from_fn(|k| [xy[0], xy[1], z][k])
     }
 
     /// Any group named `name`, whatever its dimension.

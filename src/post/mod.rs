@@ -234,3 +234,26 @@ pub fn nearest_point(points: &[Point], x: Point) -> usize {
         .fold((0, f64::MAX), |a, b| if b.1 < a.1 { b } else { a })
         .0
 }
+
+/// The output arrays of a solved solid model from its QP unknowns `x`:
+/// displacements, and per tetrahedron the six stresses, von Mises and the
+/// principal stresses.
+pub fn solid_output(
+    model: &crate::fem::solid::SolidModel,
+    materials: &BTreeMap<String, Material>,
+    x: &[f64],
+) -> crate::output::SolidOutput {
+    let displacement = model.displacements(x);
+    let stress = model.stresses(materials, &displacement);
+    crate::output::SolidOutput {
+        points: model.points.clone(),
+        point_body: model.point_body.clone(),
+        tets: model.tets.clone(),
+        material: model.tet_material.clone(),
+        material_names: model.material_names.clone(),
+        von_mises: stress.iter().map(element::von_mises_solid).collect(),
+        principal: stress.iter().map(element::principal_solid).collect(),
+        displacement,
+        stress,
+    }
+}

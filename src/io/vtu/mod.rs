@@ -355,6 +355,57 @@ pub fn write_vtu_with(
     write_piece(path, piece, compress, names)
 }
 
+/// Writes a solved solid model (VTK tetrahedra, type 10). Point data:
+/// `displacement` (3), `body`; cell data: `stress` (six components in
+/// VTK's symmetric-tensor order xx, yy, zz, xy, yz, xz), `von_mises`,
+/// `principal_stress` (3), `material`.
+pub fn write_solid_vtu(
+    path: &Path,
+    out: &crate::output::SolidOutput,
+    compress: bool,
+) -> Result<(), IoError> {
+    let (n, m) = (out.points.len(), out.tets.len());
+    check_len(path, "point_body", out.point_body.len(), n)?;
+    check_len(path, "displacement", out.displacement.len(), n)?;
+    check_len(path, "material", out.material.len(), m)?;
+    check_len(path, "stress", out.stress.len(), m)?;
+    check_len(path, "von_mises", out.von_mises.len(), m)?;
+    check_len(path, "principal", out.principal.len(), m)?;
+    for t in &out.tets {
+        for &i in t {
+            check_index(path, "tetrahedron", i, n)?;
+        }
+    }
+    let cells = Cells {
+        cell_verts: VertexNumbers::XML {
+            connectivity: out.tets.iter().flatten().map(|&i| i as u64).collect(),
+            offsets: (1..=m as u64).map(|k| 4 * k).collect(),
+        },
+        types: vec![CellType::Tetra; m],
+    };
+    let point = vec![
+        array(
+            "displacement",
+            ElementType::Vectors,
+            IOBuffer::F64(out.displacement.as_flattened().to_vec()),
+        ),
+        i32_array("body", out.point_body.iter().map(|&b| i64::from(b))),
+    ];
+    let cell = vec![
+        f64_array("stress", 6, out.stress.as_flattened().to_vec()),
+        f64_array("von_mises", 1, out.von_mises.clone()),
+        f64_array("principal_stress", 3, out.principal.as_flattened().to_vec()),
+        i32_array("material", out.material.iter().map(|&k| i64::from(k))),
+    ];
+    let piece = UnstructuredGridPiece {
+        points: IOBuffer::F64(out.points.as_flattened().to_vec()),
+        cells,
+        data: Attributes { point, cell },
+    };
+    let names = crate::fem::ElementKind::Solid.component_names();
+    write_piece(path, piece, compress, names)
+}
+
 /// Each point's part in the contact: 0 none, 1 a conforming pair, 2 a
 /// slave node, 3 a master node (a point both slave and master gets 2).
 fn contact_roles(mesh: &OutMesh) -> Vec<i64> {

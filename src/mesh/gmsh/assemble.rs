@@ -97,7 +97,16 @@ impl<'a> Parser<'a> {
         for (&t, nd) in e.tri_tags.iter().zip(&e.tris) {
             triangles.push([lookup(t, nd[0])?, lookup(t, nd[1])?, lookup(t, nd[2])?]);
         }
-        if triangles.is_empty() {
+        let mut tets = Vec::with_capacity(e.tets.len());
+        for (&t, nd) in e.tet_tags.iter().zip(&e.tets) {
+            tets.push(
+                nd.map(|v| lookup(t, v))
+                    .into_iter()
+                    .collect::<Result<Vec<_>, _>>()?,
+            );
+        }
+        let tets: Vec<[usize; 4]> = tets.into_iter().map(|v| [v[0], v[1], v[2], v[3]]).collect();
+        if triangles.is_empty() && tets.is_empty() {
             return Err(self.invalid(
                 "$Elements: no triangles: the mesh has no 3-node triangle elements (type 2) \
                  (only elements in physical groups are saved by gmsh unless Mesh.SaveAll=1)",
@@ -118,7 +127,19 @@ impl<'a> Parser<'a> {
             })
             .collect();
 
-        Ok(Mesh {
+        let z = if tets.is_empty() {
+            vec![]
+        } else if sorted {
+            std::mem::take(&mut self.node_z)
+        } else {
+            let mut order: Vec<usize> = (0..n).collect();
+            order.sort_unstable_by_key(|&i| self.node_tags.get(i).copied().unwrap_or_default());
+            order
+                .iter()
+                .map(|&i| self.node_z.get(i).copied().unwrap_or_default())
+                .collect()
+        };
+        let mut mesh = Mesh {
             path: self.path.to_path_buf(),
             nodes: xy,
             node_tags: tags,
@@ -127,7 +148,14 @@ impl<'a> Parser<'a> {
             triangle_tags: std::mem::take(&mut self.elems.tri_tags),
             triangles,
             groups,
-        })
+            z,
+            tets,
+            tet_tags: std::mem::take(&mut self.elems.tet_tags),
+        };
+        if !mesh.tets.is_empty() {
+            super::solid::check(&mut mesh)?;
+        }
+        Ok(mesh)
     }
 }
 

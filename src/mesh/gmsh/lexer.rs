@@ -86,6 +86,7 @@ impl<'a> Parser<'a> {
             entities: None,
             node_tags: Vec::new(),
             node_xy: Vec::new(),
+            node_z: Vec::new(),
             have_nodes: false,
             have_elements: false,
             elems: RawElements::default(),

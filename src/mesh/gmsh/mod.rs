@@ -17,6 +17,9 @@
 mod assemble;
 mod lexer;
 mod sections;
+mod solid;
+
+pub use solid::volume6;
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -127,6 +130,9 @@ enum Kind {
     Point,
     Line,
     Triangle,
+    /// The 4-node tetrahedron of a solid model (docs/design.md §"Adding a
+    /// kind: solid 3D").
+    Tet,
 }
 
 impl Kind {
@@ -135,6 +141,7 @@ impl Kind {
             15 => Some(Kind::Point),
             1 => Some(Kind::Line),
             2 => Some(Kind::Triangle),
+            4 => Some(Kind::Tet),
             _ => None,
         }
     }
@@ -143,6 +150,7 @@ impl Kind {
             Kind::Point => 0,
             Kind::Line => 1,
             Kind::Triangle => 2,
+            Kind::Tet => 3,
         }
     }
     fn nodes(self) -> usize {
@@ -150,24 +158,41 @@ impl Kind {
             Kind::Point => 1,
             Kind::Line => 2,
             Kind::Triangle => 3,
+            Kind::Tet => 4,
         }
     }
 }
 
 fn unsupported_type_msg(t: i64, elem_tag: u64) -> String {
+    unsupported_in_group(t, elem_tag, None)
+}
+
+/// [`unsupported_type_msg`] naming the physical group(s) of the element
+/// when known (a 10-node tetrahedron in a Physical Volume).
+fn unsupported_in_group(t: i64, elem_tag: u64, group: Option<&str>) -> String {
     let name = element_type_name(t);
+    let dim = if name.contains("tetra") || name.contains("hexa") || name.contains("pri") {
+        3
+    } else {
+        2
+    };
     // What to change in Gmsh: the element order, or the recombination into quadrangles.
     let hint = if name.contains("quadrangle") {
         "; mesh with triangles (no Recombine / Mesh.RecombineAll = 0) and first-order \
          elements (`gmsh -2 -order 1`)"
+            .to_string()
     } else if name.contains("order") {
-        "; re-mesh with first-order elements (`gmsh -2 -order 1`, Mesh.ElementOrder = 1)"
+        format!(
+            "; re-mesh with first-order elements (`gmsh -{dim} -order 1`, Mesh.ElementOrder = 1)"
+        )
     } else {
-        ""
+        String::new()
     };
+    let group = group.map_or(String::new(), |g| format!(" in physical group {g}"));
     format!(
-        "element {elem_tag} has type {t} ({name}), which is not supported: only linear (P1) \
-         3-node triangles (type 2), 2-node lines (type 1) and points (type 15) are supported{hint}"
+        "element {elem_tag}{group} has type {t} ({name}), which is not supported: only linear (P1) \
+         3-node triangles (type 2), 2-node lines (type 1) and points (type 15) are supported, \
+         and 4-node tetrahedra (type 4) in 3D{hint}"
     )
 }
 
@@ -197,6 +222,8 @@ struct RawElements {
     line_tags: Vec<u64>,
     tris: Vec<[u64; 3]>,
     tri_tags: Vec<u64>,
+    tets: Vec<[u64; 4]>,
+    tet_tags: Vec<u64>,
 }
 
 impl RawElements {
@@ -205,10 +232,11 @@ impl RawElements {
             Kind::Point => self.points.len(),
             Kind::Line => self.lines.len(),
             Kind::Triangle => self.tris.len(),
+            Kind::Tet => self.tets.len(),
         }
     }
     /// Store one element; `nodes` holds at least `kind.nodes()` tags.
-    fn push(&mut self, kind: Kind, tag: u64, nodes: &[u64; 3]) {
+    fn push(&mut self, kind: Kind, tag: u64, nodes: &[u64; 4]) {
         match kind {
             Kind::Point => {
                 self.points.push(nodes[0]);
@@ -219,8 +247,12 @@ impl RawElements {
                 self.line_tags.push(tag);
             }
             Kind::Triangle => {
-                self.tris.push(*nodes);
+                self.tris.push([nodes[0], nodes[1], nodes[2]]);
                 self.tri_tags.push(tag);
+            }
+            Kind::Tet => {
+                self.tets.push(*nodes);
+                self.tet_tags.push(tag);
             }
         }
     }
@@ -237,6 +269,10 @@ impl RawElements {
             Kind::Triangle => {
                 self.tris.reserve(n);
                 self.tri_tags.reserve(n);
+            }
+            Kind::Tet => {
+                self.tets.reserve(n);
+                self.tet_tags.reserve(n);
             }
         }
     }
@@ -256,11 +292,14 @@ struct Parser<'a> {
     section: String,
 
     names: HashMap<(Dim, i32), String>,
-    /// Physical tags of each entity (dim <= 2), from `$Entities`.
+    /// Physical tags of each entity (dim 0 to 3), from `$Entities`.
     entities: Option<HashMap<(Dim, i32), Vec<i32>>>,
     /// Nodes in file order.
     node_tags: Vec<u64>,
     node_xy: Vec<[f64; 2]>,
+    /// z of each node (kept apart so that a 2D mesh reads as before; the
+    /// mesh keeps it only when it holds tetrahedra).
+    node_z: Vec<f64>,
     have_nodes: bool,
     have_elements: bool,
     elems: RawElements,

@@ -3,7 +3,8 @@
 
 use super::lexer::*;
 use super::{
-    element_type_name, unsupported_type_msg, Block, Kind, Parser, Version, MAX_COORDINATE,
+    element_type_name, unsupported_in_group, unsupported_type_msg, Block, Kind, Parser, Version,
+    MAX_COORDINATE,
 };
 use crate::mesh::{Dim, Mesh, MeshError};
 use std::collections::HashMap;
@@ -203,9 +204,7 @@ impl<'a> Parser<'a> {
             }
             let name = String::from_utf8_lossy(rest.get(..len).unwrap_or_default()).into_owned();
             self.pos = start + len + 1;
-            if dim <= 2 {
-                self.names.insert((dim as Dim, tag), name);
-            }
+            self.names.insert((dim as Dim, tag), name);
         }
         self.expect_end()
     }
@@ -249,9 +248,7 @@ impl<'a> Parser<'a> {
                         self.int(&format!("a bounding entity of {what} {tag}"))?;
                     }
                 }
-                if d <= 2 {
-                    map.insert((d as Dim, tag), phys);
-                }
+                map.insert((d as Dim, tag), phys);
             }
         }
         self.entities = Some(map);
@@ -309,6 +306,7 @@ impl<'a> Parser<'a> {
         let c = cap(nnodes, self.remaining(), 8);
         self.node_tags.reserve(c);
         self.node_xy.reserve(c);
+        self.node_z.reserve(c);
         let mut total: u64 = 0;
         for _ in 0..nblocks {
             let dim = self.int("the entity dimension of a node block")?;
@@ -355,6 +353,7 @@ impl<'a> Parser<'a> {
                         self.check_finite(tag, x, y, z)?;
                     }
                     self.node_xy.push([x, y]);
+                    self.node_z.push(z);
                 }
                 self.node_tags.extend_from_slice(&tags);
             } else {
@@ -372,6 +371,7 @@ impl<'a> Parser<'a> {
                     }
                     self.check_finite(tag, x, y, z)?;
                     self.node_xy.push([x, y]);
+                    self.node_z.push(z);
                 }
             }
         }
@@ -389,6 +389,7 @@ impl<'a> Parser<'a> {
         let c = cap(n, self.remaining(), 8);
         self.node_tags.reserve(c);
         self.node_xy.reserve(c);
+        self.node_z.reserve(c);
         for _ in 0..n {
             let tag = self.a_u64("a node tag")?;
             let x = self.a_f64("a node x coordinate")?;
@@ -397,6 +398,7 @@ impl<'a> Parser<'a> {
             self.check_finite(tag, x, y, z)?;
             self.node_tags.push(tag);
             self.node_xy.push([x, y]);
+            self.node_z.push(z);
         }
         self.expect_end()
     }
@@ -424,7 +426,11 @@ impl<'a> Parser<'a> {
             }
             let Some(kind) = Kind::from_type(i64::from(etype)) else {
                 let first = self.size("an element tag")?;
-                return Err(self.err_at(self.here(), unsupported_type_msg(etype.into(), first)));
+                let group = self.entity_groups(dim, etag);
+                return Err(self.err_at(
+                    self.here(),
+                    unsupported_in_group(etype.into(), first, group.as_deref()),
+                ));
             };
             if dim != i32::from(kind.dim()) {
                 return Err(self.err_at(
@@ -448,7 +454,7 @@ impl<'a> Parser<'a> {
                     if self.binary { per * 8 } else { 2 * per },
                 ),
             );
-            let mut nodes = [0u64; 3];
+            let mut nodes = [0u64; 4];
             if self.binary {
                 let nb = usize::try_from(n).ok().and_then(|n| n.checked_mul(per * 8));
                 let data = self.take(nb, "the element data")?;
@@ -490,12 +496,24 @@ impl<'a> Parser<'a> {
         self.check_count(n, 4, "elements")?;
         // The previous element: gmsh writes an element once per physical group
         // of its entity, consecutively; such copies are merged here.
-        let mut prev: Option<(Kind, i32, [u64; 3], usize)> = None;
+        let mut prev: Option<(Kind, i32, [u64; 4], usize)> = None;
         for _ in 0..n {
             let tag = self.a_u64("an element tag")?;
             let etype = self.a_i32("an element type")?;
             let Some(kind) = Kind::from_type(i64::from(etype)) else {
-                return Err(self.err_tok(unsupported_type_msg(etype.into(), tag)));
+                if etype != 11 {
+                    return Err(self.err_tok(unsupported_type_msg(etype.into(), tag)));
+                }
+                // A 10-node tetrahedron: name its Physical Volume (the tag
+                // that follows).
+                let ntags = self.a_u64("the number of tags of an element")?;
+                let phys = if ntags > 0 {
+                    self.a_i32("an element tag value")?
+                } else {
+                    0
+                };
+                let group = self.group_label(3, phys);
+                return Err(self.err_tok(unsupported_in_group(11, tag, Some(&group))));
             };
             let ntags = self.a_u64("the number of tags of an element")?;
             let mut phys = 0i32;
@@ -508,7 +526,7 @@ impl<'a> Parser<'a> {
                     _ => {}
                 }
             }
-            let mut nodes = [0u64; 3];
+            let mut nodes = [0u64; 4];
             for slot in nodes.iter_mut().take(kind.nodes()) {
                 *slot = self.a_u64("a node tag of an element")?;
             }
@@ -534,5 +552,27 @@ impl<'a> Parser<'a> {
             }
         }
         self.expect_end()
+    }
+
+    /// 'NAME' of the physical group (dim, tag), or its tag.
+    fn group_label(&self, dim: i32, tag: i32) -> String {
+        let d = crate::mesh::Dim::try_from(dim).unwrap_or(0);
+        match self.names.get(&(d, tag.abs())) {
+            Some(n) => format!("'{n}'"),
+            None => format!("{}", tag.abs()),
+        }
+    }
+
+    /// The physical groups of entity (dim, tag) of a 4.1 file, as
+    /// [`Parser::group_label`]s, when it has any.
+    fn entity_groups(&self, dim: i32, tag: i32) -> Option<String> {
+        let d = crate::mesh::Dim::try_from(dim).ok()?;
+        let phys = self.entities.as_ref()?.get(&(d, tag))?;
+        (!phys.is_empty()).then(|| {
+            phys.iter()
+                .map(|&p| self.group_label(dim, p))
+                .collect::<Vec<_>>()
+                .join(", ")
+        })
     }
 }

@@ -1,0 +1,616 @@
+//! The first slice of 3D (issue 45): a model of P1 tetrahedra without
+//! contact, from a 3D mesh to the QP min ½xᵀCx − xᵀd (no rows), on the
+//! shared pieces — [`ElementKind::Solid`], [`PointDofs`]`<3>`, the
+//! [`RigidMode`]s, the QP layer. Dirichlet components, slip on plane
+//! surfaces, tractions (`pn` or `p`) on boundary triangles, gravity. What
+//! is still 2D-only (the topology cut along contact surfaces, the ordered
+//! parallel assembly, the outputs) is listed in docs/design.md §"Adding a
+//! kind: solid 3D".
+
+use super::conditions::PointDofs;
+use super::element::{ElementKind, MaterialMatrix, Point3, RigidMode, Vector3, SOLID_MODES};
+use super::FemError;
+use crate::linalg::sparse::Csr;
+use crate::mesh::Mesh;
+use crate::problem::Material;
+use crate::qp::QpProblem;
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+/// A traction on a boundary surface: `pn` along the outward normal
+/// (negative pushes in) or a fixed vector `p` (N/m²).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SolidTraction {
+    Normal(f64),
+    Vector(Vector3),
+}
+
+/// What a solid model is made of besides its mesh: the TOML sections of a
+/// 3D problem, typed (docs/problem-format.md §"3D models").
+#[derive(Debug, Clone, Default)]
+pub struct SolidInput {
+    /// Material of each Physical Volume.
+    pub materials: BTreeMap<String, Material>,
+    /// g (m/s²): the body force ρg.
+    pub gravity: Vector3,
+    /// `[[dirichlet]]`: the group and its prescribed ux, uy, uz.
+    pub dirichlet: Vec<(String, [Option<f64>; 3])>,
+    /// `[[slip]]`: plane surfaces on which u·n = 0.
+    pub slip: Vec<String>,
+    /// `[[traction]]`: the surface and its load.
+    pub traction: Vec<(String, SolidTraction)>,
+}
+
+/// The assembled solid model with the maps back to the mesh.
+#[derive(Clone)]
+pub struct SolidModel {
+    pub kind: ElementKind,
+    /// The mesh nodes (a point per node: no contact cut yet).
+    pub points: Vec<Point3>,
+    /// Tetrahedra, positively oriented, in node indices.
+    pub tets: Vec<[usize; 4]>,
+    /// The material of each tetrahedron (index into `material_names`).
+    pub tet_material: Vec<u32>,
+    pub material_names: Vec<String>,
+    /// u_p = u0_p + T_p ξ_p.
+    pub dofs: Vec<PointDofs<3>>,
+    pub qp: QpProblem,
+    /// Nodal external forces (N), before the elimination.
+    pub loads: Vec<Vector3>,
+    /// The body of each node (connected through tetrahedra).
+    pub point_body: Vec<u32>,
+    pub nbodies: usize,
+}
+
+impl SolidModel {
+    /// Full nodal displacements from the QP unknowns.
+    pub fn displacements(&self, x: &[f64]) -> Vec<Vector3> {
+        self.dofs
+            .iter()
+            .map(|p| {
+                let mut u = p.u0;
+                for k in 0..p.ndof {
+                    for (c, uc) in u.iter_mut().enumerate() {
+                        *uc += p.t[k][c] * x[p.start + k];
+                    }
+                }
+                u
+            })
+            .collect()
+    }
+
+    /// The six stresses (VTK's order) of every tetrahedron.
+    pub fn stresses(&self, materials: &BTreeMap<String, Material>, u: &[Vector3]) -> Vec<[f64; 6]> {
+        let d: Vec<MaterialMatrix> = self
+            .material_names
+            .iter()
+            .map(|m| self.kind.material(&materials[m]))
+            .collect();
+        self.tets
+            .iter()
+            .zip(&self.tet_material)
+            .map(|(t, &m)| {
+                let ue: [f64; 12] = std::array::from_fn(|i| u[t[i / 3]][i % 3]);
+                self.kind
+                    .tet_stress(&t.map(|v| self.points[v]), &d[m as usize], &ue)
+            })
+            .collect()
+    }
+}
+
+/// A condition r·u = v at a point (r need not be unit).
+type Cond3 = (Vector3, f64);
+
+fn dot(a: Vector3, b: Vector3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Combine the conditions r·u = v at one point into u = u0 + Tξ by
+/// Gram–Schmidt: the independent directions fix u0, the orthonormal
+/// complement spans T (docs/methods.md §2.5, in 3D). Conditions that
+/// disagree are an error.
+pub fn eliminate3(cs: &[Cond3]) -> Result<PointDofs<3>, String> {
+    let mut q: Vec<(Vector3, f64)> = vec![];
+    for &(r, v) in cs {
+        let l = dot(r, r).sqrt();
+        let (mut r, mut v) = (r.map(|c| c / l), v / l);
+        for &(qk, wk) in &q {
+            let s = dot(r, qk);
+            r = [0, 1, 2].map(|i| r[i] - s * qk[i]);
+            v -= s * wk;
+        }
+        let n = dot(r, r).sqrt();
+        if n > 1e-8 {
+            q.push((r.map(|c| c / n), v / n));
+        } else if v.abs() > 1e-9 * (1.0 + cs.iter().map(|c| c.1.abs()).sum::<f64>()) {
+            return Err(format!(
+                "conditions that disagree (residual {v:.3e} along a direction already fixed)"
+            ));
+        }
+    }
+    let mut u0 = [0.0; 3];
+    for &(qk, wk) in &q {
+        for i in 0..3 {
+            u0[i] += wk * qk[i];
+        }
+    }
+    let mut t = [[0.0; 3]; 3];
+    let mut ndof = 0;
+    for e in 0..3 {
+        let mut r = [0.0; 3];
+        r[e] = 1.0;
+        for qk in q.iter().map(|x| x.0).chain(t[..ndof].iter().copied()) {
+            let s = dot(r, qk);
+            r = [0, 1, 2].map(|i| r[i] - s * qk[i]);
+        }
+        let n = dot(r, r).sqrt();
+        if n > 1e-6 && ndof + q.len() < 3 {
+            t[ndof] = r.map(|c| c / n);
+            ndof += 1;
+        }
+    }
+    Ok(PointDofs {
+        start: 0,
+        ndof,
+        t,
+        u0,
+    })
+}
+
+/// The faces of the tetrahedra: sorted nodes → (the vertex opposite, how
+/// many tetrahedra share the face), for the outward normal of a boundary
+/// triangle and to tell an interior face.
+fn faces(tets: &[[usize; 4]]) -> HashMap<[usize; 3], (usize, u8)> {
+    let mut f: HashMap<[usize; 3], (usize, u8)> = HashMap::with_capacity(4 * tets.len());
+    for tet in tets {
+        for skip in 0..4 {
+            let mut k: Vec<usize> = (0..4).filter(|&i| i != skip).map(|i| tet[i]).collect();
+            k.sort_unstable();
+            f.entry([k[0], k[1], k[2]]).or_insert((tet[skip], 0)).1 += 1;
+        }
+    }
+    f
+}
+
+/// A boundary triangle of a Physical Surface: its nodes, the weight |F|/3
+/// of each, its outward unit normal and its Gmsh tag (for messages).
+#[derive(Debug, Clone, Copy)]
+struct Facet {
+    nodes: [usize; 3],
+    weight: f64,
+    normal: Vector3,
+    tag: u64,
+}
+
+/// The triangles of a Physical Surface `name` with each one's node weight
+/// |F|/3 and outward unit normal; `what` names the TOML entry.
+fn surface(
+    mesh: &Mesh,
+    points: &[Point3],
+    faces: &HashMap<[usize; 3], (usize, u8)>,
+    path: &Path,
+    name: &str,
+    what: &str,
+) -> Result<Vec<Facet>, FemError> {
+    let Some(g) = mesh.group(name, 2) else {
+        let other = mesh.group_any(name).map_or(String::new(), |g| {
+            format!(" (it is a group of dimension {})", g.dim)
+        });
+        return Err(FemError::new(
+            path,
+            format!(
+                "{what}: no Physical Surface \"{name}\" in {}{other}",
+                mesh.path.display()
+            ),
+        ));
+    };
+    let kind = ElementKind::Solid;
+    let mut out = vec![];
+    for &t in &g.elements {
+        let tri = mesh.triangles[t];
+        let (w, mut n) = kind.facet_weight(&tri.map(|v| points[v]));
+        let mut key = tri;
+        key.sort_unstable();
+        // The reader has checked that every triangle is a face; one inside
+        // a body (two tetrahedra) is on no boundary.
+        if let Some(&(_, 2)) = faces.get(&key) {
+            return Err(FemError::new(
+                path,
+                format!(
+                    "{what}: triangle {} of \"{name}\" lies inside the volume mesh (two tetrahedra share it), not on its boundary",
+                    mesh.triangle_tags[t]
+                ),
+            ));
+        }
+        if let Some(&(opp, _)) = faces.get(&key) {
+            let x0 = points[tri[0]];
+            let o = points[opp];
+            if dot(n, [o[0] - x0[0], o[1] - x0[1], o[2] - x0[2]]) > 0.0 {
+                n = n.map(|c| -c);
+            }
+        }
+        out.push(Facet {
+            nodes: tri,
+            weight: w,
+            normal: n,
+            tag: mesh.triangle_tags[t],
+        });
+    }
+    Ok(out)
+}
+
+/// Build the solid model of a 3D `mesh` (docs/design.md §"Adding a kind:
+/// solid 3D"): messages name the TOML file `path` and the group.
+pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel, FemError> {
+    let err = |msg: String| FemError::new(path, msg);
+    let kind = ElementKind::Solid;
+    let points: Vec<Point3> = (0..mesh.nodes.len()).map(|i| mesh.node::<3>(i)).collect();
+    // Materials of the tetrahedra through their Physical Volumes.
+    let mut material_names: Vec<String> = vec![];
+    let mut tet_material = vec![u32::MAX; mesh.tets.len()];
+    for g in mesh.groups.iter().filter(|g| g.dim == 3) {
+        if !input.materials.contains_key(&g.name) {
+            continue;
+        }
+        let mi = material_names.len() as u32;
+        material_names.push(g.name.clone());
+        for &t in &g.elements {
+            tet_material[t] = mi;
+        }
+    }
+    if let Some(t) = tet_material.iter().position(|&m| m == u32::MAX) {
+        return Err(err(format!(
+            "{}: tetrahedron {} is in no Physical Volume named in [materials]",
+            mesh.path.display(),
+            mesh.tet_tags[t]
+        )));
+    }
+    let tets = mesh.tets.clone();
+    // Bodies: nodes connected through tetrahedra.
+    let nn = points.len();
+    let mut parent: Vec<usize> = (0..nn).collect();
+    fn find(p: &mut [usize], mut a: usize) -> usize {
+        while p[a] != a {
+            p[a] = p[p[a]];
+            a = p[a];
+        }
+        a
+    }
+    let mut used = vec![false; nn];
+    for t in &tets {
+        for &v in t {
+            used[v] = true;
+            let (a, b) = (find(&mut parent, t[0]), find(&mut parent, v));
+            parent[b] = a;
+        }
+    }
+    let mut body_of_root = HashMap::new();
+    let mut point_body = vec![0u32; nn];
+    for v in 0..nn {
+        let r = find(&mut parent, v);
+        let n = body_of_root.len() as u32;
+        point_body[v] = *body_of_root.entry(r).or_insert(n);
+    }
+    let nbodies = body_of_root.len();
+    // Conditions.
+    let mut conds: Vec<Vec<Cond3>> = vec![vec![]; nn];
+    for v in (0..nn).filter(|&v| !used[v]) {
+        // A node of no tetrahedron (a point element): held, no unknowns.
+        conds[v] = vec![
+            ([1.0, 0.0, 0.0], 0.0),
+            ([0.0, 1.0, 0.0], 0.0),
+            ([0.0, 0.0, 1.0], 0.0),
+        ];
+    }
+    let fc = faces(&tets);
+    for (i, (on, u)) in input.dirichlet.iter().enumerate() {
+        let what = format!("[[dirichlet]] #{} (on = \"{on}\")", i + 1);
+        let Some(g) = mesh.group_any(on) else {
+            return Err(err(format!(
+                "{what}: no physical group \"{on}\" in {}",
+                mesh.path.display()
+            )));
+        };
+        let mut nodes: Vec<usize> = match g.dim {
+            0 => g.elements.iter().map(|&e| mesh.points[e]).collect(),
+            1 => g.elements.iter().flat_map(|&e| mesh.lines[e]).collect(),
+            2 => g.elements.iter().flat_map(|&e| mesh.triangles[e]).collect(),
+            _ => g.elements.iter().flat_map(|&e| mesh.tets[e]).collect(),
+        };
+        nodes.sort_unstable();
+        nodes.dedup();
+        for v in nodes {
+            for (k, uk) in u.iter().enumerate() {
+                if let Some(val) = uk {
+                    let mut r = [0.0; 3];
+                    r[k] = 1.0;
+                    conds[v].push((r, *val));
+                }
+            }
+        }
+    }
+    for (i, on) in input.slip.iter().enumerate() {
+        let what = format!("[[slip]] #{} (on = \"{on}\")", i + 1);
+        let tris = surface(mesh, &points, &fc, path, on, &what)?;
+        let Some(&Facet {
+            nodes: t0,
+            normal: n0,
+            ..
+        }) = tris.first()
+        else {
+            continue;
+        };
+        let x0 = points[t0[0]];
+        let size = tris
+            .iter()
+            .flat_map(|t| t.nodes)
+            .map(|v| {
+                (0..3)
+                    .map(|k| (points[v][k] - x0[k]).abs())
+                    .fold(0.0, f64::max)
+            })
+            .fold(0.0, f64::max);
+        for f in &tris {
+            let (tri, n) = (f.nodes, f.normal);
+            let off = tri
+                .iter()
+                .map(|&v| dot(n0, [0, 1, 2].map(|k| points[v][k] - x0[k])).abs())
+                .fold(0.0, f64::max);
+            if dot(n, n0) < 1.0 - 1e-10 || off > 1e-9 * size {
+                return Err(err(format!(
+                    "{what}: the surface is not plane (its triangle {} has normal ({:.4}, {:.4}, {:.4}), the first ({:.4}, {:.4}, {:.4})): a slip surface in 3D must be a plane",
+                    f.tag,
+                    n[0], n[1], n[2], n0[0], n0[1], n0[2]
+                )));
+            }
+        }
+        let mut nodes: Vec<usize> = tris.iter().flat_map(|t| t.nodes).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        for v in nodes {
+            conds[v].push((n0, 0.0));
+        }
+    }
+    let mut dofs = Vec::with_capacity(nn);
+    let mut next = 0;
+    for (v, cs) in conds.iter().enumerate() {
+        let pd = eliminate3(cs).map_err(|m| {
+            err(format!(
+                "conflicting conditions at node {}: {m}",
+                mesh.node_tags[v]
+            ))
+        })?;
+        let pd = PointDofs { start: next, ..pd };
+        next += pd.ndof;
+        dofs.push(pd);
+    }
+    let n = next;
+    // Loads: gravity and tractions.
+    let mats: Vec<&Material> = material_names.iter().map(|m| &input.materials[m]).collect();
+    let dmats: Vec<MaterialMatrix> = mats.iter().map(|m| kind.material(m)).collect();
+    let mut loads = vec![[0.0; 3]; nn];
+    for (t, tet) in tets.iter().enumerate() {
+        let m = mats[tet_material[t] as usize];
+        let f = kind.tet_body_load(&tet.map(|v| points[v]), input.gravity.map(|g| m.rho * g));
+        for &v in tet {
+            for k in 0..3 {
+                loads[v][k] += f[k];
+            }
+        }
+    }
+    for (i, (on, load)) in input.traction.iter().enumerate() {
+        let what = format!("[[traction]] #{} (on = \"{on}\")", i + 1);
+        for Facet {
+            nodes: tri,
+            weight: w,
+            normal: nrm,
+            ..
+        } in surface(mesh, &points, &fc, path, on, &what)?
+        {
+            let p = match *load {
+                SolidTraction::Normal(pn) => nrm.map(|c| pn * c),
+                SolidTraction::Vector(p) => p,
+            };
+            for v in tri {
+                for k in 0..3 {
+                    loads[v][k] += w * p[k];
+                }
+            }
+        }
+    }
+    // C = Σ T_aᵀ K_ab T_b, d = Σ T_aᵀ (f_a − K_ab u0_b) (methods.md §2.3).
+    let mut trip: Vec<(usize, usize, f64)> = Vec::with_capacity(tets.len() * 144);
+    let mut d = vec![0.0; n];
+    for (t, tet) in tets.iter().enumerate() {
+        let k = kind.tet_stiffness(&tet.map(|v| points[v]), &dmats[tet_material[t] as usize]);
+        for (a, &va) in tet.iter().enumerate() {
+            let pa = &dofs[va];
+            for (b, &vb) in tet.iter().enumerate() {
+                let pb = &dofs[vb];
+                let kab = |i: usize, j: usize| k[3 * a + i][3 * b + j];
+                // K_ab u0_b
+                let ku0: [f64; 3] = [0, 1, 2].map(|i| (0..3).map(|j| kab(i, j) * pb.u0[j]).sum());
+                for r in 0..pa.ndof {
+                    d[pa.start + r] -= dot(pa.t[r], ku0);
+                    for c in 0..pb.ndof {
+                        let mut s = 0.0;
+                        for i in 0..3 {
+                            for j in 0..3 {
+                                s += pa.t[r][i] * kab(i, j) * pb.t[c][j];
+                            }
+                        }
+                        trip.push((pa.start + r, pb.start + c, s));
+                    }
+                }
+            }
+        }
+    }
+    for (v, f) in loads.iter().enumerate() {
+        let p = &dofs[v];
+        for r in 0..p.ndof {
+            d[p.start + r] += dot(p.t[r], *f);
+        }
+    }
+    let c = Csr::from_triplets(n, n, &trip);
+    drop(trip);
+    let kernel = rigid_kernel(&points, &point_body, nbodies, &conds, &dofs, n);
+    if !kernel.is_empty() {
+        return Err(err(format!(
+            "{}: {} rigid motion(s) of the bodies are held by no condition, and a 3D model has no contact yet (issue 45): add [[dirichlet]] or [[slip]]",
+            mesh.path.display(),
+            kernel.len()
+        )));
+    }
+    let qp = QpProblem {
+        c,
+        d,
+        a: Csr::from_triplets(0, n, &[]),
+        g: vec![],
+        kernel,
+        friction: None,
+        near: None,
+    };
+    Ok(SolidModel {
+        kind,
+        points,
+        tets,
+        tet_material,
+        material_names,
+        dofs,
+        qp,
+        loads,
+        point_body,
+        nbodies,
+    })
+}
+
+/// The rigid motions (the six [`SOLID_MODES`]) of each body that satisfy
+/// its homogeneous conditions, in the reduced unknowns, orthonormalised
+/// (docs/methods.md §1.7; the 2D rigid.rs in 3D).
+fn rigid_kernel(
+    points: &[Point3],
+    point_body: &[u32],
+    nbodies: usize,
+    conds: &[Vec<Cond3>],
+    dofs: &[PointDofs<3>],
+    n: usize,
+) -> Vec<Vec<f64>> {
+    let mut lo = vec![[f64::MAX; 3]; nbodies];
+    let mut hi = vec![[f64::MIN; 3]; nbodies];
+    for (p, x) in points.iter().enumerate() {
+        let b = point_body[p] as usize;
+        for k in 0..3 {
+            lo[b][k] = lo[b][k].min(x[k]);
+            hi[b][k] = hi[b][k].max(x[k]);
+        }
+    }
+    let centre = |b: usize| [0, 1, 2].map(|k| (lo[b][k] + hi[b][k]) / 2.0);
+    let size = |b: usize| {
+        (0..3)
+            .map(|k| hi[b][k] - lo[b][k])
+            .fold(0.0, f64::max)
+            .max(1e-300)
+    };
+    let motion = |m: RigidMode, b: usize, x: Point3| m.at(x, centre(b), size(b));
+    let mut gtg = vec![vec![vec![0.0; 6]; 6]; nbodies];
+    for (p, cs) in conds.iter().enumerate() {
+        let b = point_body[p] as usize;
+        for &(r, _) in cs {
+            let l = dot(r, r).sqrt();
+            let row: Vec<f64> = SOLID_MODES
+                .iter()
+                .map(|&m| dot(r, motion(m, b, points[p])) / l)
+                .collect();
+            for i in 0..6 {
+                for j in 0..6 {
+                    gtg[b][i][j] += row[i] * row[j];
+                }
+            }
+        }
+    }
+    let mut kernel: Vec<Vec<f64>> = vec![];
+    for (b, m) in gtg.iter().enumerate() {
+        let (vals, vecs) = crate::linalg::dense::sym_eigen(m);
+        for (k, &val) in vals.iter().enumerate() {
+            if val > 1e-9 {
+                continue;
+            }
+            let coef: Vec<f64> = (0..6).map(|i| vecs[i][k]).collect();
+            let mut z = vec![0.0; n];
+            for (p, pd) in dofs
+                .iter()
+                .enumerate()
+                .filter(|(p, _)| point_body[*p] as usize == b)
+            {
+                let mut u = [0.0; 3];
+                for (i, &mode) in SOLID_MODES.iter().enumerate() {
+                    let w = motion(mode, b, points[p]);
+                    for c in 0..3 {
+                        u[c] += coef[i] * w[c];
+                    }
+                }
+                for r in 0..pd.ndof {
+                    z[pd.start + r] = dot(pd.t[r], u);
+                }
+            }
+            for q in &kernel {
+                let s: f64 = q.iter().zip(&z).map(|(a, b)| a * b).sum();
+                for (zi, qi) in z.iter_mut().zip(q) {
+                    *zi -= s * qi;
+                }
+            }
+            let nz = z.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if nz > 1e-12 {
+                kernel.push(z.into_iter().map(|v| v / nz).collect());
+            }
+        }
+    }
+    kernel
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// u0 + Tξ satisfies the conditions for any ξ, T is orthonormal, and
+    /// conflicting conditions are refused.
+    #[test]
+    fn elimination_in_3d() {
+        let s = 0.5f64.sqrt();
+        for (cs, ndof) in [
+            (vec![], 3),
+            (vec![([0.0, 0.0, 2.0], 0.4)], 2),
+            (vec![([s, s, 0.0], 0.0), ([1.0, 0.0, 0.0], 0.1)], 1),
+            (
+                vec![
+                    ([1.0, 0.0, 0.0], 0.1),
+                    ([0.0, 1.0, 0.0], 0.2),
+                    ([0.0, 0.0, 1.0], -0.3),
+                ],
+                0,
+            ),
+            (vec![([1.0, 0.0, 0.0], 0.1), ([2.0, 0.0, 0.0], 0.2)], 2),
+        ] {
+            let pd = eliminate3(&cs).unwrap();
+            assert_eq!(pd.ndof, ndof, "{cs:?}");
+            for xi in [[0.0; 3], [0.3, -1.2, 0.7]] {
+                let mut u = pd.u0;
+                for k in 0..pd.ndof {
+                    for c in 0..3 {
+                        u[c] += pd.t[k][c] * xi[k];
+                    }
+                }
+                for (r, v) in &cs {
+                    assert!((dot(*r, u) - v).abs() < 1e-14, "{cs:?}");
+                }
+            }
+            for i in 0..pd.ndof {
+                for j in 0..pd.ndof {
+                    let want = if i == j { 1.0 } else { 0.0 };
+                    assert!((dot(pd.t[i], pd.t[j]) - want).abs() < 1e-14);
+                }
+            }
+        }
+        assert!(eliminate3(&[([1.0, 0.0, 0.0], 0.1), ([1.0, 0.0, 0.0], 0.2)]).is_err());
+    }
+}
