@@ -328,3 +328,37 @@ fn a_thin_walled_shrink_fit_takes_the_dual_form() {
         "dual vs sparse path: {diff:e} of {scale:e}"
     );
 }
+
+/// The certificate decides for the direct Coulomb iteration too (issue 42
+/// §1): at μ = 0.15 the direct iteration of step 3 reaches an iterate
+/// exact to 10⁻¹² (KKT residual), then predicts a working set whose
+/// Coulomb system is singular (rows that depend on each other where the
+/// faults meet) and stopped as failed, and the iterate was thrown away for
+/// the glued start and the fixed point: 52 Newton steps over the five
+/// steps. Now the stopped iteration's last iterate is taken when it passes
+/// the certificate, as a stopped Tresca solve's is (docs/methods.md §9.1).
+#[test]
+fn a_stopped_direct_iteration_whose_iterate_passes_is_taken() {
+    let d = tempfile::tempdir().unwrap();
+    let model = frictional(0.15, d.path());
+    let out = d.path().join("out").display().to_string();
+    let (code, text) = run(&["solve", &model, "--log-level", "debug", "--out", &out]);
+    assert_eq!(code, 0, "{text}");
+    assert!(
+        text.contains("but its last iterate passes the certificate"),
+        "{text}"
+    );
+    let newton: usize = text
+        .lines()
+        .filter(|l| l.starts_with("step ") && l.contains(" converged in "))
+        .map(|l| {
+            l.split(" converged in ")
+                .nth(1)
+                .and_then(|r| r.split_whitespace().next())
+                .and_then(|n| n.parse::<usize>().ok())
+                .unwrap_or_else(|| panic!("{l}"))
+        })
+        .sum();
+    assert!(newton <= 40, "{newton} Newton steps over the five steps");
+    assert!(text.contains("→ certified"), "{text}");
+}

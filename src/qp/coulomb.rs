@@ -137,6 +137,8 @@ pub fn solve(
         &mut counts,
         name,
         "a warm bound or the glued start",
+        proven,
+        kkt_target,
     )? {
         return Ok(counts.output(d));
     }
@@ -231,19 +233,33 @@ pub fn solve(
     }
 }
 
-/// A direct iteration's answer `d`: returned if it converged, else counted
-/// and the loop goes on to `next`.
+/// A direct iteration's answer `d`: returned if it converged, or if it
+/// stopped otherwise (a singular working set after an iterate exact to
+/// 10⁻¹², the geodynamic faults of docs/methods.md §9.1) but its last
+/// iterate passes the certificate at `kkt_target`, as [`usable`] takes a
+/// Tresca answer; else counted and the loop goes on to `next`.
 fn direct(
     d: Option<Result<Tresca, QpError>>,
     step: &mut dyn TrescaStep,
     counts: &mut Counts,
     name: &str,
     next: &str,
+    proven: &dyn Fn(&Tresca, f64) -> bool,
+    kkt_target: f64,
 ) -> Result<Option<Tresca>, QpError> {
     let Some(d) = d else { return Ok(None) };
     let mut d = d?;
     if d.status.converged() {
         step.complete(&mut d)?;
+        return Ok(Some(d));
+    }
+    step.complete(&mut d)?;
+    if proven(&d, kkt_target) {
+        log::debug!(
+            "{name}: the direct Coulomb iteration stopped ({}) but its last iterate passes the certificate",
+            d.status.describe()
+        );
+        d.status = Status::Converged;
         return Ok(Some(d));
     }
     log::debug!(
@@ -298,7 +314,7 @@ fn glued_start(
     counts.add(&mut r);
     let after_glued = step.coulomb(mu);
     let next = "the fixed point from the glued answer";
-    if let Some(d) = direct(after_glued, step, counts, name, next)? {
+    if let Some(d) = direct(after_glued, step, counts, name, next, proven, kkt_target)? {
         return Ok(Start::Done(std::mem::take(counts).output(d)));
     }
     Ok(Start::From(s))

@@ -298,6 +298,9 @@ struct State<'a> {
     tang: Vec<Tangential>,
     /// The sets of the last solve (None before the first).
     last: Option<(Vec<bool>, Vec<Tangential>)>,
+    /// The sets of the last solve that gave an iterate (a failed one
+    /// leaves the iterate before it).
+    solved: Option<(Vec<bool>, Vec<Tangential>)>,
     outer: usize,
     inner: usize,
     /// Working sets solved so far (anti-cycling; looked up, never iterated).
@@ -371,6 +374,7 @@ impl<'a> State<'a> {
             in_n0: in_n.clone(),
             in_n,
             last: None,
+            solved: None,
             outer: 0,
             inner: 0,
             visited: HashSet::new(),
@@ -860,6 +864,7 @@ impl Iterative for State<'_> {
         );
         match self.solve_set() {
             Ok(None) => {
+                self.solved = Some((self.in_n.clone(), self.tang.clone()));
                 let rec = self.record(it);
                 log::debug!("ssn: friction step {it}: residual {:.3e}", rec.residual);
                 // A Tresca problem whose sets cycle (single changes walking
@@ -898,7 +903,18 @@ impl Iterative for State<'_> {
                     Step::Continue(rec)
                 }
             }
-            Ok(Some(status)) => Step::Done(status, self.record(it)),
+            Ok(Some(status)) => {
+                if matches!(status, Status::Failed(_)) {
+                    // The iterate is the last solved one: its sets with it
+                    // (the loop may still take it if it passes the
+                    // certificate, [`coulomb::solve`]).
+                    if let Some((n_set, tang)) = self.solved.clone() {
+                        self.in_n = n_set;
+                        self.tang = tang;
+                    }
+                }
+                Step::Done(status, self.record(it))
+            }
             Err(e) => {
                 let msg = e.to_string();
                 self.error = Some(e);
