@@ -1009,3 +1009,39 @@ fn at_a_contrast_of_2e8_the_rigid_balance_refuses_the_answer_that_disagrees() {
     let d = rel(&dual.x, &ssn.x);
     assert!(d < 1e-5, "dual x {d:.2e} from ssn");
 }
+
+/// The arch of tests/data/arch with Coulomb μ = 0.3 on its joints: ssn
+/// found a sliding motion of the voussoirs on which the loads outwork
+/// friction, but judged "no row closes" by a test of its own (10⁻¹⁰ of
+/// Σ|a|·max|z| per row) that let row 53 close by 10⁻¹¹ of that, the
+/// driver refused the claim, and the run exited 3 "not certified" at
+/// μ = 0.2, 0.25 and 0.3. Now ssn claims only a direction the driver's
+/// own test accepts: exit 2, the sliding voussoirs named; μ = 0.35 stands
+/// (certified).
+#[test]
+fn an_arch_with_too_little_friction_is_refused_as_sliding() {
+    let dir = root().join("tests/data/arch");
+    let tmp = tempfile::tempdir().expect("tempdir");
+    for (mu, code) in [("0.3", 2), ("0.35", 0)] {
+        let model = common::model_variant(
+            &dir,
+            "arch.toml",
+            &[("friction = 0.8\n", &format!("friction = {mu}\n"))],
+            &tmp.path().join(format!("arch_{mu}.toml")),
+        );
+        let out = tmp.path().join(format!("out_{mu}"));
+        let (got, text) = common::run(&[
+            "solve",
+            &model.display().to_string(),
+            "--out",
+            &out.display().to_string(),
+        ]);
+        assert_eq!(got, code, "μ = {mu}:\n{text}");
+        if code == 2 {
+            assert!(text.contains("the problem is unbounded"), "{text}");
+            assert!(text.contains("body 'v3' (translation"), "{text}");
+        } else {
+            assert!(text.contains("→ certified"), "{text}");
+        }
+    }
+}
