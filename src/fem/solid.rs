@@ -9,6 +9,7 @@
 
 use super::conditions::PointDofs;
 use super::element::{ElementKind, MaterialMatrix, Point3, RigidMode, Vector3, SOLID_MODES};
+use super::topology::cell_bodies;
 use super::FemError;
 use crate::linalg::sparse::Csr;
 use crate::mesh::Mesh;
@@ -157,16 +158,27 @@ pub fn eliminate3(cs: &[Cond3]) -> Result<PointDofs<3>, String> {
     })
 }
 
-/// The faces of the tetrahedra: sorted nodes → (the vertex opposite, how
-/// many tetrahedra share the face), for the outward normal of a boundary
-/// triangle and to tell an interior face.
-fn faces(tets: &[[usize; 4]]) -> HashMap<[usize; 3], (usize, u8)> {
-    let mut f: HashMap<[usize; 3], (usize, u8)> = HashMap::with_capacity(4 * tets.len());
-    for tet in tets {
+/// A face of the tetrahedra: the vertex opposite it in its first
+/// tetrahedron, how many tetrahedra share it, the first one and the
+/// second one if any.
+type Face = (usize, u8, usize, Option<usize>);
+
+/// The faces of the tetrahedra: sorted nodes → [`Face`], for the outward
+/// normal of a boundary triangle, to tell an interior face and to join the
+/// tetrahedra into bodies.
+fn faces(tets: &[[usize; 4]]) -> HashMap<[usize; 3], Face> {
+    let mut f: HashMap<[usize; 3], Face> = HashMap::with_capacity(4 * tets.len());
+    for (t, tet) in tets.iter().enumerate() {
         for skip in 0..4 {
             let mut k: Vec<usize> = (0..4).filter(|&i| i != skip).map(|i| tet[i]).collect();
             k.sort_unstable();
-            f.entry([k[0], k[1], k[2]]).or_insert((tet[skip], 0)).1 += 1;
+            let e = f
+                .entry([k[0], k[1], k[2]])
+                .or_insert((tet[skip], 0, t, None));
+            e.1 += 1;
+            if e.1 == 2 {
+                e.3 = Some(t);
+            }
         }
     }
     f
@@ -187,7 +199,7 @@ struct Facet {
 fn surface(
     mesh: &Mesh,
     points: &[Point3],
-    faces: &HashMap<[usize; 3], (usize, u8)>,
+    faces: &HashMap<[usize; 3], Face>,
     path: &Path,
     name: &str,
     what: &str,
@@ -213,7 +225,7 @@ fn surface(
         key.sort_unstable();
         // The reader has checked that every triangle is a face; one inside
         // a body (two tetrahedra) is on no boundary.
-        if let Some(&(_, 2)) = faces.get(&key) {
+        if let Some(&(_, 2, _, _)) = faces.get(&key) {
             return Err(FemError::new(
                 path,
                 format!(
@@ -222,7 +234,7 @@ fn surface(
                 ),
             ));
         }
-        if let Some(&(opp, _)) = faces.get(&key) {
+        if let Some(&(opp, ..)) = faces.get(&key) {
             let x0 = points[tri[0]];
             let o = points[opp];
             if dot(n, [o[0] - x0[0], o[1] - x0[1], o[2] - x0[2]]) > 0.0 {
@@ -266,32 +278,35 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         )));
     }
     let tets = mesh.tets.clone();
-    // Bodies: nodes connected through tetrahedra.
     let nn = points.len();
-    let mut parent: Vec<usize> = (0..nn).collect();
-    fn find(p: &mut [usize], mut a: usize) -> usize {
-        while p[a] != a {
-            p[a] = p[p[a]];
-            a = p[a];
-        }
-        a
-    }
+    let fc = faces(&tets);
+    // Bodies: tetrahedra joined through their faces (the 2D cut of
+    // topology.rs, without contact surfaces yet); a node's body is its
+    // tetrahedra's.
+    let joined = fc.values().filter_map(|f| f.3.map(|s| (f.2, s)));
+    let (tet_body, nbodies) = cell_bodies(&tets, &mesh.node_tags, joined);
     let mut used = vec![false; nn];
-    for t in &tets {
-        for &v in t {
+    let mut point_body = vec![u32::MAX; nn];
+    for (t, tet) in tets.iter().enumerate() {
+        for &v in tet {
             used[v] = true;
-            let (a, b) = (find(&mut parent, t[0]), find(&mut parent, v));
-            parent[b] = a;
+            if point_body[v] == u32::MAX {
+                point_body[v] = tet_body[t];
+            } else if point_body[v] != tet_body[t] {
+                return Err(err(format!(
+                    "{}: node {} joins two bodies that share no face (tetrahedra touching at an edge or a vertex): a 3D model has no contact cut yet (issue 45)",
+                    mesh.path.display(),
+                    mesh.node_tags[v]
+                )));
+            }
         }
     }
-    let mut body_of_root = HashMap::new();
-    let mut point_body = vec![0u32; nn];
-    for v in 0..nn {
-        let r = find(&mut parent, v);
-        let n = body_of_root.len() as u32;
-        point_body[v] = *body_of_root.entry(r).or_insert(n);
+    // A node of no tetrahedron: a body of its own.
+    let mut nbodies = nbodies;
+    for b in point_body.iter_mut().filter(|b| **b == u32::MAX) {
+        *b = nbodies as u32;
+        nbodies += 1;
     }
-    let nbodies = body_of_root.len();
     // Conditions.
     let mut conds: Vec<Vec<Cond3>> = vec![vec![]; nn];
     for v in (0..nn).filter(|&v| !used[v]) {
@@ -302,7 +317,6 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
             ([0.0, 0.0, 1.0], 0.0),
         ];
     }
-    let fc = faces(&tets);
     for (i, (on, u)) in input.dirichlet.iter().enumerate() {
         let what = format!("[[dirichlet]] #{} (on = \"{on}\")", i + 1);
         let Some(g) = mesh.group_any(on) else {
