@@ -9,6 +9,7 @@
 
 use super::conditions::PointDofs;
 use super::element::{ElementKind, MaterialMatrix, Point3, RigidMode, Vector3, SOLID_MODES};
+use super::stiffness::{assemble, Cells, Materials};
 use super::topology::cell_bodies;
 use super::FemError;
 use crate::linalg::sparse::Csr;
@@ -399,19 +400,27 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         dofs.push(pd);
     }
     let n = next;
-    // Loads: gravity and tractions.
+    // C = Σ T_aᵀ K_ab T_b and the element part of d, Σ T_aᵀ (f_a − K_ab
+    // u0_b) with the gravity f_a (methods.md §2.3): the ordered assembly
+    // of the plane, on tetrahedra.
     let mats: Vec<&Material> = material_names.iter().map(|m| &input.materials[m]).collect();
-    let dmats: Vec<MaterialMatrix> = mats.iter().map(|m| kind.material(m)).collect();
-    let mut loads = vec![[0.0; 3]; nn];
-    for (t, tet) in tets.iter().enumerate() {
-        let m = mats[tet_material[t] as usize];
-        let f = kind.tet_body_load(&tet.map(|v| points[v]), input.gravity.map(|g| m.rho * g));
-        for &v in tet {
-            for k in 0..3 {
-                loads[v][k] += f[k];
-            }
-        }
-    }
+    let smats = Materials::<3> {
+        kind,
+        dmats: mats.iter().map(|m| kind.material(m)).collect(),
+        bforce: mats
+            .iter()
+            .map(|m| input.gravity.map(|g| m.rho * g))
+            .collect(),
+        spin: vec![0.0; mats.len()],
+    };
+    let cells = Cells {
+        points: &points,
+        cells: &tets,
+        material: &tet_material,
+    };
+    let (c, mut d) = assemble(cells, &dofs, n, &smats, true);
+    // Tractions on the boundary triangles: d += Tᵀ f.
+    let mut tractions = vec![[0.0; 3]; nn];
     for (i, (on, load)) in input.traction.iter().enumerate() {
         let what = format!("[[traction]] #{} (on = \"{on}\")", i + 1);
         for Facet {
@@ -427,46 +436,35 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
             };
             for v in tri {
                 for k in 0..3 {
-                    loads[v][k] += w * p[k];
+                    tractions[v][k] += w * p[k];
                 }
             }
         }
     }
-    // C = Σ T_aᵀ K_ab T_b, d = Σ T_aᵀ (f_a − K_ab u0_b) (methods.md §2.3).
-    let mut trip: Vec<(usize, usize, f64)> = Vec::with_capacity(tets.len() * 144);
-    let mut d = vec![0.0; n];
-    for (t, tet) in tets.iter().enumerate() {
-        let k = kind.tet_stiffness(&tet.map(|v| points[v]), &dmats[tet_material[t] as usize]);
-        for (a, &va) in tet.iter().enumerate() {
-            let pa = &dofs[va];
-            for (b, &vb) in tet.iter().enumerate() {
-                let pb = &dofs[vb];
-                let kab = |i: usize, j: usize| k[3 * a + i][3 * b + j];
-                // K_ab u0_b
-                let ku0: [f64; 3] = [0, 1, 2].map(|i| (0..3).map(|j| kab(i, j) * pb.u0[j]).sum());
-                for r in 0..pa.ndof {
-                    d[pa.start + r] -= dot(pa.t[r], ku0);
-                    for c in 0..pb.ndof {
-                        let mut s = 0.0;
-                        for i in 0..3 {
-                            for j in 0..3 {
-                                s += pa.t[r][i] * kab(i, j) * pb.t[c][j];
-                            }
-                        }
-                        trip.push((pa.start + r, pb.start + c, s));
-                    }
-                }
-            }
-        }
-    }
-    for (v, f) in loads.iter().enumerate() {
+    for (v, f) in tractions.iter().enumerate() {
         let p = &dofs[v];
         for r in 0..p.ndof {
             d[p.start + r] += dot(p.t[r], *f);
         }
     }
-    let c = Csr::from_triplets(n, n, &trip);
-    drop(trip);
+    // The nodal external forces: the gravity of the tetrahedra, then the
+    // tractions.
+    let mut loads = vec![[0.0; 3]; nn];
+    for (t, tet) in tets.iter().enumerate() {
+        let mi = tet_material[t] as usize;
+        let pts = tet.map(|v| points[v]);
+        for (a, &v) in tet.iter().enumerate() {
+            let f = kind.cell_body_load(&pts, a, smats.bforce[mi], 0.0);
+            for k in 0..3 {
+                loads[v][k] += f[k];
+            }
+        }
+    }
+    for (l, f) in loads.iter_mut().zip(&tractions) {
+        for k in 0..3 {
+            l[k] += f[k];
+        }
+    }
     let kernel = rigid_kernel(&points, &point_body, nbodies, &conds, &dofs, n);
     if !kernel.is_empty() {
         return Err(err(format!(
