@@ -7,7 +7,7 @@
 //! parallel assembly, the outputs) is listed in docs/design.md §"Adding a
 //! kind: solid 3D".
 
-use super::conditions::PointDofs;
+use super::conditions::{number, Cond, PointDofs};
 use super::element::{ElementKind, MaterialMatrix, Point3, RigidMode, Vector3, SOLID_MODES};
 use super::stiffness::{assemble, Cells, Materials};
 use super::topology::cell_bodies;
@@ -101,62 +101,15 @@ impl SolidModel {
 }
 
 /// A condition r·u = v at a point (r need not be unit).
-type Cond3 = (Vector3, f64);
+type Cond3 = Cond<3>;
+
+/// The condition r·u = v.
+fn cond(r: Vector3, v: f64) -> Cond3 {
+    Cond { r, v, src: 0 }
+}
 
 fn dot(a: Vector3, b: Vector3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// Combine the conditions r·u = v at one point into u = u0 + Tξ by
-/// Gram–Schmidt: the independent directions fix u0, the orthonormal
-/// complement spans T (docs/methods.md §2.5, in 3D). Conditions that
-/// disagree are an error.
-pub fn eliminate3(cs: &[Cond3]) -> Result<PointDofs<3>, String> {
-    let mut q: Vec<(Vector3, f64)> = vec![];
-    for &(r, v) in cs {
-        let l = dot(r, r).sqrt();
-        let (mut r, mut v) = (r.map(|c| c / l), v / l);
-        for &(qk, wk) in &q {
-            let s = dot(r, qk);
-            r = [0, 1, 2].map(|i| r[i] - s * qk[i]);
-            v -= s * wk;
-        }
-        let n = dot(r, r).sqrt();
-        if n > 1e-8 {
-            q.push((r.map(|c| c / n), v / n));
-        } else if v.abs() > 1e-9 * (1.0 + cs.iter().map(|c| c.1.abs()).sum::<f64>()) {
-            return Err(format!(
-                "conditions that disagree (residual {v:.3e} along a direction already fixed)"
-            ));
-        }
-    }
-    let mut u0 = [0.0; 3];
-    for &(qk, wk) in &q {
-        for i in 0..3 {
-            u0[i] += wk * qk[i];
-        }
-    }
-    let mut t = [[0.0; 3]; 3];
-    let mut ndof = 0;
-    for e in 0..3 {
-        let mut r = [0.0; 3];
-        r[e] = 1.0;
-        for qk in q.iter().map(|x| x.0).chain(t[..ndof].iter().copied()) {
-            let s = dot(r, qk);
-            r = [0, 1, 2].map(|i| r[i] - s * qk[i]);
-        }
-        let n = dot(r, r).sqrt();
-        if n > 1e-6 && ndof + q.len() < 3 {
-            t[ndof] = r.map(|c| c / n);
-            ndof += 1;
-        }
-    }
-    Ok(PointDofs {
-        start: 0,
-        ndof,
-        t,
-        u0,
-    })
 }
 
 /// A face of the tetrahedra: the vertex opposite it in its first
@@ -313,9 +266,9 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
     for v in (0..nn).filter(|&v| !used[v]) {
         // A node of no tetrahedron (a point element): held, no unknowns.
         conds[v] = vec![
-            ([1.0, 0.0, 0.0], 0.0),
-            ([0.0, 1.0, 0.0], 0.0),
-            ([0.0, 0.0, 1.0], 0.0),
+            cond([1.0, 0.0, 0.0], 0.0),
+            cond([0.0, 1.0, 0.0], 0.0),
+            cond([0.0, 0.0, 1.0], 0.0),
         ];
     }
     for (i, (on, u)) in input.dirichlet.iter().enumerate() {
@@ -339,7 +292,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
                 if let Some(val) = uk {
                     let mut r = [0.0; 3];
                     r[k] = 1.0;
-                    conds[v].push((r, *val));
+                    conds[v].push(cond(r, *val));
                 }
             }
         }
@@ -383,23 +336,17 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         nodes.sort_unstable();
         nodes.dedup();
         for v in nodes {
-            conds[v].push((n0, 0.0));
+            conds[v].push(cond(n0, 0.0));
         }
     }
-    let mut dofs = Vec::with_capacity(nn);
-    let mut next = 0;
-    for (v, cs) in conds.iter().enumerate() {
-        let pd = eliminate3(cs).map_err(|m| {
-            err(format!(
-                "conflicting conditions at node {}: {m}",
-                mesh.node_tags[v]
-            ))
-        })?;
-        let pd = PointDofs { start: next, ..pd };
-        next += pd.ndof;
-        dofs.push(pd);
-    }
-    let n = next;
+    // The elimination of the plane, by Gram–Schmidt in 3D.
+    let dofs = number(&conds, |v, m| {
+        err(format!(
+            "conflicting conditions at node {}: {m}",
+            mesh.node_tags[v]
+        ))
+    })?;
+    let n = dofs.last().map_or(0, |pd| pd.start + pd.ndof);
     // C = Σ T_aᵀ K_ab T_b and the element part of d, Σ T_aᵀ (f_a − K_ab
     // u0_b) with the gravity f_a (methods.md §2.3): the ordered assembly
     // of the plane, on tetrahedra.
@@ -527,7 +474,7 @@ fn rigid_kernel(
     let mut gtg = vec![vec![vec![0.0; 6]; 6]; nbodies];
     for (p, cs) in conds.iter().enumerate() {
         let b = point_body[p] as usize;
-        for &(r, _) in cs {
+        for &Cond { r, .. } in cs {
             let l = dot(r, r).sqrt();
             let row: Vec<f64> = SOLID_MODES
                 .iter()
@@ -582,6 +529,7 @@ fn rigid_kernel(
 
 #[cfg(test)]
 mod tests {
+    use super::super::conditions::eliminate;
     use super::*;
 
     /// u0 + Tξ satisfies the conditions for any ξ, T is orthonormal, and
@@ -603,7 +551,8 @@ mod tests {
             ),
             (vec![([1.0, 0.0, 0.0], 0.1), ([2.0, 0.0, 0.0], 0.2)], 2),
         ] {
-            let pd = eliminate3(&cs).unwrap();
+            let cs: Vec<Cond3> = cs.into_iter().map(|(r, v)| cond(r, v)).collect();
+            let pd = eliminate(&cs).unwrap();
             assert_eq!(pd.ndof, ndof, "{cs:?}");
             for xi in [[0.0; 3], [0.3, -1.2, 0.7]] {
                 let mut u = pd.u0;
@@ -612,8 +561,8 @@ mod tests {
                         u[c] += pd.t[k][c] * xi[k];
                     }
                 }
-                for (r, v) in &cs {
-                    assert!((dot(*r, u) - v).abs() < 1e-14, "{cs:?}");
+                for c in &cs {
+                    assert!((dot(c.r, u) - c.v).abs() < 1e-14, "{cs:?}");
                 }
             }
             for i in 0..pd.ndof {
@@ -623,6 +572,6 @@ mod tests {
                 }
             }
         }
-        assert!(eliminate3(&[([1.0, 0.0, 0.0], 0.1), ([1.0, 0.0, 0.0], 0.2)]).is_err());
+        assert!(eliminate(&[cond([1.0, 0.0, 0.0], 0.1), cond([1.0, 0.0, 0.0], 0.2)]).is_err());
     }
 }
