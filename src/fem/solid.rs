@@ -1,10 +1,12 @@
 //! The first slice of 3D (issue 45): a model of P1 tetrahedra without
 //! contact, from a 3D mesh to the QP min ½xᵀCx − xᵀd (no rows), on the
 //! shared pieces — [`ElementKind::Solid`], [`PointDofs`]`<3>`, the
-//! [`RigidMode`]s, the QP layer. Dirichlet components, slip on plane
-//! surfaces, tractions (`pn` or `p`) on boundary triangles, gravity. What
-//! is still 2D-only (the topology cut along contact surfaces, the ordered
-//! parallel assembly, the outputs) is listed in docs/design.md §"Adding a
+//! [`RigidMode`]s, the body detection (`topology::cell_bodies`), the
+//! ordered parallel assembly (`stiffness::assemble`), the elimination of
+//! the conditions (`conditions::eliminate`), the QP layer. Dirichlet
+//! components, slip on plane surfaces, tractions (`pn` or `p`) on boundary
+//! triangles, gravity. What is still 2D-only (the topology cut along
+//! contact surfaces, the outputs) is listed in docs/design.md §"Adding a
 //! kind: solid 3D".
 
 use super::conditions::{number, Cond, PointDofs};
