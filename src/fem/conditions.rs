@@ -10,7 +10,7 @@
 //! combines Dirichlet and slip at corners. The unknowns ξ are numbered point
 //! by point (§2.3).
 
-use super::element::Vector;
+use super::element::{PointD, Vector};
 use super::topology::{dim_name, Topology};
 use super::FemError;
 use crate::mesh::Mesh;
@@ -39,11 +39,12 @@ impl<const D: usize> Default for PointDofs<D> {
     }
 }
 
-/// One linear condition r·u = v at a point; `src` indexes the names of the
-/// TOML entries that set conditions (for messages).
-#[derive(Clone, Copy)]
-pub(super) struct Cond {
-    pub(super) r: Vector,
+/// One linear condition r·u = v at a point of a model of dimension D;
+/// `src` indexes the names of the TOML entries that set conditions (for
+/// messages).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Cond<const D: usize = 2> {
+    pub(super) r: PointD<D>,
     pub(super) v: f64,
     pub(super) src: usize,
 }
@@ -202,32 +203,25 @@ impl Conditions {
         body_names: &[String],
         path: &Path,
     ) -> Result<Vec<PointDofs>, FemError> {
-        let mut dofs = Vec::with_capacity(self.at.len());
-        let mut next = 0usize;
-        for (p, cs) in self.at.iter().enumerate() {
-            let pd = eliminate(cs).map_err(|m| {
-                let mut from: Vec<usize> = cs.iter().map(|c| c.src).collect();
-                from.sort_unstable();
-                from.dedup();
-                let from: Vec<&str> = from.iter().map(|&i| self.src[i].as_str()).collect();
-                FemError::new(
-                    path,
-                    format!(
-                        "conflicting conditions at node {} ({}) from {}: {m}",
-                        mesh.node_tags[topo.point_node[p]],
-                        match body_names.get(topo.point_body[p] as usize) {
-                            Some(n) => format!("body '{n}'"),
-                            None => format!("body {}", topo.point_body[p]),
-                        },
-                        from.join(", ")
-                    ),
-                )
-            })?;
-            let pd = PointDofs { start: next, ..pd };
-            next += pd.ndof;
-            dofs.push(pd);
-        }
-        Ok(dofs)
+        number(&self.at, |p, m| {
+            let cs = &self.at[p];
+            let mut from: Vec<usize> = cs.iter().map(|c| c.src).collect();
+            from.sort_unstable();
+            from.dedup();
+            let from: Vec<&str> = from.iter().map(|&i| self.src[i].as_str()).collect();
+            FemError::new(
+                path,
+                format!(
+                    "conflicting conditions at node {} ({}) from {}: {m}",
+                    mesh.node_tags[topo.point_node[p]],
+                    match body_names.get(topo.point_body[p] as usize) {
+                        Some(n) => format!("body '{n}'"),
+                        None => format!("body {}", topo.point_body[p]),
+                    },
+                    from.join(", ")
+                ),
+            )
+        })
     }
 
     /// The conditions as (point, unit direction r, index into `groups`).
@@ -240,8 +234,45 @@ impl Conditions {
     }
 }
 
-/// Combine the conditions r·u = v at one point into u = u0 + Tξ.
-fn eliminate(cs: &[Cond]) -> Result<PointDofs, String> {
+/// Each point's u = u0 + Tξ from its conditions `at`, its unknowns
+/// numbered after the previous point's; `err(p, why)` is the error of
+/// conditions that disagree at point p.
+pub(super) fn number<const D: usize>(
+    at: &[Vec<Cond<D>>],
+    err: impl Fn(usize, String) -> FemError,
+) -> Result<Vec<PointDofs<D>>, FemError> {
+    let mut dofs = Vec::with_capacity(at.len());
+    let mut next = 0usize;
+    for (p, cs) in at.iter().enumerate() {
+        let pd = eliminate(cs).map_err(|m| err(p, m))?;
+        let pd = PointDofs { start: next, ..pd };
+        next += pd.ndof;
+        dofs.push(pd);
+    }
+    Ok(dofs)
+}
+
+/// Combine the conditions r·u = v at one point into u = u0 + Tξ: the
+/// closed forms of the plane (which fix its bits), Gram–Schmidt in 3D.
+pub(super) fn eliminate<const D: usize>(cs: &[Cond<D>]) -> Result<PointDofs<D>, String> {
+    if D == 2 {
+        let pd = eliminate_plane(cs)?;
+        Ok(PointDofs {
+            start: pd.start,
+            ndof: pd.ndof,
+            t: std::array::from_fn(|k| std::array::from_fn(|c| pd.t[k][c])),
+            u0: std::array::from_fn(|c| pd.u0[c]),
+        })
+    } else {
+        gram_schmidt(cs)
+    }
+}
+
+/// The closed forms of the plane: one condition, or two independent ones
+/// (the others checked against them).
+fn eliminate_plane<const D: usize>(cs: &[Cond<D>]) -> Result<PointDofs, String> {
+    // r of a plane condition (D = 2).
+    let rv = |c: &Cond<D>| -> Vector { [c.r[0], c.r[1]] };
     let mut pd = PointDofs {
         start: 0,
         ndof: 2,
@@ -251,20 +282,20 @@ fn eliminate(cs: &[Cond]) -> Result<PointDofs, String> {
     if cs.is_empty() {
         return Ok(pd);
     }
-    let q1 = normalize(cs[0].r);
-    let v1 = cs[0].v / norm2(cs[0].r);
+    let q1 = normalize(rv(&cs[0]));
+    let v1 = cs[0].v / norm2(rv(&cs[0]));
     // A second, independent condition?
     let second = cs.iter().skip(1).find(|c| {
-        let r = normalize(c.r);
+        let r = normalize(rv(c));
         (r[0] * q1[1] - r[1] * q1[0]).abs() > 1e-8
     });
     match second {
         None => {
             // all parallel: check consistency
             for c in &cs[1..] {
-                let r = normalize(c.r);
+                let r = normalize(rv(c));
                 let s = r[0] * q1[0] + r[1] * q1[1];
-                let v = c.v / norm2(c.r);
+                let v = c.v / norm2(rv(c));
                 if (v - s * v1).abs() > 1e-9 * (1.0 + v.abs() + v1.abs()) {
                     return Err(format!(
                         "two conditions prescribe different values ({} and {}) in one direction",
@@ -278,14 +309,15 @@ fn eliminate(cs: &[Cond]) -> Result<PointDofs, String> {
             pd.t = [[-q1[1], q1[0]], [0.0, 0.0]];
         }
         Some(c2) => {
-            let (r1, r2) = (cs[0].r, c2.r);
+            let (r1, r2) = (rv(&cs[0]), rv(c2));
             let det = r1[0] * r2[1] - r1[1] * r2[0];
             let u = [
                 (cs[0].v * r2[1] - c2.v * r1[1]) / det,
                 (r1[0] * c2.v - r2[0] * cs[0].v) / det,
             ];
             for c in cs {
-                let res = c.r[0] * u[0] + c.r[1] * u[1] - c.v;
+                let r = rv(c);
+                let res = r[0] * u[0] + r[1] * u[1] - c.v;
                 if res.abs() > 1e-9 * (1.0 + c.v.abs() + u[0].abs() + u[1].abs()) {
                     return Err(format!(
                         "more than two independent conditions that disagree (residual {res:.3e})"
@@ -298,6 +330,58 @@ fn eliminate(cs: &[Cond]) -> Result<PointDofs, String> {
         }
     }
     Ok(pd)
+}
+
+/// Gram–Schmidt on the conditions r·u = v at one point: the independent
+/// directions fix u0, the orthonormal complement spans T (docs/methods.md
+/// §2.5, in 3D). Conditions that disagree are an error.
+fn gram_schmidt<const D: usize>(cs: &[Cond<D>]) -> Result<PointDofs<D>, String> {
+    let dot = |a: &PointD<D>, b: &PointD<D>| -> f64 { (0..D).map(|i| a[i] * b[i]).sum() };
+    let mut q: Vec<(PointD<D>, f64)> = vec![];
+    for c in cs {
+        let l = dot(&c.r, &c.r).sqrt();
+        let (mut r, mut v) = (c.r.map(|x| x / l), c.v / l);
+        for &(qk, wk) in &q {
+            let s = dot(&r, &qk);
+            r = std::array::from_fn(|i| r[i] - s * qk[i]);
+            v -= s * wk;
+        }
+        let n = dot(&r, &r).sqrt();
+        if n > 1e-8 {
+            q.push((r.map(|x| x / n), v / n));
+        } else if v.abs() > 1e-9 * (1.0 + cs.iter().map(|c| c.v.abs()).sum::<f64>()) {
+            return Err(format!(
+                "conditions that disagree (residual {v:.3e} along a direction already fixed)"
+            ));
+        }
+    }
+    let mut u0 = [0.0; D];
+    for &(qk, wk) in &q {
+        for i in 0..D {
+            u0[i] += wk * qk[i];
+        }
+    }
+    let mut t = [[0.0; D]; D];
+    let mut ndof = 0;
+    for e in 0..D {
+        let mut r = [0.0; D];
+        r[e] = 1.0;
+        for qk in q.iter().map(|x| x.0).chain(t[..ndof].iter().copied()) {
+            let s = dot(&r, &qk);
+            r = std::array::from_fn(|i| r[i] - s * qk[i]);
+        }
+        let n = dot(&r, &r).sqrt();
+        if n > 1e-6 && ndof + q.len() < D {
+            t[ndof] = r.map(|x| x / n);
+            ndof += 1;
+        }
+    }
+    Ok(PointDofs {
+        start: 0,
+        ndof,
+        t,
+        u0,
+    })
 }
 
 /// |r|.

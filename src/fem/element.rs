@@ -499,6 +499,58 @@ impl ElementKind {
         }
     }
 
+    /// The rows of vertex `a` of the element stiffness of a cell `p` (a
+    /// triangle, D = 2 and N = 3, or a tetrahedron, D = 3 and N = 4), as
+    /// its N blocks of D×D: `k[b][i][j]` = C_e[D a + i][D b + j]. The one
+    /// entry point of the shared assembly (`stiffness::assemble`); the
+    /// plane's values are [`ElementKind::stiffness_rows`]'s, bit for bit.
+    #[inline]
+    pub fn cell_stiffness_rows<const D: usize, const N: usize>(
+        self,
+        p: &[PointD<D>; N],
+        d: &MaterialMatrix,
+        a: usize,
+    ) -> [[[f64; D]; D]; N] {
+        let blocks = |row: &dyn Fn(usize, usize) -> f64| {
+            std::array::from_fn(|b| {
+                std::array::from_fn(|i| std::array::from_fn(|j| row(i, D * b + j)))
+            })
+        };
+        match &d.d {
+            Elasticity::Solid(d6) => {
+                let k = tet_stiffness(&cell_points(p), d6);
+                blocks(&|i, c| k[D * a + i][c])
+            }
+            _ => {
+                let k = self.stiffness_rows(&cell_points(p), d, a);
+                blocks(&|i, c| k[i][c])
+            }
+        }
+    }
+
+    /// The body load of vertex `a` of a cell `p` (the element part of d):
+    /// [`ElementKind::body_load`] of a triangle, |T|/4 f_b of a
+    /// tetrahedron (`c`, the centrifugal coefficient, is the plane's).
+    #[inline]
+    pub fn cell_body_load<const D: usize, const N: usize>(
+        self,
+        p: &[PointD<D>; N],
+        a: usize,
+        fb: PointD<D>,
+        c: f64,
+    ) -> PointD<D> {
+        match self {
+            ElementKind::Solid => {
+                let f = self.tet_body_load(&cell_points(p), std::array::from_fn(|k| fb[k]));
+                std::array::from_fn(|k| f[k])
+            }
+            _ => {
+                let f = self.body_load(&cell_points(p), a, std::array::from_fn(|k| fb[k]), c);
+                std::array::from_fn(|k| f[k])
+            }
+        }
+    }
+
     /// C_e = |T| BᵀDB (12×12) of a tetrahedron of a solid model
     /// (docs/design.md §"Adding a kind: solid 3D"; methods.md §2.2 in 3D).
     pub fn tet_stiffness(self, p: &[Point3; 4], d: &MaterialMatrix) -> [[f64; 12]; 12] {
@@ -524,6 +576,20 @@ impl ElementKind {
         let a2 = dot(n, n).sqrt();
         (a2 / 6.0, n.map(|c| c / a2))
     }
+}
+
+/// The vertices of a cell as the kind's own type ([`Point`]s of a
+/// triangle, [`Point3`]s of a tetrahedron): the same values; a cell of
+/// another shape is a programming error (an index out of bounds).
+#[inline]
+fn cell_points<const D: usize, const N: usize, const E: usize, const M: usize>(
+    p: &[PointD<D>; N],
+) -> [PointD<E>; M] {
+    debug_assert!(
+        D == E && N == M,
+        "a cell of {N} points in {D}D read as {M} in {E}D"
+    );
+    std::array::from_fn(|i| std::array::from_fn(|k| p[i][k]))
 }
 
 /// What the triangle methods say when asked for a solid's element.

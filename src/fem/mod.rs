@@ -159,7 +159,13 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
     loads::check_body_forces(&topo, &f.materials, &f.model, path)?;
     loads::warn_measureless_tractions(mesh, kind, &f.traction, path);
     let mats = stiffness::Materials::new(&topo, &f.materials, &f.model);
-    let (c, mut d) = stiffness::assemble(&topo, &dofs, n, &mats, opts.parallel);
+    let (c, mut d) = stiffness::assemble(
+        stiffness::Cells::plane(&topo),
+        &dofs,
+        n,
+        &mats,
+        opts.parallel,
+    );
     lap.lap("stiffness");
     let bl = loads::BoundaryLoads {
         traction: &f.traction,

@@ -1,14 +1,18 @@
 //! The first slice of 3D (issue 45): a model of P1 tetrahedra without
 //! contact, from a 3D mesh to the QP min ½xᵀCx − xᵀd (no rows), on the
 //! shared pieces — [`ElementKind::Solid`], [`PointDofs`]`<3>`, the
-//! [`RigidMode`]s, the QP layer. Dirichlet components, slip on plane
-//! surfaces, tractions (`pn` or `p`) on boundary triangles, gravity. What
-//! is still 2D-only (the topology cut along contact surfaces, the ordered
-//! parallel assembly, the outputs) is listed in docs/design.md §"Adding a
+//! [`RigidMode`]s, the body detection (`topology::cell_bodies`), the
+//! ordered parallel assembly (`stiffness::assemble`), the elimination of
+//! the conditions (`conditions::eliminate`), the QP layer. Dirichlet
+//! components, slip on plane surfaces, tractions (`pn` or `p`) on boundary
+//! triangles, gravity. What is still 2D-only (the topology cut along
+//! contact surfaces, the outputs) is listed in docs/design.md §"Adding a
 //! kind: solid 3D".
 
-use super::conditions::PointDofs;
+use super::conditions::{number, Cond, PointDofs};
 use super::element::{ElementKind, MaterialMatrix, Point3, RigidMode, Vector3, SOLID_MODES};
+use super::stiffness::{assemble, Cells, Materials};
+use super::topology::cell_bodies;
 use super::FemError;
 use crate::linalg::sparse::Csr;
 use crate::mesh::Mesh;
@@ -99,74 +103,38 @@ impl SolidModel {
 }
 
 /// A condition r·u = v at a point (r need not be unit).
-type Cond3 = (Vector3, f64);
+type Cond3 = Cond<3>;
+
+/// The condition r·u = v.
+fn cond(r: Vector3, v: f64) -> Cond3 {
+    Cond { r, v, src: 0 }
+}
 
 fn dot(a: Vector3, b: Vector3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-/// Combine the conditions r·u = v at one point into u = u0 + Tξ by
-/// Gram–Schmidt: the independent directions fix u0, the orthonormal
-/// complement spans T (docs/methods.md §2.5, in 3D). Conditions that
-/// disagree are an error.
-pub fn eliminate3(cs: &[Cond3]) -> Result<PointDofs<3>, String> {
-    let mut q: Vec<(Vector3, f64)> = vec![];
-    for &(r, v) in cs {
-        let l = dot(r, r).sqrt();
-        let (mut r, mut v) = (r.map(|c| c / l), v / l);
-        for &(qk, wk) in &q {
-            let s = dot(r, qk);
-            r = [0, 1, 2].map(|i| r[i] - s * qk[i]);
-            v -= s * wk;
-        }
-        let n = dot(r, r).sqrt();
-        if n > 1e-8 {
-            q.push((r.map(|c| c / n), v / n));
-        } else if v.abs() > 1e-9 * (1.0 + cs.iter().map(|c| c.1.abs()).sum::<f64>()) {
-            return Err(format!(
-                "conditions that disagree (residual {v:.3e} along a direction already fixed)"
-            ));
-        }
-    }
-    let mut u0 = [0.0; 3];
-    for &(qk, wk) in &q {
-        for i in 0..3 {
-            u0[i] += wk * qk[i];
-        }
-    }
-    let mut t = [[0.0; 3]; 3];
-    let mut ndof = 0;
-    for e in 0..3 {
-        let mut r = [0.0; 3];
-        r[e] = 1.0;
-        for qk in q.iter().map(|x| x.0).chain(t[..ndof].iter().copied()) {
-            let s = dot(r, qk);
-            r = [0, 1, 2].map(|i| r[i] - s * qk[i]);
-        }
-        let n = dot(r, r).sqrt();
-        if n > 1e-6 && ndof + q.len() < 3 {
-            t[ndof] = r.map(|c| c / n);
-            ndof += 1;
-        }
-    }
-    Ok(PointDofs {
-        start: 0,
-        ndof,
-        t,
-        u0,
-    })
-}
+/// A face of the tetrahedra: the vertex opposite it in its first
+/// tetrahedron, how many tetrahedra share it, the first one and the
+/// second one if any.
+type Face = (usize, u8, usize, Option<usize>);
 
-/// The faces of the tetrahedra: sorted nodes → (the vertex opposite, how
-/// many tetrahedra share the face), for the outward normal of a boundary
-/// triangle and to tell an interior face.
-fn faces(tets: &[[usize; 4]]) -> HashMap<[usize; 3], (usize, u8)> {
-    let mut f: HashMap<[usize; 3], (usize, u8)> = HashMap::with_capacity(4 * tets.len());
-    for tet in tets {
+/// The faces of the tetrahedra: sorted nodes → [`Face`], for the outward
+/// normal of a boundary triangle, to tell an interior face and to join the
+/// tetrahedra into bodies.
+fn faces(tets: &[[usize; 4]]) -> HashMap<[usize; 3], Face> {
+    let mut f: HashMap<[usize; 3], Face> = HashMap::with_capacity(4 * tets.len());
+    for (t, tet) in tets.iter().enumerate() {
         for skip in 0..4 {
             let mut k: Vec<usize> = (0..4).filter(|&i| i != skip).map(|i| tet[i]).collect();
             k.sort_unstable();
-            f.entry([k[0], k[1], k[2]]).or_insert((tet[skip], 0)).1 += 1;
+            let e = f
+                .entry([k[0], k[1], k[2]])
+                .or_insert((tet[skip], 0, t, None));
+            e.1 += 1;
+            if e.1 == 2 {
+                e.3 = Some(t);
+            }
         }
     }
     f
@@ -187,7 +155,7 @@ struct Facet {
 fn surface(
     mesh: &Mesh,
     points: &[Point3],
-    faces: &HashMap<[usize; 3], (usize, u8)>,
+    faces: &HashMap<[usize; 3], Face>,
     path: &Path,
     name: &str,
     what: &str,
@@ -213,7 +181,7 @@ fn surface(
         key.sort_unstable();
         // The reader has checked that every triangle is a face; one inside
         // a body (two tetrahedra) is on no boundary.
-        if let Some(&(_, 2)) = faces.get(&key) {
+        if let Some(&(_, 2, _, _)) = faces.get(&key) {
             return Err(FemError::new(
                 path,
                 format!(
@@ -222,7 +190,7 @@ fn surface(
                 ),
             ));
         }
-        if let Some(&(opp, _)) = faces.get(&key) {
+        if let Some(&(opp, ..)) = faces.get(&key) {
             let x0 = points[tri[0]];
             let o = points[opp];
             if dot(n, [o[0] - x0[0], o[1] - x0[1], o[2] - x0[2]]) > 0.0 {
@@ -266,43 +234,45 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         )));
     }
     let tets = mesh.tets.clone();
-    // Bodies: nodes connected through tetrahedra.
     let nn = points.len();
-    let mut parent: Vec<usize> = (0..nn).collect();
-    fn find(p: &mut [usize], mut a: usize) -> usize {
-        while p[a] != a {
-            p[a] = p[p[a]];
-            a = p[a];
-        }
-        a
-    }
+    let fc = faces(&tets);
+    // Bodies: tetrahedra joined through their faces (the 2D cut of
+    // topology.rs, without contact surfaces yet); a node's body is its
+    // tetrahedra's.
+    let joined = fc.values().filter_map(|f| f.3.map(|s| (f.2, s)));
+    let (tet_body, nbodies) = cell_bodies(&tets, &mesh.node_tags, joined);
     let mut used = vec![false; nn];
-    for t in &tets {
-        for &v in t {
+    let mut point_body = vec![u32::MAX; nn];
+    for (t, tet) in tets.iter().enumerate() {
+        for &v in tet {
             used[v] = true;
-            let (a, b) = (find(&mut parent, t[0]), find(&mut parent, v));
-            parent[b] = a;
+            if point_body[v] == u32::MAX {
+                point_body[v] = tet_body[t];
+            } else if point_body[v] != tet_body[t] {
+                return Err(err(format!(
+                    "{}: node {} joins two bodies that share no face (tetrahedra touching at an edge or a vertex): a 3D model has no contact cut yet (issue 45)",
+                    mesh.path.display(),
+                    mesh.node_tags[v]
+                )));
+            }
         }
     }
-    let mut body_of_root = HashMap::new();
-    let mut point_body = vec![0u32; nn];
-    for v in 0..nn {
-        let r = find(&mut parent, v);
-        let n = body_of_root.len() as u32;
-        point_body[v] = *body_of_root.entry(r).or_insert(n);
+    // A node of no tetrahedron: a body of its own.
+    let mut nbodies = nbodies;
+    for b in point_body.iter_mut().filter(|b| **b == u32::MAX) {
+        *b = nbodies as u32;
+        nbodies += 1;
     }
-    let nbodies = body_of_root.len();
     // Conditions.
     let mut conds: Vec<Vec<Cond3>> = vec![vec![]; nn];
     for v in (0..nn).filter(|&v| !used[v]) {
         // A node of no tetrahedron (a point element): held, no unknowns.
         conds[v] = vec![
-            ([1.0, 0.0, 0.0], 0.0),
-            ([0.0, 1.0, 0.0], 0.0),
-            ([0.0, 0.0, 1.0], 0.0),
+            cond([1.0, 0.0, 0.0], 0.0),
+            cond([0.0, 1.0, 0.0], 0.0),
+            cond([0.0, 0.0, 1.0], 0.0),
         ];
     }
-    let fc = faces(&tets);
     for (i, (on, u)) in input.dirichlet.iter().enumerate() {
         let what = format!("[[dirichlet]] #{} (on = \"{on}\")", i + 1);
         let Some(g) = mesh.group_any(on) else {
@@ -324,7 +294,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
                 if let Some(val) = uk {
                     let mut r = [0.0; 3];
                     r[k] = 1.0;
-                    conds[v].push((r, *val));
+                    conds[v].push(cond(r, *val));
                 }
             }
         }
@@ -368,36 +338,38 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         nodes.sort_unstable();
         nodes.dedup();
         for v in nodes {
-            conds[v].push((n0, 0.0));
+            conds[v].push(cond(n0, 0.0));
         }
     }
-    let mut dofs = Vec::with_capacity(nn);
-    let mut next = 0;
-    for (v, cs) in conds.iter().enumerate() {
-        let pd = eliminate3(cs).map_err(|m| {
-            err(format!(
-                "conflicting conditions at node {}: {m}",
-                mesh.node_tags[v]
-            ))
-        })?;
-        let pd = PointDofs { start: next, ..pd };
-        next += pd.ndof;
-        dofs.push(pd);
-    }
-    let n = next;
-    // Loads: gravity and tractions.
+    // The elimination of the plane, by Gram–Schmidt in 3D.
+    let dofs = number(&conds, |v, m| {
+        err(format!(
+            "conflicting conditions at node {}: {m}",
+            mesh.node_tags[v]
+        ))
+    })?;
+    let n = dofs.last().map_or(0, |pd| pd.start + pd.ndof);
+    // C = Σ T_aᵀ K_ab T_b and the element part of d, Σ T_aᵀ (f_a − K_ab
+    // u0_b) with the gravity f_a (methods.md §2.3): the ordered assembly
+    // of the plane, on tetrahedra.
     let mats: Vec<&Material> = material_names.iter().map(|m| &input.materials[m]).collect();
-    let dmats: Vec<MaterialMatrix> = mats.iter().map(|m| kind.material(m)).collect();
-    let mut loads = vec![[0.0; 3]; nn];
-    for (t, tet) in tets.iter().enumerate() {
-        let m = mats[tet_material[t] as usize];
-        let f = kind.tet_body_load(&tet.map(|v| points[v]), input.gravity.map(|g| m.rho * g));
-        for &v in tet {
-            for k in 0..3 {
-                loads[v][k] += f[k];
-            }
-        }
-    }
+    let smats = Materials::<3> {
+        kind,
+        dmats: mats.iter().map(|m| kind.material(m)).collect(),
+        bforce: mats
+            .iter()
+            .map(|m| input.gravity.map(|g| m.rho * g))
+            .collect(),
+        spin: vec![0.0; mats.len()],
+    };
+    let cells = Cells {
+        points: &points,
+        cells: &tets,
+        material: &tet_material,
+    };
+    let (c, mut d) = assemble(cells, &dofs, n, &smats, true);
+    // Tractions on the boundary triangles: d += Tᵀ f.
+    let mut tractions = vec![[0.0; 3]; nn];
     for (i, (on, load)) in input.traction.iter().enumerate() {
         let what = format!("[[traction]] #{} (on = \"{on}\")", i + 1);
         for Facet {
@@ -413,46 +385,35 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
             };
             for v in tri {
                 for k in 0..3 {
-                    loads[v][k] += w * p[k];
+                    tractions[v][k] += w * p[k];
                 }
             }
         }
     }
-    // C = Σ T_aᵀ K_ab T_b, d = Σ T_aᵀ (f_a − K_ab u0_b) (methods.md §2.3).
-    let mut trip: Vec<(usize, usize, f64)> = Vec::with_capacity(tets.len() * 144);
-    let mut d = vec![0.0; n];
-    for (t, tet) in tets.iter().enumerate() {
-        let k = kind.tet_stiffness(&tet.map(|v| points[v]), &dmats[tet_material[t] as usize]);
-        for (a, &va) in tet.iter().enumerate() {
-            let pa = &dofs[va];
-            for (b, &vb) in tet.iter().enumerate() {
-                let pb = &dofs[vb];
-                let kab = |i: usize, j: usize| k[3 * a + i][3 * b + j];
-                // K_ab u0_b
-                let ku0: [f64; 3] = [0, 1, 2].map(|i| (0..3).map(|j| kab(i, j) * pb.u0[j]).sum());
-                for r in 0..pa.ndof {
-                    d[pa.start + r] -= dot(pa.t[r], ku0);
-                    for c in 0..pb.ndof {
-                        let mut s = 0.0;
-                        for i in 0..3 {
-                            for j in 0..3 {
-                                s += pa.t[r][i] * kab(i, j) * pb.t[c][j];
-                            }
-                        }
-                        trip.push((pa.start + r, pb.start + c, s));
-                    }
-                }
-            }
-        }
-    }
-    for (v, f) in loads.iter().enumerate() {
+    for (v, f) in tractions.iter().enumerate() {
         let p = &dofs[v];
         for r in 0..p.ndof {
             d[p.start + r] += dot(p.t[r], *f);
         }
     }
-    let c = Csr::from_triplets(n, n, &trip);
-    drop(trip);
+    // The nodal external forces: the gravity of the tetrahedra, then the
+    // tractions.
+    let mut loads = vec![[0.0; 3]; nn];
+    for (t, tet) in tets.iter().enumerate() {
+        let mi = tet_material[t] as usize;
+        let pts = tet.map(|v| points[v]);
+        for (a, &v) in tet.iter().enumerate() {
+            let f = kind.cell_body_load(&pts, a, smats.bforce[mi], 0.0);
+            for k in 0..3 {
+                loads[v][k] += f[k];
+            }
+        }
+    }
+    for (l, f) in loads.iter_mut().zip(&tractions) {
+        for k in 0..3 {
+            l[k] += f[k];
+        }
+    }
     let kernel = rigid_kernel(&points, &point_body, nbodies, &conds, &dofs, n);
     if !kernel.is_empty() {
         return Err(err(format!(
@@ -515,7 +476,7 @@ fn rigid_kernel(
     let mut gtg = vec![vec![vec![0.0; 6]; 6]; nbodies];
     for (p, cs) in conds.iter().enumerate() {
         let b = point_body[p] as usize;
-        for &(r, _) in cs {
+        for &Cond { r, .. } in cs {
             let l = dot(r, r).sqrt();
             let row: Vec<f64> = SOLID_MODES
                 .iter()
@@ -570,6 +531,7 @@ fn rigid_kernel(
 
 #[cfg(test)]
 mod tests {
+    use super::super::conditions::eliminate;
     use super::*;
 
     /// u0 + Tξ satisfies the conditions for any ξ, T is orthonormal, and
@@ -591,7 +553,8 @@ mod tests {
             ),
             (vec![([1.0, 0.0, 0.0], 0.1), ([2.0, 0.0, 0.0], 0.2)], 2),
         ] {
-            let pd = eliminate3(&cs).unwrap();
+            let cs: Vec<Cond3> = cs.into_iter().map(|(r, v)| cond(r, v)).collect();
+            let pd = eliminate(&cs).unwrap();
             assert_eq!(pd.ndof, ndof, "{cs:?}");
             for xi in [[0.0; 3], [0.3, -1.2, 0.7]] {
                 let mut u = pd.u0;
@@ -600,8 +563,8 @@ mod tests {
                         u[c] += pd.t[k][c] * xi[k];
                     }
                 }
-                for (r, v) in &cs {
-                    assert!((dot(*r, u) - v).abs() < 1e-14, "{cs:?}");
+                for c in &cs {
+                    assert!((dot(c.r, u) - c.v).abs() < 1e-14, "{cs:?}");
                 }
             }
             for i in 0..pd.ndof {
@@ -611,6 +574,6 @@ mod tests {
                 }
             }
         }
-        assert!(eliminate3(&[([1.0, 0.0, 0.0], 0.1), ([1.0, 0.0, 0.0], 0.2)]).is_err());
+        assert!(eliminate(&[cond([1.0, 0.0, 0.0], 0.1), cond([1.0, 0.0, 0.0], 0.2)]).is_err());
     }
 }

@@ -12,7 +12,7 @@
 //! vertices are mostly in cache (Gmsh numbers nodes in no spatial order).
 
 use super::conditions::PointDofs;
-use super::element::{Point, Vector};
+use super::element::{Point, PointD, Vector};
 
 use super::element::MaterialMatrix;
 use super::topology::Topology;
@@ -23,10 +23,10 @@ use std::collections::BTreeMap;
 /// What the element matrices need of each material in the model's
 /// [`ElementKind`](super::element::ElementKind): D, the body force ρ g and the centrifugal coefficient
 /// ρω² (a spin about the axis, docs/methods.md §10).
-pub(super) struct Materials {
+pub(super) struct Materials<const D: usize = 2> {
     pub(super) kind: super::element::ElementKind,
     pub(super) dmats: Vec<MaterialMatrix>,
-    pub(super) bforce: Vec<Vector>,
+    pub(super) bforce: Vec<PointD<D>>,
     pub(super) spin: Vec<f64>,
 }
 
@@ -71,6 +71,48 @@ impl Materials {
     }
 }
 
+impl<const D: usize> Materials<D> {
+    /// [`Materials::stiffness_rows`] of a cell of N vertices, as N blocks
+    /// of D×D ([`ElementKind::cell_stiffness_rows`](super::element::ElementKind::cell_stiffness_rows)).
+    #[inline]
+    fn cell_rows<const N: usize>(
+        &self,
+        pts: &[PointD<D>; N],
+        mi: usize,
+        a: usize,
+    ) -> [[[f64; D]; D]; N] {
+        self.kind.cell_stiffness_rows(pts, &self.dmats[mi], a)
+    }
+
+    /// [`Materials::body_load`] of a cell of N vertices.
+    #[inline]
+    fn cell_load<const N: usize>(&self, pts: &[PointD<D>; N], mi: usize, a: usize) -> PointD<D> {
+        self.kind
+            .cell_body_load(pts, a, self.bforce[mi], self.spin[mi])
+    }
+}
+
+/// The cells of a model as the assembly reads them: the points, the
+/// cells (N = D + 1 point indices: triangles, tetrahedra) and each cell's
+/// material (an index into [`Materials`]).
+#[derive(Clone, Copy)]
+pub(super) struct Cells<'a, const D: usize, const N: usize> {
+    pub(super) points: &'a [PointD<D>],
+    pub(super) cells: &'a [[usize; N]],
+    pub(super) material: &'a [u32],
+}
+
+impl<'a> Cells<'a, 2, 3> {
+    /// The triangles of a plane or axisymmetric model.
+    pub(super) fn plane(topo: &'a Topology) -> Self {
+        Cells {
+            points: &topo.points,
+            cells: &topo.triangles,
+            material: &topo.tri_material,
+        }
+    }
+}
+
 /// Points per parallel work item of the assembly.
 const CHUNK_POINTS: usize = 2048;
 
@@ -100,7 +142,7 @@ fn for_each_mut<T: Send>(parallel: bool, items: &mut [T], f: impl Fn(&mut T) + S
 }
 
 /// The row blocks of a chunk of points (in rank order): columns and values
-/// (point i of the chunk at `at[i]..at[i + 1]`), two d entries per point;
+/// (point i of the chunk at `at[i]..at[i + 1]`), D d entries per point;
 /// `coff` is scratch.
 #[derive(Default)]
 struct Block {
@@ -121,33 +163,41 @@ struct Target<'a> {
     d: &'a mut [f64],
 }
 
-/// A point without conditions: ndof 2, T = I, u0 = 0 (the assembly skips
+/// A point without conditions: ndof D, T = I, u0 = 0 (the assembly skips
 /// the transformation, which changes nothing but the sign of zeros).
-fn is_free(pd: &PointDofs) -> bool {
-    pd.ndof == 2 && pd.t == [[1.0, 0.0], [0.0, 1.0]] && pd.u0 == [0.0, 0.0]
+fn is_free<const D: usize>(pd: &PointDofs<D>) -> bool {
+    pd.ndof == D
+        && (0..D).all(|k| (0..D).all(|c| pd.t[k][c] == if k == c { 1.0 } else { 0.0 }))
+        && pd.u0.iter().all(|&u| u == 0.0)
 }
 
-/// Z-order (Morton) keys of 2D positions: 16 bits per axis over the box of
-/// all of them. Sorting by key puts nearby positions near each other.
-struct Morton {
-    lo: Point,
-    scale: Point,
+/// Z-order (Morton) keys of D-dimensional positions: 32/D bits per axis
+/// (16 in the plane, 10 in 3D) over the box of all of them. Sorting by key
+/// puts nearby positions near each other.
+struct Morton<const D: usize> {
+    lo: PointD<D>,
+    scale: PointD<D>,
 }
 
-impl Morton {
-    fn new(pts: &[Point]) -> Morton {
-        let mut lo = [f64::INFINITY; 2];
-        let mut hi = [f64::NEG_INFINITY; 2];
+impl<const D: usize> Morton<D> {
+    /// Bits per axis.
+    const BITS: u32 = 32 / D as u32;
+    /// The largest coordinate on an axis.
+    const MAX: f64 = ((1u64 << Self::BITS) - 1) as f64;
+
+    fn new(pts: &[PointD<D>]) -> Morton<D> {
+        let mut lo = [f64::INFINITY; D];
+        let mut hi = [f64::NEG_INFINITY; D];
         for x in pts {
-            for k in 0..2 {
+            for k in 0..D {
                 lo[k] = lo[k].min(x[k]);
                 hi[k] = hi[k].max(x[k]);
             }
         }
-        let scale = [0, 1].map(|k| {
+        let scale = std::array::from_fn(|k| {
             let e = hi[k] - lo[k];
             if e > 0.0 && e.is_finite() {
-                65535.0 / e
+                Self::MAX / e
             } else {
                 0.0
             }
@@ -155,15 +205,15 @@ impl Morton {
         Morton { lo, scale }
     }
 
-    fn key(&self, x: Point) -> u64 {
-        let q = [0, 1].map(|k| ((x[k] - self.lo[k]) * self.scale[k]).clamp(0.0, 65535.0) as u64);
-        let spread = |mut v: u64| {
-            v = (v | (v << 8)) & 0x00FF_00FF;
-            v = (v | (v << 4)) & 0x0F0F_0F0F;
-            v = (v | (v << 2)) & 0x3333_3333;
-            (v | (v << 1)) & 0x5555_5555
-        };
-        spread(q[0]) | (spread(q[1]) << 1)
+    fn key(&self, x: PointD<D>) -> u64 {
+        let mut key = 0u64;
+        for k in 0..D {
+            let q = ((x[k] - self.lo[k]) * self.scale[k]).clamp(0.0, Self::MAX) as u64;
+            for bit in 0..Self::BITS as usize {
+                key |= ((q >> bit) & 1) << (bit * D + k);
+            }
+        }
+        key
     }
 }
 
@@ -183,9 +233,9 @@ fn sorted_by_key(parallel: bool, keys: impl Iterator<Item = u64>) -> Vec<u32> {
 }
 
 /// A point as the assembly reads it, stored in Z-order.
-#[derive(Clone, Copy, Default)]
-struct RankPoint {
-    x: Point,
+#[derive(Clone, Copy)]
+struct RankPoint<const D: usize> {
+    x: PointD<D>,
     start: usize,
     /// The point's index.
     p: u32,
@@ -193,41 +243,56 @@ struct RankPoint {
     free: bool,
 }
 
-/// A triangle as the assembly reads it: its vertices (Z-order ranks), mesh
+/// A cell as the assembly reads it: its vertices (Z-order ranks), mesh
 /// index and material.
-#[derive(Clone, Copy, Default)]
-struct TriRec {
-    v: [u32; 3],
+#[derive(Clone, Copy)]
+struct TriRec<const N: usize> {
+    v: [u32; N],
     t: u32,
     mat: u32,
 }
 
+impl<const N: usize> Default for TriRec<N> {
+    fn default() -> Self {
+        TriRec {
+            v: [0; N],
+            t: 0,
+            mat: 0,
+        }
+    }
+}
+
 /// The points in Z-order and the triangles by lowest rank, with each rank's
 /// triangles (indices into `trec`, in increasing mesh order).
-struct Order {
+struct Order<const D: usize, const N: usize> {
     /// Rank r holds point `rp[r].p`.
-    rp: Vec<RankPoint>,
-    trec: Vec<TriRec>,
+    rp: Vec<RankPoint<D>>,
+    trec: Vec<TriRec<N>>,
     inc_ptr: Vec<usize>,
     inc: Vec<u32>,
 }
 
-impl Order {
-    fn new(topo: &Topology, dofs: &[PointDofs], parallel: bool, lap: &mut super::Lap) -> Order {
+impl<const D: usize, const N: usize> Order<D, N> {
+    fn new(
+        topo: Cells<D, N>,
+        dofs: &[PointDofs<D>],
+        parallel: bool,
+        lap: &mut super::Lap,
+    ) -> Order<D, N> {
         let np = topo.points.len();
-        let (rp, rank) = point_order(topo, dofs, parallel);
+        let (rp, rank) = point_order(topo.points, dofs, parallel);
         lap.lap("point order");
         // Triangles bucketed by their lowest vertex rank (mesh order within
         // a bucket), vertices as ranks.
-        let trec: Vec<TriRec> = {
+        let trec: Vec<TriRec<N>> = {
             let recs = || {
-                topo.triangles.iter().enumerate().map(|(t, tri)| TriRec {
+                topo.cells.iter().enumerate().map(|(t, tri)| TriRec {
                     v: tri.map(|v| rank[v]),
                     t: t as u32,
-                    mat: topo.tri_material[t],
+                    mat: topo.material[t],
                 })
             };
-            let low = |rec: &TriRec| rec.v.iter().copied().min().unwrap_or(0) as usize;
+            let low = |rec: &TriRec<N>| rec.v.iter().copied().min().unwrap_or(0) as usize;
             super::sort::bucket_sort(recs, low, np).0
         };
         drop(rank);
@@ -249,10 +314,14 @@ impl Order {
 }
 
 /// The points in Z-order (as `RankPoint`s) and each point's rank.
-fn point_order(topo: &Topology, dofs: &[PointDofs], parallel: bool) -> (Vec<RankPoint>, Vec<u32>) {
-    let mut rank = vec![0u32; topo.points.len()];
-    let z = Morton::new(&topo.points);
-    let order = sorted_by_key(parallel, topo.points.iter().map(|&x| z.key(x)));
+fn point_order<const D: usize>(
+    points: &[PointD<D>],
+    dofs: &[PointDofs<D>],
+    parallel: bool,
+) -> (Vec<RankPoint<D>>, Vec<u32>) {
+    let mut rank = vec![0u32; points.len()];
+    let z = Morton::new(points);
+    let order = sorted_by_key(parallel, points.iter().map(|&x| z.key(x)));
     let rp = order
         .iter()
         .enumerate()
@@ -261,7 +330,7 @@ fn point_order(topo: &Topology, dofs: &[PointDofs], parallel: bool) -> (Vec<Rank
             rank[p] = r as u32;
             let pd = &dofs[p];
             RankPoint {
-                x: topo.points[p],
+                x: points[p],
                 start: pd.start,
                 p: p as u32,
                 ndof: pd.ndof as u8,
@@ -274,7 +343,11 @@ fn point_order(topo: &Topology, dofs: &[PointDofs], parallel: bool) -> (Vec<Rank
 
 /// Rank → its triangles (indices into `trec`), in increasing mesh order:
 /// (pointers, lists).
-fn incidence(trec: &[TriRec], np: usize, parallel: bool) -> (Vec<usize>, Vec<u32>) {
+fn incidence<const N: usize>(
+    trec: &[TriRec<N>],
+    np: usize,
+    parallel: bool,
+) -> (Vec<usize>, Vec<u32>) {
     let mut inc_ptr = vec![0usize; np + 1];
     for rec in trec {
         for &v in &rec.v {
@@ -324,7 +397,7 @@ struct Nbrs {
 }
 
 /// Pass 1 for the ranks s..e.
-fn neighbours(ord: &Order, (s, e): (usize, usize)) -> Nbrs {
+fn neighbours<const D: usize, const N: usize>(ord: &Order<D, N>, (s, e): (usize, usize)) -> Nbrs {
     let rp = &ord.rp;
     let mut adj: Vec<u32> = Vec::with_capacity((e - s) * 8);
     let mut ptr: Vec<u32> = Vec::with_capacity(e - s + 1);
@@ -361,7 +434,12 @@ fn neighbours(ord: &Order, (s, e): (usize, usize)) -> Nbrs {
 }
 
 /// CSR row pointers of C in DOF order, from the row lengths of pass 1.
-fn row_pointers(ord: &Order, parts: &[Nbrs], dofs: &[PointDofs], n: usize) -> Vec<usize> {
+fn row_pointers<const D: usize, const N: usize>(
+    ord: &Order<D, N>,
+    parts: &[Nbrs],
+    dofs: &[PointDofs<D>],
+    n: usize,
+) -> Vec<usize> {
     let mut len_of = vec![0u32; dofs.len()];
     for (r, x) in ord.rp.iter().enumerate() {
         len_of[x.p as usize] = parts[r / CHUNK_POINTS].len[r % CHUNK_POINTS];
@@ -378,14 +456,14 @@ fn row_pointers(ord: &Order, parts: &[Nbrs], dofs: &[PointDofs], n: usize) -> Ve
 
 /// Everything pass 2 reads: the order, the neighbours, the DOFs and the
 /// materials.
-struct Gather<'a> {
-    ord: &'a Order,
+struct Gather<'a, const D: usize, const N: usize> {
+    ord: &'a Order<D, N>,
     parts: &'a [Nbrs],
-    dofs: &'a [PointDofs],
-    mats: &'a Materials,
+    dofs: &'a [PointDofs<D>],
+    mats: &'a Materials<D>,
 }
 
-impl Gather<'_> {
+impl<const D: usize, const N: usize> Gather<'_, D, N> {
     /// The neighbours of rank r (pass 1).
     fn nbrs(&self, r: usize) -> &[u32] {
         let (c, k) = (&self.parts[r / CHUNK_POINTS], r % CHUNK_POINTS);
@@ -408,7 +486,7 @@ impl Gather<'_> {
         at.clear();
         at.push(0);
         dv.clear();
-        dv.resize(2 * (e - s), 0.0);
+        dv.resize(D * (e - s), 0.0);
         for r in s..e {
             let pr = rp[r];
             if pr.ndof == 0 {
@@ -435,7 +513,7 @@ impl Gather<'_> {
                 nb,
                 coff,
                 blk: &mut vals[v0..],
-                dr: &mut dv[2 * (r - s)..2 * (r - s) + 2],
+                dr: &mut dv[D * (r - s)..D * (r - s) + D],
             };
             self.add_triangles(row);
             at.push(cols.len());
@@ -464,39 +542,35 @@ impl Gather<'_> {
         for &i in self.ord.tris_of(r) {
             let rec = self.ord.trec[i as usize];
             let vx = rec.v.map(|v| &rp[v as usize]);
-            let a = if rec.v[0] as usize == r {
-                0
-            } else if rec.v[1] as usize == r {
-                1
-            } else {
-                2
-            };
+            let a = rec.v.iter().position(|&v| v as usize == r).unwrap_or(0);
             let mi = rec.mat as usize;
-            let pts = [vx[0].x, vx[1].x, vx[2].x];
-            let ke = mats.stiffness_rows(&pts, mi, a);
-            let mut fe = mats.body_load(&pts, mi, a);
+            let pts = vx.map(|x| x.x);
+            // ke[b][i][j]: row D a + i, column D b + j of the element matrix.
+            let ke = mats.cell_rows(&pts, mi, a);
+            let mut fe = mats.cell_load(&pts, mi, a);
             // fe − Ke u0
             for (k, fk) in fe.iter_mut().enumerate() {
-                for b in 0..3 {
+                for b in 0..N {
                     if vx[b].free {
                         continue;
                     }
                     let u0 = dofs[vx[b].p as usize].u0;
-                    *fk -= ke[k][2 * b] * u0[0] + ke[k][2 * b + 1] * u0[1];
+                    *fk -= dot(&ke[b][k], &u0);
                 }
             }
             match pp {
                 None => {
-                    dr[0] += fe[0];
-                    dr[1] += fe[1];
+                    for (dk, fk) in dr.iter_mut().zip(fe) {
+                        *dk += fk;
+                    }
                 }
                 Some(pp) => {
                     for (dk, ta) in dr.iter_mut().zip(&pp.t[..pp.ndof]) {
-                        *dk += ta[0] * fe[0] + ta[1] * fe[1];
+                        *dk += dot(ta, &fe);
                     }
                 }
             }
-            for b in 0..3 {
+            for b in 0..N {
                 if vx[b].ndof == 0 {
                     continue;
                 }
@@ -507,10 +581,11 @@ impl Gather<'_> {
                     .unwrap_or(0);
                 match pp {
                     None if vx[b].free => {
-                        blk[col] += ke[0][2 * b];
-                        blk[col + 1] += ke[0][2 * b + 1];
-                        blk[len + col] += ke[1][2 * b];
-                        blk[len + col + 1] += ke[1][2 * b + 1];
+                        for (i, kbi) in ke[b].iter().enumerate() {
+                            for (j, v) in kbi.iter().enumerate() {
+                                blk[i * len + col + j] += v;
+                            }
+                        }
                     }
                     _ => {
                         let pa = &dofs[pr.p as usize];
@@ -520,9 +595,9 @@ impl Gather<'_> {
                             let row = ka * len + col;
                             for kb in 0..pb.ndof {
                                 let tb = pb.t[kb];
-                                let v = ta[0] * (ke[0][2 * b] * tb[0] + ke[0][2 * b + 1] * tb[1])
-                                    + ta[1] * (ke[1][2 * b] * tb[0] + ke[1][2 * b + 1] * tb[1]);
-                                blk[row + kb] += v;
+                                // Σ_i ta_i (Σ_j ke_ij tb_j)
+                                let ktb: [f64; D] = std::array::from_fn(|i| dot(&ke[b][i], &tb));
+                                blk[row + kb] += dot(&ta, &ktb);
                             }
                         }
                     }
@@ -530,6 +605,17 @@ impl Gather<'_> {
             }
         }
     }
+}
+
+/// a·b summed from the first component on (a0 b0 + a1 b1 in the plane:
+/// the order that fixes the 2D bits).
+#[inline]
+fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
+    let mut s = a[0] * b[0];
+    for k in 1..D {
+        s += a[k] * b[k];
+    }
+    s
 }
 
 /// The row block of one rank being filled: its `len` columns per row, the
@@ -546,8 +632,8 @@ struct RowBlock<'a> {
 
 /// Split C's indices and values and d into `threads` disjoint ranges of
 /// rows of whole points, each with about 1/threads of the entries.
-fn targets<'a>(
-    dofs: &[PointDofs],
+fn targets<'a, const D: usize>(
+    dofs: &[PointDofs<D>],
     indptr: &[usize],
     threads: usize,
     indices: &'a mut [usize],
@@ -588,8 +674,8 @@ fn targets<'a>(
 }
 
 /// Copy the blocks `out` of the chunks `round` that fall in `t`'s rows.
-fn copy_blocks(
-    rp: &[RankPoint],
+fn copy_blocks<const D: usize>(
+    rp: &[RankPoint<D>],
     indptr: &[usize],
     round: &[(usize, usize)],
     out: &[Block],
@@ -606,7 +692,7 @@ fn copy_blocks(
             let i1 = i0 + (b1 - b0);
             t.ind[i0..i1].copy_from_slice(&b.cols[b0..b1]);
             t.dat[i0..i1].copy_from_slice(&b.vals[b0..b1]);
-            let (d0, dk) = (x.start - t.rows.start, 2 * i);
+            let (d0, dk) = (x.start - t.rows.start, D * i);
             t.d[d0..d0 + k].copy_from_slice(&b.d[dk..dk + k]);
         }
     }
@@ -614,11 +700,11 @@ fn copy_blocks(
 
 /// C and the element part of d for the `n` unknowns of `dofs`, on rayon's
 /// threads if `parallel` (the result is the same bit for bit).
-pub(super) fn assemble(
-    topo: &Topology,
-    dofs: &[PointDofs],
+pub(super) fn assemble<const D: usize, const N: usize>(
+    topo: Cells<D, N>,
+    dofs: &[PointDofs<D>],
     n: usize,
-    mats: &Materials,
+    mats: &Materials<D>,
     parallel: bool,
 ) -> (Csr, Vec<f64>) {
     let np = topo.points.len();
@@ -741,8 +827,8 @@ mod tests {
             let mats = Materials::new(&m.topo, &problem.file.materials, &problem.file.model);
             let n = m.qp.n();
             let (cr, dr) = reference_stiffness(&m.topo, &m.dofs, n, &mats);
-            let (cs, ds) = assemble(&m.topo, &m.dofs, n, &mats, false);
-            let (cp, dp) = assemble(&m.topo, &m.dofs, n, &mats, true);
+            let (cs, ds) = assemble(Cells::plane(&m.topo), &m.dofs, n, &mats, false);
+            let (cp, dp) = assemble(Cells::plane(&m.topo), &m.dofs, n, &mats, true);
             // Threads change nothing, bit for bit.
             assert_eq!(cs, cp, "{}", path.display());
             assert_eq!(ds, dp);

@@ -453,39 +453,54 @@ fn conforming_edges(
 }
 
 /// The body of each mesh triangle and the number of bodies: triangles
-/// joined through edges not on a conforming contact curve, bodies numbered
-/// in the order of (lowest node tag, lowest triangle).
+/// joined through edges not on a conforming contact curve, numbered as
+/// [`cell_bodies`] does.
 fn bodies(
     mesh: &Mesh,
     edges: &Edges,
     contact_edges: &[((usize, usize), u32)],
 ) -> (Vec<u32>, usize) {
-    let nt = mesh.triangles.len();
     let mut on_contact = vec![false; edges.len()];
     for &((a, b), _) in contact_edges {
         if let Some(e) = edges.find(a, b) {
             on_contact[e] = true;
         }
     }
+    let joined = edges
+        .tri
+        .iter()
+        .enumerate()
+        .filter(|&(e, ts)| ts[1] != NONE32 && !on_contact[e])
+        .map(|(_, ts)| (ts[0] as usize, ts[1] as usize));
+    cell_bodies(&mesh.triangles, &mesh.node_tags, joined)
+}
+
+/// The body of each cell (D + 1 nodes: triangles in 2D, tetrahedra in 3D)
+/// and the number of bodies: the cells `joined` through a shared facet
+/// (an edge in 2D, a face in 3D) are one body, and the bodies are numbered
+/// in the order of (lowest node tag, lowest cell).
+pub(super) fn cell_bodies<const N: usize>(
+    cells: &[[usize; N]],
+    node_tags: &[u64],
+    joined: impl IntoIterator<Item = (usize, usize)>,
+) -> (Vec<u32>, usize) {
+    let nt = cells.len();
     let mut uf = UnionFind::new(nt);
-    for (e, ts) in edges.tri.iter().enumerate() {
-        if ts[1] != NONE32 && !on_contact[e] {
-            uf.union(ts[0] as usize, ts[1] as usize);
-        }
+    for (a, b) in joined {
+        uf.union(a, b);
     }
-    drop(on_contact);
-    // Each set's root is its lowest triangle.
+    // Each set's root is its lowest cell.
     let mut root_min_tag = vec![u64::MAX; nt];
-    let mut tri_root = vec![0u32; nt];
-    for (t, tri) in mesh.triangles.iter().enumerate() {
+    let mut cell_root = vec![0u32; nt];
+    for (t, cell) in cells.iter().enumerate() {
         let r = uf.find(t);
-        tri_root[t] = r as u32;
-        let m = tri.iter().map(|&v| mesh.node_tags[v]).min().unwrap_or(0);
+        cell_root[t] = r as u32;
+        let m = cell.iter().map(|&v| node_tags[v]).min().unwrap_or(0);
         root_min_tag[r] = root_min_tag[r].min(m);
     }
     drop(uf);
     let mut roots: Vec<(u64, usize)> = (0..nt)
-        .filter(|&t| tri_root[t] as usize == t)
+        .filter(|&t| cell_root[t] as usize == t)
         .map(|r| (root_min_tag[r], r))
         .collect();
     drop(root_min_tag);
@@ -494,8 +509,11 @@ fn bodies(
     for (i, &(_, r)) in roots.iter().enumerate() {
         body_of_root[r] = i as u32;
     }
-    let mesh_tri_body = tri_root.iter().map(|&r| body_of_root[r as usize]).collect();
-    (mesh_tri_body, roots.len())
+    let cell_body = cell_root
+        .iter()
+        .map(|&r| body_of_root[r as usize])
+        .collect();
+    (cell_body, roots.len())
 }
 
 /// Orientation: flip (in `tris`) a body whose triangles are all clockwise;
