@@ -68,6 +68,9 @@ use crate::qp::{Context, Friction, IterRecord, Output, QpError, QpProblem, Statu
 const RHO: f64 = super::RHO_FACTOR;
 /// Augmented Lagrangian steps per Newton step, at most.
 const AL_MAX: usize = 200;
+/// Sweeps in a row that do not halve |Bx − b| after which the augmented
+/// Lagrangian steps stop (docs/methods.md §9.2).
+const AL_STALL: usize = 3;
 /// c_tᵢ = CT_FACTOR · cᵢ in the slip prediction |λ_t + c_t v| ≤ s: any
 /// c_t > 0 has the same fixed points; a small one lets the forces lead.
 /// With c_t = c the block of tests/friction.rs at tan θ = 0.9μ under
@@ -762,7 +765,9 @@ impl<'a> State<'a> {
             .collect();
         let bscale = norm_inf(&b);
         let mut x = vec![0.0; n];
+        let (mut sweeps, mut last_res, mut stalled) = (0, f64::INFINITY, 0);
         for _ in 0..AL_MAX {
+            sweeps += 1;
             // x = K⁻¹(d' + Bᵀ(ρb − μ))
             let mut rhs = dp.clone();
             for (k, br) in brows.iter().enumerate() {
@@ -782,10 +787,22 @@ impl<'a> State<'a> {
                 res = res.max((bx - b[k]).abs());
             }
             let xs = norm_inf(&x).max(bscale).max(f64::MIN_POSITIVE);
-            if res <= 1e-14 * xs {
+            // Done at rounding, or when three sweeps in a row no longer
+            // halve |Bx − b| (its floor: rounding at 1.4·10⁻¹³, or rows that
+            // contradict each other, where more sweeps only grow μ).
+            stalled = if res > 0.5 * last_res * xs {
+                stalled + 1
+            } else {
+                0
+            };
+            last_res = res / xs;
+            if res <= 1e-14 * xs || stalled >= AL_STALL {
                 break;
             }
         }
+        log::debug!(
+            "ssn: friction: sparse step: {sweeps} augmented Lagrangian sweeps, |Bx − b| {last_res:.2e} of max(|x|, |b|)"
+        );
         if !x.iter().all(|v| v.is_finite()) {
             return Ok(Some(Status::Failed(Failure::Breakdown(
                 "the KKT solve of a working set gave a non-finite iterate".into(),
