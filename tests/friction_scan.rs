@@ -110,6 +110,17 @@ fn sheared_steps(dir: &std::path::Path) -> String {
     p.display().to_string()
 }
 
+/// max |a − b| over every component, and max |b| (the scale it is judged by).
+fn max_difference(a: &[[f64; 2]], b: &[[f64; 2]]) -> (f64, f64) {
+    let scale = b
+        .iter()
+        .fold(0.0f64, |m, u| m.max(u[0].abs()).max(u[1].abs()));
+    let diff = a.iter().zip(b).fold(0.0f64, |m, (p, q)| {
+        m.max((p[0] - q[0]).abs()).max((p[1] - q[1]).abs())
+    });
+    (diff, scale)
+}
+
 /// The last step's displacements of a checkpoint.
 fn last_displacement(h5: &std::path::Path) -> Vec<[f64; 2]> {
     let ck = signorini::io::hdf5::read_checkpoint(h5).unwrap();
@@ -148,12 +159,7 @@ fn sparse_path_load_steps_start_from_the_last_steps_sets() {
     assert_eq!(code, 0, "{text}");
     let us = last_displacement(&d.path().join("sparse/sheared_steps.h5"));
     let ud = last_displacement(&d.path().join("dual/sheared_steps.h5"));
-    let scale = ud
-        .iter()
-        .fold(0.0f64, |m, u| m.max(u[0].abs()).max(u[1].abs()));
-    let diff = us.iter().zip(&ud).fold(0.0f64, |m, (a, b)| {
-        m.max((a[0] - b[0]).abs()).max((a[1] - b[1]).abs())
-    });
+    let (diff, scale) = max_difference(&us, &ud);
     assert!(
         diff <= 1e-8 * scale,
         "sparse vs dual path: {diff:e} of {scale:e}"
@@ -317,12 +323,7 @@ fn a_thin_walled_shrink_fit_takes_the_dual_form() {
     assert_eq!(code, 0, "{text}");
     let ud = last_displacement(&d.path().join("dual/sf.h5"));
     let us = last_displacement(&d.path().join("sparse/sf.h5"));
-    let scale = ud
-        .iter()
-        .fold(0.0f64, |m, u| m.max(u[0].abs()).max(u[1].abs()));
-    let diff = us.iter().zip(&ud).fold(0.0f64, |m, (a, b)| {
-        m.max((a[0] - b[0]).abs()).max((a[1] - b[1]).abs())
-    });
+    let (diff, scale) = max_difference(&us, &ud);
     assert!(
         diff <= 1e-8 * scale,
         "dual vs sparse path: {diff:e} of {scale:e}"
