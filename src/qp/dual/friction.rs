@@ -12,7 +12,7 @@
 //! last multipliers: the outer loop of §9.1 shared with `ssn`
 //! ([`crate::qp::coulomb`]), of which this file is the Tresca solve.
 
-use super::{row_scaling_of, BoundStep, BoxBounds, DualOp, Smalbe};
+use super::{dense_h, row_scaling_of, BoundStep, BoxBounds, DualOp, Smalbe};
 use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::sparse::Csr;
 use crate::qp::coulomb::{self, Bound, Tresca, TrescaStep};
@@ -24,6 +24,15 @@ use std::time::Instant;
 /// the dual gradient only, and on the inclined plane of tests/friction.rs
 /// at tol = 10⁻¹⁰ the change stagnated at 4.7·tol.
 const COULOMB_TOL_FACTOR: f64 = 100.0;
+
+/// The dual Hessian H = B K⁻¹ Bᵀ of the stacked rows is formed once
+/// ([`dense_h`], 2m solves' worth) when B has at most DENSE_RATIO·√n rows
+/// (ssn's frictional dual form takes the same border, docs/methods.md
+/// §9.2) and at most DENSE_MAX (8·DENSE_MAX² bytes): then every step of
+/// every Tresca solve is a dense product instead of a solve with K.
+const DENSE_RATIO: f64 = 48.0;
+/// See [`DENSE_RATIO`].
+const DENSE_MAX: usize = 4096;
 
 /// Solve the frictional `qp` on the box-constrained dual with the bound
 /// steps `make` builds (one per Tresca solve); returns x and [λ_n; λ_t].
@@ -100,6 +109,9 @@ pub(crate) fn solve_friction<S: BoundStep>(
         name,
         lam0: None,
         prescribed,
+        kernel: None,
+        hnorm: None,
+        dense: None,
     };
     let target = ctx.settings.kkt_target;
     let proven = coulomb::certificate(qp);
@@ -125,6 +137,13 @@ struct DualTresca<'q, 'c, 'a, F> {
     /// an offset): (row, sign of the slip −t0). Their λ_t is s·sign v
     /// (0 in the glued solve), not the host's.
     prescribed: Vec<(usize, f64)>,
+    /// The orthonormal kernel basis, the same for every Tresca solve.
+    kernel: Option<Vec<Vec<f64>>>,
+    /// ‖PHP‖ of the first solve ([`BoxBounds::hnorm`]).
+    hnorm: Option<f64>,
+    /// H = B K⁻¹ Bᵀ of the stacked rows, formed at the first solve when
+    /// B is small ([`DENSE_RATIO`]).
+    dense: Option<std::sync::Arc<Vec<f64>>>,
 }
 
 impl<S: BoundStep, F: FnMut() -> S> TrescaStep for DualTresca<'_, '_, '_, F> {
@@ -135,9 +154,25 @@ impl<S: BoundStep, F: FnMut() -> S> TrescaStep for DualTresca<'_, '_, '_, F> {
     fn solve(&mut self, bound: Bound<'_>) -> Result<Tresca, QpError> {
         let (qp, ctx, name) = (self.qp, self.ctx, self.name);
         let m = qp.m();
-        let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
+        let r = match &self.kernel {
+            Some(r) => r.clone(),
+            None => {
+                let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
+                self.kernel = Some(r.clone());
+                r
+            }
+        };
         let fac = ctx.ws.cholesky(&qp.c, &qp.kernel)?;
-        let op = DualOp::new(self.sq, fac, r, name)?;
+        let sm = self.sq.m();
+        let small = sm as f64 <= DENSE_RATIO * (qp.n() as f64).sqrt() && sm <= DENSE_MAX;
+        if small && self.dense.is_none() {
+            self.dense = Some(std::sync::Arc::new(dense_h(self.sq, &fac)));
+            log::debug!("{name}: the dual Hessian formed ({sm} stacked rows)");
+        }
+        let mut op = DualOp::new(self.sq, fac, r, name)?;
+        if let Some(h) = &self.dense {
+            op.with_dense(h.clone());
+        }
         // |λ_t| ≤ s ⇔ |μ| ≤ s/sc for the scaled multiplier μ = λ/sc; glued:
         // no bound (s = ∞).
         let upper: Vec<f64> = match bound {
@@ -148,9 +183,11 @@ impl<S: BoundStep, F: FnMut() -> S> TrescaStep for DualTresca<'_, '_, '_, F> {
             m_n: m,
             upper,
             lam0: self.lam0.take(),
+            hnorm: self.hnorm,
         };
         let mut st = Smalbe::new(op, ctx.settings.tol, (self.make)(), name, Some(&boxed))?;
         st.s.target = ctx.settings.kkt_target;
+        self.hnorm = Some(st.hnorm);
         let mut exec = ctx.executor(name);
         let (status, iters) = exec.run(&mut st);
         let out = st.into_result(status, iters, exec.log, vec![]);

@@ -198,6 +198,52 @@ pub(crate) struct DualOp<'a> {
     rho: f64,
     /// Solves with the factor so far.
     solves: usize,
+    /// H = A K⁻¹ Aᵀ formed once ([`dense_h`]), m×m (symmetric: row- or
+    /// column-major alike): then
+    /// [`DualOp::h`] is a dense product, not a solve with K.
+    dense: Option<std::sync::Arc<Vec<f64>>>,
+}
+
+/// Columns of K⁻¹Aᵀ formed together in [`dense_h`].
+const DENSE_CHUNK: usize = 64;
+
+/// H = A K⁻¹ Aᵀ (row-major m×m, symmetrised) for the factor `fac` of `qp`'s
+/// C: m solves with K, 64 right-hand sides a pass. A Coulomb loop applies
+/// the same H thousands of times (docs/methods.md §9.2: one Tresca solve a
+/// bound, each hundreds of steps), where a solve with K of the geodynamic
+/// model costs as much as a product with H of its 332 stacked rows ten
+/// times over.
+pub(crate) fn dense_h(qp: &QpProblem, fac: &Cholesky) -> Vec<f64> {
+    let (n, m) = (qp.n(), qp.m());
+    let mut h = vec![0.0; m * m];
+    let mut x = vec![0.0; n * DENSE_CHUNK];
+    for first in (0..m).step_by(DENSE_CHUNK) {
+        let k = DENSE_CHUNK.min(m - first);
+        let x = &mut x[..n * k];
+        x.fill(0.0);
+        for c in 0..k {
+            let (cols, vals) = qp.a.row(first + c);
+            for (&j, &v) in cols.iter().zip(vals) {
+                x[c * n + j] += v;
+            }
+        }
+        fac.solve_many_in_place(x, k);
+        for i in 0..m {
+            let (cols, vals) = qp.a.row(i);
+            for c in 0..k {
+                let col = &x[c * n..(c + 1) * n];
+                h[i * m + first + c] = cols.iter().zip(vals).map(|(&j, &v)| v * col[j]).sum();
+            }
+        }
+    }
+    for i in 0..m {
+        for j in 0..i {
+            let v = 0.5 * (h[i * m + j] + h[j * m + i]);
+            h[i * m + j] = v;
+            h[j * m + i] = v;
+        }
+    }
+    h
 }
 
 impl<'a> DualOp<'a> {
@@ -245,6 +291,7 @@ impl<'a> DualOp<'a> {
             l,
             rho: 0.0,
             solves: 0,
+            dense: None,
         })
     }
     /// Dimension k of the kernel.
@@ -278,8 +325,28 @@ impl<'a> DualOp<'a> {
         let qp = self.qp;
         qp.a.mul(&t).iter().zip(&qp.g).map(|(a, g)| a - g).collect()
     }
+    /// Apply H through the dense `h` ([`dense_h`]) from now on.
+    pub(crate) fn with_dense(&mut self, h: std::sync::Arc<Vec<f64>>) {
+        debug_assert_eq!(h.len(), self.qp.m() * self.qp.m());
+        self.dense = Some(h);
+    }
     /// H v = A K⁻¹ Aᵀ v
     pub(crate) fn h(&mut self, v: &[f64]) -> Vec<f64> {
+        if let Some(h) = &self.dense {
+            // faer's product (SIMD lanes, several sums at once): a row by
+            // row `dot` is one chain of dependent additions, 8 times slower.
+            let m = v.len();
+            let mut out = vec![0.0; m];
+            faer::linalg::matmul::matmul(
+                faer::MatMut::from_column_major_slice_mut(&mut out, m, 1),
+                faer::Accum::Replace,
+                faer::MatRef::from_column_major_slice(h, m, m),
+                faer::MatRef::from_column_major_slice(v, m, 1),
+                1.0,
+                faer::Par::Seq,
+            );
+            return out;
+        }
         let mut t = self.qp.a.mul_t(v);
         self.solve_k(&mut t);
         self.qp.a.mul(&t)
@@ -437,6 +504,8 @@ struct Smalbe<'a, S> {
     e_norm: f64,
     /// SMALBE's M.
     mpar: f64,
+    /// ‖PHP‖ (power iteration, ρ = 0), kept for [`BoxBounds::hnorm`].
+    pub(crate) hnorm: f64,
     /// SMALBE's η.
     eta: f64,
     /// The augmented Lagrangian at the previous update.
@@ -475,6 +544,11 @@ pub(crate) struct BoxBounds {
     pub(crate) m_n: usize,
     pub(crate) upper: Vec<f64>,
     pub(crate) lam0: Option<Vec<f64>>,
+    /// ‖PHP‖ as the last solve of the same operator estimated it: the
+    /// Tresca solves of one Coulomb loop share H (only the box moves), and
+    /// the estimate (30 applications of H, a tenth of a solve on the
+    /// geodynamic model) is the same number every time.
+    pub(crate) hnorm: Option<f64>,
 }
 
 impl<'a, S: BoundStep> Smalbe<'a, S> {
@@ -501,7 +575,11 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
             op.project(&mut bhat);
         }
         // ‖PHP‖ by power iteration (ρ = 0 here).
-        let hnorm = if m == 0 { 1.0 } else { op.norm_estimate() };
+        let hnorm = match boxed.and_then(|b| b.hnorm) {
+            Some(h) => h,
+            None if m == 0 => 1.0,
+            None => op.norm_estimate(),
+        };
         if !(hnorm > 0.0 && hnorm.is_finite()) {
             return Err(QpError::Factor(format!(
                 "{name}: ‖H‖ estimate {hnorm} is not positive"
@@ -580,6 +658,7 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
             mu: vec![0.0; k],
             e_norm,
             mpar: smalbe_m0(ref_g, e_norm, hnorm),
+            hnorm,
             eta: ETA_FACTOR * ref_g,
             lag_prev: None,
             outer: 0,
@@ -904,6 +983,36 @@ fn smalbe_m0(ref_g: f64, e_norm: f64, hnorm: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::qp::testing::two_blocks;
+
+    /// The formed H (more rows than one pass of [`DENSE_CHUNK`]) applies as
+    /// the solve with K does, to rounding, and is symmetric.
+    #[test]
+    fn the_formed_dual_hessian_applies_as_the_solves_do() {
+        let qp = two_blocks(80, 6, true);
+        let m = qp.m();
+        assert!(m > DENSE_CHUNK, "{m} rows");
+        let fac = Cholesky::new(&qp.c, &qp.kernel).unwrap();
+        let h = std::sync::Arc::new(dense_h(&qp, &fac));
+        let r = orthonormal_kernel(&qp.c, &qp.kernel).unwrap();
+        let mut by_solves = DualOp::new(&qp, fac.clone(), r.clone(), "test").unwrap();
+        let mut formed = DualOp::new(&qp, fac, r, "test").unwrap();
+        formed.with_dense(h.clone());
+        let v: Vec<f64> = (0..m).map(|i| ((i * 7 % 13) as f64) - 6.0).collect();
+        let (a, b) = (by_solves.h(&v), formed.h(&v));
+        let diff: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x - y).collect();
+        assert!(
+            norm(&diff) <= 1e-12 * norm(&a),
+            "{:e} of {:e}",
+            norm(&diff),
+            norm(&a)
+        );
+        assert_eq!(formed.solves, 0, "the formed H solved with K");
+        for i in 0..m {
+            for j in 0..i {
+                assert_eq!(h[i * m + j], h[j * m + i]);
+            }
+        }
+    }
 
     /// G̃ has orthonormal rows, P annihilates them, PHP + ρQ is symmetric
     /// with eigenvalue ρ on range G̃ᵀ, and the power estimate of ‖PHP‖ is
