@@ -19,6 +19,20 @@ pub struct Csr {
     pub data: Shared<f64>,
 }
 
+impl Csr {
+    /// Whether `other` is this matrix: the same arrays (the clones a load
+    /// step's model shares), else equal sizes, pattern and values. What a
+    /// workspace keeps for a matrix is reused only for the same one.
+    pub fn same_as(&self, other: &Csr) -> bool {
+        (self.nrows == other.nrows
+            && self.ncols == other.ncols
+            && self.indptr.ptr_eq(&other.indptr)
+            && self.indices.ptr_eq(&other.indices)
+            && self.data.ptr_eq(&other.data))
+            || self == other
+    }
+}
+
 /// A vector shared by its clones and copied on the first write through
 /// one of them (`Arc::make_mut`): reads see a `Vec`, writes too.
 #[derive(Debug, Clone, Default, PartialEq)]

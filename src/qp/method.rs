@@ -186,8 +186,9 @@ pub struct Capabilities {
 
 /// Unknowns above which a method's [`Capabilities::friction_caveat`] is
 /// said before a frictional solve (NAFEMS 1 with μ = 0.1, BENCHMARKS.md
-/// "Friction at scale": mprgp 30 times ssn's time at 15 k unknowns, 160
-/// times at 58 k).
+/// "Friction": mprgp 4 times ssn's time at 58 k and 160 k unknowns with
+/// the dual Hessian formed, docs/methods.md §9.2; 30 and 160 times
+/// without).
 pub const SLOW_FRICTION_DOFS: usize = 10_000;
 
 impl Default for Capabilities {

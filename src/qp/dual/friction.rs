@@ -120,6 +120,23 @@ pub(crate) fn solve_friction<S: BoundStep>(
     Ok(out)
 }
 
+/// What the frictional dual derives from C, B and ker C alone, kept in the
+/// workspace for the next solve of the same matrices (a load step).
+struct KeptHessian {
+    /// C and the scaled stacked rows B (clones share their arrays).
+    c: Csr,
+    b: Csr,
+    /// [`crate::linalg::cholesky::matrix_key`] of ker C's basis.
+    kernel_key: u64,
+    /// H = B K⁻¹ Bᵀ ([`dense_h`]).
+    h: std::sync::Arc<Vec<f64>>,
+    /// ‖PHP‖ ([`BoxBounds::hnorm`]).
+    hnorm: f64,
+}
+
+/// The workspace slot of [`KeptHessian`].
+const KEPT_HESSIAN_TAG: u64 = 0x6d70_7267_705f_6873;
+
 /// The Tresca solve of the dual: the host on the stacked rows [A; T] with
 /// the box |λ_t| ≤ s, warm-started from the last multipliers.
 struct DualTresca<'q, 'c, 'a, F> {
@@ -166,8 +183,24 @@ impl<S: BoundStep, F: FnMut() -> S> TrescaStep for DualTresca<'_, '_, '_, F> {
         let sm = self.sq.m();
         let small = sm as f64 <= DENSE_RATIO * (qp.n() as f64).sqrt() && sm <= DENSE_MAX;
         if small && self.dense.is_none() {
-            self.dense = Some(std::sync::Arc::new(dense_h(self.sq, &fac)));
-            log::debug!("{name}: the dual Hessian formed ({sm} stacked rows)");
+            // H depends on C, B and ker C alone: a load step of the same
+            // model takes the last step's (the same bits a fresh one has).
+            let kernel_key = crate::linalg::cholesky::matrix_key(&[], &qp.kernel);
+            let kept = ctx.ws.kept::<KeptHessian>(KEPT_HESSIAN_TAG).filter(|k| {
+                k.kernel_key == kernel_key && k.c.same_as(&qp.c) && k.b.same_as(&self.sq.a)
+            });
+            let h = match kept {
+                Some(k) => {
+                    log::debug!("{name}: the dual Hessian of the last solve of the same matrices");
+                    self.hnorm = Some(k.hnorm);
+                    k.h.clone()
+                }
+                None => {
+                    log::debug!("{name}: the dual Hessian formed ({sm} stacked rows)");
+                    std::sync::Arc::new(dense_h(self.sq, &fac))
+                }
+            };
+            self.dense = Some(h);
         }
         let mut op = DualOp::new(self.sq, fac, r, name)?;
         if let Some(h) = &self.dense {
@@ -187,6 +220,20 @@ impl<S: BoundStep, F: FnMut() -> S> TrescaStep for DualTresca<'_, '_, '_, F> {
         };
         let mut st = Smalbe::new(op, ctx.settings.tol, (self.make)(), name, Some(&boxed))?;
         st.s.target = ctx.settings.kkt_target;
+        if self.hnorm.is_none() {
+            if let Some(h) = &self.dense {
+                ctx.ws.keep(
+                    KEPT_HESSIAN_TAG,
+                    std::rc::Rc::new(KeptHessian {
+                        c: qp.c.clone(),
+                        b: self.sq.a.clone(),
+                        kernel_key: crate::linalg::cholesky::matrix_key(&[], &qp.kernel),
+                        h: h.clone(),
+                        hnorm: st.hnorm,
+                    }),
+                );
+            }
+        }
         self.hnorm = Some(st.hnorm);
         let mut exec = ctx.executor(name);
         let (status, iters) = exec.run(&mut st);

@@ -260,15 +260,7 @@ impl Kept {
     /// Whether `qp` has the matrices the data were derived from: the same
     /// arrays (a load step's model shares them), else equal values.
     fn matches(&self, qp: &QpProblem, kernel_key: u64) -> bool {
-        let same = |x: &crate::linalg::sparse::Csr, y: &crate::linalg::sparse::Csr| {
-            (x.nrows == y.nrows
-                && x.ncols == y.ncols
-                && x.indptr.ptr_eq(&y.indptr)
-                && x.indices.ptr_eq(&y.indices)
-                && x.data.ptr_eq(&y.data))
-                || x == y
-        };
-        self.kernel_key == kernel_key && same(&self.c, &qp.c) && same(&self.a, &qp.a)
+        self.kernel_key == kernel_key && self.c.same_as(&qp.c) && self.a.same_as(&qp.a)
     }
 }
 

@@ -112,18 +112,10 @@ impl KeptDual {
     /// Whether `qp` has the matrices H was derived from: the same arrays
     /// (a load step's model shares them), else equal values.
     fn matches(&self, qp: &QpProblem, fr: &Friction, kernel_key: u64) -> bool {
-        let same = |x: &Csr, y: &Csr| {
-            (x.nrows == y.nrows
-                && x.ncols == y.ncols
-                && x.indptr.ptr_eq(&y.indptr)
-                && x.indices.ptr_eq(&y.indices)
-                && x.data.ptr_eq(&y.data))
-                || x == y
-        };
         self.kernel_key == kernel_key
-            && same(&self.c, &qp.c)
-            && same(&self.a, &qp.a)
-            && same(&self.t, &fr.t)
+            && self.c.same_as(&qp.c)
+            && self.a.same_as(&qp.a)
+            && self.t.same_as(&fr.t)
     }
 }
 
