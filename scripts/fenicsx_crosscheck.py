@@ -4,6 +4,9 @@
 Usage:  /usr/bin/python3 scripts/fenicsx_crosscheck.py meshes/NAME.toml [--tol 1e-8]
         exit 0 OK, 1 FAIL, 2 usage/setup error, 3 NOT CHECKED (see the end)
 
+A mesh of tetrahedra (a 3D model) is checked by scripts/fenicsx_crosscheck3d.py
+(linear elasticity; 3D contact is NOT CHECKED until `solve` runs it).
+
 Runs under Debian's python3 (python3-dolfinx-real 0.5.2, python3-gmsh,
 python3-scipy, python3-h5py); the QP solver Clarabel comes from PyPI and is
 looked for in <repo>/.venv/debian-site (pip install --target, see python_checks.sh) or
@@ -1758,6 +1761,19 @@ def main(argv=None) -> int:
     log(f"== {name}: {toml}")
     try:
         cfg = tomllib.loads(toml.read_text())
+        # A mesh of tetrahedra: the 3D reference (scripts/fenicsx_crosscheck3d.py).
+        import fenicsx_crosscheck3d as x3
+
+        msh = (toml.parent / str(cfg.get("mesh", {}).get("file", ""))).resolve()
+        if msh.is_file() and x3.mesh_is_3d(gmsh, msh):
+            try:
+                rc = x3.check(toml, exe, args.tol, tmp, gmsh)
+            except x3.NotChecked as e:
+                raise NotChecked(str(e))
+            except x3.CheckError as e:
+                raise CheckError(str(e))
+            log(f"{'OK' if rc == 0 else 'FAIL'} {name} ({time.time() - t_start:.1f} s)")
+            return rc
         extra = unmodelled(cfg)
         if extra:
             raise NotChecked(f"the reference does not model {', '.join(extra)} (docs/problem-format.md); "
