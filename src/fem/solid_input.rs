@@ -28,10 +28,7 @@ pub fn solid_input(problem: &Problem) -> Result<SolidInput, FemError> {
     if !f.steps.is_empty() {
         return Err(FemError::new(
             path,
-            format!(
-                "[[steps]]: {} load steps given, but load steps are not in yet for 3D models (tetrahedra); solve one load case per problem file",
-                f.steps.len()
-            ),
+            "[[steps]]: load steps are not in yet for 3D models (tetrahedra); solve one load case per problem file".to_string(),
         ));
     }
     Ok(SolidInput {
