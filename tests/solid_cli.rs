@@ -415,3 +415,41 @@ fn a_3d_key_in_a_2d_problem_is_refused() {
         &["bad.toml", "[model] gravity", "2 components", "found 3"],
     );
 }
+
+/// The outputs are one transaction: a run whose commit fails (the
+/// checkpoint's name taken by a directory) exits 2 and leaves the files of
+/// the run before it as they were, not a new VTU beside an old JSON.
+#[test]
+fn a_failed_commit_leaves_the_previous_outputs() {
+    if !have_gmsh() {
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    block_mesh(dir);
+    std::fs::write(dir.join("block.toml"), block_toml("")).unwrap();
+    let (code, out, err) = signorini(dir, &["solve", "block.toml", "--out", "out", "-q"]);
+    assert_eq!(code, 0, "{out}{err}");
+    let before: Vec<Vec<u8>> = ["block.vtu", "block.json"]
+        .iter()
+        .map(|f| std::fs::read(dir.join("out").join(f)).unwrap())
+        .collect();
+    std::fs::remove_file(dir.join("out/block.h5")).unwrap();
+    std::fs::create_dir_all(dir.join("out/block.h5/in_the_way")).unwrap();
+    // Another load, so that a written VTU would differ.
+    let text = block_toml("").replace("p = [1e8, 0.0, 0.0]", "p = [2e8, 0.0, 0.0]");
+    std::fs::write(dir.join("block.toml"), text).unwrap();
+    let (code, out, err) = signorini(dir, &["solve", "block.toml", "--out", "out"]);
+    assert_eq!(code, 2, "{out}{err}");
+    assert!(err.contains("block.h5"), "{err}");
+    for (f, b) in ["block.vtu", "block.json"].iter().zip(&before) {
+        assert_eq!(&std::fs::read(dir.join("out").join(f)).unwrap(), b, "{f}");
+    }
+    let stray: Vec<_> = std::fs::read_dir(dir.join("out"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| !["block.vtu", "block.json", "block.h5"].contains(&n.as_str()))
+        .collect();
+    assert!(stray.is_empty(), "{stray:?}");
+}
