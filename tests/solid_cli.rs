@@ -46,6 +46,7 @@ Physical Surface("x0") = Surface In BoundingBox{-e, -e, -e, e, 0.5 + e, 0.3 + e}
 Physical Surface("x1") = Surface In BoundingBox{1 - e, -e, -e, 1 + e, 0.5 + e, 0.3 + e};
 Physical Surface("y0") = Surface In BoundingBox{-e, -e, -e, 1 + e, e, 0.3 + e};
 Physical Surface("z0") = Surface In BoundingBox{-e, -e, -e, 1 + e, 0.5 + e, e};
+Physical Point("corner") = Point In BoundingBox{1 - e, 0.5 - e, 0.3 - e, 1 + e, 0.5 + e, 0.3 + e};
 Mesh.MeshSizeMax = 0.15;
 Mesh.MeshSizeMin = 0.075;
 "#;
@@ -452,4 +453,67 @@ fn a_failed_commit_leaves_the_previous_outputs() {
         .filter(|n| !["block.vtu", "block.json", "block.h5"].contains(&n.as_str()))
         .collect();
     assert!(stray.is_empty(), "{stray:?}");
+}
+
+/// `[[force]] f = [fx, fy, fz]` on a Physical Point is a load in N: the
+/// JSON's loads add it to the traction's, and the reactions balance both
+/// in force and moment. `--dim 2` overrides the 3D guess of `mesh`.
+#[test]
+fn a_point_force_is_a_load_and_the_supports_balance_it() {
+    if !have_gmsh() {
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    block_mesh(dir);
+    let f = [1.0e5, -2.0e5, 3.0e5];
+    // Held by three supports that fix all six rigid motions.
+    let toml = format!(
+        "{}[[force]]\non = \"corner\"\nf = [{}, {}, {}]\n[[dirichlet]]\non = \"y0\"\nux = 0.0\n",
+        block_toml(""),
+        f[0],
+        f[1],
+        f[2]
+    );
+    std::fs::write(dir.join("force.toml"), toml).unwrap();
+    let (code, out, err) = signorini(dir, &["solve", "force.toml", "--out", "out"]);
+    assert_eq!(code, 0, "{out}{err}");
+    let j: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/force.json")).unwrap())
+            .unwrap();
+    let (lf, lm) = (vec3(&j["loads"]["force"]), vec3(&j["loads"]["moment"]));
+    let t = SIGMA * 0.5 * 0.3;
+    let want = [t + f[0], f[1], f[2]];
+    for k in 0..3 {
+        assert!((lf[k] - want[k]).abs() < 1e-9 * t, "{lf:?} {want:?}");
+    }
+    // The corner (1, 0.5, 0.3) × f joins the traction's moment.
+    let x = [1.0, 0.5, 0.3];
+    let mf = [
+        x[1] * f[2] - x[2] * f[1],
+        x[2] * f[0] - x[0] * f[2],
+        x[0] * f[1] - x[1] * f[0],
+    ];
+    let mt = [0.0, 0.15 * t, -0.25 * t];
+    for k in 0..3 {
+        assert!((lm[k] - mf[k] - mt[k]).abs() < 1e-9 * t, "{lm:?}");
+    }
+    let (mut rf, mut rm) = ([0.0; 3], [0.0; 3]);
+    for r in j["reactions"].as_object().unwrap().values() {
+        let (fr, mr) = (vec3(&r["force"]), vec3(&r["moment"]));
+        for k in 0..3 {
+            rf[k] += fr[k];
+            rm[k] += mr[k];
+        }
+    }
+    // y0 is both slip and ux = 0 here (the 2D name of the pair).
+    assert_eq!(j["reactions"]["y0"]["kind"], "dirichlet+slip");
+    for k in 0..3 {
+        assert!((lf[k] + rf[k]).abs() < 1e-8 * t, "force {lf:?} {rf:?}");
+        assert!((lm[k] + rm[k]).abs() < 1e-8 * t, "moment {lm:?} {rm:?}");
+    }
+    // `--dim 2` overrides the guess: Gmsh stops at the surface mesh.
+    let (code, out, err) = signorini(dir, &["mesh", "block.geo", "--dim", "2", "-o", "flat.msh"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(!out.contains("tetrahedra"), "{out}");
 }
