@@ -12,8 +12,9 @@ use super::FemError;
 use crate::mesh::Mesh;
 use crate::problem::{shorten, Problem, TractionLoad};
 
-/// The [`SolidInput`] of a 3D `problem`; `[[contact]]` and `[[steps]]` are
-/// refused naming the entry (3D contact is being added, issue 45).
+/// The [`SolidInput`] of a 3D `problem`; `[[contact]]`, `[[steps]]` and
+/// `[output] reference_step` are refused naming the entry (3D contact is
+/// being added, issue 45).
 pub fn solid_input(problem: &Problem) -> Result<SolidInput, FemError> {
     let (f, path) = (&problem.file, problem.path.as_path());
     if let Some(c) = f.contact.first() {
@@ -29,6 +30,14 @@ pub fn solid_input(problem: &Problem) -> Result<SolidInput, FemError> {
         return Err(FemError::new(
             path,
             "[[steps]]: load steps are not in yet for 3D models (tetrahedra); solve one load case per problem file".to_string(),
+        ));
+    }
+    if let Some(k) = f.output.reference_step {
+        return Err(FemError::new(
+            path,
+            format!(
+                "[output] reference_step = {k}: the *_change fields are not in yet for 3D models (tetrahedra)"
+            ),
         ));
     }
     Ok(SolidInput {
