@@ -128,7 +128,13 @@ fn print_solid_report(prep: &SolidPrepared, o: &run::SolidOutcome) {
         k.dual,
         k.complementarity,
         k.stationarity,
-        if k.certified {
+        // The verdict's words as in 2D (print_certificate).
+        if k.certified && k.stationarity > k.target {
+            format!(
+                "certified at the rounding floor (stationarity floor {:.1e}; target {:.0e}; docs/methods.md §8.4)",
+                k.stationarity_floor, k.target
+            )
+        } else if k.certified {
             format!("certified (≤ {:.0e})", k.target)
         } else {
             format!("NOT certified (target {:.0e})", k.target)
