@@ -1,9 +1,13 @@
 #!/usr/bin/env bash
 # Regenerate the example meshes meshes/*.msh from meshes/*.geo with Gmsh
-# (ASCII msh 4.1, first-order triangles), then run the consistency check
-# meshes/check_meshes.py if python3 (>= 3.11, for tomllib) is available.
+# (ASCII msh 4.1, first-order triangles), and the 3D ones meshes/3d/*.msh
+# (first-order tetrahedra: a .geo that declares a Physical Volume is meshed
+# with -3, as `signorini mesh` does), then run the consistency check
+# meshes/check_meshes.py (2D models) if python3 (>= 3.11, for tomllib) is
+# available.
 #
-# Usage: scripts/gen_meshes.sh [NAME ...]     (default: every meshes/*.geo)
+# Usage: scripts/gen_meshes.sh [NAME ...]     (default: every meshes/*.geo
+#        and meshes/3d/*.geo; a 3D one is named 3d/NAME)
 # Env:   GMSH=/path/to/gmsh   (default: gmsh from PATH)
 #        SKIP_CHECK=1         (do not run the Python check)
 # Exits non-zero if gmsh is missing, a mesh fails, or the check fails.
@@ -24,7 +28,7 @@ if [ "$#" -gt 0 ]; then
     names=("$@")
 else
     names=()
-    for g in *.geo; do names+=("${g%.geo}"); done
+    for g in *.geo 3d/*.geo; do names+=("${g%.geo}"); done
 fi
 
 fail=0
@@ -36,7 +40,9 @@ for n in "${names[@]}"; do
         continue
     fi
     log="$(mktemp)"
-    if "$GMSH" -2 -format msh41 "$n.geo" -o "$n.msh" >"$log" 2>&1 && [ -s "$n.msh" ]; then
+    dim=2
+    if sed 's://.*$::' "$n.geo" | grep -qE 'Physical[[:space:]]+Volume'; then dim=3; fi
+    if "$GMSH" -"$dim" -format msh41 "$n.geo" -o "$n.msh" >"$log" 2>&1 && [ -s "$n.msh" ]; then
         counts="$(grep -E 'Info *: [0-9]+ nodes [0-9]+ elements' "$log" | tail -n1 | sed 's/.*: //')"
         echo "ok     $n.msh  ($counts)"
         grep -iE '^(Warning|Error)' "$log" | sed "s/^/       /" || true

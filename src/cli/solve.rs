@@ -7,8 +7,8 @@ use super::SolveArgs;
 use crate::post;
 use crate::qp::{MethodId, SolveOptions};
 use crate::run::{
-    self, CheckpointWriter, Concurrent, Outcome, Prepared, Progress, Restart, Run, RunError,
-    SummaryWriter, Transaction, VtuWriter,
+    self, CheckpointWriter, Concurrent, Loaded, Outcome, Prepared, Progress, Restart, Run,
+    RunError, SolidPrepared, SummaryWriter, Transaction, VtuWriter,
 };
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -29,8 +29,9 @@ pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 
     if a.max_steps == Some(0) {
         return bad_input(&"--max-steps 0: load steps count from 1");
     }
-    let prep = match run::prepare_with(&a.problem, a.no_contact, build) {
-        Ok(p) => p,
+    let prep = match run::load(&a.problem, a.no_contact, build) {
+        Ok(Loaded::Plane(p)) => *p,
+        Ok(Loaded::Solid(s)) => return solid(a, quiet, t0, &s),
         Err(e) => return bad_input(&e),
     };
     let (method, mut opts) = match run::options(&prep.problem, &a.solver.section()) {
@@ -44,6 +45,163 @@ pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 
             bad_input(&e);
             e.exit_code()
         }
+    }
+}
+
+/// A 3D model (tetrahedra, no contact yet): solved and written by
+/// [`run::solve_solid`], its report printed; the exit code as in 2D.
+fn solid(a: &SolveArgs, quiet: bool, t0: Instant, prep: &SolidPrepared) -> i32 {
+    if let Some(r) = &a.restart {
+        return bad_input(&format!(
+            "--restart {}: 3D models (tetrahedra) have no restart yet (issue 45)",
+            r.display()
+        ));
+    }
+    let (method, mut opts) = match run::options(&prep.problem, &a.solver.section()) {
+        Ok(x) => x,
+        Err(e) => return bad_input(&e),
+    };
+    opts.progress = progress(quiet);
+    let file = &prep.problem.file;
+    let dir = a
+        .out
+        .clone()
+        .or(file.output.dir.clone())
+        .unwrap_or_else(|| PathBuf::from("out"));
+    let compress = a.compress || file.output.compress;
+    let outcome = match run::solve_solid(prep, method, &opts, a.solver.strict, &dir, compress, t0) {
+        Ok(o) => o,
+        Err(e) => {
+            bad_input(&e);
+            return e.exit_code();
+        }
+    };
+    if !quiet {
+        print_solid_report(prep, &outcome);
+    }
+    if outcome.certified {
+        0
+    } else {
+        EXIT_NOT_CONVERGED
+    }
+}
+
+/// The report of a 3D run: as 2D's, with 3-vectors.
+fn print_solid_report(prep: &SolidPrepared, o: &run::SolidOutcome) {
+    let s = &o.summary;
+    crate::outln!(
+        "signorini {} — {} ({})",
+        env!("CARGO_PKG_VERSION"),
+        prep.problem.name,
+        prep.problem.path.display()
+    );
+    crate::outln!(
+        "mesh        {} nodes, {} tetrahedra, {} bodies (3D, solid)",
+        s.nodes,
+        s.tetrahedra,
+        s.bodies
+    );
+    crate::outln!(
+        "problem     {} DOFs, {} contact constraints",
+        s.dofs,
+        s.constraints
+    );
+    crate::outln!(
+        "method      {} (preconditioner {}, ordering {})",
+        s.method,
+        s.preconditioner,
+        s.ordering
+    );
+    crate::outln!(
+        "status      {} after {} iterations ({} inner)",
+        s.status,
+        s.iterations,
+        s.inner_iterations
+    );
+    for note in &s.notes {
+        crate::outln!("note        {note}");
+    }
+    let k = &s.kkt;
+    crate::outln!(
+        "KKT         primal {:.2e}  dual {:.2e}  complementarity {:.2e}  stationarity {:.2e}  → {}",
+        k.primal,
+        k.dual,
+        k.complementarity,
+        k.stationarity,
+        // The verdict's words as in 2D (print_certificate).
+        if k.certified && k.stationarity > k.target {
+            format!(
+                "certified at the rounding floor (stationarity floor {:.1e}; target {:.0e}; docs/methods.md §8.4)",
+                k.stationarity_floor, k.target
+            )
+        } else if k.certified {
+            format!("certified (≤ {:.0e})", k.target)
+        } else {
+            format!("NOT certified (target {:.0e})", k.target)
+        }
+    );
+    crate::outln!(
+        "energy      {:.6e} (QP objective); strain energy {:.6e}, work of the loads {:.6e}",
+        s.energy,
+        s.strain_energy,
+        s.load_work
+    );
+    let v3 = |v: [f64; 3]| format!("({:.4e}, {:.4e}, {:.4e})", v[0], v[1], v[2]);
+    let (mut rf, mut rm) = ([0.0; 3], [0.0; 3]);
+    for (name, g) in &s.reactions {
+        let r = &g.resultant;
+        for k in 0..3 {
+            rf[k] += r.force[k];
+            rm[k] += r.moment[k];
+        }
+        crate::outln!(
+            "reaction    {:<14} ({}) F = {}, M = {}",
+            format!("'{name}'"),
+            g.kind,
+            v3(r.force),
+            v3(r.moment)
+        );
+    }
+    let (lf, lm) = (s.loads.force, s.loads.moment);
+    crate::outln!(
+        "balance     loads F = {}, M = {} (about ({}, {}, {})); loads + reactions F = ({:.2e}, {:.2e}, {:.2e}), M = ({:.2e}, {:.2e}, {:.2e})",
+        v3(lf),
+        v3(lm),
+        s.moment_point[0],
+        s.moment_point[1],
+        s.moment_point[2],
+        lf[0] + rf[0],
+        lf[1] + rf[1],
+        lf[2] + rf[2],
+        lm[0] + rm[0],
+        lm[1] + rm[1],
+        lm[2] + rm[2]
+    );
+    for (name, p) in &s.probes {
+        let u = p.u.map(|v| if v == 0.0 { 0.0 } else { v });
+        crate::outln!(
+            "probe {name:<5} ({:.6}, {:.6}, {:.6}) node {}: u = ({:.6e}, {:.6e}, {:.6e})",
+            p.x,
+            p.y,
+            p.z,
+            p.node,
+            u[0],
+            u[1],
+            u[2]
+        );
+    }
+    let t = &s.timings;
+    crate::outln!(
+        "time [s]    read {:.3}  assemble {:.3}  solve {:.3}  write {:.3}  total {:.3}",
+        t.read,
+        t.assemble,
+        t.solve,
+        t.write,
+        t.total
+    );
+    for (i, f) in o.files.iter().enumerate() {
+        let head = if i == 0 { "outputs" } else { "" };
+        crate::outln!("{head:<11} {}", f.display());
     }
 }
 

@@ -89,7 +89,7 @@ impl Conditions {
     ) -> Result<(), FemError> {
         for (i, dch) in dirichlet.iter().enumerate() {
             let what = format!("[[dirichlet]] #{} (on = \"{}\")", i + 1, dch.on);
-            let [ux, uy] = dch.value.components();
+            let [ux, uy, _] = dch.value.components();
             let mut pts: Vec<usize> = topo
                 .group_points(mesh, path, &dch.on, &what)?
                 .into_iter()

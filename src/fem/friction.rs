@@ -69,7 +69,7 @@ pub(super) fn symmetry_rows(
             .all(|d| d.value.components()[k].unwrap_or(0.0) == 0.0)
             && steps
                 .iter()
-                .all(|st| st.dirichlet.get(name).is_none_or(|u| u[k] == 0.0))
+                .all(|st| st.dirichlet.get(name).is_none_or(|u| u.xyz()[k] == 0.0))
     };
     let mut at: std::collections::HashMap<usize, Vec<(Vector, u32)>> =
         std::collections::HashMap::new();

@@ -86,7 +86,7 @@ pub(super) fn check_body_forces(
     path: &Path,
 ) -> Result<(), FemError> {
     let err = |msg: String| FemError::new(path, msg);
-    let g = model.gravity.unwrap_or([0.0, 0.0]);
+    let g = model.gravity.map_or([0.0, 0.0], |g| g.xy());
     let w = model.omega.unwrap_or(0.0);
     let mut r_max = vec![0.0f64; topo.material_names.len()];
     for (tri, &mi) in topo.triangles.iter().zip(&topo.tri_material) {
@@ -211,7 +211,7 @@ impl Loads<'_> {
                 let (pa, pb) = (mesh.nodes[a], mesh.nodes[b]);
                 let len = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
                 let pv = match tr.load {
-                    TractionLoad::Vector(pv) => pv,
+                    TractionLoad::Vector(pv) => pv.xy(),
                     TractionLoad::Normal(pn) => {
                         let nrm = topo.outward_normal(mesh, t, a, b);
                         [pn * nrm[0], pn * nrm[1]]
@@ -258,7 +258,8 @@ impl Loads<'_> {
                 if let Some(&(_, p)) = topo.copies(v).first() {
                     // f is per unit thickness, like every other load (§2.2);
                     // per radian in an axisymmetric model (th = 1).
-                    self.add(p, [th * fo.f[0], th * fo.f[1]]);
+                    let f = fo.f.xy();
+                    self.add(p, [th * f[0], th * f[1]]);
                 }
             }
         }

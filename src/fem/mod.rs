@@ -22,6 +22,7 @@ mod mortar;
 mod pairs;
 mod rigid;
 pub mod solid;
+pub mod solid_input;
 mod sort;
 mod stiffness;
 pub mod topology;
@@ -143,7 +144,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
         return Err(FemError::new(
             path,
             format!(
-                "{}: a 3D mesh (tetrahedra): solid models are read, checked and assembled (fem::solid), but `solve` does not run them yet (issue 45)",
+                "{}: a 3D mesh (tetrahedra): `signorini solve` runs a 3D model without contact, but this command does not run 3D models yet (issue 45)",
                 mesh.path.display()
             ),
         ));

@@ -39,7 +39,7 @@ impl Materials {
     ) -> Materials {
         let kind = topo.kind;
         let mats: Vec<&Material> = topo.material_names.iter().map(|m| &materials[m]).collect();
-        let gvec = model.gravity.unwrap_or([0.0, 0.0]);
+        let gvec = model.gravity.map_or([0.0, 0.0], |g| g.xy());
         let w = model.omega.unwrap_or(0.0);
         // A load step scales ρω²r like every other load.
         let lf = model.centrifugal_factor.unwrap_or(1.0);

@@ -45,35 +45,122 @@ pub fn shorten(s: &str) -> String {
     }
 }
 
-fn two<E: serde::de::Error>(v: Vec<f64>) -> Result<[f64; 2], E> {
-    match v.as_slice() {
-        [a, b] => Ok([*a, *b]),
-        // Three: a 3D model, which the library builds (fem::solid) but
-        // the problem file does not type yet (docs/design.md).
-        [_, _, _] => Err(E::custom(
-            "expected 2 components [x, y], found 3: 3D models (tetrahedra) are read but not yet solved by this program (issue 45)",
-        )),
-        _ => Err(E::custom(format!(
-            "expected 2 components [x, y], found {}",
-            v.len()
+/// A vector key as written (`u`, `p`, `gravity`, `f`, a probe, a step's
+/// `dirichlet` value): two components for a 2D mesh, three for a 3D one.
+/// The dimension is the mesh's, known only once it is read, so the file
+/// keeps what was written and [`Problem::check_dimension`] holds it against
+/// the mesh (docs/problem-format.md §12). Equality compares the values.
+#[derive(Debug, Clone, Copy)]
+pub struct Components {
+    c: [f64; 3],
+    len: usize,
+    /// Byte offset of the value in the problem file (for messages).
+    at: Option<usize>,
+}
+
+impl PartialEq for Components {
+    fn eq(&self, o: &Components) -> bool {
+        self.values() == o.values()
+    }
+}
+
+impl From<[f64; 2]> for Components {
+    fn from(v: [f64; 2]) -> Components {
+        Components {
+            c: [v[0], v[1], 0.0],
+            len: 2,
+            at: None,
+        }
+    }
+}
+
+impl From<[f64; 3]> for Components {
+    fn from(c: [f64; 3]) -> Components {
+        Components {
+            c,
+            len: 3,
+            at: None,
+        }
+    }
+}
+
+impl Components {
+    /// The components as written.
+    pub fn values(&self) -> &[f64] {
+        &self.c[..self.len]
+    }
+
+    /// How many components were written (2 or 3).
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Never: a vector key has two or three components.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// [x, y] (a 2D model; the dimension is checked before any use).
+    pub fn xy(&self) -> [f64; 2] {
+        [self.c[0], self.c[1]]
+    }
+
+    /// [x, y, z] (a 3D model; z = 0 for a 2-vector).
+    pub fn xyz(&self) -> [f64; 3] {
+        self.c
+    }
+
+    /// The same vector with every component scaled by `f`.
+    pub fn scaled(&self, f: f64) -> Components {
+        Components {
+            c: self.c.map(|v| v * f),
+            ..*self
+        }
+    }
+
+    /// `[a, b]` or `[a, b, c]` as a message shows it.
+    pub fn show(&self) -> String {
+        let v: Vec<String> = self.values().iter().map(|&v| num(v)).collect();
+        format!("[{}]", v.join(", "))
+    }
+}
+
+fn components<E: serde::de::Error>(v: toml::Spanned<Vec<f64>>) -> Result<Components, E> {
+    let at = Some(v.span().start);
+    match v.get_ref().as_slice() {
+        [a, b] => Ok(Components {
+            c: [*a, *b, 0.0],
+            len: 2,
+            at,
+        }),
+        [a, b, c] => Ok(Components {
+            c: [*a, *b, *c],
+            len: 3,
+            at,
+        }),
+        w => Err(E::custom(format!(
+            "expected 2 components [x, y] (3, [x, y, z], in a 3D model), found {}",
+            w.len()
         ))),
     }
 }
 
-/// `[x, y]` with exactly two components (serde's fixed-size arrays would
-/// drop a third one silently).
-fn pair<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
-    two(Vec::<f64>::deserialize(d)?)
+/// `[x, y]` or `[x, y, z]`: serde's fixed-size arrays would drop a third
+/// component silently, and the mesh decides which is right.
+fn vector<'de, D: Deserializer<'de>>(d: D) -> Result<Components, D::Error> {
+    components(toml::Spanned::<Vec<f64>>::deserialize(d)?)
 }
 
-fn opt_pair<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
-    Option::<Vec<f64>>::deserialize(d)?.map(two).transpose()
+fn opt_vector<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Components>, D::Error> {
+    Option::<toml::Spanned<Vec<f64>>>::deserialize(d)?
+        .map(components)
+        .transpose()
 }
 
-fn map_pair<'de, D: Deserializer<'de>>(d: D) -> Result<BTreeMap<String, [f64; 2]>, D::Error> {
-    BTreeMap::<String, Vec<f64>>::deserialize(d)?
+fn map_vector<'de, D: Deserializer<'de>>(d: D) -> Result<BTreeMap<String, Components>, D::Error> {
+    BTreeMap::<String, toml::Spanned<Vec<f64>>>::deserialize(d)?
         .into_iter()
-        .map(|(k, v)| two(v).map(|p| (k, p)))
+        .map(|(k, v)| components(v).map(|p| (k, p)))
         .collect()
 }
 
@@ -112,29 +199,27 @@ pub enum Plane {
 }
 
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(from = "raw::RawModel")]
 pub struct ModelSection {
-    #[serde(default)]
     pub plane: Plane,
     /// Thickness t_h (plane stress; multiplies every stiffness and load).
-    #[serde(default = "one")]
     pub thickness: f64,
     /// Gravity vector: body force F = ρ·gravity (methods.md §1.2).
-    #[serde(default, deserialize_with = "opt_pair")]
-    pub gravity: Option<[f64; 2]>,
+    pub gravity: Option<Components>,
     /// Angular velocity ω [rad/s] about the axis (axisymmetric only): the
     /// centrifugal body force ρω²r along r (docs/methods.md §10).
-    #[serde(default)]
     pub omega: Option<f64>,
     /// The load factor of the step on the centrifugal load ρω²r (set by
     /// [`ProblemFile::at_step`], like the factor on gravity; None = 1).
-    #[serde(skip)]
     pub centrifugal_factor: Option<f64>,
     /// The units the numbers are in, as labels only (`signorini plot`):
     /// `units = { length = "mm", stress = "MPa" }`; default m and Pa.
     /// Nothing is converted, and the solution does not depend on it.
-    #[serde(default)]
     pub units: Option<Units>,
+    /// Where `plane`, `thickness` and `omega` are written (byte offsets),
+    /// None where absent: a 3D model refuses them naming the line
+    /// ([`Problem::check_dimension`]).
+    pub written_2d: [(&'static str, Option<usize>); 3],
 }
 
 /// `[model] units`: the names of the model's length and stress units
@@ -193,10 +278,6 @@ impl Units {
     }
 }
 
-fn one() -> f64 {
-    1.0
-}
-
 impl Default for ModelSection {
     fn default() -> Self {
         ModelSection {
@@ -206,6 +287,7 @@ impl Default for ModelSection {
             omega: None,
             centrifugal_factor: None,
             units: None,
+            written_2d: [("plane", None), ("thickness", None), ("omega", None)],
         }
     }
 }
@@ -227,44 +309,55 @@ pub struct Dirichlet {
     pub value: Prescribed,
 }
 
-/// What a `[[dirichlet]]` prescribes: `u = [ux, uy]`, or `ux` and/or `uy`
-/// (a component not given stays free).
+/// What a `[[dirichlet]]` prescribes: `u = [ux, uy]` (`[ux, uy, uz]` in
+/// 3D), or any of `ux`, `uy`, `uz` (a component not given stays free).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Prescribed {
-    /// `u = [ux, uy]`: both components.
-    Both([f64; 2]),
-    /// `ux`, `uy` or both; at least one is present.
-    Components { ux: Option<f64>, uy: Option<f64> },
+    /// `u`: every component.
+    All(Components),
+    /// `ux`, `uy`, `uz`; at least one is present.
+    Components {
+        ux: Option<f64>,
+        uy: Option<f64>,
+        uz: Option<f64>,
+    },
 }
 
 impl Prescribed {
-    /// The prescribed [ux, uy]; None where the component is free.
-    pub fn components(&self) -> [Option<f64>; 2] {
+    /// The prescribed [ux, uy, uz]; None where the component is free (uz
+    /// of a 2-vector `u` is None).
+    pub fn components(&self) -> [Option<f64>; 3] {
         match *self {
-            Prescribed::Both([x, y]) => [Some(x), Some(y)],
-            Prescribed::Components { ux, uy } => [ux, uy],
+            Prescribed::All(u) => {
+                let [x, y, z] = u.xyz();
+                [Some(x), Some(y), (u.len() == 3).then_some(z)]
+            }
+            Prescribed::Components { ux, uy, uz } => [ux, uy, uz],
         }
     }
 
     /// The same components with every value scaled by `f`.
     fn scaled(&self, f: f64) -> Prescribed {
         match *self {
-            Prescribed::Both(u) => Prescribed::Both([u[0] * f, u[1] * f]),
-            Prescribed::Components { ux, uy } => Prescribed::Components {
+            Prescribed::All(u) => Prescribed::All(u.scaled(f)),
+            Prescribed::Components { ux, uy, uz } => Prescribed::Components {
                 ux: ux.map(|v| v * f),
                 uy: uy.map(|v| v * f),
+                uz: uz.map(|v| v * f),
             },
         }
     }
 
     /// The same components with the values `u` of a load step
     /// (`[[steps]] dirichlet`); a free component stays free.
-    fn replaced(&self, u: [f64; 2]) -> Prescribed {
+    fn replaced(&self, u: Components) -> Prescribed {
+        let c = u.xyz();
         match *self {
-            Prescribed::Both(_) => Prescribed::Both(u),
-            Prescribed::Components { ux, uy } => Prescribed::Components {
-                ux: ux.map(|_| u[0]),
-                uy: uy.map(|_| u[1]),
+            Prescribed::All(_) => Prescribed::All(u),
+            Prescribed::Components { ux, uy, uz } => Prescribed::Components {
+                ux: ux.map(|_| c[0]),
+                uy: uy.map(|_| c[1]),
+                uz: uz.map(|_| c[2]),
             },
         }
     }
@@ -280,8 +373,8 @@ pub struct Traction {
 /// The load of a `[[traction]]` [N/m²].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum TractionLoad {
-    /// `p = [px, py]`: a fixed vector.
-    Vector([f64; 2]),
+    /// `p = [px, py]` (`[px, py, pz]` in 3D): a fixed vector.
+    Vector(Components),
     /// `pn`: along the outward normal of the body owning the segment
     /// (negative pushes in).
     Normal(f64),
@@ -290,7 +383,7 @@ pub enum TractionLoad {
 impl TractionLoad {
     fn scaled(&self, f: f64) -> TractionLoad {
         match *self {
-            TractionLoad::Vector(p) => TractionLoad::Vector([p[0] * f, p[1] * f]),
+            TractionLoad::Vector(p) => TractionLoad::Vector(p.scaled(f)),
             TractionLoad::Normal(v) => TractionLoad::Normal(v * f),
         }
     }
@@ -302,13 +395,14 @@ pub struct Slip {
     pub on: String,
 }
 
-/// A point force (extension): `f` [N per unit thickness] at a physical point.
+/// A point force (extension): `f` [N per unit thickness; N in 3D] at a
+/// physical point.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Force {
     pub on: String,
-    #[serde(deserialize_with = "pair")]
-    pub f: [f64; 2],
+    #[serde(deserialize_with = "vector")]
+    pub f: Components,
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
@@ -421,8 +515,8 @@ impl Contact {
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSection {
-    #[serde(default, deserialize_with = "map_pair")]
-    pub probes: BTreeMap<String, [f64; 2]>,
+    #[serde(default, deserialize_with = "map_vector")]
+    pub probes: BTreeMap<String, Components>,
     /// Directory for outputs (the `--out` flag overrides it).
     pub dir: Option<PathBuf>,
     /// zlib-compress VTU arrays.
@@ -449,9 +543,10 @@ pub struct LoadStep {
     /// Factor on prescribed displacements only (overrides `factor` for them).
     pub displacement: Option<f64>,
     /// Explicit prescribed displacement per `[[dirichlet]] on` name: [ux, uy]
-    /// (replaces the group's values and its factor in this step).
-    #[serde(default, deserialize_with = "map_pair")]
-    pub dirichlet: BTreeMap<String, [f64; 2]>,
+    /// ([ux, uy, uz] in 3D; replaces the group's values and its factor in
+    /// this step).
+    #[serde(default, deserialize_with = "map_vector")]
+    pub dirichlet: BTreeMap<String, Components>,
 }
 
 /// The whole problem file, checked and typed (`validate`).
@@ -485,9 +580,9 @@ impl ProblemFile {
             t.load = t.load.scaled(lf);
         }
         for fo in f.force.iter_mut() {
-            fo.f = [fo.f[0] * lf, fo.f[1] * lf];
+            fo.f = fo.f.scaled(lf);
         }
-        f.model.gravity = f.model.gravity.map(|g| [g[0] * lf, g[1] * lf]);
+        f.model.gravity = f.model.gravity.map(|g| g.scaled(lf));
         f.model.centrifugal_factor = Some(lf);
         for d in f.dirichlet.iter_mut() {
             d.value = match st.dirichlet.get(&d.on) {
@@ -561,6 +656,99 @@ impl Problem {
             text: text.to_string(),
             file,
         })
+    }
+
+    /// Holds the vector keys against the mesh's dimension `dim` (2 or 3),
+    /// which is known only once the mesh is read: a 2-vector in 3D or a
+    /// 3-vector in 2D is refused naming the key and its line, and so are
+    /// `uz` in 2D and the keys of a plane model (`plane`, `thickness`,
+    /// `omega`) in 3D (docs/problem-format.md §12).
+    pub fn check_dimension(&self, dim: usize) -> Result<(), ModelError> {
+        let f = &self.file;
+        let bad = |at: Option<usize>, msg: String| ModelError::Invalid {
+            path: self.path.clone(),
+            msg: match at {
+                Some(at) => format!("line {}: {msg}", self.line_of(at)),
+                None => msg,
+            },
+        };
+        let mut keys: Vec<(String, Components)> = vec![];
+        if let Some(g) = f.model.gravity {
+            keys.push(("[model] gravity".into(), g));
+        }
+        for d in &f.dirichlet {
+            let what = format!("[[dirichlet]] on = \"{}\": u", shorten(&d.on));
+            match d.value {
+                Prescribed::All(u) => keys.push((what, u)),
+                Prescribed::Components { uz: Some(_), .. } if dim == 2 => {
+                    return Err(bad(
+                        None,
+                        format!(
+                            "[[dirichlet]] on = \"{}\": uz is a key of 3D models, and the mesh {} is 2D (triangles); give ux and/or uy",
+                            shorten(&d.on),
+                            self.mesh_path().display()
+                        ),
+                    ))
+                }
+                Prescribed::Components { .. } => {}
+            }
+        }
+        for t in &f.traction {
+            if let TractionLoad::Vector(p) = t.load {
+                keys.push((format!("[[traction]] on = \"{}\": p", shorten(&t.on)), p));
+            }
+        }
+        for x in &f.force {
+            keys.push((format!("[[force]] on = \"{}\": f", shorten(&x.on)), x.f));
+        }
+        for (name, x) in &f.output.probes {
+            keys.push((format!("[output] probes.{}", shorten(name)), *x));
+        }
+        for (i, st) in f.steps.iter().enumerate() {
+            for (name, u) in &st.dirichlet {
+                keys.push((
+                    format!("[[steps]] #{}: dirichlet.{}", i + 1, shorten(name)),
+                    *u,
+                ));
+            }
+        }
+        let (axes, cells) = match dim {
+            2 => ("[x, y]", "triangles"),
+            _ => ("[x, y, z]", "tetrahedra"),
+        };
+        if let Some((what, v)) = keys.into_iter().find(|(_, v)| v.len() != dim) {
+            return Err(bad(
+                v.at,
+                format!(
+                    "{what} = {}: expected {dim} components {axes} for the {dim}D mesh {} ({cells}), found {}",
+                    v.show(),
+                    self.mesh_path().display(),
+                    v.len()
+                ),
+            ));
+        }
+        if dim == 3 {
+            if let Some((key, at)) = f.model.written_2d.iter().find(|(_, at)| at.is_some()) {
+                return Err(bad(
+                    *at,
+                    format!(
+                        "[model] {key}: a key of plane and axisymmetric models, and the mesh {} is 3D (tetrahedra); remove it",
+                        self.mesh_path().display()
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The 1-based line of byte offset `at` in the problem file.
+    fn line_of(&self, at: usize) -> usize {
+        let at = at.min(self.text.len());
+        self.text.as_bytes()[..at]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1
     }
 
     /// The mesh path, resolved relative to the TOML file.

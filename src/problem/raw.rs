@@ -4,7 +4,8 @@
 //! so that no consumer has to test which keys are present.
 
 use super::{
-    opt_pair, Force, LoadStep, Material, MeshSection, ModelSection, NormalKind, OutputSection, Slip,
+    opt_vector, Components, Force, LoadStep, Material, MeshSection, ModelSection, NormalKind,
+    OutputSection, Plane, Slip, Units,
 };
 use crate::qp::SolverSection;
 use serde::Deserialize;
@@ -14,20 +15,22 @@ use std::collections::BTreeMap;
 #[serde(deny_unknown_fields)]
 pub(super) struct RawDirichlet {
     pub on: String,
-    #[serde(default, deserialize_with = "opt_pair")]
-    pub u: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "opt_vector")]
+    pub u: Option<Components>,
     pub ux: Option<f64>,
     pub uy: Option<f64>,
+    pub uz: Option<f64>,
 }
 
 impl RawDirichlet {
-    /// Every prescribed value given, in the order u, ux, uy.
+    /// Every prescribed value given, in the order u, ux, uy, uz.
     pub fn values(&self) -> impl Iterator<Item = f64> + '_ {
         self.u
             .iter()
-            .flatten()
+            .flat_map(|u| u.values())
             .chain(&self.ux)
             .chain(&self.uy)
+            .chain(&self.uz)
             .copied()
     }
 }
@@ -36,15 +39,51 @@ impl RawDirichlet {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawTraction {
     pub on: String,
-    #[serde(default, deserialize_with = "opt_pair")]
-    pub p: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "opt_vector")]
+    pub p: Option<Components>,
     pub pn: Option<f64>,
 }
 
 impl RawTraction {
     /// Every traction value given, in the order p, pn.
     pub fn values(&self) -> impl Iterator<Item = f64> + '_ {
-        self.p.iter().flatten().chain(&self.pn).copied()
+        self.p
+            .iter()
+            .flat_map(|p| p.values())
+            .chain(&self.pn)
+            .copied()
+    }
+}
+
+/// `[model]` as written; the keys of a plane model keep where they were
+/// written, for a 3D mesh to refuse them naming the line.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawModel {
+    plane: Option<toml::Spanned<Plane>>,
+    thickness: Option<toml::Spanned<f64>>,
+    #[serde(default, deserialize_with = "opt_vector")]
+    gravity: Option<Components>,
+    omega: Option<toml::Spanned<f64>>,
+    units: Option<Units>,
+}
+
+impl From<RawModel> for ModelSection {
+    fn from(r: RawModel) -> ModelSection {
+        let d = ModelSection::default();
+        ModelSection {
+            plane: r.plane.as_ref().map_or(d.plane, |p| *p.get_ref()),
+            thickness: r.thickness.as_ref().map_or(d.thickness, |t| *t.get_ref()),
+            gravity: r.gravity,
+            omega: r.omega.as_ref().map(|w| *w.get_ref()),
+            centrifugal_factor: None,
+            units: r.units,
+            written_2d: [
+                ("plane", r.plane.map(|p| p.span().start)),
+                ("thickness", r.thickness.map(|t| t.span().start)),
+                ("omega", r.omega.map(|w| w.span().start)),
+            ],
+        }
     }
 }
 

@@ -24,7 +24,7 @@ pub(super) fn validate(raw: RawFile) -> Check<ProblemFile> {
     let dirichlet = collect(&raw.dirichlet, dirichlet)?;
     let traction = collect(&raw.traction, traction)?;
     for fo in &raw.force {
-        if !fo.f.iter().all(|v| v.is_finite()) {
+        if !fo.f.values().iter().all(|v| v.is_finite()) {
             return Err(format!(
                 "[[force]] on = \"{}\": values must be finite",
                 fo.on
@@ -65,15 +65,15 @@ pub(super) fn warnings(f: &ProblemFile) -> Vec<String> {
                 continue;
             };
             let held = d.value.components();
-            for (k, axis) in ["ux", "uy"].iter().enumerate() {
-                if held[k].is_none() && u[k] != 0.0 {
+            for (k, axis) in ["ux", "uy", "uz"].iter().enumerate().take(u.len()) {
+                let uk = u.values()[k];
+                if held[k].is_none() && uk != 0.0 {
                     out.push(format!(
-                        "[[steps]] #{}: dirichlet.{} = [{}, {}] sets {axis} = {}, but [[dirichlet]] on = \"{}\" does not prescribe {axis}: the value is ignored and {axis} stays free (add {axis} to that [[dirichlet]] to prescribe it)",
+                        "[[steps]] #{}: dirichlet.{} = {} sets {axis} = {}, but [[dirichlet]] on = \"{}\" does not prescribe {axis}: the value is ignored and {axis} stays free (add {axis} to that [[dirichlet]] to prescribe it)",
                         i + 1,
                         shorten(&d.on),
-                        num(u[0]),
-                        num(u[1]),
-                        num(u[k]),
+                        u.show(),
+                        num(uk),
                         shorten(&d.on)
                     ));
                 }
@@ -182,7 +182,11 @@ fn beyond(v: f64) -> bool {
 fn check_magnitudes(f: &RawFile) -> Check {
     let mut loads: Vec<(String, f64)> = vec![];
     if let Some(g) = f.model.gravity {
-        loads.extend(g.iter().map(|v| ("[model] gravity".to_string(), *v)));
+        loads.extend(
+            g.values()
+                .iter()
+                .map(|v| ("[model] gravity".to_string(), *v)),
+        );
     }
     for d in &f.dirichlet {
         let what = format!("[[dirichlet]] on = \"{}\": u", shorten(&d.on));
@@ -194,7 +198,7 @@ fn check_magnitudes(f: &RawFile) -> Check {
     }
     for x in &f.force {
         let what = format!("[[force]] on = \"{}\": f", shorten(&x.on));
-        loads.extend(x.f.iter().map(|v| (what.clone(), *v)));
+        loads.extend(x.f.values().iter().map(|v| (what.clone(), *v)));
     }
     if let Some((what, v)) = loads.into_iter().find(|(_, v)| beyond(*v)) {
         return Err(format!(
@@ -220,14 +224,18 @@ fn check_model(f: &RawFile) -> Check {
         return Err(format!("[model] thickness = {} must be positive", num(t)));
     }
     if let Some(g) = f.model.gravity {
-        if !g.iter().all(|v| v.is_finite()) {
+        if !g.values().iter().all(|v| v.is_finite()) {
             return Err("[model] gravity must be finite".into());
         }
-        if let Some(why) = ElementKind::of(&f.model).gravity_misfit(g) {
+        // A 3-vector is held against the mesh (Problem::check_dimension).
+        let misfit = (g.len() == 2)
+            .then(|| ElementKind::of(&f.model).gravity_misfit(g.xy()))
+            .flatten();
+        if let Some(why) = misfit {
             return Err(format!(
                 "[model] gravity = [{}, {}]: {why}",
-                num(g[0]),
-                num(g[1])
+                num(g.xy()[0]),
+                num(g.xy()[1])
             ));
         }
     }
@@ -275,11 +283,14 @@ fn check_materials(f: &RawFile) -> Check {
     Ok(())
 }
 
-/// `[[dirichlet]]` #i: `u = [ux, uy]`, or `ux` and/or `uy`, finite.
+/// `[[dirichlet]]` #i: `u = [ux, uy]` (or `[ux, uy, uz]`), or any of `ux`,
+/// `uy`, `uz`, finite.
 fn dirichlet(i: usize, d: &RawDirichlet) -> Check<Dirichlet> {
-    let value = match (d.u, d.ux, d.uy) {
-        (Some(u), None, None) => Prescribed::Both(u),
-        (None, ux, uy) if ux.is_some() || uy.is_some() => Prescribed::Components { ux, uy },
+    let value = match (d.u, d.ux, d.uy, d.uz) {
+        (Some(u), None, None, None) => Prescribed::All(u),
+        (None, ux, uy, uz) if ux.is_some() || uy.is_some() || uz.is_some() => {
+            Prescribed::Components { ux, uy, uz }
+        }
         _ => {
             return Err(format!(
                 "[[dirichlet]] #{} (on = \"{}\"): give either u = [ux, uy] or ux and/or uy",
@@ -525,12 +536,12 @@ fn check_steps(f: &RawFile) -> Check {
                     "[[steps]] #{n}: dirichlet.{name}: no [[dirichlet]] with on = \"{name}\""
                 ));
             }
-            if !u.iter().all(|v| v.is_finite()) {
+            if !u.values().iter().all(|v| v.is_finite()) {
                 return Err(format!(
                     "[[steps]] #{n}: dirichlet.{name}: values must be finite"
                 ));
             }
-            if let Some(v) = u.iter().find(|v| beyond(**v)) {
+            if let Some(v) = u.values().iter().find(|v| beyond(**v)) {
                 return Err(format!(
                     "[[steps]] #{n}: dirichlet.{} = {} is beyond ±{MAX_MAGNITUDE:e}: products with it would overflow; change the units",
                     shorten(name),
@@ -553,7 +564,7 @@ fn check_output(f: &RawFile) -> Check {
         }
     }
     for (name, p) in &f.output.probes {
-        if !p.iter().all(|v| v.is_finite()) {
+        if !p.values().iter().all(|v| v.is_finite()) {
             return Err(format!("[output] probe {name}: coordinates must be finite"));
         }
     }
@@ -638,15 +649,18 @@ mod tests {
              [[steps]]\nfactor = 2.0\ndirichlet = { c = [7.0, 8.0] }\n",
         )
         .unwrap();
-        assert_eq!(f.dirichlet[0].value, Prescribed::Both([1.0, 2.0]));
-        assert_eq!(f.dirichlet[1].value.components(), [None, Some(3.0)]);
+        assert_eq!(f.dirichlet[0].value, Prescribed::All([1.0, 2.0].into()));
+        assert_eq!(f.dirichlet[1].value.components(), [None, Some(3.0), None]);
         assert_eq!(f.traction[0].load, TractionLoad::Normal(-4.0));
         let s = f.at_step(0);
-        assert_eq!(s.dirichlet[0].value, Prescribed::Both([2.0, 4.0]));
+        assert_eq!(s.dirichlet[0].value, Prescribed::All([2.0, 4.0].into()));
         // Explicit step values replace the given component only.
-        assert_eq!(s.dirichlet[1].value.components(), [None, Some(8.0)]);
+        assert_eq!(s.dirichlet[1].value.components(), [None, Some(8.0), None]);
         assert_eq!(s.traction[0].load, TractionLoad::Normal(-8.0));
-        assert_eq!(s.traction[1].load, TractionLoad::Vector([10.0, 12.0]));
+        assert_eq!(
+            s.traction[1].load,
+            TractionLoad::Vector([10.0, 12.0].into())
+        );
     }
 
     #[test]

@@ -19,6 +19,7 @@ mod output;
 mod plot;
 mod prepare;
 mod restart;
+pub mod solid;
 mod steps;
 mod summary;
 
@@ -32,11 +33,12 @@ pub use output::{
 };
 pub use plot::plot_file;
 pub use prepare::{
-    fingerprint, fingerprint_before_mortar, fingerprint_diff, fnv1a, options, prepare,
+    fingerprint, fingerprint_before_mortar, fingerprint_diff, fnv1a, load, options, prepare,
     prepare_with, probes, reduce, reduce_active, solve, solve_model, solve_model_in, step_model,
-    step_model_reusing, Prepared,
+    step_model_reusing, Loaded, Prepared,
 };
 pub use restart::Restart;
+pub use solid::{solve_solid, SolidOutcome, SolidPrepared, SolidSummary};
 pub use steps::{preconditioner_label, Outcome, Run, Solved, Step, Verdict};
 pub use summary::{KktSummary, Probe, StepRow, Summary, Timings};
 

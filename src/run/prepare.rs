@@ -42,6 +42,34 @@ pub fn prepare_with(
     no_contact: bool,
     build: &fem::BuildOptions,
 ) -> Result<Prepared, RunError> {
+    let (problem, mesh, mesh_hash, t0) = read(path, no_contact)?;
+    plane(problem, mesh, mesh_hash, t0, no_contact, build)
+}
+
+/// What [`load`] read: a plane or axisymmetric model (triangles), or a
+/// solid one (tetrahedra).
+pub enum Loaded {
+    Plane(Box<Prepared>),
+    Solid(Box<super::solid::SolidPrepared>),
+}
+
+/// Read the TOML and the mesh and build the model of the mesh's
+/// dimension: the one place where a run branches on it (docs/design.md,
+/// "Where it stands").
+pub fn load(path: &Path, no_contact: bool, build: &fem::BuildOptions) -> Result<Loaded, RunError> {
+    let (problem, mesh, mesh_hash, t0) = read(path, no_contact)?;
+    if mesh.dim() == 3 {
+        let p = super::solid::prepare(problem, mesh, mesh_hash, t0)?;
+        return Ok(Loaded::Solid(Box::new(p)));
+    }
+    Ok(Loaded::Plane(Box::new(plane(
+        problem, mesh, mesh_hash, t0, no_contact, build,
+    )?)))
+}
+
+/// The problem file and its mesh, the vector keys held against the mesh's
+/// dimension; the mesh file's hash and when the reading began.
+fn read(path: &Path, no_contact: bool) -> Result<(Problem, Mesh, u64, Instant), RunError> {
     let t0 = Instant::now();
     let mut problem = Problem::load(path)?;
     if no_contact {
@@ -52,6 +80,19 @@ pub fn prepare_with(
     let mesh_hash = fnv1a(&bytes);
     let mesh = mesh::gmsh::parse_msh(&mesh_path, &bytes)?;
     drop(bytes);
+    problem.check_dimension(mesh.dim())?;
+    Ok((problem, mesh, mesh_hash, t0))
+}
+
+/// The plane (or axisymmetric) model of a problem read by [`read`].
+fn plane(
+    problem: Problem,
+    mesh: Mesh,
+    mesh_hash: u64,
+    t0: Instant,
+    no_contact: bool,
+    build: &fem::BuildOptions,
+) -> Result<Prepared, RunError> {
     check_contact_groups(&problem, &mesh)?;
     let t_read = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
@@ -114,7 +155,7 @@ fn check_probes(problem: &Problem, model: &Model) -> Result<(), RunError> {
     }
     use crate::problem::num;
     for (name, x) in &problem.file.output.probes {
-        let Some(at) = post::locate(&topo.points, &topo.triangles, *x) else {
+        let Some(at) = post::locate(&topo.points, &topo.triangles, x.xy()) else {
             continue;
         };
         if !at.inside() {
@@ -124,8 +165,8 @@ fn check_probes(problem: &Problem, model: &Model) -> Result<(), RunError> {
                 msg: format!(
                     "[output] probe {}: ({}, {}) lies outside the mesh: {:.3e} from the nearest triangle (points {}, {}, {}), whose size is {:.3e}; a probe must lie in a triangle or within {} × its size of it",
                     crate::problem::shorten(name),
-                    num(x[0]),
-                    num(x[1]),
+                    num(x.xy()[0]),
+                    num(x.xy()[1]),
                     at.distance,
                     tri[0],
                     tri[1],
@@ -437,7 +478,7 @@ pub fn probes(prep: &Prepared, u: &[[f64; 2]]) -> Vec<(String, [f64; 2], usize, 
         .probes
         .iter()
         .map(|(name, x)| {
-            let p = post::nearest_point(pts, *x);
+            let p = post::nearest_point(pts, x.xy());
             (name.clone(), pts[p], p, u[p])
         })
         .collect()

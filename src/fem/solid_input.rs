@@ -1,0 +1,111 @@
+//! The problem file of a 3D model as [`fem::solid`](super::solid)'s typed
+//! input: the one place where the TOML entries of a 3D problem become a
+//! [`SolidInput`], and where what a 3D model does not take yet is refused
+//! (docs/problem-format.md §12). Kept apart from `solid.rs` so that the
+//! library's solid model and the problem file's reading of it change
+//! independently. The vector keys have been held against the mesh's
+//! dimension before (`Problem::check_dimension`).
+
+use super::element::Vector3;
+use super::solid::{SolidInput, SolidModel, SolidTraction};
+use super::FemError;
+use crate::mesh::Mesh;
+use crate::problem::{shorten, Problem, TractionLoad};
+
+/// The [`SolidInput`] of a 3D `problem`; `[[contact]]`, `[[steps]]` and
+/// `[output] reference_step` are refused naming the entry (3D contact is
+/// being added, issue 45).
+pub fn solid_input(problem: &Problem) -> Result<SolidInput, FemError> {
+    let (f, path) = (&problem.file, problem.path.as_path());
+    if let Some(c) = f.contact.first() {
+        return Err(FemError::new(
+            path,
+            format!(
+                "[[contact]] #1 ({}): contact in 3D models (tetrahedra) is not in yet (issue 45); a 3D model is solved without [[contact]] for now",
+                c.keys()
+            ),
+        ));
+    }
+    if !f.steps.is_empty() {
+        return Err(FemError::new(
+            path,
+            "[[steps]]: load steps are not in yet for 3D models (tetrahedra); solve one load case per problem file".to_string(),
+        ));
+    }
+    if let Some(k) = f.output.reference_step {
+        return Err(FemError::new(
+            path,
+            format!(
+                "[output] reference_step = {k}: the *_change fields are not in yet for 3D models (tetrahedra)"
+            ),
+        ));
+    }
+    Ok(SolidInput {
+        materials: f.materials.clone(),
+        gravity: f.model.gravity.map_or([0.0; 3], |g| g.xyz()),
+        dirichlet: f
+            .dirichlet
+            .iter()
+            .map(|d| (d.on.clone(), d.value.components()))
+            .collect(),
+        slip: f.slip.iter().map(|s| s.on.clone()).collect(),
+        traction: f
+            .traction
+            .iter()
+            .map(|t| {
+                let load = match t.load {
+                    TractionLoad::Normal(pn) => SolidTraction::Normal(pn),
+                    TractionLoad::Vector(p) => SolidTraction::Vector(p.xyz()),
+                };
+                (t.on.clone(), load)
+            })
+            .collect(),
+    })
+}
+
+/// Adds the `[[force]]` entries of `problem` (a force in N at the nodes of
+/// a Physical Point) to a built model: d += Tᵀ f at each node, and the
+/// nodal loads (the QP's d is linear in the loads, docs/methods.md §2.3).
+pub fn add_point_forces(
+    model: &mut SolidModel,
+    mesh: &Mesh,
+    problem: &Problem,
+) -> Result<(), FemError> {
+    for (i, fo) in problem.file.force.iter().enumerate() {
+        let what = format!("[[force]] #{} (on = \"{}\")", i + 1, shorten(&fo.on));
+        let Some(g) = mesh.group_any(&fo.on).filter(|g| g.dim == 0) else {
+            let points: Vec<&str> = mesh
+                .groups
+                .iter()
+                .filter(|g| g.dim == 0)
+                .map(|g| g.name.as_str())
+                .collect();
+            return Err(FemError::new(
+                &problem.path,
+                format!(
+                    "{what}: no physical point named \"{}\" in {} (points: {})",
+                    shorten(&fo.on),
+                    mesh.path.display(),
+                    if points.is_empty() {
+                        "none".to_string()
+                    } else {
+                        points.join(", ")
+                    }
+                ),
+            ));
+        };
+        let f: Vector3 = fo.f.xyz();
+        for &e in &g.elements {
+            let v = mesh.points[e];
+            let p = &model.dofs[v];
+            for r in 0..p.ndof {
+                let t = p.t[r];
+                model.qp.d[p.start + r] += t[0] * f[0] + t[1] * f[1] + t[2] * f[2];
+            }
+            for k in 0..3 {
+                model.loads[v][k] += f[k];
+            }
+        }
+    }
+    Ok(())
+}
