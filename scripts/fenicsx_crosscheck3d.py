@@ -120,9 +120,7 @@ def read_signorini(h5: Path) -> dict:
             "tets": f["mesh/tetrahedra"][:].astype(np.int64),
             "material": f["mesh/material"][:].astype(np.int64),
             "material_names": [m.decode() if isinstance(m, bytes) else str(m)
-                               for m in (f["mesh/material"].attrs.get("material_names")
-                                         if "material_names" in f["mesh/material"].attrs
-                                         else f["mesh"].attrs["material_names"])],
+                               for m in f["mesh"].attrs["material_names"]],
             "u": st["displacement"][:],
             "stress": st["stress"][:],
             "converged": int(st.attrs["converged"]),

@@ -216,6 +216,16 @@ for t in axi_cup/axi_cup axi_sphere/axi_sphere axi_sphere/axi_sphere_mortar:b ax
     record "crosscheck ${t#*/}" $?
 done
 
+# 3D models (P1 tetrahedra, scripts/fenicsx_crosscheck3d.py): the shipped
+# cantilever, and a steel base under an aluminium cover with a rubber plug
+# held by three slip planes (two of them meet on an edge), pn and p tractions
+# and gravity.
+for t in meshes/3d/cantilever_3d.toml tests/data/solid_xcheck/twomat.toml; do
+    stamp "fenicsx_crosscheck.py $t (3D)"
+    SIGNORINI="$EXE" SIGNORINI_PYDEPS="$PYDEPS" /usr/bin/python3 scripts/fenicsx_crosscheck.py "$t" --tol 1e-8
+    record "crosscheck $(basename "$t" .toml)" $?
+done
+
 # Friction (docs/methods.md §9): signorini's Tresca and Coulomb answers
 # against the reference's own (Clarabel on the Tresca problem with auxiliary
 # variables, polished; Coulomb by its own fixed point on s = μλ_n), comparing
