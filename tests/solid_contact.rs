@@ -223,7 +223,9 @@ fn wrong_facing_and_boundary_surfaces_are_refused() {
         .unwrap()
         .to_string();
     assert!(
-        e.contains("slave surface") && e.contains("\"interface\"") && e.contains("not on its boundary"),
+        e.contains("slave surface")
+            && e.contains("\"interface\"")
+            && e.contains("not on its boundary"),
         "{e}"
     );
     // A pair within one body.
@@ -308,7 +310,7 @@ fn hertz_sphere_on_a_block() {
     let file = other.clone().map_or(data("hertz.msh"), PathBuf::from);
     let (err, ps) = hertz(&file);
     println!(
-        "Hertz 3D (hc = a/5): a {:+.2}%, p0 {:+.2}%, Σλ/(P/4) − 1 = {:.1e}",
+        "Hertz 3D: a {:+.2}%, p0 {:+.2}%, Σλ/(P/4) − 1 = {:.1e}",
         100.0 * err[0],
         100.0 * err[1],
         err[2]

@@ -214,7 +214,11 @@ impl Cut {
 /// |F|/3 of its nodes.
 fn outward(points: &[Point3], tri: [usize; 3], tet: &[usize; 4]) -> (f64, Vector3) {
     let (w, n) = ElementKind::Solid.facet_weight(&tri.map(|v| points[v]));
-    let opp = tet.iter().copied().find(|v| !tri.contains(v)).unwrap_or(tri[0]);
+    let opp = tet
+        .iter()
+        .copied()
+        .find(|v| !tri.contains(v))
+        .unwrap_or(tri[0]);
     let (x0, o) = (points[tri[0]], points[opp]);
     if dot(n, [o[0] - x0[0], o[1] - x0[1], o[2] - x0[2]]) > 0.0 {
         (w, n.map(|c| -c))
@@ -294,7 +298,9 @@ fn check_supported_contact(contact: &[Contact], path: &Path) -> Result<(), FemEr
         let what = contact_what(i, c);
         let no = |why: &str| Err(FemError::new(path, format!("{what}: {why}")));
         if c.has_friction() {
-            return no("friction in a 3D model is not implemented yet (issue 46); remove friction/tresca");
+            return no(
+                "friction in a 3D model is not implemented yet (issue 46); remove friction/tresca",
+            );
         }
         match &c.pair {
             ContactPair::Conforming {
@@ -601,11 +607,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
     }
     // Contact rows (docs/methods.md §11).
     let mut contact = vec![];
-    let interface_names: Vec<String> = input
-        .contact
-        .iter()
-        .map(|c| c.groups().join("/"))
-        .collect();
+    let interface_names: Vec<String> = input.contact.iter().map(|c| c.groups().join("/")).collect();
     let node_tag = |p: usize| mesh.node_tags[point_node[p]];
     for (i, c) in input.contact.iter().enumerate() {
         let what = contact_what(i, c);

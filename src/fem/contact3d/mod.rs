@@ -103,9 +103,7 @@ pub(super) fn conforming_rows(
     for (f, lp) in tris {
         let area = 3.0 * f.weight;
         for i in 0..3 {
-            let e = acc
-                .entry((f.points[i], lp[i]))
-                .or_insert(([0.0; 3], 0.0));
+            let e = acc.entry((f.points[i], lp[i])).or_insert(([0.0; 3], 0.0));
             for k in 0..3 {
                 e.0[k] += area * f.normal[k];
             }

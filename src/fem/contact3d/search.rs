@@ -140,9 +140,7 @@ impl<'a> TriangleTree<'a> {
                     .unwrap_or(0);
                 let mid = (s + e) / 2;
                 t.order[s..e].select_nth_unstable_by(mid - s, |&a, &b| {
-                    centre(a)[axis]
-                        .total_cmp(&centre(b)[axis])
-                        .then(a.cmp(&b))
+                    centre(a)[axis].total_cmp(&centre(b)[axis]).then(a.cmp(&b))
                 });
                 todo.push((mid, e, me, 1));
                 todo.push((s, mid, me, 0));
@@ -253,7 +251,7 @@ mod tests {
             let mut scan: Option<Hit> = None;
             for i in 0..tris.len() {
                 if let Some((w, d)) = project(x, &tris[i], normals[i]) {
-                    if scan.map_or(true, |b| d.abs() < b.dist.abs()) {
+                    if scan.is_none_or(|b| d.abs() < b.dist.abs()) {
                         scan = Some(Hit {
                             tri: i,
                             weights: w,
