@@ -3,7 +3,8 @@ docs/verification.md): reads the (x, y, p) lines HERTZ3D_DUMP wrote and draws
 the quarter footprint (mirrored to the full disc) and p(r) against Hertz's
 p0 sqrt(1 - r^2/a^2) (K. L. Johnson, Contact Mechanics, 1985, eq. 4.22-4.23).
 
-usage: .venv/bin/python scripts/hertz3d_footprint.py DUMP OUT.png
+usage: .venv/bin/python scripts/hertz3d_footprint.py DUMP OUT.png [ROWS]
+(ROWS: the label of the rows, "NTS rows" by default)
 """
 import sys
 
@@ -17,7 +18,7 @@ import numpy as np
 E, NU, R, A_NOMINAL = 2.0e11, 0.3, 1.0, 0.1
 
 
-def main(dump, out):
+def main(dump, out, rows="NTS rows"):
     d = np.loadtxt(dump)
     x, y, p = d[:, 0], d[:, 1], d[:, 2]
     keep = np.hypot(x, y) < 2.0 * A_NOMINAL
@@ -43,7 +44,7 @@ def main(dump, out):
     r = np.hypot(x, y)
     rr = np.linspace(0, a, 200)
     ax2.plot(rr, p0 * np.sqrt(1 - (rr / a) ** 2) / 1e9, "k-", label="Hertz (nominal load)")
-    ax2.plot(r, p / 1e9, "o", ms=3, label="signorini, NTS rows")
+    ax2.plot(r, p / 1e9, "o", ms=3, label="signorini, " + rows)
     ax2.set_xlabel("r [m]")
     ax2.set_ylabel("p [GPa]")
     ax2.set_title("pressure against radius")
@@ -53,4 +54,4 @@ def main(dump, out):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2])
+    main(*sys.argv[1:4])

@@ -11,13 +11,14 @@
 //! §"Adding a kind: solid 3D".
 
 use super::conditions::{number, Cond, PointDofs};
-use super::contact3d::{conforming_rows, nts_rows, reduced_rows, Row3};
+use super::contact3d::{conforming_rows, mortar_rows, nts_rows, reduced_rows, Row3};
 use super::element::{ElementKind, MaterialMatrix, Point3, RigidMode, Vector3, SOLID_MODES};
+use super::pairs::STIFF_SLAVE;
 use super::stiffness::{assemble, Cells, Materials};
 use super::topology::cell_bodies;
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::problem::{Contact, ContactPair, Discretization, Material, NonMatchingPair, NormalKind};
+use crate::problem::{Contact, ContactPair, Discretization, Material, NormalKind};
 use crate::qp::QpProblem;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -292,7 +293,7 @@ fn contact_what(i: usize, c: &Contact) -> String {
 }
 
 /// What 3D contact does not have yet, refused naming the entry: friction
-/// (issue 46), one row per triangle normal, mortar rows.
+/// (issue 46), one row per triangle normal.
 fn check_supported_contact(contact: &[Contact], path: &Path) -> Result<(), FemError> {
     for (i, c) in contact.iter().enumerate() {
         let what = contact_what(i, c);
@@ -302,19 +303,47 @@ fn check_supported_contact(contact: &[Contact], path: &Path) -> Result<(), FemEr
                 "friction in a 3D model is not implemented yet (issue 46); remove friction/tresca",
             );
         }
-        match &c.pair {
-            ContactPair::Conforming {
-                normals: NormalKind::Segment,
-                ..
-            } => return no("normals = \"segment\" is for curves (2D); a 3D surface has averaged normals"),
-            ContactPair::NonMatching(NonMatchingPair {
-                discretization: Some(Discretization::Mortar),
-                ..
-            }) => return no("mortar rows on triangles are not implemented yet; write discretization = \"nts\" (node-to-surface rows)"),
-            _ => {}
+        if let ContactPair::Conforming {
+            normals: NormalKind::Segment,
+            ..
+        } = &c.pair
+        {
+            return no(
+                "normals = \"segment\" is for curves (2D); a 3D surface has averaged normals",
+            );
         }
     }
     Ok(())
+}
+
+/// A pair without `discretization`: mortar rows, unless the slave is more
+/// than [`STIFF_SLAVE`] times stiffer than the master (the 2D rule and
+/// warning, docs/methods.md §7.1).
+fn default_discretization(
+    slave: &[Facet],
+    master: &[Facet],
+    body_e: &[(f64, f64)],
+    sname: &str,
+    mname: &str,
+    what: &str,
+) -> Discretization {
+    let e_slave = slave
+        .iter()
+        .map(|f| body_e[f.body as usize].0)
+        .fold(f64::INFINITY, f64::min);
+    let e_master = master
+        .iter()
+        .map(|f| body_e[f.body as usize].1)
+        .fold(0.0, f64::max);
+    if e_slave > STIFF_SLAVE * e_master {
+        log::warn!(
+            "{what}: slave \"{sname}\" (E = {e_slave:e}) is {:.0} times stiffer than master \"{mname}\" (E = {e_master:e}): node-to-surface rows, not the default mortar rows, whose multipliers oscillate on a stiff slave; make the softer body the slave for mortar rows, or write discretization = \"nts\"",
+            e_slave / e_master
+        );
+        Discretization::Nts
+    } else {
+        Discretization::Mortar
+    }
 }
 
 /// Build the solid model of a 3D `mesh` (docs/design.md §"Adding a kind:
@@ -609,6 +638,13 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
     let mut contact = vec![];
     let interface_names: Vec<String> = input.contact.iter().map(|c| c.groups().join("/")).collect();
     let node_tag = |p: usize| mesh.node_tags[point_node[p]];
+    // The least and largest Young's modulus of each body's tetrahedra.
+    let mut body_e = vec![(f64::INFINITY, 0.0f64); nbodies];
+    for (t, &m) in tet_material.iter().enumerate() {
+        let e = mats[m as usize].e;
+        let b = &mut body_e[tet_body[t] as usize];
+        *b = (b.0.min(e), b.1.max(e));
+    }
     for (i, c) in input.contact.iter().enumerate() {
         let what = contact_what(i, c);
         match &c.pair {
@@ -643,7 +679,21 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
                 let role = |r: &str| format!("{what}: {r} surface");
                 let slave = surf(&pair.slave, &role("slave"))?;
                 let master = surf(&pair.master, &role("master"))?;
-                contact.extend(nts_rows(
+                let disc = pair.discretization.unwrap_or_else(|| {
+                    default_discretization(
+                        &slave,
+                        &master,
+                        &body_e,
+                        &pair.slave,
+                        &pair.master,
+                        &what,
+                    )
+                });
+                let rows = match disc {
+                    Discretization::Mortar => mortar_rows,
+                    Discretization::Nts => nts_rows,
+                };
+                contact.extend(rows(
                     &points, &slave, &master, pair, i as u32, &what, node_tag, path,
                 )?);
             }

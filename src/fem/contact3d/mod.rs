@@ -4,9 +4,11 @@
 //! and a tangent frame (for the two tangential rows of 3D friction, issue
 //! 46), then the rows in the reduced unknowns as in 2D (`contact.rs`).
 
+mod mortar;
 mod nts;
 pub mod search;
 
+pub(super) use mortar::mortar_rows;
 pub(super) use nts::nts_rows;
 
 use super::conditions::PointDofs;

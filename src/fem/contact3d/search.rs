@@ -149,6 +149,41 @@ impl<'a> TriangleTree<'a> {
         t
     }
 
+    /// The triangles whose boxes meet the box [lo, hi], in increasing
+    /// order.
+    pub fn overlapping(&self, lo: Point3, hi: Point3) -> Vec<usize> {
+        let mut out = vec![];
+        if self.nodes.is_empty() {
+            return out;
+        }
+        let mut stack = vec![0usize];
+        while let Some(ni) = stack.pop() {
+            let nd = &self.nodes[ni];
+            if (0..3).any(|k| nd.lo[k] > hi[k] || nd.hi[k] < lo[k]) {
+                continue;
+            }
+            match nd.kids {
+                Some([a, b]) => {
+                    stack.push(b);
+                    stack.push(a);
+                }
+                None => out.extend(self.order[nd.start..nd.end].iter().copied().filter(|&i| {
+                    let t = &self.tris[i];
+                    (0..3).all(|k| {
+                        let (a, b) = t
+                            .iter()
+                            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                                (a.min(v[k]), b.max(v[k]))
+                            });
+                        a <= hi[k] && b >= lo[k]
+                    })
+                })),
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
     /// The triangle nearest to `x` (the least |distance| to its plane) on
     /// which `x` projects orthogonally, among those `keep` accepts; ties go
     /// to the lower triangle index.
