@@ -394,7 +394,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         for &t in &g.elements {
             let mut key = mesh.triangles[t];
             key.sort_unstable();
-            if let Some(&(_, 1, ..)) = fc.get(&key) {
+            if !matches!(fc.get(&key), Some(&(_, 2, ..))) {
                 return Err(err(format!(
                     "{what}: contact surface \"{on}\" is not between two bodies: its triangle {} borders one body only (is the surface on the outer boundary? a surface on the boundary of two meshes is a slave/master pair)",
                     mesh.triangle_tags[t]
