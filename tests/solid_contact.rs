@@ -211,13 +211,19 @@ fn stacked_cubes_non_matching_mortar_pass_the_patch_test() {
 #[test]
 fn floating_cube_on_a_block_is_certified() {
     let mesh = read_msh(&data("stack_nm.msh")).unwrap();
-    let mut inp = stack_input(nts("upper_bottom", "lower_top"));
-    inp.slip = vec!["bottom".into(), "lower_x0".into(), "lower_y0".into()];
-    let m = build(&mesh, Path::new("floating.toml"), &inp).unwrap();
-    assert_eq!(m.qp.kernel.len(), 6, "the upper cube's six motions");
-    let r = solve(&m);
-    let f: f64 = r.lambda.iter().sum();
-    assert!((f - P).abs() < 1e-9 * P, "resultant {f}");
+    for disc in [Discretization::Nts, Discretization::Mortar] {
+        let mut c = nts("upper_bottom", "lower_top");
+        if let ContactPair::NonMatching(p) = &mut c.pair {
+            p.discretization = Some(disc);
+        }
+        let mut inp = stack_input(c);
+        inp.slip = vec!["bottom".into(), "lower_x0".into(), "lower_y0".into()];
+        let m = build(&mesh, Path::new("floating.toml"), &inp).unwrap();
+        assert_eq!(m.qp.kernel.len(), 6, "the upper cube's six motions");
+        let r = solve(&m);
+        let f: f64 = r.lambda.iter().sum();
+        assert!((f - P).abs() < 1e-9 * P, "{disc:?}: resultant {f}");
+    }
 }
 
 /// A wrong-facing slave (the upper cube's top, which faces away from the

@@ -149,3 +149,94 @@ pub(in crate::fem) fn nts_rows(
     }
     Ok(rows)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn facet(points: [usize; 3], xs: &[Point3], body: u32) -> Facet {
+        let p = points.map(|i| xs[i]);
+        let (weight, normal) = crate::fem::ElementKind::Solid.facet_weight(&p);
+        Facet {
+            nodes: points,
+            points,
+            body,
+            weight,
+            normal,
+            tag: 1,
+        }
+    }
+
+    /// A slave node above a tilted master triangle: the row has the
+    /// master's normal, the barycentric weights of the orthogonal
+    /// projection (Σ w = 1, so a rigid translation leaves it unchanged)
+    /// and the distance to the plane as its gap; a slave triangle facing
+    /// the same way as the master is refused.
+    #[test]
+    fn a_row_on_a_tilted_master() {
+        let t = 0.3f64;
+        // Master: a triangle in the plane z = t x (normal ∝ (−t, 0, 1)).
+        let mut xs: Vec<Point3> = vec![[0.0, 0.0, 0.0], [2.0, 0.0, 2.0 * t], [0.0, 2.0, 0.0]];
+        let n = {
+            let l = (1.0 + t * t).sqrt();
+            [-t / l, 0.0, 1.0 / l]
+        };
+        // Slave: a triangle 0.1 above it along n, facing down.
+        let base = [[0.5, 0.5], [0.9, 0.5], [0.5, 0.9]];
+        for b in base {
+            let z = t * b[0];
+            xs.push([b[0] + 0.1 * n[0], b[1], z + 0.1 * n[2]]);
+        }
+        let master = [facet([0, 1, 2], &xs, 0)];
+        let slave = [facet([3, 5, 4], &xs, 1)];
+        assert!(dot(slave[0].normal, n) < -0.99, "{:?}", slave[0].normal);
+        let pair = NonMatchingPair {
+            slave: "s".into(),
+            master: "m".into(),
+            max_gap: None,
+            discretization: None,
+            interference: false,
+        };
+        let rows = nts_rows(
+            &xs,
+            &slave,
+            &master,
+            &pair,
+            0,
+            "t",
+            |p| p as u64,
+            Path::new("t"),
+        )
+        .unwrap();
+        assert_eq!(rows.len(), 3);
+        for r in &rows {
+            assert!((0..3).all(|k| (r.normal[k] - n[k]).abs() < 1e-15));
+            assert!((r.gap0 - 0.1).abs() < 1e-14, "{}", r.gap0);
+            let ws: f64 = r.masters.iter().map(|m| m.1).sum();
+            assert!((ws - 1.0).abs() < 1e-15);
+            // The weights give back the projected point.
+            let x = xs[r.slave];
+            let p: Vec<f64> = (0..3)
+                .map(|k| r.masters.iter().map(|&(m, w)| w * xs[m][k]).sum())
+                .collect();
+            for k in 0..3 {
+                assert!((x[k] - 0.1 * n[k] - p[k]).abs() < 1e-14);
+            }
+        }
+        let away = [facet([3, 4, 5], &xs, 1)];
+        let e = nts_rows(
+            &xs,
+            &away,
+            &master,
+            &pair,
+            0,
+            "t",
+            |p| p as u64,
+            Path::new("t"),
+        )
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(e.contains("faces away"), "{e}");
+    }
+}
