@@ -388,3 +388,56 @@ fn hertz_sphere_on_a_block() {
         }
     }
 }
+
+/// The upper cube pushed 10⁻⁴ into the lower one: refused as a
+/// penetration naming the slave, solved with `interference = true` (the
+/// overlap closed in the first step: the rows' gaps are −10⁻⁴), by either
+/// rows; a gap of 10⁻⁴ instead is a gap0 of 10⁻⁴ on every row.
+#[test]
+fn initial_overlap_and_gap() {
+    let mut mesh = read_msh(&data("stack_nm.msh")).unwrap();
+    let upper: Vec<usize> = {
+        let g = mesh.group("upper", 3).unwrap();
+        let mut v: Vec<usize> = g.elements.iter().flat_map(|&t| mesh.tets[t]).collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    let z0 = mesh.z.clone();
+    for (shift, disc) in [
+        (-1e-4, Discretization::Nts),
+        (-1e-4, Discretization::Mortar),
+        (1e-4, Discretization::Nts),
+        (1e-4, Discretization::Mortar),
+    ] {
+        for &v in &upper {
+            mesh.z[v] = z0[v] + shift;
+        }
+        let mut c = nts("upper_bottom", "lower_top");
+        if let ContactPair::NonMatching(p) = &mut c.pair {
+            p.discretization = Some(disc);
+        }
+        let mut inp = stack_input(c.clone());
+        if shift < 0.0 {
+            let e = build(&mesh, Path::new("fit.toml"), &inp)
+                .err()
+                .unwrap()
+                .to_string();
+            assert!(
+                e.contains("\"upper_bottom\"") && e.contains("penetrates"),
+                "{e}"
+            );
+            if let ContactPair::NonMatching(p) = &mut c.pair {
+                p.interference = true;
+            }
+            inp = stack_input(c);
+        }
+        let m = build(&mesh, Path::new("fit.toml"), &inp).unwrap();
+        for row in &m.contact {
+            assert!((row.gap0 - shift).abs() < 1e-12, "{disc:?}: {}", row.gap0);
+        }
+        let r = solve(&m);
+        let f: f64 = r.lambda.iter().sum();
+        assert!((f - P).abs() < 1e-9 * P, "{disc:?} {shift}: resultant {f}");
+    }
+}
