@@ -441,3 +441,59 @@ fn initial_overlap_and_gap() {
         assert!((f - P).abs() < 1e-9 * P, "{disc:?} {shift}: resultant {f}");
     }
 }
+
+/// The iterative ssn path (AMG-preconditioned CG, no factor of C's size,
+/// docs/methods.md §7.2) with the solid's near-null space (the six rigid
+/// motions per body): certified, and the same answer as the default path,
+/// on the conforming and mortar cubes and the coarse Hertz model.
+#[test]
+fn iterative_path_agrees() {
+    let stack = read_msh(&data("stack.msh")).unwrap();
+    let stack_nm = read_msh(&data("stack_nm.msh")).unwrap();
+    let mut mortar = nts("upper_bottom", "lower_top");
+    if let ContactPair::NonMatching(p) = &mut mortar.pair {
+        p.discretization = Some(Discretization::Mortar);
+    }
+    let hertz_mesh = read_msh(&data("hertz.msh")).unwrap();
+    let mut hertz_in = SolidInput::default();
+    hertz_in.materials.insert("ball".into(), mat(2e11, 0.3));
+    hertz_in.materials.insert("block".into(), mat(2e11, 0.3));
+    hertz_in.slip = vec!["x0".into(), "y0".into(), "block_bottom".into()];
+    hertz_in.traction = vec![("ball_top".into(), SolidTraction::Normal(-4.66e7))];
+    let mut c = nts("ball", "block_top");
+    if let ContactPair::NonMatching(p) = &mut c.pair {
+        p.max_gap = Some(0.05);
+    }
+    hertz_in.contact = vec![c];
+    for (name, mesh, inp) in [
+        ("conforming", &stack, stack_input(conforming("interface"))),
+        ("mortar", &stack_nm, stack_input(mortar)),
+        ("hertz", &hertz_mesh, hertz_in),
+    ] {
+        let m = build(mesh, Path::new("it.toml"), &inp).unwrap();
+        let near = m.qp.near.as_ref().expect("a near-null space");
+        assert_eq!(near.modes.len(), 6);
+        let direct = solve(&m);
+        let mut opts = SolveOptions::default();
+        opts.settings.ssn.path = signorini::qp::settings::SsnPath::Iterative;
+        let it = registry::solve("ssn", &m.qp, &opts).expect("solves");
+        assert!(it.status.converged(), "{name}: {:?}", it.status);
+        assert!(
+            it.kkt.within(opts.settings.kkt_target),
+            "{name}: {:?}",
+            it.kkt
+        );
+        let xmax = direct.x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let dx = direct
+            .x
+            .iter()
+            .zip(&it.x)
+            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+        println!(
+            "{name}: iterative against direct, max |Δx|/max |x| = {:.1e}",
+            dx / xmax
+        );
+        // Measured: 6.4e-12, 7.7e-12, 5.8e-11.
+        assert!(dx < 1e-9 * xmax, "{name}: {dx:e} of {xmax:e}");
+    }
+}

@@ -733,6 +733,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
             names.join(", ")
         )));
     }
+    let near = near_kernel(&points, &point_body, nbodies, &dofs, n);
     let qp = QpProblem {
         c,
         d,
@@ -740,7 +741,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         g,
         kernel,
         friction: None,
-        near: None,
+        near,
     };
     Ok(SolidModel {
         kind,
@@ -759,6 +760,63 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         interface_names,
         kernel_body,
     })
+}
+
+/// Each body's box centre and size, the frame of its rigid motions.
+fn body_frames(points: &[Point3], point_body: &[u32], nbodies: usize) -> Vec<(Point3, f64)> {
+    let mut lo = vec![[f64::MAX; 3]; nbodies];
+    let mut hi = vec![[f64::MIN; 3]; nbodies];
+    for (p, x) in points.iter().enumerate() {
+        let b = point_body[p] as usize;
+        for k in 0..3 {
+            lo[b][k] = lo[b][k].min(x[k]);
+            hi[b][k] = hi[b][k].max(x[k]);
+        }
+    }
+    (0..nbodies)
+        .map(|b| {
+            let c = [0, 1, 2].map(|k| (lo[b][k] + hi[b][k]) / 2.0);
+            let l = (0..3)
+                .map(|k| hi[b][k] - lo[b][k])
+                .fold(0.0, f64::max)
+                .max(1e-300);
+            (c, l)
+        })
+        .collect()
+}
+
+/// The near-null space of the iterative ssn path (docs/methods.md §7.2,
+/// the 2D `rigid::near_kernel` in 3D): each point's unknowns as one
+/// block, and the six rigid motions of every body in the reduced unknowns,
+/// whatever the conditions hold. None if the points' unknowns are not
+/// contiguous in point order.
+fn near_kernel(
+    points: &[Point3],
+    point_body: &[u32],
+    nbodies: usize,
+    dofs: &[PointDofs<3>],
+    n: usize,
+) -> Option<crate::qp::NearKernel> {
+    let frames = body_frames(points, point_body, nbodies);
+    let mut modes = vec![vec![0.0; n]; SOLID_MODES.len()];
+    let mut block_ptr = vec![0usize];
+    for (p, pd) in dofs.iter().enumerate() {
+        if pd.ndof == 0 {
+            continue;
+        }
+        if pd.start != *block_ptr.last()? {
+            return None;
+        }
+        let (c, l) = frames[point_body[p] as usize];
+        for (mode, &m) in modes.iter_mut().zip(SOLID_MODES.iter()) {
+            let u = m.at(points[p], c, l);
+            for j in 0..pd.ndof {
+                mode[pd.start + j] = dot(pd.t[j], u);
+            }
+        }
+        block_ptr.push(pd.start + pd.ndof);
+    }
+    (*block_ptr.last()? == n).then_some(crate::qp::NearKernel { block_ptr, modes })
 }
 
 /// The rigid motions (the six [`SOLID_MODES`]) of each body that satisfy
