@@ -77,6 +77,30 @@ pub struct SolidOutput {
     pub principal: Vec<[f64; 3]>,
 }
 
+/// The contact surface of a solved solid model (docs/problem-format.md
+/// §12): one point per contact row, at its slave point, and the slave
+/// surfaces' triangles on those points.
+#[derive(Debug, Clone, Default)]
+pub struct SolidContactOutput {
+    /// The slave point of each row (reference coordinates).
+    pub points: Vec<[f64; 3]>,
+    /// The slave point's index in [`SolidOutput::points`].
+    pub slave: Vec<usize>,
+    /// Slave-surface triangles in row indices (a triangle with a node
+    /// that has no row of the same interface is left out).
+    pub triangles: Vec<[usize; 3]>,
+    /// The row's unit normal (outward of the master).
+    pub normal: Vec<[f64; 3]>,
+    pub interface: Vec<u32>,
+    /// The initial gap g₀ and the current one g₀ − Σ c_p·u_p.
+    pub gap0: Vec<f64>,
+    pub gap: Vec<f64>,
+    /// λ (N) and λ / tributary area (N/m²).
+    pub multiplier: Vec<f64>,
+    pub pressure: Vec<f64>,
+    pub active: Vec<bool>,
+}
+
 /// The fields of one solved (load) step.
 #[derive(Debug, Clone, Default)]
 pub struct StepOutput {

@@ -162,6 +162,23 @@ fn print_solid_report(prep: &SolidPrepared, o: &run::SolidOutcome) {
             v3(r.moment)
         );
     }
+    if !s.contact.is_empty() {
+        crate::outln!(
+            "contact     {} active of {} rows",
+            s.active,
+            s.constraints
+        );
+    }
+    for (name, it) in &s.contact {
+        crate::outln!(
+            "interface   '{name}': F = {}, M = {}; {} of {} rows active, max pressure {:.4e}",
+            v3(it.resultant.force),
+            v3(it.resultant.moment),
+            it.active,
+            it.rows,
+            it.max_pressure
+        );
+    }
     let (lf, lm) = (s.loads.force, s.loads.moment);
     crate::outln!(
         "balance     loads F = {}, M = {} (about ({}, {}, {})); loads + reactions F = ({:.2e}, {:.2e}, {:.2e}), M = ({:.2e}, {:.2e}, {:.2e})",

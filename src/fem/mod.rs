@@ -13,6 +13,7 @@
 
 mod conditions;
 mod contact;
+pub mod contact3d;
 mod edges;
 pub mod element;
 pub mod friction;

@@ -1,22 +1,24 @@
-//! The first slice of 3D (issue 45): a model of P1 tetrahedra without
-//! contact, from a 3D mesh to the QP min ½xᵀCx − xᵀd (no rows), on the
+//! 3D models of P1 tetrahedra (issue 45), from a 3D mesh to the QP
+//! min ½xᵀCx − xᵀd s.t. Ax ≤ g, on the
 //! shared pieces — [`ElementKind::Solid`], [`PointDofs`]`<3>`, the
 //! [`RigidMode`]s, the body detection (`topology::cell_bodies`), the
 //! ordered parallel assembly (`stiffness::assemble`), the elimination of
 //! the conditions (`conditions::eliminate`), the QP layer. Dirichlet
 //! components, slip on plane surfaces, tractions (`pn` or `p`) on boundary
-//! triangles, gravity. What is still 2D-only (the topology cut along
-//! contact surfaces, the outputs) is listed in docs/design.md §"Adding a
-//! kind: solid 3D".
+//! triangles, gravity, and contact (`contact3d`: the mesh cut along
+//! conforming surfaces, node-to-node and node-to-surface rows; docs/
+//! methods.md §11). What is still 2D-only is listed in docs/design.md
+//! §"Adding a kind: solid 3D".
 
 use super::conditions::{number, Cond, PointDofs};
+use super::contact3d::{conforming_rows, mortar_rows, nts_rows, reduced_rows, Row3};
 use super::element::{ElementKind, MaterialMatrix, Point3, RigidMode, Vector3, SOLID_MODES};
+use super::pairs::STIFF_SLAVE;
 use super::stiffness::{assemble, Cells, Materials};
 use super::topology::cell_bodies;
 use super::FemError;
-use crate::linalg::sparse::Csr;
 use crate::mesh::Mesh;
-use crate::problem::Material;
+use crate::problem::{Contact, ContactPair, Discretization, Material, NormalKind};
 use crate::qp::QpProblem;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -43,15 +45,24 @@ pub struct SolidInput {
     pub slip: Vec<String>,
     /// `[[traction]]`: the surface and its load.
     pub traction: Vec<(String, SolidTraction)>,
+    /// `[[contact]]`, the 2D contract on surfaces: `on` a surface between
+    /// two bodies (the mesh is cut there), or `slave`/`master` surfaces of
+    /// two bodies (node-to-surface rows; mortar and friction are refused
+    /// for now, docs/design.md).
+    pub contact: Vec<Contact>,
 }
 
 /// The assembled solid model with the maps back to the mesh.
 #[derive(Clone)]
 pub struct SolidModel {
     pub kind: ElementKind,
-    /// The mesh nodes (a point per node: no contact cut yet).
+    /// The points: one per mesh node and body of its tetrahedra (a node on
+    /// a conforming contact surface has one in each of the two bodies),
+    /// node after node; without a contact cut, the mesh nodes.
     pub points: Vec<Point3>,
-    /// Tetrahedra, positively oriented, in node indices.
+    /// The mesh node of each point.
+    pub point_node: Vec<usize>,
+    /// Tetrahedra, positively oriented, in point indices.
     pub tets: Vec<[usize; 4]>,
     /// The material of each tetrahedron (index into `material_names`).
     pub tet_material: Vec<u32>,
@@ -61,9 +72,19 @@ pub struct SolidModel {
     pub qp: QpProblem,
     /// Nodal external forces (N), before the elimination.
     pub loads: Vec<Vector3>,
-    /// The body of each node (connected through tetrahedra).
+    /// The body of each point (tetrahedra joined through faces off the
+    /// contact cut).
     pub point_body: Vec<u32>,
     pub nbodies: usize,
+    /// The contact rows on points (docs/methods.md §11).
+    pub contact: Vec<Row3>,
+    /// The contact row of each QP row (rows on fixed points only are left
+    /// out).
+    pub qp_rows: Vec<usize>,
+    /// Each `[[contact]]` entry's surfaces, `on` or `slave/master`.
+    pub interface_names: Vec<String>,
+    /// The body of each kernel vector.
+    pub kernel_body: Vec<u32>,
 }
 
 impl SolidModel {
@@ -79,6 +100,19 @@ impl SolidModel {
                     }
                 }
                 u
+            })
+            .collect()
+    }
+
+    /// The contact pressure of each QP row from its multipliers λ: the
+    /// slave point, λ / area (N/m²; docs/methods.md §11.2), and the row.
+    pub fn contact_pressure(&self, lambda: &[f64]) -> Vec<(usize, f64, &Row3)> {
+        self.qp_rows
+            .iter()
+            .zip(lambda)
+            .map(|(&r, &l)| {
+                let row = &self.contact[r];
+                (row.slave, l / row.area, row)
             })
             .collect()
     }
@@ -140,21 +174,69 @@ fn faces(tets: &[[usize; 4]]) -> HashMap<[usize; 3], Face> {
     f
 }
 
-/// A boundary triangle of a Physical Surface: its nodes, the weight |F|/3
-/// of each, its outward unit normal and its Gmsh tag (for messages).
+/// A boundary triangle of a Physical Surface: its nodes, its points (the
+/// copies in its body, which differ from the nodes only on a contact cut),
+/// its body, the weight |F|/3 of each node, its outward unit normal and
+/// its Gmsh tag (for messages).
 #[derive(Debug, Clone, Copy)]
-struct Facet {
-    nodes: [usize; 3],
-    weight: f64,
-    normal: Vector3,
-    tag: u64,
+pub(super) struct Facet {
+    pub(super) nodes: [usize; 3],
+    pub(super) points: [usize; 3],
+    pub(super) body: u32,
+    pub(super) weight: f64,
+    pub(super) normal: Vector3,
+    pub(super) tag: u64,
 }
 
-/// The triangles of a Physical Surface `name` with each one's node weight
-/// |F|/3 and outward unit normal; `what` names the TOML entry.
+/// The points of the nodes: one per node and body of its tetrahedra, node
+/// after node, bodies in increasing order (one per node without a contact
+/// cut, in node order: the points are then the nodes).
+struct Cut {
+    /// The points of node v are `node_ptr[v]..node_ptr[v + 1]`.
+    node_ptr: Vec<usize>,
+    point_body: Vec<u32>,
+}
+
+impl Cut {
+    /// The point of node `v` in body `b` (its first point if none is).
+    fn point(&self, v: usize, b: u32) -> usize {
+        let r = self.node_ptr[v]..self.node_ptr[v + 1];
+        r.clone()
+            .find(|&p| self.point_body[p] == b)
+            .unwrap_or(r.start)
+    }
+
+    fn points(&self, v: usize) -> std::ops::Range<usize> {
+        self.node_ptr[v]..self.node_ptr[v + 1]
+    }
+}
+
+/// The outward unit normal of face `tri` of tetrahedron `tet` and the weight
+/// |F|/3 of its nodes.
+fn outward(points: &[Point3], tri: [usize; 3], tet: &[usize; 4]) -> (f64, Vector3) {
+    let (w, n) = ElementKind::Solid.facet_weight(&tri.map(|v| points[v]));
+    let opp = tet
+        .iter()
+        .copied()
+        .find(|v| !tri.contains(v))
+        .unwrap_or(tri[0]);
+    let (x0, o) = (points[tri[0]], points[opp]);
+    if dot(n, [o[0] - x0[0], o[1] - x0[1], o[2] - x0[2]]) > 0.0 {
+        (w, n.map(|c| -c))
+    } else {
+        (w, n)
+    }
+}
+
+/// The triangles of a Physical Surface `name` on the boundary of the
+/// volume mesh; `what` names the TOML entry.
+#[allow(clippy::too_many_arguments)]
 fn surface(
     mesh: &Mesh,
-    points: &[Point3],
+    nodes: &[Point3],
+    tets: &[[usize; 4]],
+    tet_body: &[u32],
+    cut: &Cut,
     faces: &HashMap<[usize; 3], Face>,
     path: &Path,
     name: &str,
@@ -172,16 +254,17 @@ fn surface(
             ),
         ));
     };
-    let kind = ElementKind::Solid;
     let mut out = vec![];
     for &t in &g.elements {
         let tri = mesh.triangles[t];
-        let (w, mut n) = kind.facet_weight(&tri.map(|v| points[v]));
         let mut key = tri;
         key.sort_unstable();
         // The reader has checked that every triangle is a face; one inside
         // a body (two tetrahedra) is on no boundary.
-        if let Some(&(_, 2, _, _)) = faces.get(&key) {
+        let Some(&(_, count, t0, _)) = faces.get(&key) else {
+            continue;
+        };
+        if count == 2 {
             return Err(FemError::new(
                 path,
                 format!(
@@ -190,21 +273,77 @@ fn surface(
                 ),
             ));
         }
-        if let Some(&(opp, ..)) = faces.get(&key) {
-            let x0 = points[tri[0]];
-            let o = points[opp];
-            if dot(n, [o[0] - x0[0], o[1] - x0[1], o[2] - x0[2]]) > 0.0 {
-                n = n.map(|c| -c);
-            }
-        }
+        let (weight, normal) = outward(nodes, tri, &tets[t0]);
+        let body = tet_body[t0];
         out.push(Facet {
             nodes: tri,
-            weight: w,
-            normal: n,
+            points: tri.map(|v| cut.point(v, body)),
+            body,
+            weight,
+            normal,
             tag: mesh.triangle_tags[t],
         });
     }
     Ok(out)
+}
+
+/// The `[[contact]]` entry `c` as written, for messages.
+fn contact_what(i: usize, c: &Contact) -> String {
+    format!("[[contact]] #{} ({})", i + 1, c.keys())
+}
+
+/// What 3D contact does not have yet, refused naming the entry: friction
+/// (issue 46), one row per triangle normal.
+fn check_supported_contact(contact: &[Contact], path: &Path) -> Result<(), FemError> {
+    for (i, c) in contact.iter().enumerate() {
+        let what = contact_what(i, c);
+        let no = |why: &str| Err(FemError::new(path, format!("{what}: {why}")));
+        if c.has_friction() {
+            return no(
+                "friction in a 3D model is not implemented yet (issue 46); remove friction/tresca",
+            );
+        }
+        if let ContactPair::Conforming {
+            normals: NormalKind::Segment,
+            ..
+        } = &c.pair
+        {
+            return no(
+                "normals = \"segment\" is for curves (2D); a 3D surface has averaged normals",
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A pair without `discretization`: mortar rows, unless the slave is more
+/// than [`STIFF_SLAVE`] times stiffer than the master (the 2D rule and
+/// warning, docs/methods.md §7.1).
+fn default_discretization(
+    slave: &[Facet],
+    master: &[Facet],
+    body_e: &[(f64, f64)],
+    sname: &str,
+    mname: &str,
+    what: &str,
+) -> Discretization {
+    let e_slave = slave
+        .iter()
+        .map(|f| body_e[f.body as usize].0)
+        .fold(f64::INFINITY, f64::min);
+    let e_master = master
+        .iter()
+        .map(|f| body_e[f.body as usize].1)
+        .fold(0.0, f64::max);
+    if e_slave > STIFF_SLAVE * e_master {
+        log::warn!(
+            "{what}: slave \"{sname}\" (E = {e_slave:e}) is {:.0} times stiffer than master \"{mname}\" (E = {e_master:e}): node-to-surface rows, not the default mortar rows, whose multipliers oscillate on a stiff slave; make the softer body the slave for mortar rows, or write discretization = \"nts\"",
+            e_slave / e_master
+        );
+        Discretization::Nts
+    } else {
+        Discretization::Mortar
+    }
 }
 
 /// Build the solid model of a 3D `mesh` (docs/design.md §"Adding a kind:
@@ -212,7 +351,8 @@ fn surface(
 pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel, FemError> {
     let err = |msg: String| FemError::new(path, msg);
     let kind = ElementKind::Solid;
-    let points: Vec<Point3> = (0..mesh.nodes.len()).map(|i| mesh.node::<3>(i)).collect();
+    check_supported_contact(&input.contact, path)?;
+    let nodes: Vec<Point3> = (0..mesh.nodes.len()).map(|i| mesh.node::<3>(i)).collect();
     // Materials of the tetrahedra through their Physical Volumes.
     let mut material_names: Vec<String> = vec![];
     let mut tet_material = vec![u32::MAX; mesh.tets.len()];
@@ -233,41 +373,125 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
             mesh.tet_tags[t]
         )));
     }
-    let tets = mesh.tets.clone();
-    let nn = points.len();
-    let fc = faces(&tets);
-    // Bodies: tetrahedra joined through their faces (the 2D cut of
-    // topology.rs, without contact surfaces yet); a node's body is its
-    // tetrahedra's.
-    let joined = fc.values().filter_map(|f| f.3.map(|s| (f.2, s)));
-    let (tet_body, nbodies) = cell_bodies(&tets, &mesh.node_tags, joined);
-    let mut used = vec![false; nn];
-    let mut point_body = vec![u32::MAX; nn];
-    for (t, tet) in tets.iter().enumerate() {
-        for &v in tet {
-            used[v] = true;
-            if point_body[v] == u32::MAX {
-                point_body[v] = tet_body[t];
-            } else if point_body[v] != tet_body[t] {
+    let mesh_tets = &mesh.tets;
+    let nn = nodes.len();
+    let fc = faces(mesh_tets);
+    // The conforming contact surfaces cut the mesh (docs/methods.md
+    // §11.1): their faces do not join tetrahedra into bodies.
+    let mut cut_faces: HashMap<[usize; 3], (u32, usize)> = HashMap::new();
+    let mut cut_tris: Vec<Vec<usize>> = vec![vec![]; input.contact.len()];
+    for (i, c) in input.contact.iter().enumerate() {
+        let ContactPair::Conforming { on, .. } = &c.pair else {
+            continue;
+        };
+        let what = contact_what(i, c);
+        let Some(g) = mesh.group(on, 2) else {
+            return Err(err(format!(
+                "{what}: no Physical Surface \"{on}\" in {}",
+                mesh.path.display()
+            )));
+        };
+        for &t in &g.elements {
+            let mut key = mesh.triangles[t];
+            key.sort_unstable();
+            if !matches!(fc.get(&key), Some(&(_, 2, ..))) {
                 return Err(err(format!(
-                    "{}: node {} joins two bodies that share no face (tetrahedra touching at an edge or a vertex): a 3D model has no contact cut yet (issue 45)",
-                    mesh.path.display(),
-                    mesh.node_tags[v]
+                    "{what}: contact surface \"{on}\" is not between two bodies: its triangle {} borders one body only (is the surface on the outer boundary? a surface on the boundary of two meshes is a slave/master pair)",
+                    mesh.triangle_tags[t]
                 )));
+            }
+            if let Some(&(j, _)) = cut_faces.get(&key) {
+                return Err(err(format!(
+                    "{what}: triangle {} of \"{on}\" is also in [[contact]] #{}",
+                    mesh.triangle_tags[t],
+                    j + 1
+                )));
+            }
+            cut_faces.insert(key, (i as u32, t));
+            cut_tris[i].push(t);
+        }
+    }
+    // Bodies: tetrahedra joined through their faces off the contact cut; a
+    // node has a point in each body of its tetrahedra.
+    let joined = fc
+        .iter()
+        .filter(|(k, _)| !cut_faces.contains_key(*k))
+        .filter_map(|(_, f)| f.3.map(|s| (f.2, s)));
+    let (tet_body, nbodies) = cell_bodies(mesh_tets, &mesh.node_tags, joined);
+    let mut on_cut = vec![false; nn];
+    for (key, &(i, t)) in &cut_faces {
+        let f = fc[key];
+        let s = f.3.unwrap_or(f.2);
+        if tet_body[f.2] == tet_body[s] {
+            let c = &input.contact[i as usize];
+            return Err(err(format!(
+                "{}: contact surface \"{}\" is not between two bodies: its triangle {} lies inside one body (the surface does not cut it into two)",
+                contact_what(i as usize, c),
+                c.groups()[0],
+                mesh.triangle_tags[t]
+            )));
+        }
+        for &v in key {
+            on_cut[v] = true;
+        }
+    }
+    let mut node_bodies: Vec<Vec<u32>> = vec![vec![]; nn];
+    for (t, tet) in mesh_tets.iter().enumerate() {
+        for &v in tet {
+            if !node_bodies[v].contains(&tet_body[t]) {
+                node_bodies[v].push(tet_body[t]);
             }
         }
     }
-    // A node of no tetrahedron: a body of its own.
     let mut nbodies = nbodies;
-    for b in point_body.iter_mut().filter(|b| **b == u32::MAX) {
-        *b = nbodies as u32;
-        nbodies += 1;
+    let mut node_ptr = vec![0usize; nn + 1];
+    let mut point_body = vec![];
+    let mut point_node = vec![];
+    let mut used = vec![];
+    for (v, bs) in node_bodies.iter_mut().enumerate() {
+        if bs.len() > 1 && !on_cut[v] {
+            return Err(err(format!(
+                "{}: node {} joins two bodies that share no face (tetrahedra touching at an edge or a vertex, not across a [[contact]] surface)",
+                mesh.path.display(),
+                mesh.node_tags[v]
+            )));
+        }
+        bs.sort_unstable();
+        if bs.is_empty() {
+            // A node of no tetrahedron: a body of its own.
+            bs.push(nbodies as u32);
+            nbodies += 1;
+            used.push(false);
+        } else {
+            used.extend(bs.iter().map(|_| true));
+        }
+        for &b in bs.iter() {
+            point_body.push(b);
+            point_node.push(v);
+        }
+        node_ptr[v + 1] = point_body.len();
     }
+    let cut = Cut {
+        node_ptr,
+        point_body,
+    };
+    let np = point_node.len();
+    let points: Vec<Point3> = point_node.iter().map(|&v| nodes[v]).collect();
+    let tets: Vec<[usize; 4]> = mesh_tets
+        .iter()
+        .zip(&tet_body)
+        .map(|(t, &b)| t.map(|v| cut.point(v, b)))
+        .collect();
+    let surf = |on: &str, what: &str| {
+        surface(
+            mesh, &nodes, mesh_tets, &tet_body, &cut, &fc, path, on, what,
+        )
+    };
     // Conditions.
-    let mut conds: Vec<Vec<Cond3>> = vec![vec![]; nn];
-    for v in (0..nn).filter(|&v| !used[v]) {
+    let mut conds: Vec<Vec<Cond3>> = vec![vec![]; np];
+    for p in (0..np).filter(|&p| !used[p]) {
         // A node of no tetrahedron (a point element): held, no unknowns.
-        conds[v] = vec![
+        conds[p] = vec![
             cond([1.0, 0.0, 0.0], 0.0),
             cond([0.0, 1.0, 0.0], 0.0),
             cond([0.0, 0.0, 1.0], 0.0),
@@ -281,27 +505,29 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
                 mesh.path.display()
             )));
         };
-        let mut nodes: Vec<usize> = match g.dim {
+        let mut gnodes: Vec<usize> = match g.dim {
             0 => g.elements.iter().map(|&e| mesh.points[e]).collect(),
             1 => g.elements.iter().flat_map(|&e| mesh.lines[e]).collect(),
             2 => g.elements.iter().flat_map(|&e| mesh.triangles[e]).collect(),
             _ => g.elements.iter().flat_map(|&e| mesh.tets[e]).collect(),
         };
-        nodes.sort_unstable();
-        nodes.dedup();
-        for v in nodes {
-            for (k, uk) in u.iter().enumerate() {
-                if let Some(val) = uk {
-                    let mut r = [0.0; 3];
-                    r[k] = 1.0;
-                    conds[v].push(cond(r, *val));
+        gnodes.sort_unstable();
+        gnodes.dedup();
+        for v in gnodes {
+            for p in cut.points(v) {
+                for (k, uk) in u.iter().enumerate() {
+                    if let Some(val) = uk {
+                        let mut r = [0.0; 3];
+                        r[k] = 1.0;
+                        conds[p].push(cond(r, *val));
+                    }
                 }
             }
         }
     }
     for (i, on) in input.slip.iter().enumerate() {
         let what = format!("[[slip]] #{} (on = \"{on}\")", i + 1);
-        let tris = surface(mesh, &points, &fc, path, on, &what)?;
+        let tris = surf(on, &what)?;
         let Some(&Facet {
             nodes: t0,
             normal: n0,
@@ -310,13 +536,13 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         else {
             continue;
         };
-        let x0 = points[t0[0]];
+        let x0 = nodes[t0[0]];
         let size = tris
             .iter()
             .flat_map(|t| t.nodes)
             .map(|v| {
                 (0..3)
-                    .map(|k| (points[v][k] - x0[k]).abs())
+                    .map(|k| (nodes[v][k] - x0[k]).abs())
                     .fold(0.0, f64::max)
             })
             .fold(0.0, f64::max);
@@ -324,7 +550,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
             let (tri, n) = (f.nodes, f.normal);
             let off = tri
                 .iter()
-                .map(|&v| dot(n0, [0, 1, 2].map(|k| points[v][k] - x0[k])).abs())
+                .map(|&v| dot(n0, [0, 1, 2].map(|k| nodes[v][k] - x0[k])).abs())
                 .fold(0.0, f64::max);
             if dot(n, n0) < 1.0 - 1e-10 || off > 1e-9 * size {
                 return Err(err(format!(
@@ -334,18 +560,18 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
                 )));
             }
         }
-        let mut nodes: Vec<usize> = tris.iter().flat_map(|t| t.nodes).collect();
-        nodes.sort_unstable();
-        nodes.dedup();
-        for v in nodes {
-            conds[v].push(cond(n0, 0.0));
+        let mut ps: Vec<usize> = tris.iter().flat_map(|t| t.points).collect();
+        ps.sort_unstable();
+        ps.dedup();
+        for p in ps {
+            conds[p].push(cond(n0, 0.0));
         }
     }
     // The elimination of the plane, by Gram–Schmidt in 3D.
-    let dofs = number(&conds, |v, m| {
+    let dofs = number(&conds, |p, m| {
         err(format!(
             "conflicting conditions at node {}: {m}",
-            mesh.node_tags[v]
+            mesh.node_tags[point_node[p]]
         ))
     })?;
     let n = dofs.last().map_or(0, |pd| pd.start + pd.ndof);
@@ -369,23 +595,17 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
     };
     let (c, mut d) = assemble(cells, &dofs, n, &smats, true);
     // Tractions on the boundary triangles: d += Tᵀ f.
-    let mut tractions = vec![[0.0; 3]; nn];
+    let mut tractions = vec![[0.0; 3]; np];
     for (i, (on, load)) in input.traction.iter().enumerate() {
         let what = format!("[[traction]] #{} (on = \"{on}\")", i + 1);
-        for Facet {
-            nodes: tri,
-            weight: w,
-            normal: nrm,
-            ..
-        } in surface(mesh, &points, &fc, path, on, &what)?
-        {
+        for f in surf(on, &what)? {
             let p = match *load {
-                SolidTraction::Normal(pn) => nrm.map(|c| pn * c),
+                SolidTraction::Normal(pn) => f.normal.map(|c| pn * c),
                 SolidTraction::Vector(p) => p,
             };
-            for v in tri {
+            for v in f.points {
                 for k in 0..3 {
-                    tractions[v][k] += w * p[k];
+                    tractions[v][k] += f.weight * p[k];
                 }
             }
         }
@@ -398,7 +618,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
     }
     // The nodal external forces: the gravity of the tetrahedra, then the
     // tractions.
-    let mut loads = vec![[0.0; 3]; nn];
+    let mut loads = vec![[0.0; 3]; np];
     for (t, tet) in tets.iter().enumerate() {
         let mi = tet_material[t] as usize;
         let pts = tet.map(|v| points[v]);
@@ -414,26 +634,119 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
             l[k] += f[k];
         }
     }
-    let kernel = rigid_kernel(&points, &point_body, nbodies, &conds, &dofs, n);
-    if !kernel.is_empty() {
+    // Contact rows (docs/methods.md §11).
+    let mut contact = vec![];
+    let interface_names: Vec<String> = input.contact.iter().map(|c| c.groups().join("/")).collect();
+    let node_tag = |p: usize| mesh.node_tags[point_node[p]];
+    // The least and largest Young's modulus of each body's tetrahedra.
+    let mut body_e = vec![(f64::INFINITY, 0.0f64); nbodies];
+    for (t, &m) in tet_material.iter().enumerate() {
+        let e = mats[m as usize].e;
+        let b = &mut body_e[tet_body[t] as usize];
+        *b = (b.0.min(e), b.1.max(e));
+    }
+    for (i, c) in input.contact.iter().enumerate() {
+        let what = contact_what(i, c);
+        match &c.pair {
+            ContactPair::Conforming { on, .. } => {
+                let mut tris = vec![];
+                for &t in &cut_tris[i] {
+                    let tri = mesh.triangles[t];
+                    let mut key = tri;
+                    key.sort_unstable();
+                    let f = fc[&key];
+                    let s = f.3.unwrap_or(f.2);
+                    let (tk, tl) = if tet_body[f.2] < tet_body[s] {
+                        (f.2, s)
+                    } else {
+                        (s, f.2)
+                    };
+                    let (weight, normal) = outward(&nodes, tri, &mesh_tets[tk]);
+                    let (bk, bl) = (tet_body[tk], tet_body[tl]);
+                    let facet = Facet {
+                        nodes: tri,
+                        points: tri.map(|v| cut.point(v, bk)),
+                        body: bk,
+                        weight,
+                        normal,
+                        tag: mesh.triangle_tags[t],
+                    };
+                    tris.push((facet, tri.map(|v| cut.point(v, bl))));
+                }
+                contact.extend(conforming_rows(&tris, i as u32, on, node_tag, path)?);
+            }
+            ContactPair::NonMatching(pair) => {
+                let role = |r: &str| format!("{what}: {r} surface");
+                let slave = surf(&pair.slave, &role("slave"))?;
+                let master = surf(&pair.master, &role("master"))?;
+                let disc = pair.discretization.unwrap_or_else(|| {
+                    default_discretization(
+                        &slave,
+                        &master,
+                        &body_e,
+                        &pair.slave,
+                        &pair.master,
+                        &what,
+                    )
+                });
+                let rows = match disc {
+                    Discretization::Mortar => mortar_rows,
+                    Discretization::Nts => nts_rows,
+                };
+                contact.extend(rows(
+                    &points, &slave, &master, pair, i as u32, &what, node_tag, path,
+                )?);
+            }
+        }
+    }
+    let (a, g, qp_rows) = reduced_rows(&contact, &dofs, n, |row| {
+        err(format!(
+            "contact row at node {} of \"{}\" is violated by the prescribed displacements alone",
+            node_tag(row.slave),
+            interface_names[row.interface as usize]
+        ))
+    })?;
+    let point_body = cut.point_body;
+    let (kernel, kernel_body) = rigid_kernel(&points, &point_body, nbodies, &conds, &dofs, n);
+    // A body with free rigid motions must touch a contact row; whether the
+    // rows hold them is the QP layer's decision (docs/methods.md §8.2).
+    let mut touched = vec![false; nbodies];
+    for &r in &qp_rows {
+        for (p, _) in contact[r].coefficients() {
+            touched[point_body[p] as usize] = true;
+        }
+    }
+    if let Some(&b) = kernel_body.iter().find(|&&b| !touched[b as usize]) {
+        let k = kernel_body.iter().filter(|&&x| x == b).count();
+        let names: Vec<&str> = tets
+            .iter()
+            .zip(&tet_material)
+            .filter(|(t, _)| point_body[t[0]] == b)
+            .map(|(_, &m)| material_names[m as usize].as_str())
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .collect();
         return Err(err(format!(
-            "{}: {} rigid motion(s) of the bodies are held by no condition, and a 3D model has no contact yet (issue 45): add [[dirichlet]] or [[slip]]",
+            "{}: {k} rigid motion(s) of body {} ({}) are held by no [[dirichlet]] or [[slip]] and it has no [[contact]] row: add one",
             mesh.path.display(),
-            kernel.len()
+            b + 1,
+            names.join(", ")
         )));
     }
+    let near = near_kernel(&points, &point_body, nbodies, &dofs, n);
     let qp = QpProblem {
         c,
         d,
-        a: Csr::from_triplets(0, n, &[]),
-        g: vec![],
+        a,
+        g,
         kernel,
         friction: None,
-        near: None,
+        near,
     };
     Ok(SolidModel {
         kind,
         points,
+        point_node,
         tets,
         tet_material,
         material_names,
@@ -442,7 +755,68 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         loads,
         point_body,
         nbodies,
+        contact,
+        qp_rows,
+        interface_names,
+        kernel_body,
     })
+}
+
+/// Each body's box centre and size, the frame of its rigid motions.
+fn body_frames(points: &[Point3], point_body: &[u32], nbodies: usize) -> Vec<(Point3, f64)> {
+    let mut lo = vec![[f64::MAX; 3]; nbodies];
+    let mut hi = vec![[f64::MIN; 3]; nbodies];
+    for (p, x) in points.iter().enumerate() {
+        let b = point_body[p] as usize;
+        for k in 0..3 {
+            lo[b][k] = lo[b][k].min(x[k]);
+            hi[b][k] = hi[b][k].max(x[k]);
+        }
+    }
+    (0..nbodies)
+        .map(|b| {
+            let c = [0, 1, 2].map(|k| (lo[b][k] + hi[b][k]) / 2.0);
+            let l = (0..3)
+                .map(|k| hi[b][k] - lo[b][k])
+                .fold(0.0, f64::max)
+                .max(1e-300);
+            (c, l)
+        })
+        .collect()
+}
+
+/// The near-null space of the iterative ssn path (docs/methods.md §7.2,
+/// the 2D `rigid::near_kernel` in 3D): each point's unknowns as one
+/// block, and the six rigid motions of every body in the reduced unknowns,
+/// whatever the conditions hold. None if the points' unknowns are not
+/// contiguous in point order.
+fn near_kernel(
+    points: &[Point3],
+    point_body: &[u32],
+    nbodies: usize,
+    dofs: &[PointDofs<3>],
+    n: usize,
+) -> Option<crate::qp::NearKernel> {
+    let frames = body_frames(points, point_body, nbodies);
+    let mut modes = vec![vec![0.0; n]; SOLID_MODES.len()];
+    let mut block_ptr = vec![0usize];
+    for (p, pd) in dofs.iter().enumerate() {
+        if pd.ndof == 0 {
+            continue;
+        }
+        if pd.start != *block_ptr.last()? {
+            return None;
+        }
+        let (c, l) = frames[point_body[p] as usize];
+        for (mode, &m) in modes.iter_mut().zip(SOLID_MODES.iter()) {
+            let u = m.at(points[p], c, l);
+            for j in 0..pd.ndof {
+                mode[pd.start + j] = dot(pd.t[j], u);
+            }
+        }
+        block_ptr.push(pd.start + pd.ndof);
+    }
+    (*block_ptr.last()? == n).then_some(crate::qp::NearKernel { block_ptr, modes })
 }
 
 /// The rigid motions (the six [`SOLID_MODES`]) of each body that satisfy
@@ -455,7 +829,7 @@ fn rigid_kernel(
     conds: &[Vec<Cond3>],
     dofs: &[PointDofs<3>],
     n: usize,
-) -> Vec<Vec<f64>> {
+) -> (Vec<Vec<f64>>, Vec<u32>) {
     let mut lo = vec![[f64::MAX; 3]; nbodies];
     let mut hi = vec![[f64::MIN; 3]; nbodies];
     for (p, x) in points.iter().enumerate() {
@@ -490,6 +864,7 @@ fn rigid_kernel(
         }
     }
     let mut kernel: Vec<Vec<f64>> = vec![];
+    let mut owner = vec![];
     for (b, m) in gtg.iter().enumerate() {
         let (vals, vecs) = crate::linalg::dense::sym_eigen(m);
         for (k, &val) in vals.iter().enumerate() {
@@ -523,10 +898,11 @@ fn rigid_kernel(
             let nz = z.iter().map(|v| v * v).sum::<f64>().sqrt();
             if nz > 1e-12 {
                 kernel.push(z.into_iter().map(|v| v / nz).collect());
+                owner.push(b as u32);
             }
         }
     }
-    kernel
+    (kernel, owner)
 }
 
 #[cfg(test)]

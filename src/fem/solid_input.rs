@@ -12,20 +12,10 @@ use super::FemError;
 use crate::mesh::Mesh;
 use crate::problem::{shorten, Problem, TractionLoad};
 
-/// The [`SolidInput`] of a 3D `problem`; `[[contact]]`, `[[steps]]` and
-/// `[output] reference_step` are refused naming the entry (3D contact is
-/// being added, issue 45).
+/// The [`SolidInput`] of a 3D `problem`; `[[steps]]` and `[output]
+/// reference_step` are refused naming the entry (not in 3D yet).
 pub fn solid_input(problem: &Problem) -> Result<SolidInput, FemError> {
     let (f, path) = (&problem.file, problem.path.as_path());
-    if let Some(c) = f.contact.first() {
-        return Err(FemError::new(
-            path,
-            format!(
-                "[[contact]] #1 ({}): contact in 3D models (tetrahedra) is not in yet (issue 45); a 3D model is solved without [[contact]] for now",
-                c.keys()
-            ),
-        ));
-    }
     if !f.steps.is_empty() {
         return Err(FemError::new(
             path,
@@ -49,6 +39,7 @@ pub fn solid_input(problem: &Problem) -> Result<SolidInput, FemError> {
             .map(|d| (d.on.clone(), d.value.components()))
             .collect(),
         slip: f.slip.iter().map(|s| s.on.clone()).collect(),
+        contact: f.contact.clone(),
         traction: f
             .traction
             .iter()
@@ -96,7 +87,11 @@ pub fn add_point_forces(
         };
         let f: Vector3 = fo.f.xyz();
         for &e in &g.elements {
-            let v = mesh.points[e];
+            // The copy of the lowest body on a contact surface, as in 2D.
+            let node = mesh.points[e];
+            let Some(v) = model.point_node.iter().position(|&n| n == node) else {
+                continue;
+            };
             let p = &model.dofs[v];
             for r in 0..p.ndof {
                 let t = p.t[r];

@@ -348,6 +348,7 @@ fn write_mesh(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<(), IoError> {
 pub fn write_solid_checkpoint(
     path: &Path,
     out: &crate::output::SolidOutput,
+    contact: &crate::output::SolidContactOutput,
     node_tags: &[u64],
     attrs: &[(&str, String)],
     time: f64,
@@ -396,6 +397,14 @@ pub fn write_solid_checkpoint(
             write_ds(&ctx, &g, "tetrahedra", &[m, 4], &tets)?;
             write_ds(&ctx, &g, "material", &[m], &out.material)?;
             set_attr_str_list(&ctx, &g, "material_names", &out.material_names)?;
+            let r = contact.points.len();
+            let slave: Vec<u64> = contact.slave.iter().map(|&i| i as u64).collect();
+            write_ds(&ctx, &g, "contact_slave", &[r], &slave)?;
+            write_ds(&ctx, &g, "contact_normal", &[r, 3], contact.normal.as_flattened())?;
+            write_ds(&ctx, &g, "contact_gap0", &[r], &contact.gap0)?;
+            write_ds(&ctx, &g, "contact_interface", &[r], &contact.interface)?;
+            let tris: Vec<u64> = contact.triangles.iter().flatten().map(|&i| i as u64).collect();
+            write_ds(&ctx, &g, "contact_triangles", &[contact.triangles.len(), 3], &tris)?;
             let steps = file.create_group("steps").map_err(ctx.h5("/steps"))?;
             let name = step_name(1);
             let s = steps
@@ -417,6 +426,11 @@ pub fn write_solid_checkpoint(
                 &[m, 3],
                 out.principal.as_flattened(),
             )?;
+            write_ds(&ctx, &s, "multipliers", &[r], &contact.multiplier)?;
+            write_ds(&ctx, &s, "contact_pressure", &[r], &contact.pressure)?;
+            write_ds(&ctx, &s, "gap", &[r], &contact.gap)?;
+            let active: Vec<u8> = contact.active.iter().map(|&a| u8::from(a)).collect();
+            write_ds(&ctx, &s, "active", &[r], &active)?;
             set_attr_scalar(&ctx, &s, "time", &time)?;
             set_attr_str(&ctx, &s, "method", &info.method)?;
             set_attr_str(&ctx, &s, "preconditioner", &info.preconditioner)?;

@@ -15,7 +15,7 @@ use crate::fem::element::{ElementKind, Point3, Vector3};
 use crate::fem::solid::SolidModel;
 use crate::fem::solid_input::{add_point_forces, solid_input};
 use crate::mesh::Mesh;
-use crate::output::{SolidOutput, StepInfo};
+use crate::output::{SolidContactOutput, SolidOutput, StepInfo};
 use crate::problem::{num, shorten, Problem};
 use crate::qp::{registry, MethodId, SolveOptions};
 use serde::Serialize;
@@ -155,6 +155,18 @@ pub struct GroupReaction3 {
     pub resultant: Resultant3,
 }
 
+/// One contact interface of a 3D model in the JSON summary.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Interface3 {
+    pub rows: usize,
+    pub active: usize,
+    /// The largest λ / tributary area (N/m²).
+    pub max_pressure: f64,
+    /// On the slave side, from the master side.
+    #[serde(flatten)]
+    pub resultant: Resultant3,
+}
+
 /// The nearest node to a requested probe and its displacement.
 #[derive(Debug, Clone, Serialize)]
 pub struct Probe3 {
@@ -198,6 +210,10 @@ pub struct SolidSummary {
     pub moment_point: Point3,
     pub loads: Resultant3,
     pub reactions: BTreeMap<String, GroupReaction3>,
+    /// Per `[[contact]]` interface (its groups, "/"-joined): rows, active
+    /// rows, the largest pressure, and the force the master side exerts
+    /// on the slave side with its moment about `moment_point`.
+    pub contact: BTreeMap<String, Interface3>,
     pub notes: Vec<String>,
     pub probes: BTreeMap<String, Probe3>,
     #[serde(rename = "timings_s")]
@@ -215,6 +231,8 @@ impl SolidSummary {
 pub struct SolidOutcome {
     pub summary: SolidSummary,
     pub output: SolidOutput,
+    /// The contact surface's values (empty without `[[contact]]`).
+    pub contact: SolidContactOutput,
     /// Converged and within the KKT target (exit code 0, else 3).
     pub certified: bool,
     /// The files written: VTU, HDF5, JSON.
@@ -249,7 +267,8 @@ pub fn solve_solid(
     let t_write = Instant::now();
     let materials = &prep.problem.file.materials;
     let out = crate::post::solid_output(&prep.model, materials, &res.x);
-    let forces = forces(prep, &out.displacement);
+    let contact = contact_output(prep, &out.displacement, &res.lambda, &res.active);
+    let forces = forces(prep, &out.displacement, &contact);
     let preconditioner = preconditioner_label(method, opts);
     let ordering = match opts.settings.factor_free(method) {
         Some(why) => format!("none ({why})"),
@@ -260,6 +279,7 @@ pub fn solve_solid(
     let stage = tx.stage_dir().to_path_buf();
     let staged = |p: &Path| stage.join(p.file_name().unwrap_or_default());
     crate::io::vtu::write_solid_vtu(&staged(&files.vtu), &out, compress)?;
+    crate::io::vtu::write_solid_contact_vtu(&staged(&files.contact_vtu), &contact, compress)?;
     let info = StepInfo {
         method: method.name().to_string(),
         preconditioner: preconditioner.clone(),
@@ -277,10 +297,17 @@ pub fn solve_solid(
         ("version", env!("CARGO_PKG_VERSION").to_string()),
         ("fingerprint", format!("solid mesh {:016x}", prep.mesh_hash)),
     ];
+    let tags: Vec<u64> = prep
+        .model
+        .point_node
+        .iter()
+        .map(|&v| prep.mesh.node_tags[v])
+        .collect();
     crate::io::hdf5::write_solid_checkpoint(
         &staged(&files.h5),
         &out,
-        &prep.mesh.node_tags,
+        &contact,
+        &tags,
         &attrs,
         prep.problem.file.step_time(0),
         &info,
@@ -304,7 +331,8 @@ pub fn solve_solid(
         rigid_modes: m.qp.kernel.len(),
         dofs: m.qp.n(),
         constraints: m.qp.m(),
-        active: 0,
+        active: contact.active.iter().filter(|&&a| a).count(),
+        contact: forces.interfaces.clone(),
         failed_steps: if certified && res.status.converged() {
             vec![]
         } else {
@@ -346,7 +374,7 @@ pub fn solve_solid(
     if let Some(sig) = super::interrupted() {
         return Err(RunError::Interrupted(sig));
     }
-    let names: Vec<String> = [&files.vtu, &files.h5, &files.json]
+    let names: Vec<String> = [&files.vtu, &files.contact_vtu, &files.h5, &files.json]
         .iter()
         .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
         .collect();
@@ -356,7 +384,8 @@ pub fn solve_solid(
         summary,
         output: out,
         certified: certified && res.status.converged(),
-        files: vec![files.vtu, files.h5, files.json],
+        files: vec![files.vtu, files.contact_vtu, files.h5, files.json],
+        contact,
     })
 }
 
@@ -364,6 +393,7 @@ pub fn solve_solid(
 /// contact).
 struct Forces3 {
     groups: Vec<GroupReaction3>,
+    interfaces: BTreeMap<String, Interface3>,
     loads: Resultant3,
     strain_energy: f64,
     load_work: f64,
@@ -374,8 +404,31 @@ struct Forces3 {
 /// between them by the least-norm split over their condition directions
 /// (each direction wholly to the one group that fixes it; equally between
 /// groups that fix the same one). Strain energy ½uᵀKu and fᵀu.
-fn forces(prep: &SolidPrepared, u: &[Vector3]) -> Forces3 {
+fn forces(prep: &SolidPrepared, u: &[Vector3], contact: &SolidContactOutput) -> Forces3 {
     let m = &prep.model;
+    // The contact forces on the points, −λ c_p for each row Σ c_p·u_p ≤ g
+    // (K u = f + contact + reaction), and each interface's resultant on
+    // its slave side.
+    let mut fc = vec![[0.0; 3]; m.points.len()];
+    let mut interfaces: BTreeMap<String, Interface3> = BTreeMap::new();
+    for (r, row) in m.contact.iter().enumerate() {
+        let lam = contact.multiplier[r];
+        let name = m.interface_names[row.interface as usize].clone();
+        let it = interfaces.entry(name).or_default();
+        it.rows += 1;
+        it.active += usize::from(contact.active[r]);
+        it.max_pressure = it.max_pressure.max(contact.pressure[r]);
+        let slave_body = m.point_body[row.slave];
+        for (p, c) in row.coefficients() {
+            let f = c.map(|ck| -lam * ck);
+            for k in 0..3 {
+                fc[p][k] += f[k];
+            }
+            if m.point_body[p] == slave_body {
+                it.resultant.add(m.points[p], f);
+            }
+        }
+    }
     let kind = ElementKind::Solid;
     let mats: Vec<_> = m
         .material_names
@@ -418,6 +471,14 @@ fn forces(prep: &SolidPrepared, u: &[Vector3]) -> Forces3 {
         }
     };
     let mesh = &prep.mesh;
+    // The points of each node (one per body on a contact surface).
+    let mut node_ptr = vec![0usize; mesh.nodes.len() + 1];
+    for &v in &m.point_node {
+        node_ptr[v + 1] += 1;
+    }
+    for v in 0..mesh.nodes.len() {
+        node_ptr[v + 1] += node_ptr[v];
+    }
     let nodes_of = |on: &str| -> Vec<usize> {
         let Some(g) = mesh.group_any(on) else {
             return vec![];
@@ -430,7 +491,8 @@ fn forces(prep: &SolidPrepared, u: &[Vector3]) -> Forces3 {
         };
         v.sort_unstable();
         v.dedup();
-        v
+        // Every point of those nodes: a condition holds each copy.
+        v.iter().flat_map(|&n| node_ptr[n]..node_ptr[n + 1]).collect()
     };
     for d in &f.dirichlet {
         let gi = group(&d.on, "dirichlet");
@@ -450,7 +512,7 @@ fn forces(prep: &SolidPrepared, u: &[Vector3]) -> Forces3 {
         let nodes = nodes_of(&s.on);
         // The plane's normal: the fixed direction the elimination left
         // (the complement of the node's free directions), projected.
-        let Some(n) = slip_normal(m, mesh, &s.on) else {
+        let Some(n) = slip_normal(mesh, &s.on) else {
             continue;
         };
         for v in nodes {
@@ -470,7 +532,7 @@ fn forces(prep: &SolidPrepared, u: &[Vector3]) -> Forces3 {
         if dirs.is_empty() {
             continue;
         }
-        let r = [0, 1, 2].map(|k| fint[p][k] - m.loads[p][k]);
+        let r = [0, 1, 2].map(|k| fint[p][k] - m.loads[p][k] - fc[p][k]);
         // α = Mᵀ (M Mᵀ)⁺ r: the least-norm split of r over the directions.
         let mut mmt = vec![vec![0.0; 3]; 3];
         for (_, d) in dirs {
@@ -503,6 +565,7 @@ fn forces(prep: &SolidPrepared, u: &[Vector3]) -> Forces3 {
     }
     Forces3 {
         groups,
+        interfaces,
         loads,
         strain_energy,
         load_work,
@@ -511,10 +574,10 @@ fn forces(prep: &SolidPrepared, u: &[Vector3]) -> Forces3 {
 
 /// The unit normal of the plane slip surface `on` (fem::solid has checked
 /// that it is plane): its first triangle's.
-fn slip_normal(m: &SolidModel, mesh: &Mesh, on: &str) -> Option<Vector3> {
+fn slip_normal(mesh: &Mesh, on: &str) -> Option<Vector3> {
     let g = mesh.group(on, 2)?;
     let t = mesh.triangles[*g.elements.first()?];
-    let p = t.map(|v| m.points[v]);
+    let p = t.map(|v| mesh.node::<3>(v));
     let (_, n) = ElementKind::Solid.facet_weight(&p);
     Some(n)
 }
@@ -541,10 +604,76 @@ fn probes(prep: &SolidPrepared, u: &[Vector3]) -> BTreeMap<String, Probe3> {
                     y: pts[node][1],
                     z: pts[node][2],
                     node,
-                    tag: prep.mesh.node_tags[node],
+                    tag: prep.mesh.node_tags[prep.model.point_node[node]],
                     u: u[node],
                 },
             )
         })
         .collect()
+}
+
+/// The contact surface's values (docs/problem-format.md §12): per row its
+/// slave point, normal, gaps, λ and λ / area, active; the slave surfaces'
+/// triangles on the rows.
+fn contact_output(
+    prep: &SolidPrepared,
+    u: &[Vector3],
+    lambda: &[f64],
+    active: &[bool],
+) -> SolidContactOutput {
+    let m = &prep.model;
+    let r = m.contact.len();
+    let mut multiplier = vec![0.0; r];
+    let mut on = vec![false; r];
+    for (i, &row) in m.qp_rows.iter().enumerate() {
+        multiplier[row] = lambda.get(i).copied().unwrap_or(0.0);
+        on[row] = active.get(i).copied().unwrap_or(false);
+    }
+    let mut c = SolidContactOutput {
+        triangles: vec![],
+        multiplier,
+        active: on,
+        ..Default::default()
+    };
+    for (k, row) in m.contact.iter().enumerate() {
+        let moved: f64 = row
+            .coefficients()
+            .iter()
+            .map(|(p, cp)| (0..3).map(|j| cp[j] * u[*p][j]).sum::<f64>())
+            .sum();
+        c.points.push(m.points[row.slave]);
+        c.slave.push(row.slave);
+        c.normal.push(row.normal);
+        c.interface.push(row.interface);
+        c.gap0.push(row.gap0);
+        c.gap.push(row.gap0 - moved);
+        c.pressure.push(c.multiplier[k] / row.area);
+    }
+    // Slave-surface triangles: (interface, node) → row.
+    let mut row_of: std::collections::HashMap<(u32, usize), usize> =
+        std::collections::HashMap::with_capacity(r);
+    for (k, row) in m.contact.iter().enumerate() {
+        row_of.entry((row.interface, m.point_node[row.slave])).or_insert(k);
+    }
+    let mesh = &prep.mesh;
+    for (i, pair) in prep.problem.file.contact.iter().enumerate() {
+        let slave = match &pair.pair {
+            crate::problem::ContactPair::Conforming { on, .. } => on,
+            crate::problem::ContactPair::NonMatching(p) => &p.slave,
+        };
+        let Some(g) = mesh.group(slave, 2) else {
+            continue;
+        };
+        for &e in &g.elements {
+            let t = mesh.triangles[e];
+            let rows: Vec<usize> = t
+                .iter()
+                .filter_map(|&v| row_of.get(&(i as u32, v)).copied())
+                .collect();
+            if let [a, b, d] = rows[..] {
+                c.triangles.push([a, b, d]);
+            }
+        }
+    }
+    c
 }

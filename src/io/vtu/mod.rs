@@ -406,6 +406,65 @@ pub fn write_solid_vtu(
     write_piece(path, piece, compress, names)
 }
 
+/// Writes the contact surface of a solid model (VTK triangles, type 5, on
+/// one point per contact row). Point data: `contact_pressure`, `gap`,
+/// `active` (Int32 0/1), `normal` (3), `multiplier`, `interface` (Int32),
+/// `gap0`. With no contact rows a valid empty grid is written.
+pub fn write_solid_contact_vtu(
+    path: &Path,
+    c: &crate::output::SolidContactOutput,
+    compress: bool,
+) -> Result<(), IoError> {
+    let n = c.points.len();
+    for (what, len) in [
+        ("normal", c.normal.len()),
+        ("interface", c.interface.len()),
+        ("gap0", c.gap0.len()),
+        ("gap", c.gap.len()),
+        ("multiplier", c.multiplier.len()),
+        ("contact_pressure", c.pressure.len()),
+        ("active", c.active.len()),
+    ] {
+        check_len(path, what, len, n)?;
+    }
+    for t in &c.triangles {
+        for &i in t {
+            check_index(path, "contact triangle", i, n)?;
+        }
+    }
+    let m = c.triangles.len();
+    let cells = Cells {
+        cell_verts: VertexNumbers::XML {
+            connectivity: c.triangles.iter().flatten().map(|&i| i as u64).collect(),
+            offsets: (1..=m as u64).map(|k| 3 * k).collect(),
+        },
+        types: vec![CellType::Triangle; m],
+    };
+    let point = vec![
+        f64_array("contact_pressure", 1, c.pressure.clone()),
+        f64_array("gap", 1, c.gap.clone()),
+        i32_array("active", c.active.iter().map(|&a| i64::from(a))),
+        array(
+            "normal",
+            ElementType::Vectors,
+            IOBuffer::F64(c.normal.as_flattened().to_vec()),
+        ),
+        f64_array("multiplier", 1, c.multiplier.clone()),
+        i32_array("interface", c.interface.iter().map(|&k| i64::from(k))),
+        f64_array("gap0", 1, c.gap0.clone()),
+    ];
+    let piece = UnstructuredGridPiece {
+        points: IOBuffer::F64(c.points.as_flattened().to_vec()),
+        cells,
+        data: Attributes {
+            point,
+            cell: vec![],
+        },
+    };
+    let names = crate::fem::ElementKind::Solid.component_names();
+    write_piece(path, piece, compress, names)
+}
+
 /// Each point's part in the contact: 0 none, 1 a conforming pair, 2 a
 /// slave node, 3 a master node (a point both slave and master gets 2).
 fn contact_roles(mesh: &OutMesh) -> Vec<i64> {
