@@ -109,6 +109,9 @@ pub(in crate::fem) fn nts_rows(
     Ok(rows)
 }
 
+/// A slave point, its tributary area and its projection.
+pub(super) type Projected = (usize, f64, Hit);
+
 /// Each slave point projected on its nearest master triangle: (point, its
 /// tributary area Σ|F|/3, the projection), and how many found none. A
 /// slave whose averaged normals face the way the master's do (Σ area ×
@@ -124,7 +127,7 @@ pub(super) fn project_slaves(
     mname: &str,
     node_tag: &impl Fn(usize) -> u64,
     path: &Path,
-) -> Result<(Vec<(usize, f64, Hit)>, usize), FemError> {
+) -> Result<(Vec<Projected>, usize), FemError> {
     let err = |msg: String| FemError::new(path, msg);
     // Slave points: Σ A n (the averaged normal, for the facing check) and
     // the tributary area Σ A/3.
