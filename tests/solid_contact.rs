@@ -232,18 +232,23 @@ fn floating_cube_on_a_block_is_certified() {
 #[test]
 fn wrong_facing_and_boundary_surfaces_are_refused() {
     let mesh = read_msh(&data("stack_nm.msh")).unwrap();
-    let inp = stack_input(nts("top", "lower_top"));
-    let e = build(&mesh, Path::new("bad.toml"), &inp)
-        .err()
-        .unwrap()
-        .to_string();
-    assert!(
-        e.starts_with("bad.toml")
-            && e.contains("[[contact]] #1")
-            && e.contains("\"top\"")
-            && e.contains("faces away"),
-        "{e}"
-    );
+    for disc in [Discretization::Nts, Discretization::Mortar] {
+        let mut c = nts("top", "lower_top");
+        if let ContactPair::NonMatching(p) = &mut c.pair {
+            p.discretization = Some(disc);
+        }
+        let e = build(&mesh, Path::new("bad.toml"), &stack_input(c))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.starts_with("bad.toml")
+                && e.contains("[[contact]] #1")
+                && e.contains("\"top\"")
+                && e.contains("faces away"),
+            "{disc:?}: {e}"
+        );
+    }
     // Conforming on a surface that borders one body only.
     let inp = stack_input(conforming("lower_top"));
     let e = build(&mesh, Path::new("bad.toml"), &inp)

@@ -129,6 +129,11 @@ pub(in crate::fem) fn mortar_rows(
     let tris: Vec<[Point3; 3]> = master.iter().map(|f| f.points.map(|p| points[p])).collect();
     let normals: Vec<Vector3> = master.iter().map(|f| f.normal).collect();
     let tree = TriangleTree::build(&tris, &normals);
+    // The facing check of node-to-surface rows: the far face of a body
+    // named as slave is refused as such, not as out of reach.
+    super::nts::project_slaves(
+        points, slave, master, &tree, what, sname, mname, &node_tag, path,
+    )?;
     // Reach: how far along the normal a master triangle may lie.
     let reach = c.max_gap.unwrap_or(f64::INFINITY);
     // Per slave point: D_jj, g̃_j and M_jm.

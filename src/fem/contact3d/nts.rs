@@ -6,7 +6,7 @@
 use super::super::element::{Point3, Vector3};
 use super::super::solid::Facet;
 use super::super::FemError;
-use super::search::TriangleTree;
+use super::search::{Hit, TriangleTree};
 use super::{dot, tangent_frame, Row3};
 use crate::fem::contact::RowKind;
 use crate::problem::NonMatchingPair;
@@ -56,18 +56,6 @@ pub(in crate::fem) fn nts_rows(
     let err = |msg: String| FemError::new(path, msg);
     let (sname, mname) = (c.slave.as_str(), c.master.as_str());
     check_bodies(slave, master, what, sname, mname, path)?;
-    // Slave points: Σ A n (the averaged normal, for the facing check) and
-    // the tributary area Σ A/3.
-    let mut snodes: BTreeMap<usize, (Vector3, f64)> = BTreeMap::new();
-    for f in slave {
-        for &p in &f.points {
-            let e = snodes.entry(p).or_insert(([0.0; 3], 0.0));
-            for k in 0..3 {
-                e.0[k] += 3.0 * f.weight * f.normal[k];
-            }
-            e.1 += f.weight;
-        }
-    }
     let tris: Vec<[Point3; 3]> = master.iter().map(|f| f.points.map(|p| points[p])).collect();
     let normals: Vec<Vector3> = master.iter().map(|f| f.normal).collect();
     let size = |t: usize| {
@@ -81,38 +69,9 @@ pub(in crate::fem) fn nts_rows(
     };
     let tree = TriangleTree::build(&tris, &normals);
     let mut rows = vec![];
-    let mut skipped = 0usize;
-    // Σ area × (n_slave · n_master) over the rows: positive when the slave
-    // faces the way the master does.
-    let (mut facing, mut total) = (0.0f64, 0.0f64);
-    let mut away: Option<(usize, Vector3, Vector3)> = None;
-    // The projections first: a wrong-facing pair is named as such before
-    // its gaps are judged.
-    let mut hits = Vec::with_capacity(snodes.len());
-    for (&s, &(sum, area)) in &snodes {
-        let Some(hit) = tree.nearest(points[s], |_| true) else {
-            skipped += 1;
-            continue;
-        };
-        let ns = sum.map(|v| v / dot(sum, sum).sqrt());
-        let n = master[hit.tri].normal;
-        let cos = dot(ns, n);
-        facing += area * cos;
-        total += area;
-        if cos > 0.0 && away.is_none_or(|a| cos > dot(a.1, a.2)) {
-            away = Some((s, ns, n));
-        }
-        hits.push((s, area, hit));
-    }
-    if facing > 0.0 {
-        let (s, ns, nm) = away.unwrap_or((0, [0.0; 3], [0.0; 3]));
-        return Err(err(format!(
-            "{what}: slave surface \"{sname}\" faces away from master \"{mname}\": their outward normals point the same way (mean cosine {:.3}; at slave node {} ({:.3}, {:.3}, {:.3}) against ({:.3}, {:.3}, {:.3})); name the faces of the two bodies that touch",
-            facing / total,
-            node_tag(s),
-            ns[0], ns[1], ns[2], nm[0], nm[1], nm[2]
-        )));
-    }
+    let (hits, mut skipped) = project_slaves(
+        points, slave, master, &tree, what, sname, mname, &node_tag, path,
+    )?;
     for (s, area, hit) in hits {
         let f = &master[hit.tri];
         let n = f.normal;
@@ -148,6 +107,73 @@ pub(in crate::fem) fn nts_rows(
         log::warn!("{what}: {skipped} slave node(s) of \"{sname}\" have no master triangle within reach and are not constrained");
     }
     Ok(rows)
+}
+
+/// A slave point, its tributary area and its projection.
+pub(super) type Projected = (usize, f64, Hit);
+
+/// Each slave point projected on its nearest master triangle: (point, its
+/// tributary area Σ|F|/3, the projection), and how many found none. A
+/// slave whose averaged normals face the way the master's do (Σ area ×
+/// n_s·n_m > 0) is refused as facing away (docs/methods.md §11.2).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn project_slaves(
+    points: &[Point3],
+    slave: &[Facet],
+    master: &[Facet],
+    tree: &TriangleTree,
+    what: &str,
+    sname: &str,
+    mname: &str,
+    node_tag: &impl Fn(usize) -> u64,
+    path: &Path,
+) -> Result<(Vec<Projected>, usize), FemError> {
+    let err = |msg: String| FemError::new(path, msg);
+    // Slave points: Σ A n (the averaged normal, for the facing check) and
+    // the tributary area Σ A/3.
+    let mut snodes: BTreeMap<usize, (Vector3, f64)> = BTreeMap::new();
+    for f in slave {
+        for &p in &f.points {
+            let e = snodes.entry(p).or_insert(([0.0; 3], 0.0));
+            for k in 0..3 {
+                e.0[k] += 3.0 * f.weight * f.normal[k];
+            }
+            e.1 += f.weight;
+        }
+    }
+    let mut skipped = 0usize;
+    // Σ area × (n_slave · n_master) over the rows: positive when the slave
+    // faces the way the master does.
+    let (mut facing, mut total) = (0.0f64, 0.0f64);
+    let mut away: Option<(usize, Vector3, Vector3)> = None;
+    // The projections first: a wrong-facing pair is named as such before
+    // its gaps are judged.
+    let mut hits = Vec::with_capacity(snodes.len());
+    for (&s, &(sum, area)) in &snodes {
+        let Some(hit) = tree.nearest(points[s], |_| true) else {
+            skipped += 1;
+            continue;
+        };
+        let ns = sum.map(|v| v / dot(sum, sum).sqrt());
+        let n = master[hit.tri].normal;
+        let cos = dot(ns, n);
+        facing += area * cos;
+        total += area;
+        if cos > 0.0 && away.is_none_or(|a| cos > dot(a.1, a.2)) {
+            away = Some((s, ns, n));
+        }
+        hits.push((s, area, hit));
+    }
+    if facing > 0.0 {
+        let (s, ns, nm) = away.unwrap_or((0, [0.0; 3], [0.0; 3]));
+        return Err(err(format!(
+            "{what}: slave surface \"{sname}\" faces away from master \"{mname}\": their outward normals point the same way (mean cosine {:.3}; at slave node {} ({:.3}, {:.3}, {:.3}) against ({:.3}, {:.3}, {:.3})); name the faces of the two bodies that touch",
+            facing / total,
+            node_tag(s),
+            ns[0], ns[1], ns[2], nm[0], nm[1], nm[2]
+        )));
+    }
+    Ok((hits, skipped))
 }
 
 #[cfg(test)]
