@@ -220,7 +220,7 @@ done
 # cantilever, and a steel base under an aluminium cover with a rubber plug
 # held by three slip planes (two of them meet on an edge), pn and p tractions
 # and gravity.
-for t in meshes/3d/cantilever_3d.toml tests/data/solid_xcheck/twomat.toml; do
+for t in meshes/3d/cantilever_3d.toml tests/data/solid/xcheck/twomat.toml; do
     stamp "fenicsx_crosscheck.py $t (3D)"
     SIGNORINI="$EXE" SIGNORINI_PYDEPS="$PYDEPS" /usr/bin/python3 scripts/fenicsx_crosscheck.py "$t" --tol 1e-8
     record "crosscheck $(basename "$t" .toml)" $?

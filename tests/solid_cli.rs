@@ -5,7 +5,8 @@
 //! HDF5 checkpoint (its 3D layout), the constant stress in every
 //! tetrahedron, loads + reactions = 0; Lamé's thick sphere under internal
 //! pressure against the analytic radial displacement; the 3D refusals
-//! (`plane`, a 2-vector, `[[contact]]`, `[[steps]]`, `uz` in 2D) with exit
+//! (`plane`, a 2-vector, a contact pair within one body, `[[steps]]`, `uz`
+//! in 2D) with exit
 //! code 2, the file, the line and the key named, and no output written.
 //! Needs Gmsh (as tests/mesh_cmd.rs); without it these tests say so and pass.
 
@@ -370,14 +371,14 @@ fn keys_that_do_not_fit_the_mesh_are_refused_naming_file_line_and_key() {
         ),
         &["bad.toml", "[[force]] #1", "no physical point"],
     );
-    // Contact and load steps are not in 3D yet.
+    // A contact pair within one body; load steps are not in 3D yet.
     refused(
         dir,
         &format!(
             "{}[[contact]]\nslave = \"x1\"\nmaster = \"y0\"\n",
             block_toml("")
         ),
-        &["bad.toml", "[[contact]] #1", "3D", "not in yet"],
+        &["bad.toml", "[[contact]] #1", "must join two bodies"],
     );
     refused(
         dir,

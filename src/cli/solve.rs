@@ -163,11 +163,7 @@ fn print_solid_report(prep: &SolidPrepared, o: &run::SolidOutcome) {
         );
     }
     if !s.contact.is_empty() {
-        crate::outln!(
-            "contact     {} active of {} rows",
-            s.active,
-            s.constraints
-        );
+        crate::outln!("contact     {} active of {} rows", s.active, s.constraints);
     }
     for (name, it) in &s.contact {
         crate::outln!(

@@ -400,11 +400,28 @@ pub fn write_solid_checkpoint(
             let r = contact.points.len();
             let slave: Vec<u64> = contact.slave.iter().map(|&i| i as u64).collect();
             write_ds(&ctx, &g, "contact_slave", &[r], &slave)?;
-            write_ds(&ctx, &g, "contact_normal", &[r, 3], contact.normal.as_flattened())?;
+            write_ds(
+                &ctx,
+                &g,
+                "contact_normal",
+                &[r, 3],
+                contact.normal.as_flattened(),
+            )?;
             write_ds(&ctx, &g, "contact_gap0", &[r], &contact.gap0)?;
             write_ds(&ctx, &g, "contact_interface", &[r], &contact.interface)?;
-            let tris: Vec<u64> = contact.triangles.iter().flatten().map(|&i| i as u64).collect();
-            write_ds(&ctx, &g, "contact_triangles", &[contact.triangles.len(), 3], &tris)?;
+            let tris: Vec<u64> = contact
+                .triangles
+                .iter()
+                .flatten()
+                .map(|&i| i as u64)
+                .collect();
+            write_ds(
+                &ctx,
+                &g,
+                "contact_triangles",
+                &[contact.triangles.len(), 3],
+                &tris,
+            )?;
             let steps = file.create_group("steps").map_err(ctx.h5("/steps"))?;
             let name = step_name(1);
             let s = steps

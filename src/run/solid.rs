@@ -279,7 +279,11 @@ pub fn solve_solid(
     let stage = tx.stage_dir().to_path_buf();
     let staged = |p: &Path| stage.join(p.file_name().unwrap_or_default());
     crate::io::vtu::write_solid_vtu(&staged(&files.vtu), &out, compress)?;
-    crate::io::vtu::write_solid_contact_vtu(&staged(&files.contact_vtu), &contact, compress)?;
+    // The contact VTU of a model with `[[contact]]` (none without).
+    let has_contact = !prep.problem.file.contact.is_empty();
+    if has_contact {
+        crate::io::vtu::write_solid_contact_vtu(&staged(&files.contact_vtu), &contact, compress)?;
+    }
     let info = StepInfo {
         method: method.name().to_string(),
         preconditioner: preconditioner.clone(),
@@ -374,7 +378,11 @@ pub fn solve_solid(
     if let Some(sig) = super::interrupted() {
         return Err(RunError::Interrupted(sig));
     }
-    let names: Vec<String> = [&files.vtu, &files.contact_vtu, &files.h5, &files.json]
+    let written: Vec<&PathBuf> = [&files.vtu, &files.contact_vtu, &files.h5, &files.json]
+        .into_iter()
+        .filter(|p| has_contact || *p != &files.contact_vtu)
+        .collect();
+    let names: Vec<String> = written
         .iter()
         .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
         .collect();
@@ -384,7 +392,7 @@ pub fn solve_solid(
         summary,
         output: out,
         certified: certified && res.status.converged(),
-        files: vec![files.vtu, files.contact_vtu, files.h5, files.json],
+        files: written.into_iter().cloned().collect(),
         contact,
     })
 }
@@ -492,7 +500,9 @@ fn forces(prep: &SolidPrepared, u: &[Vector3], contact: &SolidContactOutput) -> 
         v.sort_unstable();
         v.dedup();
         // Every point of those nodes: a condition holds each copy.
-        v.iter().flat_map(|&n| node_ptr[n]..node_ptr[n + 1]).collect()
+        v.iter()
+            .flat_map(|&n| node_ptr[n]..node_ptr[n + 1])
+            .collect()
     };
     for d in &f.dirichlet {
         let gi = group(&d.on, "dirichlet");
@@ -653,7 +663,9 @@ fn contact_output(
     let mut row_of: std::collections::HashMap<(u32, usize), usize> =
         std::collections::HashMap::with_capacity(r);
     for (k, row) in m.contact.iter().enumerate() {
-        row_of.entry((row.interface, m.point_node[row.slave])).or_insert(k);
+        row_of
+            .entry((row.interface, m.point_node[row.slave]))
+            .or_insert(k);
     }
     let mesh = &prep.mesh;
     for (i, pair) in prep.problem.file.contact.iter().enumerate() {
