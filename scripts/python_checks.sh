@@ -217,10 +217,14 @@ for t in axi_cup/axi_cup axi_sphere/axi_sphere axi_sphere/axi_sphere_mortar:b ax
 done
 
 # 3D models (P1 tetrahedra, scripts/fenicsx_crosscheck3d.py): the shipped
-# cantilever, and a steel base under an aluminium cover with a rubber plug
-# held by three slip planes (two of them meet on an edge), pn and p tractions
-# and gravity.
-for t in meshes/3d/cantilever_3d.toml tests/data/solid/xcheck/twomat.toml; do
+# cantilever; a steel base under an aluminium cover with a rubber plug held
+# by three slip planes (two of them meet on an edge), pn and p tractions and
+# gravity; contact: stacked cubes with a conforming interface and with
+# node-to-surface rows (steel under rubber, the upper cube held along z by
+# contact alone), and a half-sphere on a block (NTS, a partial contact zone).
+for t in meshes/3d/cantilever_3d.toml tests/data/solid/xcheck/twomat.toml \
+         tests/data/solid/xcheck/stack_conforming.toml tests/data/solid/xcheck/stack_nts.toml \
+         tests/data/solid/xcheck/hertz_nts.toml; do
     stamp "fenicsx_crosscheck.py $t (3D)"
     SIGNORINI="$EXE" SIGNORINI_PYDEPS="$PYDEPS" /usr/bin/python3 scripts/fenicsx_crosscheck.py "$t" --tol 1e-8
     record "crosscheck $(basename "$t" .toml)" $?
