@@ -74,7 +74,9 @@ use crate::output::{
     Change, Checkpoint, ContactGeometry, OutMesh, StepFriction, StepInfo, StepOutput,
 };
 
+mod solid;
 mod split;
+pub use solid::write_solid_checkpoint;
 pub use split::{
     checkpoint_files, mesh_file_name, pack, step_file_name, write_index, write_mesh_file,
     write_step_file, CheckpointFiles, Packed,
@@ -338,136 +340,6 @@ fn write_mesh(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<(), IoError> {
         &c.interface_discretizations,
     )?;
     Ok(())
-}
-
-/// Writes the checkpoint of a solved solid (3D) model at `path` in one
-/// piece (the 3D layout of the module's documentation): root attributes
-/// `attrs` (strings), `model` = "solid", `dim` = 3 and `last_step` = 1;
-/// `/mesh` with D = 3 columns and tetrahedra; one step `/steps/0001` with
-/// `time` and `info`. No contact datasets yet (issue 45).
-pub fn write_solid_checkpoint(
-    path: &Path,
-    out: &crate::output::SolidOutput,
-    contact: &crate::output::SolidContactOutput,
-    node_tags: &[u64],
-    attrs: &[(&str, String)],
-    time: f64,
-    info: &StepInfo,
-) -> Result<(), IoError> {
-    let ctx = Ctx::writing(path);
-    for (k, _) in attrs {
-        if RESERVED_ROOT_ATTRS.contains(k) || *k == "dim" {
-            return Err(ctx.format(format!("root attribute name {k:?} is reserved")));
-        }
-    }
-    let (n, m) = (out.points.len(), out.tets.len());
-    let lens = [
-        ("node_tags", node_tags.len(), n),
-        ("body", out.point_body.len(), n),
-        ("displacement", out.displacement.len(), n),
-        ("material", out.material.len(), m),
-        ("stress", out.stress.len(), m),
-        ("von_mises", out.von_mises.len(), m),
-        ("principal_stress", out.principal.len(), m),
-    ];
-    for (what, got, want) in lens {
-        if got != want {
-            return Err(ctx.format(format!("{what} has {got} entries, expected {want}")));
-        }
-    }
-    write_atomic(path, |tmp| {
-        let file = File::create(tmp).map_err(ctx.h5("/"))?;
-        {
-            let root: &Group = &file;
-            for (k, v) in attrs {
-                set_attr_str(&ctx, root, k, v)?;
-            }
-            set_attr_str(
-                &ctx,
-                root,
-                "model",
-                crate::fem::ElementKind::Solid.model_name(),
-            )?;
-            set_attr_scalar(&ctx, root, "dim", &3u64)?;
-            let g = file.create_group("mesh").map_err(ctx.h5("/mesh"))?;
-            write_ds(&ctx, &g, "nodes", &[n, 3], out.points.as_flattened())?;
-            write_ds(&ctx, &g, "node_tags", &[n], node_tags)?;
-            write_ds(&ctx, &g, "body", &[n], &out.point_body)?;
-            let tets: Vec<u64> = out.tets.iter().flatten().map(|&i| i as u64).collect();
-            write_ds(&ctx, &g, "tetrahedra", &[m, 4], &tets)?;
-            write_ds(&ctx, &g, "material", &[m], &out.material)?;
-            set_attr_str_list(&ctx, &g, "material_names", &out.material_names)?;
-            let r = contact.points.len();
-            let slave: Vec<u64> = contact.slave.iter().map(|&i| i as u64).collect();
-            write_ds(&ctx, &g, "contact_slave", &[r], &slave)?;
-            write_ds(
-                &ctx,
-                &g,
-                "contact_normal",
-                &[r, 3],
-                contact.normal.as_flattened(),
-            )?;
-            write_ds(&ctx, &g, "contact_gap0", &[r], &contact.gap0)?;
-            write_ds(&ctx, &g, "contact_interface", &[r], &contact.interface)?;
-            let tris: Vec<u64> = contact
-                .triangles
-                .iter()
-                .flatten()
-                .map(|&i| i as u64)
-                .collect();
-            write_ds(
-                &ctx,
-                &g,
-                "contact_triangles",
-                &[contact.triangles.len(), 3],
-                &tris,
-            )?;
-            let steps = file.create_group("steps").map_err(ctx.h5("/steps"))?;
-            let name = step_name(1);
-            let s = steps
-                .create_group(&name)
-                .map_err(ctx.h5(format!("/steps/{name}")))?;
-            write_ds(
-                &ctx,
-                &s,
-                "displacement",
-                &[n, 3],
-                out.displacement.as_flattened(),
-            )?;
-            write_ds(&ctx, &s, "stress", &[m, 6], out.stress.as_flattened())?;
-            write_ds(&ctx, &s, "von_mises", &[m], &out.von_mises)?;
-            write_ds(
-                &ctx,
-                &s,
-                "principal_stress",
-                &[m, 3],
-                out.principal.as_flattened(),
-            )?;
-            write_ds(&ctx, &s, "multipliers", &[r], &contact.multiplier)?;
-            write_ds(&ctx, &s, "contact_pressure", &[r], &contact.pressure)?;
-            write_ds(&ctx, &s, "gap", &[r], &contact.gap)?;
-            let active: Vec<u8> = contact.active.iter().map(|&a| u8::from(a)).collect();
-            write_ds(&ctx, &s, "active", &[r], &active)?;
-            set_attr_scalar(&ctx, &s, "time", &time)?;
-            set_attr_str(&ctx, &s, "method", &info.method)?;
-            set_attr_str(&ctx, &s, "preconditioner", &info.preconditioner)?;
-            set_attr_scalar(&ctx, &s, "converged", &u8::from(info.converged))?;
-            set_attr_scalar(&ctx, &s, "iterations", &(info.iterations as u64))?;
-            for (name, v) in info.kkt.named() {
-                set_attr_scalar(&ctx, &s, &format!("kkt_{name}"), &v)?;
-            }
-            for (name, v) in [
-                ("energy", info.energy),
-                ("time_assemble", info.time_assemble),
-                ("time_solve", info.time_solve),
-                ("time_total", info.time_total),
-            ] {
-                set_attr_scalar(&ctx, &s, name, &v)?;
-            }
-            set_attr_scalar(&ctx, root, "last_step", &1u64)?;
-        }
-        file.close().map_err(ctx.h5("/"))
-    })
 }
 
 /// The group name of step `index` (1-based): `NNNN`.
