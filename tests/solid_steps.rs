@@ -12,7 +12,7 @@
 //! stops after two steps; `compare` runs every method of the report on the
 //! model and they agree, with 3-component probes equal to `solve`'s; a
 //! pressure that pulls the upper cube off is refused as unbounded, naming
-//! its volume.
+//! its volume; `--restart` continues a 3D run bit for bit.
 
 mod common;
 
@@ -254,4 +254,61 @@ fn a_3d_load_pulling_a_body_off_is_refused_as_unbounded() {
     );
     assert!(text.contains("stack.toml"), "{text}");
     assert!(!out.join("stack.h5").exists(), "an output was written");
+}
+
+/// `--restart` in 3D: a run stopped after two of three steps and continued
+/// (in place, and into another directory) gives the uninterrupted run's
+/// steps bit for bit; nothing to do when every step is there; a checkpoint
+/// of another load is refused naming the part that differs.
+#[test]
+fn a_3d_run_continues_from_its_checkpoint_bit_for_bit() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = stack_toml(STEPS, -P);
+    let dir = |d: &str| tmp.path().join(d).to_str().unwrap().to_string();
+    let (full, part, other) = (dir("full"), dir("part"), dir("other"));
+    let solve = |args: &[&str]| {
+        let mut a = vec!["solve"];
+        a.extend_from_slice(args);
+        let (code, text, _) = run(tmp.path(), &toml, &a);
+        assert_eq!(code, 0, "{args:?}: {text}");
+        text
+    };
+    solve(&["--out", &full]);
+    solve(&["--out", &part, "--max-steps", "2"]);
+    let h5 = format!("{part}/stack.h5");
+    solve(&["--out", &other, "--restart", &h5]);
+    solve(&["--out", &part, "--restart", &h5]);
+    let text = solve(&["--out", &part, "--restart", &h5]);
+    assert!(text.contains("nothing to do"), "{text}");
+    let f = hdf5::File::open(format!("{full}/stack.h5")).unwrap();
+    for d in [&part, &other] {
+        let g = hdf5::File::open(format!("{d}/stack.h5")).unwrap();
+        assert_eq!(
+            g.attr("last_step").unwrap().read_scalar::<u64>().unwrap(),
+            3
+        );
+        for s in ["0001", "0002", "0003"] {
+            let name = format!("steps/{s}/displacement");
+            let (a, b) = (read(&f, &name), read(&g, &name));
+            assert!(
+                a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{d} {s}"
+            );
+        }
+        // This run's summary has the step it solved.
+        let j = json(&Path::new(d).join("stack.json"));
+        assert_eq!(j["steps"].as_array().unwrap().len(), 1, "{d}");
+    }
+    // Another load: refused, naming the part; nothing written.
+    let (code, text, _) = run(
+        tmp.path(),
+        &stack_toml(STEPS, -2.0 * P),
+        &["solve", "--out", &dir("bad"), "--restart", &h5],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert!(
+        text.contains("traction") && text.contains("does not match"),
+        "{text}"
+    );
+    assert!(!tmp.path().join("bad").exists());
 }

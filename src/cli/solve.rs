@@ -51,12 +51,13 @@ pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 
 /// A 3D model (tetrahedra, no contact yet): solved and written by
 /// [`run::solve_solid`], its report printed; the exit code as in 2D.
 fn solid(a: &SolveArgs, quiet: bool, t0: Instant, prep: &SolidPrepared) -> i32 {
-    if let Some(r) = &a.restart {
-        return bad_input(&format!(
-            "--restart {}: 3D models (tetrahedra) have no restart yet (issue 45)",
-            r.display()
-        ));
-    }
+    let restart = match &a.restart {
+        Some(p) => match run::solid::SolidRestart::read(p, prep) {
+            Ok(r) => Some(r),
+            Err(e) => return bad_input(&e),
+        },
+        None => None,
+    };
     let (method, mut opts) = match run::options(&prep.problem, &a.solver.section()) {
         Ok(x) => x,
         Err(e) => return bad_input(&e),
@@ -74,11 +75,28 @@ fn solid(a: &SolveArgs, quiet: bool, t0: Instant, prep: &SolidPrepared) -> i32 {
         opts: &opts,
         strict: a.solver.strict,
         max_steps: a.max_steps,
+        restart: restart.as_ref(),
         compress,
         started: t0,
     };
     let outcome = match run::solve_solid(prep, &run, &dir) {
-        Ok(o) => o,
+        Ok(Some(o)) => o,
+        Ok(None) => {
+            // A restart whose checkpoint holds every step asked for.
+            let nsteps = file.nsteps();
+            let done = restart.as_ref().map_or(0, |r| r.steps_done);
+            if !quiet {
+                match a.max_steps {
+                    Some(k) if k < nsteps => crate::outln!(
+                        "nothing to do: the checkpoint already holds {done} steps (--max-steps {k})"
+                    ),
+                    _ => crate::outln!(
+                        "nothing to do: the checkpoint already holds all {nsteps} steps"
+                    ),
+                }
+            }
+            return 0;
+        }
         Err(e) => {
             bad_input(&e);
             return e.exit_code();

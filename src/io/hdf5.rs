@@ -77,7 +77,8 @@ use crate::output::{
 mod solid;
 mod split;
 pub use solid::{
-    write_solid_checkpoint, write_solid_index, write_solid_mesh_file, write_solid_step_file,
+    read_solid_restart, write_solid_checkpoint, write_solid_index, write_solid_mesh_file,
+    write_solid_step_file, SolidRestartData,
 };
 pub use split::{
     checkpoint_files, mesh_file_name, pack, step_file_name, write_index, write_mesh_file,

@@ -259,3 +259,86 @@ fn write_step(
     }
     Ok(())
 }
+
+/// What a restart of a 3D run reads of its checkpoint
+/// ([`read_solid_restart`]).
+#[derive(Debug, Clone, Default)]
+pub struct SolidRestartData {
+    /// The root attribute `model` ("solid" for a 3D checkpoint).
+    pub model: Option<String>,
+    /// The root attribute `fingerprint`.
+    pub fingerprint: Option<String>,
+    /// Rows of `/mesh/nodes`, `/mesh/tetrahedra`, `/mesh/contact_slave`.
+    pub points: usize,
+    pub tets: usize,
+    pub rows: usize,
+    /// The step groups in index order: (name, attribute `time`).
+    pub steps: Vec<(String, f64)>,
+    /// The last step's displacement [points, 3] and active flags [rows],
+    /// read when the sizes are the `n` and `r` asked for.
+    pub displacement: Option<Vec<[f64; 3]>>,
+    pub active: Option<Vec<u8>>,
+}
+
+/// Reads what a restart needs of the 3D checkpoint at `path` (single file
+/// or split layout): the root attributes, the mesh's sizes, the step groups
+/// and their times, and, when the checkpoint has `n` points and `r` contact
+/// rows, its last step's displacement and active flags. A 2D checkpoint
+/// gives `model` ≠ "solid" and nothing else.
+pub fn read_solid_restart(path: &Path, n: usize, r: usize) -> Result<SolidRestartData, IoError> {
+    if !path.is_file() {
+        return Err(IoError::io(
+            path,
+            "cannot open checkpoint",
+            std::io::Error::new(std::io::ErrorKind::NotFound, "no such checkpoint file"),
+        ));
+    }
+    // Every dataset read has its shape checked against n and r first.
+    let ctx = Ctx::writing(path);
+    let file = File::open(path).map_err(ctx.h5("/"))?;
+    let root: &Group = &file;
+    let text = |name: &str| -> Result<Option<String>, IoError> {
+        Ok(if super::has_attr(&ctx, root, name)? {
+            Some(super::get_attr_str(&ctx, root, name)?)
+        } else {
+            None
+        })
+    };
+    let mut out = SolidRestartData {
+        model: text("model")?,
+        fingerprint: text("fingerprint")?,
+        ..Default::default()
+    };
+    if out.model.as_deref() != Some(crate::fem::ElementKind::Solid.model_name()) {
+        return Ok(out);
+    }
+    if !file.link_exists("mesh") {
+        return Err(ctx.missing("group /mesh"));
+    }
+    let mesh = file
+        .group("mesh")
+        .map_err(|e| super::linked(&ctx, "/mesh", e))?;
+    out.points = super::dataset_len(&ctx, &mesh, "nodes")?;
+    out.tets = super::dataset_len(&ctx, &mesh, "tetrahedra")?;
+    out.rows = super::dataset_len(&ctx, &mesh, "contact_slave")?;
+    let Some((sg, names)) = super::step_names(&ctx, &file)? else {
+        return Ok(out);
+    };
+    for (_, name) in &names {
+        let g = sg
+            .group(name)
+            .map_err(|e| super::linked(&ctx, &format!("/steps/{name}"), e))?;
+        let t: f64 = super::get_attr(&ctx, &g, "time")?;
+        out.steps.push((name.clone(), t));
+    }
+    if let (Some((_, last)), true) = (names.last(), out.points == n && out.rows == r) {
+        let g = sg
+            .group(last)
+            .map_err(|e| super::linked(&ctx, &format!("/steps/{last}"), e))?;
+        let (_, u) = super::read_ds::<f64>(&ctx, &g, "displacement", Some(3), Some(n))?;
+        out.displacement = Some(u.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect());
+        let (_, a) = super::read_ds::<u8>(&ctx, &g, "active", None, Some(r))?;
+        out.active = Some(a);
+    }
+    Ok(out)
+}

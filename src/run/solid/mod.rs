@@ -9,8 +9,10 @@
 
 mod compare;
 mod forces;
+mod restart;
 mod steps;
 
+pub use restart::SolidRestart;
 pub use steps::{solve_solid, SolidRun};
 
 use super::summary::{KktSummary, Timings};
@@ -32,6 +34,8 @@ use forces::probes;
 /// A 3D problem read and assembled.
 pub struct SolidPrepared {
     pub problem: Problem,
+    /// `--no-contact`: every `[[contact]]` was dropped (part of the fingerprint).
+    pub no_contact: bool,
     /// FNV-1a 64 of the mesh file's bytes.
     pub mesh_hash: u64,
     pub mesh: Mesh,
@@ -47,6 +51,7 @@ pub(super) fn prepare(
     mesh: Mesh,
     mesh_hash: u64,
     t0: Instant,
+    no_contact: bool,
 ) -> Result<SolidPrepared, RunError> {
     let t_read = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
@@ -55,12 +60,22 @@ pub(super) fn prepare(
     check_probes(&problem, &model)?;
     Ok(SolidPrepared {
         problem,
+        no_contact,
         mesh_hash,
         mesh,
         model,
         t_read,
         t_assemble: t1.elapsed().as_secs_f64(),
     })
+}
+
+impl SolidPrepared {
+    /// The problem's fingerprint (docs/problem-format.md §6): the mesh
+    /// file's hash and each part of the TOML that defines the answer, as
+    /// 2D's; a restart must match it.
+    pub fn fingerprint(&self) -> String {
+        super::prepare::fingerprint_of(self.mesh_hash, &self.problem.text, self.no_contact, |_| {})
+    }
 }
 
 /// The model of load step `s` (0-based; the problem as written without

@@ -11,7 +11,8 @@
 
 use super::forces::{contact_output, forces, probes};
 use super::{
-    solve_in, step_model, SolidOutcome, SolidPrepared, SolidStepRow, SolidSummary, MOMENT_POINT,
+    solve_in, step_model, SolidOutcome, SolidPrepared, SolidRestart, SolidStepRow, SolidSummary,
+    MOMENT_POINT,
 };
 use crate::fem::element::{ElementKind, Vector3};
 use crate::fem::solid::SolidModel;
@@ -33,36 +34,52 @@ pub struct SolidRun<'a> {
     pub strict: bool,
     /// Stop after this many load steps (None: all).
     pub max_steps: Option<usize>,
+    /// Continue this checkpoint (`--restart`): its steps are kept and the
+    /// run starts after them.
+    pub restart: Option<&'a SolidRestart>,
     pub compress: bool,
     pub started: Instant,
 }
 
 /// Solve the load steps of a 3D model and write the outputs in `dir`, one
 /// commit per step and the JSON summary last (the transaction of 2D: an
-/// error or a signal leaves the directory as it was).
+/// error or a signal leaves the directory as it was). None: a restart
+/// whose checkpoint holds every step asked for (nothing is written).
 pub fn solve_solid(
     prep: &SolidPrepared,
     run: &SolidRun<'_>,
     dir: &Path,
-) -> Result<SolidOutcome, RunError> {
+) -> Result<Option<SolidOutcome>, RunError> {
     let (method, opts, strict, compress, started) =
         (run.method, run.opts, run.strict, run.compress, run.started);
     check_interrupt()?;
     let file = &prep.problem.file;
     let multi = !file.steps.is_empty();
     let nsteps = file.nsteps().min(run.max_steps.unwrap_or(usize::MAX));
+    let first = run.restart.map_or(0, |r| r.steps_done);
+    if first >= nsteps {
+        return Ok(None);
+    }
     let name = &prep.problem.name;
     let mut tx = Transaction::open(dir, name)?;
-    tx.plan(multi, 0, true);
     let mut files = Files::new(prep, tx.stage_dir(), dir, multi, compress);
+    let mut carried = vec![];
+    if let Some(r) = run.restart {
+        carried = files.start_from(r)?;
+    }
+    tx.plan(multi, files.kept, true);
     let ws = opts.settings.workspace();
     let target = opts.settings.kkt_target;
     let mut rows: Vec<SolidStepRow> = vec![];
     let mut failed: Vec<usize> = vec![];
-    let mut prev: Option<(Vec<Vector3>, Vec<bool>)> = None;
+    // The last answer: point displacements and the QP rows' active flags.
+    let mut prev: Option<(Vec<Vector3>, Vec<bool>)> = run.restart.map(|r| {
+        let active = prep.model.qp_rows.iter().map(|&k| r.active[k]).collect();
+        (r.displacement.clone(), active)
+    });
     let mut last = None;
     let (mut t_assemble_all, mut t_solve_all) = (0.0, 0.0);
-    for s in 0..nsteps {
+    for s in first..nsteps {
         check_interrupt()?;
         let ts = Instant::now();
         let model = step_model(prep, s)?;
@@ -113,7 +130,9 @@ pub fn solve_solid(
             time_solve,
             time_total: started.elapsed().as_secs_f64(),
         };
-        let names = files.step(s, file.step_time(s), &out, &contact, &info)?;
+        let mut names = files.step(s, file.step_time(s), &out, &contact, &info)?;
+        // A restart's copied files go with its first commit.
+        names.append(&mut carried);
         tx.commit(&names)?;
         let active = contact.active.iter().filter(|&&a| a).count();
         let (opened, closed) = match &prev {
@@ -189,13 +208,13 @@ pub fn solve_solid(
     let certified = summary.failed_steps.is_empty();
     let mut written = files.written;
     written.push(json_path);
-    Ok(SolidOutcome {
+    Ok(Some(SolidOutcome {
         summary,
         output: out,
         certified,
         files: written,
         contact,
-    })
+    }))
 }
 
 /// ξ_p = T_pᵀ(u_p − u0_p): the QP unknowns of point displacements `u` in
@@ -210,6 +229,15 @@ fn reduce(model: &SolidModel, u: &[Vector3]) -> Vec<f64> {
         }
     }
     x
+}
+
+fn copy(from: &Path, to: &Path) -> Result<(), RunError> {
+    std::fs::copy(from, to).map(|_| ()).map_err(|e| {
+        RunError::Output(format!(
+            "{}: cannot copy the checkpoint's file: {e}",
+            from.display()
+        ))
+    })
 }
 
 fn file_name(p: &Path) -> String {
@@ -233,6 +261,10 @@ struct Files<'a> {
     series: Vec<(f64, String)>,
     /// Final paths of every file written.
     written: Vec<PathBuf>,
+    /// A restart's step files kept where they are (the output directory's).
+    kept: usize,
+    /// The split layout's mesh file is there already (a restart).
+    has_mesh: bool,
 }
 
 impl<'a> Files<'a> {
@@ -253,7 +285,59 @@ impl<'a> Files<'a> {
             steps: vec![],
             series: vec![],
             written: vec![],
+            kept: 0,
+            has_mesh: false,
         }
+    }
+
+    /// The files of the checkpoint `r` continues: its mesh and step files
+    /// kept where they are the output directory's, or copied into the
+    /// stage (returned: committed with the first step); the time series
+    /// lists the kept steps' VTU pairs that are in the output directory.
+    fn start_from(&mut self, r: &SolidRestart) -> Result<Vec<String>, RunError> {
+        let name = self.prep.problem.name.clone();
+        let found = io::hdf5::checkpoint_files(&r.path)?;
+        let single = r.path.canonicalize().ok();
+        let dir = self.dir.clone();
+        let here = |f: &Path, want: &str| {
+            let w = dir.join(want);
+            matches!((f.canonicalize(), w.canonicalize()), (Ok(a), Ok(b)) if a == b)
+        };
+        if !self.multi || found.mesh.canonicalize().ok() == single {
+            return Err(RunError::Restart(format!(
+                "--restart: {}: a single solve's checkpoint; a 3D run with [[steps]] continues the split checkpoint of a run with the same steps (docs/problem-format.md §6)",
+                r.path.display()
+            )));
+        }
+        let mut staged = vec![];
+        let mesh_file = io::hdf5::mesh_file_name(&name);
+        if !here(&found.mesh, &mesh_file) {
+            copy(&found.mesh, &self.stage.join(&mesh_file))?;
+            staged.push(mesh_file.clone());
+        }
+        self.keep(&self.dir.join(&mesh_file));
+        self.has_mesh = true;
+        let mut kept = true;
+        for (i, _, f) in found.steps.iter().take(r.steps_done) {
+            let want = io::hdf5::step_file_name(&name, *i);
+            if here(f, &want) {
+                self.kept += usize::from(kept);
+            } else {
+                kept = false;
+                copy(f, &self.stage.join(&want))?;
+                staged.push(want.clone());
+            }
+            self.keep(&self.dir.join(&want));
+            self.steps.push((*i, want));
+            let t = self.prep.problem.file.step_time(i - 1);
+            let pair = output_paths(&self.dir, &name, Some(*i));
+            for v in [&pair.vtu, &pair.contact_vtu] {
+                if v.is_file() {
+                    self.series.push((t, file_name(v)));
+                }
+            }
+        }
+        Ok(staged)
     }
 
     fn attrs(&self) -> [(&'static str, String); 4] {
@@ -262,7 +346,7 @@ impl<'a> Files<'a> {
             ("problem", p.problem.name.clone()),
             ("toml", p.problem.text.clone()),
             ("version", env!("CARGO_PKG_VERSION").to_string()),
-            ("fingerprint", format!("solid mesh {:016x}", p.mesh_hash)),
+            ("fingerprint", p.fingerprint()),
         ]
     }
 
@@ -307,7 +391,8 @@ impl<'a> Files<'a> {
         // The split layout: the mesh file at the first step, the step's
         // file, the index last (committed after the files it links to).
         let mesh_file = io::hdf5::mesh_file_name(&name);
-        if self.steps.is_empty() {
+        if !self.has_mesh {
+            self.has_mesh = true;
             io::hdf5::write_solid_mesh_file(
                 &self.stage.join(&mesh_file),
                 out,
