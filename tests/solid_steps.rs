@@ -312,3 +312,109 @@ fn a_3d_run_continues_from_its_checkpoint_bit_for_bit() {
     );
     assert!(!tmp.path().join("bad").exists());
 }
+
+/// `[output] reference_step` in 3D: from step K on, the `*_change` fields
+/// are the step's minus step K's in the HDF5 and the VTU (and a restart
+/// keeps them); the VTU's `reaction` point data balance the loads.
+#[test]
+fn reference_step_and_reactions_in_3d() {
+    let tmp = tempfile::tempdir().unwrap();
+    // `extra` follows the [output] table's probes.
+    let toml = stack_toml(&format!("reference_step = 1\n{STEPS}"), -P);
+    let out = tmp.path().join("out");
+    let (code, text, _) = run(
+        tmp.path(),
+        &toml,
+        &["solve", "--out", out.to_str().unwrap()],
+    );
+    assert_eq!(code, 0, "{text}");
+    let f = hdf5::File::open(out.join("stack.h5")).unwrap();
+    let u1 = read(&f, "steps/0001/displacement");
+    for s in ["0001", "0002", "0003"] {
+        let u = read(&f, &format!("steps/{s}/displacement"));
+        let du = read(&f, &format!("steps/{s}/displacement_change"));
+        let d = u
+            .iter()
+            .zip(&u1)
+            .zip(&du)
+            .fold(0.0f64, |m, ((a, b), c)| m.max((a - b - c).abs()));
+        assert!(d == 0.0, "step {s}: {d:e}");
+        let g = f.group(&format!("steps/{s}")).unwrap();
+        assert_eq!(
+            g.attr("reference_step")
+                .unwrap()
+                .read_scalar::<u64>()
+                .unwrap(),
+            1
+        );
+        let dp = read(&f, &format!("steps/{s}/contact_pressure_change"));
+        let p = read(&f, &format!("steps/{s}/contact_pressure"));
+        let p1 = read(&f, "steps/0001/contact_pressure");
+        assert!(dp.iter().zip(&p).zip(&p1).all(|((c, a), b)| *c == a - b));
+    }
+    let vtu = signorini::io::vtu::read_vtu_arrays(&out.join("stack_0003.vtu")).unwrap();
+    for name in ["displacement_change", "reaction"] {
+        assert!(vtu.point_data.iter().any(|a| a.name == name), "no {name}");
+    }
+    assert!(vtu.cell_data.iter().any(|a| a.name == "stress_change"));
+    let c = signorini::io::vtu::read_vtu_arrays(&out.join("stack_0003_contact.vtu")).unwrap();
+    assert!(c
+        .point_data
+        .iter()
+        .any(|a| a.name == "contact_pressure_change"));
+    // Σ reactions = −loads (the top's p · 1 m² along −z).
+    let r = &vtu
+        .point_data
+        .iter()
+        .find(|a| a.name == "reaction")
+        .unwrap()
+        .values;
+    let sum = [0, 1, 2].map(|k| r.iter().skip(k).step_by(3).sum::<f64>());
+    assert!(
+        sum[0].abs() < 1e-8 * P && sum[1].abs() < 1e-8 * P,
+        "{sum:?}"
+    );
+    assert!((sum[2] - P).abs() < 1e-8 * P, "{sum:?}");
+    // A restart with another reference step is refused, naming the key.
+    let part = tmp.path().join("part");
+    let (code, text, _) = run(
+        tmp.path(),
+        &toml,
+        &["solve", "--out", part.to_str().unwrap(), "--max-steps", "2"],
+    );
+    assert_eq!(code, 0, "{text}");
+    let h5 = part.join("stack.h5");
+    let other = toml.replace("reference_step = 1", "reference_step = 2");
+    let (code, text, _) = run(
+        tmp.path(),
+        &other,
+        &[
+            "solve",
+            "--out",
+            part.to_str().unwrap(),
+            "--restart",
+            h5.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("reference_step"), "{text}");
+    // With the same one: step 3's change fields as the uninterrupted run's.
+    let (code, text, _) = run(
+        tmp.path(),
+        &toml,
+        &[
+            "solve",
+            "--out",
+            part.to_str().unwrap(),
+            "--restart",
+            h5.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(code, 0, "{text}");
+    let g = hdf5::File::open(&h5).unwrap();
+    let (a, b) = (
+        read(&f, "steps/0003/stress_change"),
+        read(&g, "steps/0003/stress_change"),
+    );
+    assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+}

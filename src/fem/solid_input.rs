@@ -13,19 +13,10 @@ use crate::mesh::Mesh;
 use crate::problem::{shorten, Force, ProblemFile, TractionLoad};
 use std::path::Path;
 
-/// The [`SolidInput`] of a 3D problem file `f` read from `path` (a load
-/// step's: `ProblemFile::at_step`); `[output] reference_step` is refused
-/// naming the entry (not in 3D yet).
-pub fn solid_input(path: &Path, f: &ProblemFile) -> Result<SolidInput, FemError> {
-    if let Some(k) = f.output.reference_step {
-        return Err(FemError::new(
-            path,
-            format!(
-                "[output] reference_step = {k}: the *_change fields are not in yet for 3D models (tetrahedra)"
-            ),
-        ));
-    }
-    Ok(SolidInput {
+/// The [`SolidInput`] of a 3D problem file `f` (a load step's:
+/// `ProblemFile::at_step`).
+pub fn solid_input(f: &ProblemFile) -> SolidInput {
+    SolidInput {
         materials: f.materials.clone(),
         gravity: f.model.gravity.map_or([0.0; 3], |g| g.xyz()),
         dirichlet: f
@@ -46,7 +37,7 @@ pub fn solid_input(path: &Path, f: &ProblemFile) -> Result<SolidInput, FemError>
                 (t.on.clone(), load)
             })
             .collect(),
-    })
+    }
 }
 
 /// Adds the `[[force]]` entries `forces` of the problem file `path` (a force in N at the nodes of

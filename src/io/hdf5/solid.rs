@@ -241,6 +241,24 @@ fn write_step(
     write_ds(ctx, &s, "gap", &[r], &contact.gap)?;
     let active: Vec<u8> = contact.active.iter().map(|&a| u8::from(a)).collect();
     write_ds(ctx, &s, "active", &[r], &active)?;
+    if let Some(c) = &out.change {
+        write_ds(
+            ctx,
+            &s,
+            "displacement_change",
+            &[n, 3],
+            c.displacement.as_flattened(),
+        )?;
+        write_ds(ctx, &s, "stress_change", &[m, 6], c.stress.as_flattened())?;
+        write_ds(
+            ctx,
+            &s,
+            "contact_pressure_change",
+            &[r],
+            &c.contact_pressure,
+        )?;
+        set_attr_scalar(ctx, &s, "reference_step", &(c.reference_step as u64))?;
+    }
     set_attr_scalar(ctx, &s, "time", &time)?;
     set_attr_str(ctx, &s, "method", &info.method)?;
     set_attr_str(ctx, &s, "preconditioner", &info.preconditioner)?;
@@ -260,6 +278,9 @@ fn write_step(
     Ok(())
 }
 
+/// A step's displacement [n], stress [m] and contact pressure [r].
+pub type StepFields = (Vec<[f64; 3]>, Vec<[f64; 6]>, Vec<f64>);
+
 /// What a restart of a 3D run reads of its checkpoint
 /// ([`read_solid_restart`]).
 #[derive(Debug, Clone, Default)]
@@ -272,8 +293,12 @@ pub struct SolidRestartData {
     pub points: usize,
     pub tets: usize,
     pub rows: usize,
-    /// The step groups in index order: (name, attribute `time`).
-    pub steps: Vec<(String, f64)>,
+    /// The step groups in index order: (name, attribute `time`, attribute
+    /// `reference_step` if the step has change fields).
+    pub steps: Vec<(String, f64, Option<u64>)>,
+    /// Step `reference`'s displacement, stress and contact pressure (the
+    /// step asked for, when the checkpoint holds it).
+    pub reference: Option<StepFields>,
     /// The last step's displacement [points, 3] and active flags [rows],
     /// read when the sizes are the `n` and `r` asked for.
     pub displacement: Option<Vec<[f64; 3]>>,
@@ -285,7 +310,13 @@ pub struct SolidRestartData {
 /// and their times, and, when the checkpoint has `n` points and `r` contact
 /// rows, its last step's displacement and active flags. A 2D checkpoint
 /// gives `model` ≠ "solid" and nothing else.
-pub fn read_solid_restart(path: &Path, n: usize, r: usize) -> Result<SolidRestartData, IoError> {
+pub fn read_solid_restart(
+    path: &Path,
+    n: usize,
+    m: usize,
+    r: usize,
+    reference: Option<usize>,
+) -> Result<SolidRestartData, IoError> {
     if !path.is_file() {
         return Err(IoError::io(
             path,
@@ -329,9 +360,32 @@ pub fn read_solid_restart(path: &Path, n: usize, r: usize) -> Result<SolidRestar
             .group(name)
             .map_err(|e| super::linked(&ctx, &format!("/steps/{name}"), e))?;
         let t: f64 = super::get_attr(&ctx, &g, "time")?;
-        out.steps.push((name.clone(), t));
+        let k = if super::has_attr(&ctx, &g, "reference_step")? {
+            Some(super::get_attr::<u64>(&ctx, &g, "reference_step")?)
+        } else {
+            None
+        };
+        out.steps.push((name.clone(), t, k));
     }
-    if let (Some((_, last)), true) = (names.last(), out.points == n && out.rows == r) {
+    let sizes = out.points == n && out.tets == m && out.rows == r;
+    if let (Some(k), true) = (reference, sizes) {
+        if let Some((_, name)) = names.iter().find(|(i, _)| *i == k) {
+            let g = sg
+                .group(name)
+                .map_err(|e| super::linked(&ctx, &format!("/steps/{name}"), e))?;
+            let (_, u) = super::read_ds::<f64>(&ctx, &g, "displacement", Some(3), Some(n))?;
+            let (_, st) = super::read_ds::<f64>(&ctx, &g, "stress", Some(6), Some(m))?;
+            let (_, p) = super::read_ds::<f64>(&ctx, &g, "contact_pressure", None, Some(r))?;
+            out.reference = Some((
+                u.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+                st.chunks_exact(6)
+                    .map(|c| std::array::from_fn(|i| c[i]))
+                    .collect(),
+                p,
+            ));
+        }
+    }
+    if let (Some((_, last)), true) = (names.last(), sizes) {
         let g = sg
             .group(last)
             .map_err(|e| super::linked(&ctx, &format!("/steps/{last}"), e))?;

@@ -17,6 +17,8 @@ pub(super) struct Forces3 {
     pub loads: Resultant3,
     pub strain_energy: f64,
     pub load_work: f64,
+    /// Each point's reaction (zero off the supports).
+    pub reaction: Vec<Vector3>,
 }
 
 /// Reactions R_p = (K u)_p − f_p at the held nodes, in the directions the
@@ -154,6 +156,7 @@ pub(super) fn forces(
             resultant: Resultant3::default(),
         })
         .collect();
+    let mut reaction = vec![[0.0; 3]; m.points.len()];
     for (p, dirs) in held.iter().enumerate() {
         if dirs.is_empty() {
             continue;
@@ -183,6 +186,9 @@ pub(super) fn forces(
         for &(g, d) in dirs {
             let a = d[0] * y[0] + d[1] * y[1] + d[2] * y[2];
             groups[g].resultant.add(m.points[p], d.map(|c| a * c));
+            for k in 0..3 {
+                reaction[p][k] += a * d[k];
+            }
             if !counted.contains(&g) {
                 counted.push(g);
                 groups[g].points += 1;
@@ -195,6 +201,7 @@ pub(super) fn forces(
         loads,
         strain_energy,
         load_work,
+        reaction,
     }
 }
 

@@ -13,7 +13,7 @@ mod restart;
 mod steps;
 
 pub use restart::SolidRestart;
-pub use steps::{solve_solid, SolidRun};
+pub use steps::{solve_solid, Reference, SolidRun};
 
 use super::summary::{KktSummary, Timings};
 use super::RunError;
@@ -85,7 +85,7 @@ impl SolidPrepared {
 /// §8.5).
 fn build_step(problem: &Problem, mesh: &Mesh, s: usize) -> Result<SolidModel, RunError> {
     let file = problem.file.at_step(s);
-    let input = solid_input(&problem.path, &file)?;
+    let input = solid_input(&file);
     let mut model = crate::fem::solid::build(mesh, &problem.path, &input)?;
     add_point_forces(&mut model, mesh, &problem.path, &file.force)?;
     Ok(model)
@@ -321,6 +321,9 @@ pub struct SolidSummary {
     /// With `[[steps]]`: one row per step (docs/problem-format.md §7).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub steps: Vec<SolidStepRow>,
+    /// `[output] reference_step`: the step the `*_change` fields refer to.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference_step: Option<usize>,
     #[serde(rename = "timings_s")]
     pub timings: Timings,
 }

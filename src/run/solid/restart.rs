@@ -24,6 +24,9 @@ pub struct SolidRestart {
     pub displacement: Vec<Vector3>,
     /// The last step's active flag per contact row.
     pub active: Vec<bool>,
+    /// The fields of `[output] reference_step` when the checkpoint holds
+    /// that step.
+    pub reference: Option<super::Reference>,
 }
 
 impl SolidRestart {
@@ -34,7 +37,9 @@ impl SolidRestart {
         let fail = |msg: String| RunError::Restart(format!("--restart: {msg}"));
         let shown = path.display();
         let problem = prep.problem.path.display();
-        let ck = read_solid_restart(path, n, r).map_err(|e| fail(e.to_string()))?;
+        let kref = prep.problem.file.output.reference_step;
+        let ck =
+            read_solid_restart(path, n, m.tets.len(), r, kref).map_err(|e| fail(e.to_string()))?;
         if ck.model.as_deref() != Some("solid") {
             return Err(fail(format!(
                 "{shown}: a checkpoint of a 2D model ({}), and {problem} is 3D (its mesh holds tetrahedra); restart needs the checkpoint of the same problem",
@@ -64,7 +69,24 @@ impl SolidRestart {
         }
         let file = &prep.problem.file;
         let nsteps = file.nsteps();
-        for (k, (name, t)) in ck.steps.iter().enumerate() {
+        for (k, (name, t, theirs)) in ck.steps.iter().enumerate() {
+            // Change fields from step K on, against K, as this problem's
+            // `[output] reference_step` writes them; else two references
+            // would mix in one checkpoint.
+            let want = kref.filter(|&r| k + 1 >= r).map(|r| r as u64);
+            if *theirs != want {
+                let said = |v: Option<u64>| {
+                    v.map_or_else(
+                        || "no change fields".to_string(),
+                        |v| format!("change fields against step {v}"),
+                    )
+                };
+                return Err(fail(format!(
+                    "{shown}: group /steps/{name} has {}, and {problem}'s [output] reference_step asks for {}: the checkpoint cannot be continued with this reference_step; set it as the checkpoint was written or solve from the start",
+                    said(*theirs),
+                    said(want)
+                )));
+            }
             let want = step_name(k + 1);
             if *name != want {
                 return Err(fail(format!(
@@ -111,6 +133,13 @@ impl SolidRestart {
             steps_done: ck.steps.len(),
             displacement: u,
             active: active.iter().map(|&a| a != 0).collect(),
+            reference: ck
+                .reference
+                .map(|(displacement, stress, pressure)| super::Reference {
+                    displacement,
+                    stress,
+                    pressure,
+                }),
         })
     }
 }

@@ -9,7 +9,7 @@
 //! `NAME.h5` of the split layout and `NAME.pvd`, committed step by step,
 //! then `NAME.json`.
 
-use super::forces::{contact_output, forces, probes};
+use super::forces::{contact_output, forces, probes, Forces3};
 use super::{
     solve_in, step_model, SolidOutcome, SolidPrepared, SolidRestart, SolidStepRow, SolidSummary,
     MOMENT_POINT,
@@ -17,7 +17,7 @@ use super::{
 use crate::fem::element::{ElementKind, Vector3};
 use crate::fem::solid::SolidModel;
 use crate::io;
-use crate::output::{SolidContactOutput, SolidOutput, StepInfo};
+use crate::output::{SolidChange, SolidContactOutput, SolidOutput, StepInfo};
 use crate::qp::{MethodId, QpResult, SolveOptions};
 use crate::run::output::{check_interrupt, output_paths, Transaction, SIGNAL};
 use crate::run::steps::{preconditioner_label, Verdict};
@@ -78,6 +78,9 @@ pub fn solve_solid(
         (r.displacement.clone(), active)
     });
     let mut last = None;
+    // The fields of `[output] reference_step` once it is solved (or read
+    // from the checkpoint a restart continues).
+    let mut reference = run.restart.and_then(|r| r.reference.clone());
     let (mut t_assemble_all, mut t_solve_all) = (0.0, 0.0);
     for s in first..nsteps {
         check_interrupt()?;
@@ -117,8 +120,25 @@ pub fn solve_solid(
         if !certified {
             failed.push(s + 1);
         }
-        let out = crate::post::solid_output(&model, &file.materials, &res.x);
-        let contact = contact_output(prep, &model, &out.displacement, &res.lambda, &res.active);
+        let mut out = crate::post::solid_output(&model, &file.materials, &res.x);
+        let mut contact = contact_output(prep, &model, &out.displacement, &res.lambda, &res.active);
+        let f3 = forces(prep, &model, &out.displacement, &contact);
+        out.reaction = f3.reaction.clone();
+        // [output] reference_step: from step K on, the change since K.
+        if let Some(k) = file.output.reference_step {
+            if s + 1 == k {
+                reference = Some(Reference {
+                    displacement: out.displacement.clone(),
+                    stress: out.stress.clone(),
+                    pressure: contact.pressure.clone(),
+                });
+            }
+            if let Some(r) = reference.as_ref().filter(|_| s + 1 >= k) {
+                let change = r.change(k, &out, &contact);
+                contact.pressure_change = change.contact_pressure.clone();
+                out.change = Some(change);
+            }
+        }
         let info = StepInfo {
             method: method.name().to_string(),
             preconditioner: preconditioner_label(method, opts),
@@ -178,16 +198,19 @@ pub fn solve_solid(
         t_assemble_all += t_assemble;
         t_solve_all += time_solve;
         prev = Some((out.displacement.clone(), res.active.clone()));
-        last = Some((model.into_owned(), res, out, contact, verdict));
+        last = Some((model.into_owned(), res, out, contact, verdict, f3));
     }
-    let Some((model, res, out, contact, verdict)) = last else {
+    let Some((model, res, out, contact, verdict, f3)) = last else {
         return Err(RunError::Settings(format!(
             "{}: no load step to solve",
             prep.problem.path.display()
         )));
     };
     let t_write = Instant::now();
-    let mut summary = summary(prep, &model, method, opts, &res, &out, &contact, verdict);
+    let mut summary = summary(
+        prep, &model, method, opts, &res, &out, &contact, verdict, f3,
+    );
+    summary.reference_step = file.output.reference_step;
     summary.failed_steps = failed;
     if multi {
         summary.steps = rows;
@@ -434,6 +457,39 @@ impl<'a> Files<'a> {
     }
 }
 
+/// The fields of the reference step (`[output] reference_step`).
+#[derive(Debug, Clone)]
+pub struct Reference {
+    pub displacement: Vec<Vector3>,
+    pub stress: Vec<[f64; 6]>,
+    /// Per contact row.
+    pub pressure: Vec<f64>,
+}
+
+impl Reference {
+    /// A step's fields minus these (reference step `k`, 1-based).
+    fn change(&self, k: usize, out: &SolidOutput, c: &SolidContactOutput) -> SolidChange {
+        let sub =
+            |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
+        SolidChange {
+            reference_step: k,
+            displacement: out
+                .displacement
+                .iter()
+                .zip(&self.displacement)
+                .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+                .collect(),
+            stress: out
+                .stress
+                .iter()
+                .zip(&self.stress)
+                .map(|(a, b)| std::array::from_fn(|i| a[i] - b[i]))
+                .collect(),
+            contact_pressure: sub(&c.pressure, &self.pressure),
+        }
+    }
+}
+
 /// The JSON summary of the last step solved.
 #[allow(clippy::too_many_arguments)]
 fn summary(
@@ -445,8 +501,8 @@ fn summary(
     out: &SolidOutput,
     contact: &SolidContactOutput,
     verdict: Verdict,
+    f: Forces3,
 ) -> SolidSummary {
-    let f = forces(prep, m, &out.displacement, contact);
     let certified = verdict.certified();
     SolidSummary {
         problem: prep.problem.name.clone(),
@@ -486,6 +542,7 @@ fn summary(
         notes: res.notes.iter().map(ToString::to_string).collect(),
         probes: probes(prep, &out.displacement),
         steps: vec![],
+        reference_step: None,
         timings: Timings {
             read: prep.t_read,
             assemble: 0.0,
