@@ -220,11 +220,13 @@ done
 # cantilever; a steel base under an aluminium cover with a rubber plug held
 # by three slip planes (two of them meet on an edge), pn and p tractions and
 # gravity; contact: stacked cubes with a conforming interface and with
-# node-to-surface rows (steel under rubber, the upper cube held along z by
-# contact alone), and a half-sphere on a block (NTS, a partial contact zone).
+# node-to-surface rows and with mortar rows (steel under rubber, the upper
+# cube held along z by contact alone), and a half-sphere on a block (NTS and
+# mortar, a partial contact zone). About 3 s each.
 for t in meshes/3d/cantilever_3d.toml tests/data/solid/xcheck/twomat.toml \
          tests/data/solid/xcheck/stack_conforming.toml tests/data/solid/xcheck/stack_nts.toml \
-         tests/data/solid/xcheck/hertz_nts.toml; do
+         tests/data/solid/xcheck/stack_mortar.toml \
+         tests/data/solid/xcheck/hertz_nts.toml tests/data/solid/xcheck/hertz_mortar.toml; do
     stamp "fenicsx_crosscheck.py $t (3D)"
     SIGNORINI="$EXE" SIGNORINI_PYDEPS="$PYDEPS" /usr/bin/python3 scripts/fenicsx_crosscheck.py "$t" --tol 1e-8
     record "crosscheck $(basename "$t" .toml)" $?
