@@ -53,8 +53,8 @@ class Failure(Exception):
 # ---------------------------------------------------------------- running
 
 
-def mesh(args, geo, params, out_msh):
-    cmd = [args.gmsh, "-2", "-format", "msh41", "-v", "1"]
+def mesh(args, geo, params, out_msh, dim=2):
+    cmd = [args.gmsh, f"-{dim}", "-format", "msh41", "-v", "1"]
     for k, v in params.items():
         cmd += ["-setnumber", k, repr(float(v))]
     cmd += [geo, "-o", out_msh]
@@ -508,10 +508,103 @@ def case_shrinkfit(args, work):
                 float((st2[inner_rows] == 1).mean()), 0.0, source="below sliding")]
 
 
+def pressure_fit(r, p):
+    """Least-squares fit of p^2 = p0^2 (1 - r^2/a^2) over the rows with
+    p > 0.3 max p (the fit of the 3D Hertz test, docs/verification.md §7c):
+    (a, p0)."""
+    sel = p > 0.3 * p.max()
+    A = np.vstack([np.ones(sel.sum()), r[sel] ** 2]).T
+    c, *_ = np.linalg.lstsq(A, p[sel] ** 2, rcond=None)
+    return math.sqrt(-c[0] / c[1]), math.sqrt(c[0])
+
+
+def node_at3(f, xyz, material):
+    """The output point at xyz (to 1e-9 of the model's size) of the body of
+    `material`, in a 3D checkpoint."""
+    m = f["mesh"]
+    nodes = m["nodes"][:]
+    names = [str(n) for n in m.attrs["material_names"]]
+    tets = m["tetrahedra"][:]
+    b = int(m["body"][tets[m["material"][:] == names.index(material), 0][0]])
+    d = np.linalg.norm(nodes - np.asarray(xyz, float), axis=1)
+    idx = np.where((d < 1e-9 * abs(nodes).max()) & (m["body"][:] == b))[0]
+    if len(idx) != 1:
+        raise Failure(f"no unique node of {material} at {xyz}")
+    return int(idx[0])
+
+
+def case_ssnv104(args, work):
+    """Code_Aster SSNV104 (V6.04.104): two hemispheres crushed together, in
+    3D (quarter model, slip planes) and axisymmetric on the same section and
+    element sizes (docs/verification.md §7d). Rows: the 3D model against the
+    manual's Hertz reference, and the 3D model against the axisymmetric one
+    (contact radius, pressure at matched radii, total force, a displacement)."""
+    return ssnv104_rows(args, work, 0.667 if args.fine else 2.0, args.fine)
+
+
+def ssnv104_rows(args, work, hc, fine):
+    """case_ssnv104 at element size hc (mm) near the contact, with the fine
+    or the coarse tolerances (verification/ssnv104/refine.py runs it at
+    several sizes)."""
+    d = os.path.join(VDIR, "ssnv104")
+    msh3 = os.path.join(work, "ssnv104_3d.msh")
+    msha = os.path.join(work, "ssnv104_axi.msh")
+    mesh(args, os.path.join(d, "ssnv104_3d.geo"), {"hc": hc}, msh3, dim=3)
+    mesh(args, os.path.join(d, "ssnv104_axi.geo"), {"hc": hc}, msha)
+    s3, h3 = solve(args, d, "ssnv104_3d.toml", msh3, work)
+    sa, ha = solve(args, d, "ssnv104_axi.toml", msha, work)
+    E, nu, R, h = 2.0e4, 0.3, 50.0, 4.0
+    Es = E / (2 * (1 - nu**2))            # two equal spheres
+    Rs = R / 2                            # 1/R* = 1/R + 1/R
+    a_ref = math.sqrt(R * h / 2)          # V6.04.104 §2.1: 10 mm
+    p0_ref = E / (math.pi * (1 - nu**2)) * math.sqrt(2 * h / R)  # 2798.3 MPa
+    with h5py.File(h3) as f:
+        m, st = f["mesh"], last_step(f)
+        xyz = m["nodes"][:][m["contact_slave"][:]]
+        r3 = np.hypot(xyz[:, 0], xyz[:, 1])
+        p3 = st["contact_pressure"][:]
+        rim3 = st["displacement"][node_at3(f, (R, 0.0, R), "upper"), 0]
+    with h5py.File(ha) as f:
+        ra = f["mesh"]["contact_points"][:, 0]
+        pa = last_step(f)["contact_pressure"][:]
+        rima = last_step(f)["displacement"][node_at(f, (R, R), "upper"), 0]
+    a3, p03 = pressure_fit(r3, p3)
+    aa, _ = pressure_fit(ra, pa)
+    F3 = 4 * abs(s3["reactions"]["upper_top"]["force"][2])          # quarter model
+    Fa = 2 * math.pi * abs(sa["reactions"]["upper_top"]["force"][1])  # per radian
+    aF = (3 * F3 * Rs / (4 * Es)) ** (1 / 3)  # Hertz for the force carried
+    c, src = "ssnv104 3D", "Code_Aster SSNV104, V6.04.104 §2.1"
+    tol_a, tol_p = (0.05, 0.10) if fine else (0.08, 0.12)
+    rows = [row(c, "a [mm] (fit)", a_ref, a3, tol_a, source=src),
+            row(c, "p0 [MPa] (fit)", p0_ref, p03, tol_p, source=src),
+            row(c, "Hertz approach for the force carried [mm]", h, aF**2 / Rs, 0.10,
+                source="crush imposed, Hertz"),
+            row(c, "a [mm] (fit) against Hertz for the force carried", aF, a3,
+                0.02 if fine else 0.03, source="Johnson (1985) §4.2")]
+    # 3D against axisymmetric: the pressure averaged over rings of the 3D
+    # slave nodes against the axisymmetric pressure at the same radii
+    o = np.argsort(ra)
+    c = "ssnv104 3D vs axisymmetric"
+    tol_r = 0.03 if fine else 0.08
+    for lo, hi in ((0.0, 3.0), (3.0, 6.0), (6.0, 8.0)):
+        k = (r3 >= lo) & (r3 < hi)
+        pm = float(np.interp(r3[k], ra[o], pa[o]).mean())
+        rows.append(row(c, f"mean p, {lo:g} <= r < {hi:g} mm [MPa]", pm, float(p3[k].mean()),
+                        tol_r, source="the axisymmetric model"))
+    rows += [row(c, "a [mm] (fit)", aa, a3, 0.02 if fine else 0.05,
+                 source="the axisymmetric model"),
+             row(c, "total force [N]", Fa, F3, 0.01 if fine else 0.03,
+                 source="the axisymmetric model"),
+             row(c, "u_r at the upper rim (R, R) [mm]", rima, rim3, 0.02 if fine else 0.05,
+                 source="the axisymmetric model")]
+    return rows
+
+
 CASES = {"nafems1": case_nafems1, "patch": case_patch, "nonmatching": case_nonmatching,
          "hertz": case_hertz,
          "punch": case_punch, "cattaneo": case_cattaneo, "hertz_sphere": case_hertz_sphere,
-         "sneddon": case_sneddon, "nafems2": case_nafems2, "shrinkfit": case_shrinkfit}
+         "sneddon": case_sneddon, "nafems2": case_nafems2, "shrinkfit": case_shrinkfit,
+         "ssnv104": case_ssnv104}
 
 
 EXIT_USAGE = 2
