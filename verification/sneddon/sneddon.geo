@@ -15,7 +15,8 @@
 DefineConstant[ hc = {0.005, Name "hc"} ];
 Mesh.MshFileVersion = 4.1;
 Mesh.ElementOrder = 1;
-a = 0.1; hp = 0.1; R = 20.0; H = 20.0; k = 0.05;
+DefineConstant[ k = {0.05, Name "k"} ];
+a = 0.1; hp = 0.1; R = 20.0; H = 20.0;
 
 Point(1) = {0, 0, 0};
 Point(3) = {a/2, 0, 0};
