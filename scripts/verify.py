@@ -536,9 +536,10 @@ def node_at3(f, xyz, material):
 def case_ssnv104(args, work):
     """Code_Aster SSNV104 (V6.04.104): two hemispheres crushed together, in
     3D (quarter model, slip planes) and axisymmetric on the same section and
-    element sizes (docs/verification.md §7d). Rows: the 3D model against the
-    manual's Hertz reference, and the 3D model against the axisymmetric one
-    (contact radius, pressure at matched radii, total force, a displacement)."""
+    element sizes (docs/verification_3d.md §7d). Rows: the 3D model against
+    the manual's Hertz reference, and the 3D model against the axisymmetric
+    one (contact radius, pressure at matched radii, total force, a
+    displacement)."""
     return ssnv104_rows(args, work, 0.667 if args.fine else 2.0, args.fine)
 
 
@@ -601,7 +602,7 @@ def ssnv104_rows(args, work, hc, fine):
 
 
 def case_sneddon3d(args, work):
-    """Sneddon's punch in 3D (docs/verification.md §7e): a quarter of
+    """Sneddon's punch in 3D (docs/verification_3d.md §7e): a quarter of
     case_sneddon's model with slip planes, against Sneddon and against the
     axisymmetric model meshed with the same sizes (hc at the punch base,
     growing as hc + 0.1 d in both)."""
@@ -649,7 +650,7 @@ def sneddon3d_rows(args, work, hc, fine):
 
 
 def case_patch3d(args, work):
-    """The 3D contact patch test through the binary (docs/verification.md
+    """The 3D contact patch test through the binary (docs/verification_3d.md
     §7f): stacked cubes with non-matching faces under a uniform pressure;
     mortar rows exact to round-off, node-to-surface rows not (a guard)."""
     d = os.path.join(VDIR, "patch3d")

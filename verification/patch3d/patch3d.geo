@@ -1,4 +1,4 @@
-// patch3d.geo -- the 3D contact patch test (docs/verification.md §7f): two
+// patch3d.geo -- the 3D contact patch test (docs/verification_3d.md §7f): two
 // unit cubes stacked along z, meshed apart, so the touching faces have
 // non-matching triangulations: "lower_top" (size h1) and "upper_bottom"
 // (size h2, with two extra points inside so that it differs from the

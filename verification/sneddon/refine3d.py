@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Sneddon's punch in 3D under refinement (docs/verification.md §7e):
+"""Sneddon's punch in 3D under refinement (docs/verification_3d.md §7e):
 scripts/verify's case sneddon3d (3D quarter model and axisymmetric model at
 the same sizes, hc at the punch base growing as hc + 0.1 d) at several hc,
 one Markdown table ("3D / axisymmetric (difference)" for the rows against

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""SSNV104 under refinement (docs/verification.md §7d): scripts/verify's
+"""SSNV104 under refinement (docs/verification_3d.md §7d): scripts/verify's
 case ssnv104 (3D quarter model and axisymmetric section at the same element
 size hc near the contact) at several sizes, one Markdown table of the tool's
 values (3D against the axisymmetric model: "3D / axisymmetric (3D − axi)");

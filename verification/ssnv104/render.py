@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Pictures of SSNV104 (docs/verification.md §7d), off-screen with pyvista:
+"""Pictures of SSNV104 (docs/verification_3d.md §7d), off-screen with pyvista:
 
     .venv/bin/python verification/ssnv104/render.py [OUTDIR]   (default docs/)
 
