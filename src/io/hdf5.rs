@@ -76,7 +76,9 @@ use crate::output::{
 
 mod solid;
 mod split;
-pub use solid::write_solid_checkpoint;
+pub use solid::{
+    write_solid_checkpoint, write_solid_index, write_solid_mesh_file, write_solid_step_file,
+};
 pub use split::{
     checkpoint_files, mesh_file_name, pack, step_file_name, write_index, write_mesh_file,
     write_step_file, CheckpointFiles, Packed,
