@@ -251,8 +251,13 @@ def mortar_rows(x, st, s_out, mt, m_out, L):
     for tri, n in zip(st, s_out):
         xs = x[tri]
         edges = np.linalg.norm(xs[[1, 2, 0]] - xs, axis=1)
-        pad = edges.max()  # no max_gap: the reach is the slave triangle's size
-        lo, hi = xs.min(axis=0) - pad, xs.max(axis=0) + pad
+        # No max_gap, no limit: a master may lie anywhere ahead of the slave
+        # triangle along n. The box of the triangle swept along n by the
+        # model's size L (every master is within L of it), widened by its
+        # longest edge; the clipping then decides.
+        pad = edges.max()
+        swept = np.vstack([xs, xs + L * n])
+        lo, hi = swept.min(axis=0) - pad, swept.max(axis=0) + pad
         cand = np.where(np.all(mhi >= lo, axis=1) & np.all(mlo <= hi, axis=1) & (m_out @ n < 0.0))[0]
         if len(cand) == 0:
             continue
