@@ -418,3 +418,38 @@ fn reference_step_and_reactions_in_3d() {
     );
     assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
 }
+
+/// A 3D step that does not converge: exit 3, its outputs written and
+/// flagged (the JSON's `failed_steps`, `converged` false and the step's
+/// row), the later steps still solved.
+#[test]
+fn a_3d_step_that_does_not_converge_exits_3_with_its_outputs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let toml = stack_toml(STEPS, -P).replace(
+        "[output]\n",
+        "[solver]\nmethod = \"uzawa\"\nmax_iter = 2\n\n[output]\n",
+    );
+    let (code, text, _) = run(
+        tmp.path(),
+        &toml,
+        &["solve", "--out", out.to_str().unwrap()],
+    );
+    assert_eq!(code, 3, "{text}");
+    let j = json(&out.join("stack.json"));
+    assert_eq!(j["converged"], Value::Bool(false), "{j}");
+    let failed: Vec<u64> = j["failed_steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    assert_eq!(failed, vec![1, 2, 3], "{j}");
+    let rows = j["steps"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    assert!(rows.iter().all(|r| r["converged"] == Value::Bool(false)));
+    assert!(text.contains("NOT CONVERGED"), "{text}");
+    for f in ["stack_0003.vtu", "stack_0003.h5", "stack.h5"] {
+        assert!(out.join(f).is_file(), "no {f}");
+    }
+}
