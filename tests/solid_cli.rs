@@ -390,8 +390,8 @@ fn keys_that_do_not_fit_the_mesh_are_refused_naming_file_line_and_key() {
     );
     refused(
         dir,
-        &block_toml("").replace("[output]\n", "[output]\nreference_step = 1\n"),
-        &["bad.toml", "reference_step", "3D"],
+        &block_toml("").replace("[output]\n", "[output]\nreference_step = 2\n"),
+        &["bad.toml", "reference_step = 2"],
     );
     // A 3D probe outside the block.
     let far = block_toml("").replace("mid = [0.5, 0.25, 0.15]", "mid = [0.5, 0.25, 0.9]");

@@ -278,7 +278,7 @@ fn write_step(
     Ok(())
 }
 
-/// A step's displacement [n], stress [m] and contact pressure [r].
+/// A step's displacement \[n\], stress \[m\] and contact pressure \[r\].
 pub type StepFields = (Vec<[f64; 3]>, Vec<[f64; 6]>, Vec<f64>);
 
 /// What a restart of a 3D run reads of its checkpoint
@@ -299,7 +299,7 @@ pub struct SolidRestartData {
     /// Step `reference`'s displacement, stress and contact pressure (the
     /// step asked for, when the checkpoint holds it).
     pub reference: Option<StepFields>,
-    /// The last step's displacement [points, 3] and active flags [rows],
+    /// The last step's displacement \[points, 3\] and active flags \[rows\],
     /// read when the sizes are the `n` and `r` asked for.
     pub displacement: Option<Vec<[f64; 3]>>,
     pub active: Option<Vec<u8>>,

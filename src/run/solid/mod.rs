@@ -1,10 +1,11 @@
-//! A 3D model (P1 tetrahedra, no contact yet; issue 45) as a run: the
-//! model built by `fem::solid` from the problem file
+//! A 3D model (P1 tetrahedra, with or without contact; issue 45) as a run:
+//! the model of each load step built by `fem::solid` from the problem file
 //! (`fem::solid_input`), solved by the QP driver with the KKT certificate
-//! and verdict of 2D ([`Verdict`]), and its outputs — the VTU of the
-//! tetrahedra, the HDF5 checkpoint in its 3D layout, the JSON summary —
-//! written as one transaction. The plane pipeline ([`super::Run`] and its
-//! observers) is not dimension-generic yet: docs/design.md ("Where it
+//! and verdict of 2D ([`super::Verdict`]), and its outputs — the VTU of
+//! the tetrahedra, the HDF5 checkpoint in its 3D layout, the JSON summary —
+//! written as one transaction ([`solve_solid`]); `--restart` ([`SolidRestart`])
+//! and `compare` (`compare.rs`). The plane pipeline ([`super::Run`] and
+//! its observers) is not dimension-generic yet: docs/design.md ("Where it
 //! stands") lists what is left to fold.
 
 mod compare;
