@@ -75,8 +75,10 @@ use crate::output::{
 };
 
 mod solid;
+mod solid_read;
 mod split;
 pub use solid::write_solid_checkpoint;
+pub use solid_read::{is_solid_checkpoint, read_solid_checkpoint, SolidSteps};
 pub use split::{
     checkpoint_files, mesh_file_name, pack, step_file_name, write_index, write_mesh_file,
     write_step_file, CheckpointFiles, Packed,
@@ -936,6 +938,28 @@ fn read_step(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<StepOutput, IoError
         None
     };
 
+    let info = read_step_info(ctx, g)?;
+    Ok(StepOutput {
+        time: get_attr(ctx, g, "time")?,
+        displacement: pairs(&displacement),
+        stress: stress
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect(),
+        von_mises,
+        principal: pairs(&principal),
+        multipliers,
+        contact_pressure,
+        gap,
+        active,
+        reaction: vec![],
+        info,
+        change,
+    })
+}
+
+/// The solver record of the step group `g` (its attributes).
+fn read_step_info(ctx: &Ctx, g: &Group) -> Result<StepInfo, IoError> {
     let iterations = get_attr::<u64>(ctx, g, "iterations")?;
     // Every residual of the certificate; checkpoints written before all
     // were kept have the first four only (the others read as 0).
@@ -958,21 +982,5 @@ fn read_step(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<StepOutput, IoError
         time_solve: get_attr(ctx, g, "time_solve")?,
         time_total: get_attr(ctx, g, "time_total")?,
     };
-    Ok(StepOutput {
-        time: get_attr(ctx, g, "time")?,
-        displacement: pairs(&displacement),
-        stress: stress
-            .chunks_exact(4)
-            .map(|c| [c[0], c[1], c[2], c[3]])
-            .collect(),
-        von_mises,
-        principal: pairs(&principal),
-        multipliers,
-        contact_pressure,
-        gap,
-        active,
-        reaction: vec![],
-        info,
-        change,
-    })
+    Ok(info)
 }
