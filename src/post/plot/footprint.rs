@@ -103,7 +103,7 @@ pub(super) fn footprints(
             .fold(f64::NEG_INFINITY, f64::max);
         let nactive = rows.iter().filter(|&&r| step.active[r] != 0).count();
         let title = format!(
-            "{name}: {nactive} of {} rows active, normal ({}, {}, {})",
+            "{name}: {nactive} of {} rows active; plane normal ({}, {}, {})",
             rows.len(),
             fmt_num(round3(n[0])),
             fmt_num(round3(n[1])),

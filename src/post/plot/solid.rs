@@ -197,7 +197,10 @@ pub fn render_solid(
                 Fill::Nodal(v) | Fill::Cell(v) => v.clone(),
             })
             .collect();
-        let title = format!("{name} — step {} — contact pressure footprint", step.index);
+        let title = format!(
+            "{name} — step {} — contact pressure footprint, active set outlined red",
+            step.index
+        );
         let label = format!("contact_pressure [{}]", units.stress);
         (title, panels, label, values)
     } else {
