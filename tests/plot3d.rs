@@ -451,3 +451,42 @@ fn the_last_step_is_drawn_unless_step_says_otherwise() {
     let e = fails(&h5, &["--step", "3"]);
     assert!(e.contains("2 steps (1 to 2)"), "{e}");
 }
+
+#[test]
+fn a_conforming_interface_under_uniform_pressure_is_one_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let msh = root().join("tests/data/solid_contact/stack.msh");
+    let toml = format!(
+        "[mesh]\nfile = \"{}\"\n[materials.lower]\nE = 2.0e11\nnu = 0.3\n[materials.upper]\nE = 7.0e10\nnu = 0.25\n\
+         [[slip]]\non = \"x0\"\n[[slip]]\non = \"y0\"\n[[slip]]\non = \"bottom\"\n\
+         [[traction]]\non = \"top\"\npn = -1.0e6\n[[contact]]\non = \"interface\"\n",
+        msh.display()
+    );
+    let p = dir.path().join("stack.toml");
+    std::fs::write(&p, toml).unwrap();
+    let (code, stdout, stderr) = signorini(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    let h5 = dir.path().join("stack.h5");
+    let (stdout, _) = plots(&h5, &["--contact"], "f.png");
+    assert!(
+        stdout.contains("interface 0 (interface): 45 of 45 rows active"),
+        "{stdout}"
+    );
+    let ck = read(&h5);
+    let (_, s) = render_solid(&ck, "s", &opts(None, "von_mises", true), Format::Png).unwrap();
+    let i = &s.interfaces[0];
+    assert!((i.area - 1.0).abs() < 1e-12 && (i.surface_area - 1.0).abs() < 1e-12);
+    // 1 MPa within rounding: one colour, the scale collapsed to its middle.
+    let (lo, hi) = s.data_range;
+    assert!(
+        (lo / 1e6 - 1.0).abs() < 1e-9 && (hi / 1e6 - 1.0).abs() < 1e-9,
+        "{lo} {hi}"
+    );
+    assert_eq!(s.range.0, s.range.1);
+}

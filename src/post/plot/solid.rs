@@ -223,7 +223,13 @@ pub fn render_solid(
         (title, vec![panel], label, values)
     };
     let what = summary.field.map_or("contact_pressure", |f| f.name());
-    let cs = scale_of(&values, o.range, o.log, what, false)?;
+    let mut cs = scale_of(&values, o.range, o.log, what, false)?;
+    // A field uniform but for rounding (a stacked block's pressure) is one
+    // colour with one tick, not its noise stretched over the map.
+    if o.range.is_none() && !o.log && cs.hi - cs.lo <= 1e-9 * cs.lo.abs().max(cs.hi.abs()) {
+        let mid = 0.5 * (cs.lo + cs.hi);
+        (cs.lo, cs.hi) = (mid, mid);
+    }
     summary.range = (cs.lo, cs.hi);
     summary.data_range = finite_range(&values);
     register_fonts();
