@@ -782,15 +782,15 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
         limit: meta.len(),
     };
     let file = File::open(path).map_err(ctx.h5("/"))?;
-    // A 3D checkpoint (write_solid_checkpoint) has another layout, which
-    // nothing reads back yet (issue 45).
+    // A 3D checkpoint (write_solid_checkpoint) has another layout, read
+    // by `read_solid_checkpoint` (issue 45).
     let solid = file
         .attr("model")
         .and_then(|a| a.read_scalar::<VarLenUnicode>())
         .is_ok_and(|m| m.as_str() == crate::fem::ElementKind::Solid.model_name());
     if solid {
         return Err(ctx.format(
-            "a 3D (solid) checkpoint: it is read by h5py (docs/problem-format.md §6), but not yet by signorini's plot, --restart or pack (issue 45)",
+            "a 3D (solid) checkpoint: it is read by h5py and `signorini plot` (docs/problem-format.md §6), but not yet by --restart or pack (issue 45)",
         ));
     }
 
