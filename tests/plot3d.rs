@@ -490,3 +490,44 @@ fn a_conforming_interface_under_uniform_pressure_is_one_colour() {
     );
     assert_eq!(s.range.0, s.range.1);
 }
+
+#[test]
+fn a_split_checkpoint_is_read_through_its_links() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = two_steps(dir.path());
+    let idx = dir.path().join("idx.h5");
+    {
+        let f = hdf5::File::create(&idx).unwrap();
+        let src = hdf5::File::open(&data).unwrap();
+        for a in ["model", "toml"] {
+            let v: hdf5::types::VarLenUnicode = src.attr(a).unwrap().read_scalar().unwrap();
+            f.new_attr::<hdf5::types::VarLenUnicode>()
+                .create(a)
+                .unwrap()
+                .write_scalar(&v)
+                .unwrap();
+        }
+        for (a, v) in [("dim", 3u64), ("last_step", 1u64)] {
+            f.new_attr::<u64>()
+                .create(a)
+                .unwrap()
+                .write_scalar(&v)
+                .unwrap();
+        }
+        f.link_external("two.h5", "/mesh", "mesh").unwrap();
+        let s = f.create_group("steps").unwrap();
+        for n in ["0001", "0002"] {
+            s.link_external("two.h5", &format!("/steps/{n}"), n)
+                .unwrap();
+        }
+    }
+    // last_step = 1 names the step drawn by default, though 0002 exists.
+    let (stdout, _) = plots(&idx, &["--cut", "y=0.1", "--field", "uz"], "s.png");
+    assert!(stdout.contains("step 1 (2 steps in the file)"), "{stdout}");
+    assert!(stdout.contains("uz on the section: -1e-4"), "{stdout}");
+    let (stdout, _) = plots(&idx, &["--contact", "--step", "2"], "s.png");
+    assert!(stdout.contains("step 2 (2 steps in the file)"), "{stdout}");
+    std::fs::remove_file(&data).unwrap();
+    let e = fails(&idx, &["--contact"]);
+    assert!(e.contains("two.h5") && e.contains("does not exist"), "{e}");
+}
