@@ -20,7 +20,8 @@ pub struct PlotArgs {
     /// Output file: .png or .svg.
     #[arg(long, short)]
     pub output: PathBuf,
-    /// Step to draw (1-based; default: the last one).
+    /// Step to draw (1-based; default: the last one; 3D: the number of
+    /// the group /steps/NNNN, default the root's last_step).
     #[arg(long)]
     pub step: Option<usize>,
     /// von_mises | ux | uy | umag | sxx | syy | sxy | szz | s1 | s2 | material | body;
@@ -64,7 +65,8 @@ pub struct PlotArgs {
     #[arg(long)]
     pub no_edges: bool,
     /// Colour range MIN,MAX of the field (or the pressure axis with
-    /// --contact); values outside get the end colours. Default: the data's range.
+    /// --contact; 3D: the footprint's colours); values outside get the end
+    /// colours. Default: the data's range.
     #[arg(long, allow_hyphen_values = true, value_name = "MIN,MAX")]
     pub range: Option<String>,
     /// Logarithmic colour scale (values ≤ 0 get the bottom colour).
