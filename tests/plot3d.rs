@@ -249,6 +249,17 @@ fn a_cut_shows_the_values_of_the_tetrahedra_it_crosses() {
     .unwrap();
     assert_eq!(g.cut.as_ref().unwrap().tets, n);
     assert_eq!(g.data_range, range);
+    // The mesh's top and bottom faces: the punch's top, the block's base.
+    for (z, area) in [(0.8, std::f64::consts::PI * 0.09 / 4.0), (0.0, 1.0)] {
+        let (_, s) = render_solid(
+            &ck,
+            "p",
+            &opts(Some(&format!("z={z}")), "von_mises", false),
+            Format::Png,
+        )
+        .unwrap();
+        assert!((s.cut.unwrap().area / area - 1.0).abs() < 0.01, "z = {z}");
+    }
     // Through the punch (0 < x < 0.3 above z = 0.5): its area is a quarter disc.
     let (_, p) = render_solid(&ck, "p", &opts(Some("z=0.65"), "szz", false), Format::Png).unwrap();
     let a = p.cut.unwrap().area;

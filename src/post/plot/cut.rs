@@ -179,12 +179,23 @@ pub(super) struct CutPolygon {
 /// The sections of the tetrahedra by `plane`, leaving out those of zero
 /// area (a tetrahedron touching the plane at a point or an edge). A
 /// vertex on the plane counts as above it, so a face in the plane is
-/// drawn once, by the tetrahedron below it.
+/// drawn once, by the tetrahedron below it; a plane that touches the mesh
+/// only from below (its bottom face) is taken from above instead.
 pub(super) fn section(points: &[V3], tets: &[[usize; 4]], plane: &Plane) -> Vec<CutPolygon> {
     let d: Vec<f64> = points
         .iter()
         .map(|&p| dot(sub(p, plane.point), plane.normal))
         .collect();
+    let below = section_by(points, tets, &d);
+    if !below.is_empty() {
+        return below;
+    }
+    let flipped: Vec<f64> = d.iter().map(|v| -v).collect();
+    section_by(points, tets, &flipped)
+}
+
+/// [`section`] by the signed distances `d` of the points.
+fn section_by(points: &[V3], tets: &[[usize; 4]], d: &[f64]) -> Vec<CutPolygon> {
     let mut out = Vec::new();
     let at = |e: EdgePoint| {
         let (a, b) = (points[e.0], points[e.1]);
@@ -302,9 +313,10 @@ mod tests {
         let plane = Plane::parse(&format!("0.25,0.25,0,{h},{h},0")).unwrap();
         let s = section(&p, &t, &plane);
         assert_eq!(s[0].verts.len(), 4);
-        // A plane through a face draws it once (from the side below it),
-        // and one that only touches a vertex not at all.
-        assert_eq!(section(&p, &t, &Plane::axis(2, 0.0)).len(), 0);
+        // A plane through a face draws it once (from the side below it,
+        // or above for the bottom face), and one that only touches a
+        // vertex not at all.
+        assert_eq!(section(&p, &t, &Plane::axis(2, 0.0)).len(), 1);
         assert_eq!(section(&p, &t, &Plane::axis(2, 1.0)).len(), 0);
         assert!(section(&p, &t, &Plane::axis(2, 1.5)).is_empty());
         let s = section(&p, &[[0, 1, 2, 3]], &Plane::parse("0,0,0,0,0,-1").unwrap());
