@@ -131,6 +131,9 @@ fn draw_panel<DB: DrawingBackend>(
         .disable_mesh()
         .x_desc(p.labels[0].clone())
         .y_desc(p.labels[1].clone())
+        // Ticks a few font sizes apart, so narrow panels stay legible.
+        .x_labels(((pw as f64 / (fs * 5.0)) as usize).clamp(3, 10))
+        .y_labels(((ph as f64 / (fs * 2.5)) as usize).clamp(3, 10))
         .label_style(("sans-serif", fs * 0.9))
         .axis_desc_style(("sans-serif", fs))
         .x_label_formatter(&|v| tick(*v, 2.0 * hx))

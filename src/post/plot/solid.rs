@@ -398,6 +398,81 @@ mod tests {
         }
     }
 
+    /// Two unit squares as slave surfaces, one in z = 0 (normal z) and one
+    /// in x = 2 (normal x), rows active but one, pressure = row number.
+    fn two_interfaces() -> SolidCheckpoint {
+        let points = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 1.0, 0.0],
+            [2.0, 1.0, 1.0],
+            [2.0, 0.0, 1.0],
+        ];
+        let contact = crate::output::SolidContactMesh {
+            slave: (0..8).collect(),
+            normal: [[0.0, 0.0, 1.0]; 4]
+                .into_iter()
+                .chain([[1.0, 0.0, 0.0]; 4])
+                .collect(),
+            gap0: vec![0.0; 8],
+            interface: vec![0, 0, 0, 0, 1, 1, 1, 1],
+            triangles: vec![[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]],
+        };
+        let step = SolidStep {
+            index: 1,
+            displacement: vec![[0.0; 3]; 8],
+            stress: vec![[0.0; 6]],
+            von_mises: vec![0.0],
+            principal: vec![[0.0; 3]],
+            contact_pressure: (0..8).map(f64::from).collect(),
+            active: vec![1, 1, 1, 1, 1, 1, 1, 0],
+            ..Default::default()
+        };
+        SolidCheckpoint {
+            tets: vec![[0, 1, 3, 7]],
+            points,
+            contact,
+            step_indices: vec![1],
+            steps: vec![step],
+            attrs: vec![(
+                "toml".into(),
+                "[[contact]]\non = \"a\"\n[[contact]]\nslave = \"b\"\nmaster = \"c\"\n".into(),
+            )],
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn each_interface_has_its_panel_in_its_own_plane() {
+        let ck = two_interfaces();
+        let opts = SolidPlotOptions {
+            base: PlotOptions {
+                contact: true,
+                ..PlotOptions::default()
+            },
+            field: SolidField::VonMises,
+            cut: None,
+        };
+        let (svg, s) = render_solid(&ck, "two", &opts, Format::Svg).unwrap();
+        let svg = String::from_utf8(svg).unwrap();
+        assert_eq!(s.interfaces.len(), 2);
+        let (a, b) = (&s.interfaces[0], &s.interfaces[1]);
+        assert_eq!((a.name.as_str(), b.name.as_str()), ("a", "b/c"));
+        assert_eq!((a.rows, a.active, b.rows, b.active), (4, 4, 4, 3));
+        assert_eq!((a.area, b.area, b.surface_area), (1.0, 1.0, 1.0));
+        assert_eq!(b.axes, ["y".to_string(), "z".to_string()]);
+        // One corner inactive: the region where the flag is ≥ ½ loses the
+        // corner triangle cut at the edges' midpoints (area ⅛).
+        assert!((b.active_area - 0.875).abs() < 1e-15, "{}", b.active_area);
+        assert_eq!((a.max_pressure, b.max_pressure), (3.0, 7.0));
+        assert_eq!(s.data_range, (0.0, 7.0));
+        assert!(svg.contains("b/c: 3 of 4 rows active"));
+        assert!(svg.contains("y [m]") && svg.contains("z [m]"));
+    }
+
     #[test]
     fn the_default_cut_is_across_the_smallest_extent() {
         let box_ = |a: f64, b: f64, c: f64| vec![[0.0, 0.0, 0.0], [a, b, c]];
