@@ -26,21 +26,28 @@ scipy's sparse LU and compared with signorini's HDF5 checkpoint
 recomputed here from the reference's displacements), relative to the
 largest value of each.
 
-Contact (conforming `on`, and `slave`/`master` with `discretization =
-"nts"`): the mesh is cut as the problem format says (a point per node and
+Contact (conforming `on`, and `slave`/`master` with mortar or "nts"
+rows): the mesh is cut as the problem format says (a point per node and
 body; bodies are the tetrahedra joined through faces not on a contact
 surface), every form assembled once per body with its materials times the
 body's indicator and routed to the body's points; rows rebuilt here: a
 conforming node pair n·(u_k − u_l) ≤ 0 with n the area-weighted average of
 the surface's triangle normals outward of the lower body k (signorini's
 master: bodies numbered by their lowest node tag), a slave node projected
-orthogonally on the nearest master triangle, n·(Σ w u_m − u_s) ≤ g₀. The
+orthogonally on the nearest master triangle, n·(Σ w u_m − u_s) ≤ g₀;
+mortar rows (the default of a pair, "nts" when the slave is more than 10
+times stiffer than the master) from docs/methods.md §11.6: each slave
+triangle clipped by every facing master triangle near it projected onto
+its plane, the pieces integrated exactly (`mortar_rows`), the dual basis
+Φ = D_e M_e⁻¹ N on the projecting part, per slave node
+n_j·(u_j − Σ (M_jm/D_jj) u_m) ≤ g̃_j/D_jj. The
 QP min ½ξᵀK_rξ − f_rᵀξ, A_r ξ ≤ g_r is solved by fenicsx_crosscheck.py's
 `solve_qp` (Clarabel, then an exact active-set polish) and compared with
-signorini's displacements, multipliers and pressures (λ over Σ|F|/3).
+signorini's displacements, multipliers, pressures (λ over Σ|F|/3, over
+D_jj for mortar rows) and the rows' initial gaps (`/mesh/contact_gap0`).
 
-Not checked yet (exit 3, the reason printed): friction (issue 46), mortar
-rows, `interference`/`max_gap`, `[[steps]]`.
+Not checked yet (exit 3, the reason printed): friction (issue 46),
+`interference`/`max_gap`, `[[steps]]`.
 """
 
 from __future__ import annotations
@@ -125,9 +132,8 @@ def unmodelled(cfg: dict) -> list[str]:
     for i, c in enumerate(cfg.get("contact", [])):
         if "friction" in c or "tresca" in c:
             out.append(f"friction on [[contact]] #{i + 1} (3D friction is issue 46)")
-        if "slave" in c and c.get("discretization", "mortar") != "nts":
-            out.append(f"mortar rows of [[contact]] #{i + 1} (only conforming and \"nts\" rows are rebuilt "
-                       "here; the mortar patch test is tests/solid_contact.rs)")
+        if c.get("discretization", "mortar") not in ("mortar", "nts"):
+            out.append(f"discretization = {c['discretization']!r} of [[contact]] #{i + 1}")
         if c.get("interference") or c.get("max_gap") is not None:
             out.append(f"interference/max_gap of [[contact]] #{i + 1}")
     if cfg.get("steps"):
@@ -169,6 +175,7 @@ def read_signorini(h5: Path) -> dict:
             "contact_slave": f["mesh/contact_slave"][:].astype(np.int64) if "contact_slave" in f["mesh"] else None,
             "multipliers": st["multipliers"][:] if "multipliers" in st else None,
             "contact_pressure": st["contact_pressure"][:] if "contact_pressure" in st else None,
+            "contact_gap0": f["mesh/contact_gap0"][:] if "contact_gap0" in f["mesh"] else None,
         }
 
 
@@ -177,6 +184,143 @@ def tri_normal(p):
     cr = np.cross(p[1] - p[0], p[2] - p[0])
     a = np.linalg.norm(cr)
     return cr / a, 0.5 * a
+
+
+# ------------------------------------------------------------ mortar rows
+# Written from docs/methods.md §11.6 and the mathematics, not from
+# src/fem/contact3d/mortar.rs: the slave triangle is clipped by each
+# projected master (the Rust code clips the other way round), the clip
+# polygon is fanned from its first vertex (not its centroid), and every
+# integrand, affine × affine on a sub-triangle, is integrated in closed
+# form, ∫_T f h = |T|/12 (Σ f_i h_i + Σ f_i Σ h_i), not by a Gauss rule.
+
+
+def _clip(subject, clip):
+    """The convex polygon `subject` clipped by the convex counter-clockwise
+    polygon `clip` (Sutherland–Hodgman), both lists of 2D points."""
+    out = [np.asarray(p, float) for p in subject]
+    k = len(clip)
+    for i in range(k):
+        a, b = clip[i], clip[(i + 1) % k]
+        ex, ey = b[0] - a[0], b[1] - a[1]
+
+        def side(p):
+            return ex * (p[1] - a[1]) - ey * (p[0] - a[0])
+
+        inp, out = out, []
+        if not inp:
+            break
+        for idx in range(len(inp)):
+            p, q = inp[idx - 1], inp[idx]
+            sp_, sq = side(p), side(q)
+            if sq >= 0.0:
+                if sp_ < 0.0:
+                    out.append(p + sp_ / (sp_ - sq) * (q - p))
+                out.append(q)
+            elif sp_ >= 0.0:
+                out.append(p + sp_ / (sp_ - sq) * (q - p))
+    return out
+
+
+def _bary2(t, q):
+    """Barycentric coordinates of the 2D points q (k×2) in triangle t (3×2)."""
+    T = np.array([t[1] - t[0], t[2] - t[0]]).T
+    l12 = np.linalg.solve(T, (q - t[0]).T).T
+    return np.column_stack([1.0 - l12.sum(axis=1), l12])
+
+
+def mortar_rows(x, st, s_out, mt, m_out, L):
+    """Mortar rows of a slave/master pair (docs/methods.md §11.6).
+
+    x: node coordinates; st, mt: the slave and master triangles (node
+    indices); s_out, m_out: their unit outward normals; L: the model's size.
+    Returns {slave node: (n_j, {master node: M_jm / D_jj}, g̃_j / D_jj, D_jj)}
+    for every slave node with D_jj > 0, n_j the area-weighted average of
+    the slave normals around node j (outward of the slave).
+    """
+    nsum: dict[int, np.ndarray] = {}
+    for tri, n in zip(st, s_out):
+        _, area = tri_normal(x[tri])
+        for v in tri:
+            nsum[int(v)] = nsum.get(int(v), 0.0) + area * n
+    mlo = x[mt].min(axis=1) - 1e-9 * L
+    mhi = x[mt].max(axis=1) + 1e-9 * L
+    D: dict[int, float] = {}
+    Mw: dict[int, dict[int, float]] = {}
+    G: dict[int, float] = {}
+    for tri, n in zip(st, s_out):
+        xs = x[tri]
+        edges = np.linalg.norm(xs[[1, 2, 0]] - xs, axis=1)
+        # No max_gap, no limit: a master may lie anywhere ahead of the slave
+        # triangle along n. The box of the triangle swept along n by the
+        # model's size L (every master is within L of it), widened by its
+        # longest edge; the clipping then decides.
+        pad = edges.max()
+        swept = np.vstack([xs, xs + L * n])
+        lo, hi = swept.min(axis=0) - pad, swept.max(axis=0) + pad
+        cand = np.where(np.all(mhi >= lo, axis=1) & np.all(mlo <= hi, axis=1) & (m_out @ n < 0.0))[0]
+        if len(cand) == 0:
+            continue
+        # A frame of the slave plane: (e1, e2, n) right-handed.
+        e1 = (xs[1] - xs[0]) / np.linalg.norm(xs[1] - xs[0])
+        e2 = np.cross(n, e1)
+        to2 = lambda y: np.column_stack([(y - xs[0]) @ e1, (y - xs[0]) @ e2])  # noqa: E731
+        s2 = to2(xs)
+        s_area = 0.5 * abs(np.cross(s2[1] - s2[0], s2[2] - s2[0]))
+        Me = np.zeros((3, 3))
+        De = np.zeros(3)
+        B: dict[int, np.ndarray] = {}  # master node -> ∫ N_a N_m (a = 0..2)
+        Gs = np.zeros(3)               # ∫ N_a g
+        for j in cand:
+            ym = x[mt[j]]
+            h = (ym - xs[0]) @ n          # heights of the master corners over the slave plane
+            m2 = to2(ym)                  # their projections along n
+            sa = 0.5 * np.cross(m2[1] - m2[0], m2[2] - m2[0])
+            if abs(sa) <= 1e-14 * s_area:
+                continue
+            order = [0, 1, 2] if sa > 0 else [0, 2, 1]
+            poly = _clip(list(s2), [m2[k] for k in order])
+            if len(poly) < 3:
+                continue
+            P = np.array(poly)
+            parea = 0.5 * abs(np.sum(P[:, 0] * np.roll(P[:, 1], -1) - np.roll(P[:, 0], -1) * P[:, 1]))
+            if parea < 1e-12 * s_area:
+                continue
+            for k in range(1, len(P) - 1):
+                v = P[[0, k, k + 1]]
+                ta = 0.5 * abs(np.cross(v[1] - v[0], v[2] - v[0]))
+                if ta == 0.0:
+                    continue
+                Ns = _bary2(s2, v)              # 3 vertices × 3 slave functions
+                Nm = _bary2(m2, v)              # 3 vertices × 3 master functions
+                g = Nm @ h                      # the gap n·(y(q) − q) at the vertices
+                mass = ta / 12.0 * (np.eye(3) + np.ones((3, 3)))
+                Me += Ns.T @ mass @ Ns
+                De += ta / 3.0 * Ns.sum(axis=0)
+                Gs += Ns.T @ mass @ g
+                bm = Ns.T @ mass @ Nm
+                for c_, node in enumerate(mt[j]):
+                    B[int(node)] = B.get(int(node), np.zeros(3)) + bm[:, c_]
+        if not B:
+            continue
+        scale = np.abs(Me).max()
+        if abs(np.linalg.det(Me)) <= 1e-12 * scale ** 3:
+            continue  # a projecting part too thin to carry a dual basis
+        A = De[:, None] * np.linalg.inv(Me)   # Φ_a = Σ_b A_ab N_b
+        for a_, node in enumerate(tri):
+            node = int(node)
+            D[node] = D.get(node, 0.0) + De[a_]
+            G[node] = G.get(node, 0.0) + A[a_] @ Gs
+            row = Mw.setdefault(node, {})
+            for mnode, bv in B.items():
+                row[mnode] = row.get(mnode, 0.0) + A[a_] @ bv
+    out = {}
+    for node, d in D.items():
+        if d <= 0.0:
+            continue
+        nj = nsum[node] / np.linalg.norm(nsum[node])
+        out[node] = (nj, {m: w / d for m, w in Mw.get(node, {}).items()}, G.get(node, 0.0) / d, d)
+    return out
 
 
 def check(toml: Path, exe: Path, tol: float, tmp: Path, gmsh) -> int:
@@ -441,6 +585,21 @@ def check(toml: Path, exe: Path, tol: float, tmp: Path, gmsh) -> int:
             mb = cell_body[mcell[0]]
             sb = cell_body[body_of_face(st[0])[0]]
             mn = np.array([outward(t, ci)[0] for t, ci in zip(mt, mcell)])
+            disc = c.get("discretization")
+            if disc is None:
+                # The default (problem-format §12): mortar, unless the slave is
+                # more than 10 times stiffer than the master.
+                e_of = lambda b: [float(mats[nm]["E"]) for nm, tag in names.volumes()  # noqa: E731
+                                  if np.isin(cell_tags.find(tag), np.where(cell_body == b)[0]).any()]
+                disc = "nts" if min(e_of(sb)) > 10.0 * max(e_of(mb)) else "mortar"
+            if disc == "mortar":
+                scell = [body_of_face(t)[0] for t in st]
+                sn = np.array([outward(t, ci)[0] for t, ci in zip(st, scell)])
+                for vv, (nj, wts, gap, dj) in sorted(mortar_rows(x, st, sn, mt, mn, L).items()):
+                    coef = [(point_of[(mnode, mb)], -w * nj) for mnode, w in sorted(wts.items()) if w != 0.0]
+                    coef.append((point_of[(vv, sb)], nj))
+                    rows.append((point_of[(vv, sb)], coef, gap, dj))
+                continue
             trib: dict[int, float] = {}
             for tri in st:
                 _, area = tri_normal(x[tri])
@@ -565,7 +724,17 @@ def check(toml: Path, exe: Path, tol: float, tmp: Path, gmsh) -> int:
         dl = np.abs(lam - lam_s).max() / max(np.abs(lam).max(), 1e-300)
         dp = np.abs(pr - pr_s).max() / max(np.abs(pr).max(), 1e-300)
         ok = ok and dl <= tol and dp <= tol
-        msg += f", multipliers {dl:.2e}, pressure {dp:.2e} ({int((lam > 0).sum())} of {m} rows in contact)"
+        msg += f", multipliers {dl:.2e}, pressure {dp:.2e}"
+        if sig["contact_gap0"] is not None:
+            # the rows' initial gaps (weighted gaps g̃_j/D_jj for mortar rows),
+            # relative to the largest (at least 10⁻⁶ of the model's size: a
+            # patch test's gaps are 0 to round-off)
+            g0_s = np.array([sig["contact_gap0"][sig_rows[int(pos[r[0]])]] for r in rows])
+            g0 = np.array([r[2] for r in rows])
+            dg = np.abs(g0 - g0_s).max() / max(np.abs(g0).max(), 1e-6 * L)
+            ok = ok and dg <= tol
+            msg += f", gap0 {dg:.2e}"
+        msg += f" ({int((lam > 0).sum())} of {m} rows in contact)"
     log(f"3D {'contact' if m else 'linear elasticity'}: {msg} (max |u| {np.abs(mine).max():.4e}) "
         f"-> {'OK' if ok else 'FAIL'}")
     return 0 if ok else 1

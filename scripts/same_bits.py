@@ -34,7 +34,14 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def problems(only):
-    pats = ["meshes/*.toml", "tests/data/*/*.toml", "tests/hard/*.toml", "verification/*/*.toml"]
+    pats = [
+        "meshes/*.toml",
+        "meshes/3d/*.toml",
+        "tests/data/*/*.toml",
+        "tests/data/solid/xcheck/*.toml",
+        "tests/hard/*.toml",
+        "verification/*/*.toml",
+    ]
     out = []
     for p in pats:
         out += sorted(glob.glob(os.path.join(ROOT, p)))

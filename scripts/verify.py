@@ -53,8 +53,8 @@ class Failure(Exception):
 # ---------------------------------------------------------------- running
 
 
-def mesh(args, geo, params, out_msh):
-    cmd = [args.gmsh, "-2", "-format", "msh41", "-v", "1"]
+def mesh(args, geo, params, out_msh, dim=2):
+    cmd = [args.gmsh, f"-{dim}", "-format", "msh41", "-v", "1"]
     for k, v in params.items():
         cmd += ["-setnumber", k, repr(float(v))]
     cmd += [geo, "-o", out_msh]
@@ -508,10 +508,183 @@ def case_shrinkfit(args, work):
                 float((st2[inner_rows] == 1).mean()), 0.0, source="below sliding")]
 
 
+def pressure_fit(r, p):
+    """Least-squares fit of p^2 = p0^2 (1 - r^2/a^2) over the rows with
+    p > 0.3 max p (the fit of the 3D Hertz test, docs/verification.md §7c):
+    (a, p0)."""
+    sel = p > 0.3 * p.max()
+    A = np.vstack([np.ones(sel.sum()), r[sel] ** 2]).T
+    c, *_ = np.linalg.lstsq(A, p[sel] ** 2, rcond=None)
+    return math.sqrt(-c[0] / c[1]), math.sqrt(c[0])
+
+
+def node_at3(f, xyz, material):
+    """The output point at xyz (to 1e-9 of the model's size) of the body of
+    `material`, in a 3D checkpoint."""
+    m = f["mesh"]
+    nodes = m["nodes"][:]
+    names = [str(n) for n in m.attrs["material_names"]]
+    tets = m["tetrahedra"][:]
+    b = int(m["body"][tets[m["material"][:] == names.index(material), 0][0]])
+    d = np.linalg.norm(nodes - np.asarray(xyz, float), axis=1)
+    idx = np.where((d < 1e-9 * abs(nodes).max()) & (m["body"][:] == b))[0]
+    if len(idx) != 1:
+        raise Failure(f"no unique node of {material} at {xyz}")
+    return int(idx[0])
+
+
+def case_ssnv104(args, work):
+    """Code_Aster SSNV104 (V6.04.104): two hemispheres crushed together, in
+    3D (quarter model, slip planes) and axisymmetric on the same section and
+    element sizes (docs/verification_3d.md §7d). Rows: the 3D model against
+    the manual's Hertz reference, and the 3D model against the axisymmetric
+    one (contact radius, pressure at matched radii, total force, a
+    displacement)."""
+    return ssnv104_rows(args, work, 0.667 if args.fine else 2.0, args.fine)
+
+
+def ssnv104_rows(args, work, hc, fine):
+    """case_ssnv104 at element size hc (mm) near the contact, with the fine
+    or the coarse tolerances (verification/ssnv104/refine.py runs it at
+    several sizes)."""
+    d = os.path.join(VDIR, "ssnv104")
+    msh3 = os.path.join(work, "ssnv104_3d.msh")
+    msha = os.path.join(work, "ssnv104_axi.msh")
+    mesh(args, os.path.join(d, "ssnv104_3d.geo"), {"hc": hc}, msh3, dim=3)
+    mesh(args, os.path.join(d, "ssnv104_axi.geo"), {"hc": hc}, msha)
+    s3, h3 = solve(args, d, "ssnv104_3d.toml", msh3, work)
+    sa, ha = solve(args, d, "ssnv104_axi.toml", msha, work)
+    E, nu, R, h = 2.0e4, 0.3, 50.0, 4.0
+    Es = E / (2 * (1 - nu**2))            # two equal spheres
+    Rs = R / 2                            # 1/R* = 1/R + 1/R
+    a_ref = math.sqrt(R * h / 2)          # V6.04.104 §2.1: 10 mm
+    p0_ref = E / (math.pi * (1 - nu**2)) * math.sqrt(2 * h / R)  # 2798.3 MPa
+    with h5py.File(h3) as f:
+        m, st = f["mesh"], last_step(f)
+        xyz = m["nodes"][:][m["contact_slave"][:]]
+        r3 = np.hypot(xyz[:, 0], xyz[:, 1])
+        p3 = st["contact_pressure"][:]
+        rim3 = st["displacement"][node_at3(f, (R, 0.0, R), "upper"), 0]
+    with h5py.File(ha) as f:
+        ra = f["mesh"]["contact_points"][:, 0]
+        pa = last_step(f)["contact_pressure"][:]
+        rima = last_step(f)["displacement"][node_at(f, (R, R), "upper"), 0]
+    a3, p03 = pressure_fit(r3, p3)
+    aa, _ = pressure_fit(ra, pa)
+    F3 = 4 * abs(s3["reactions"]["upper_top"]["force"][2])          # quarter model
+    Fa = 2 * math.pi * abs(sa["reactions"]["upper_top"]["force"][1])  # per radian
+    aF = (3 * F3 * Rs / (4 * Es)) ** (1 / 3)  # Hertz for the force carried
+    c, src = "ssnv104 3D", "Code_Aster SSNV104, V6.04.104 §2.1"
+    tol_a, tol_p = (0.05, 0.10) if fine else (0.08, 0.12)
+    rows = [row(c, "a [mm] (fit)", a_ref, a3, tol_a, source=src),
+            row(c, "p0 [MPa] (fit)", p0_ref, p03, tol_p, source=src),
+            row(c, "Hertz approach for the force carried [mm]", h, aF**2 / Rs, 0.10,
+                source="crush imposed, Hertz"),
+            row(c, "a [mm] (fit) against Hertz for the force carried", aF, a3,
+                0.02 if fine else 0.03, source="Johnson (1985) §4.2")]
+    # 3D against axisymmetric: the pressure averaged over rings of the 3D
+    # slave nodes against the axisymmetric pressure at the same radii
+    o = np.argsort(ra)
+    c = "ssnv104 3D vs axisymmetric"
+    tol_r = 0.03 if fine else 0.08
+    for lo, hi in ((0.0, 3.0), (3.0, 6.0), (6.0, 8.0)):
+        k = (r3 >= lo) & (r3 < hi)
+        pm = float(np.interp(r3[k], ra[o], pa[o]).mean())
+        rows.append(row(c, f"mean p, {lo:g} <= r < {hi:g} mm [MPa]", pm, float(p3[k].mean()),
+                        tol_r, source="the axisymmetric model"))
+    rows += [row(c, "a [mm] (fit)", aa, a3, 0.02 if fine else 0.05,
+                 source="the axisymmetric model"),
+             row(c, "total force [N]", Fa, F3, 0.01 if fine else 0.03,
+                 source="the axisymmetric model"),
+             row(c, "u_r at the upper rim (R, R) [mm]", rima, rim3, 0.02 if fine else 0.05,
+                 source="the axisymmetric model")]
+    return rows
+
+
+def case_sneddon3d(args, work):
+    """Sneddon's punch in 3D (docs/verification_3d.md §7e): a quarter of
+    case_sneddon's model with slip planes, against Sneddon and against the
+    axisymmetric model meshed with the same sizes (hc at the punch base,
+    growing as hc + 0.1 d in both)."""
+    return sneddon3d_rows(args, work, 0.005 if args.fine else 0.01, args.fine)
+
+
+def sneddon3d_rows(args, work, hc, fine):
+    d = os.path.join(VDIR, "sneddon")
+    msh3 = os.path.join(work, "sneddon_3d.msh")
+    msha = os.path.join(work, "sneddon.msh")
+    mesh(args, os.path.join(d, "sneddon_3d.geo"), {"hc": hc, "k": 0.1}, msh3, dim=3)
+    mesh(args, os.path.join(d, "sneddon.geo"), {"hc": hc, "k": 0.1}, msha)
+    s3, h3 = solve(args, d, "sneddon_3d.toml", msh3, work)
+    sa, ha = solve(args, d, "sneddon.toml", msha, work)
+    a, E, nu = 0.1, 2.0e11, 0.3
+    # the load the mesh carries: the faceted quarter disc is up to 0.6 %
+    # smaller than pi a^2 / 4
+    F3 = 4 * abs(s3["loads"]["force"][2])
+    with h5py.File(h3) as f:
+        m, st = f["mesh"], last_step(f)
+        xyz = m["nodes"][:][m["contact_slave"][:]]
+        r3 = np.hypot(xyz[:, 0], xyz[:, 1])
+        p3 = st["contact_pressure"][:]
+        d3 = -float(st["displacement"][node_at3(f, (0.0, 0.0, 0.0), "block"), 2])
+        fc = 4 * float(st["multipliers"][:].sum())
+    with h5py.File(ha) as f:
+        ra = f["mesh"]["contact_points"][:, 0]
+        pa = last_step(f)["contact_pressure"][:]
+        da = -float(last_step(f)["displacement"][node_at(f, (0.0, 0.0), "block"), 1])
+    c, src = "sneddon punch 3D", "Sneddon (1946)"
+    rows = [row(c, "delta [m]", F3 * (1 - nu**2) / (2 * a * E), d3, 0.05 if fine else 0.08,
+                source=src),
+            row(c, "p(0) [Pa]", F3 / (2 * math.pi * a**2), float(p3[np.argmin(r3)]),
+                0.06 if fine else 0.12, source=src),
+            row(c, "contact force, 4 sum(lambda) [N]", F3, fc, 1e-6, source="the load carried")]
+    c = "sneddon punch 3D vs axisymmetric"
+    o = np.argsort(ra)
+    rows.append(row(c, "delta [m]", da, d3, 0.025 if fine else 0.04, source="the axisymmetric model"))
+    for lo, hi in ((0.0, 0.25), (0.25, 0.5), (0.5, 0.75)):
+        k = (r3 >= lo * a) & (r3 < hi * a)
+        pm = float(np.interp(r3[k], ra[o], pa[o]).mean())
+        rows.append(row(c, f"mean p, {lo:g} a <= r < {hi:g} a [Pa]", pm, float(p3[k].mean()),
+                        0.04 if fine else 0.08, source="the axisymmetric model"))
+    return rows
+
+
+def case_patch3d(args, work):
+    """The 3D contact patch test through the binary (docs/verification_3d.md
+    §7f): stacked cubes with non-matching faces under a uniform pressure;
+    mortar rows exact to round-off, node-to-surface rows not (a guard)."""
+    d = os.path.join(VDIR, "patch3d")
+    params = {"h1": 0.1, "h2": 0.073} if args.fine else {"h1": 0.3, "h2": 0.22}
+    msh = os.path.join(work, "patch3d.msh")
+    mesh(args, os.path.join(d, "patch3d.geo"), params, msh, dim=3)
+    p = 1.0e7
+    exact = np.array([0.0, 0.0, -p, 0.0, 0.0, 0.0])
+    rows = []
+    for toml, tol_p, tol_s in (("patch3d_mortar.toml", 1e-10, 1e-10),
+                               ("patch3d_nts.toml", 0.15, 0.50)):
+        summary, h5 = solve(args, d, toml, msh, work)
+        with h5py.File(h5) as f:
+            s = last_step(f)
+            pr = s["contact_pressure"][:]
+            act = s["active"][:]
+            sig = s["stress"][:]
+        label = "patch 3D " + toml.split("_")[1].split(".")[0]
+        if act.min() == 0:
+            raise Failure(f"{label}: an interface row is open")
+        rows.append(row(label, f"max abs(p_row/p - 1) ({len(pr)} rows)", 0.0,
+                        float(np.abs(pr / p - 1).max()), tol_p, kind="abs",
+                        source="uniform pressure p"))
+        rows.append(row(label, "max abs(sigma - sigma_exact)/p", 0.0,
+                        float(np.abs(sig - exact).max() / p), tol_s, kind="abs",
+                        source="uniform stress sigma_zz = -p"))
+    return rows
+
+
 CASES = {"nafems1": case_nafems1, "patch": case_patch, "nonmatching": case_nonmatching,
          "hertz": case_hertz,
          "punch": case_punch, "cattaneo": case_cattaneo, "hertz_sphere": case_hertz_sphere,
-         "sneddon": case_sneddon, "nafems2": case_nafems2, "shrinkfit": case_shrinkfit}
+         "sneddon": case_sneddon, "nafems2": case_nafems2, "shrinkfit": case_shrinkfit,
+         "ssnv104": case_ssnv104, "sneddon3d": case_sneddon3d, "patch3d": case_patch3d}
 
 
 EXIT_USAGE = 2

@@ -75,6 +75,26 @@ pub struct SolidOutput {
     pub von_mises: Vec<f64>,
     /// σ1 ≥ σ2 ≥ σ3 of each tetrahedron.
     pub principal: Vec<[f64; 3]>,
+    /// The support's reaction at each point (N; zero off the supports;
+    /// empty: not computed), in the VTU only, as 2D.
+    pub reaction: Vec<[f64; 3]>,
+    /// The fields minus those of `[output] reference_step` (from that step
+    /// on).
+    pub change: Option<SolidChange>,
+}
+
+/// A 3D step's fields minus those of the reference step (docs/problem-format.md
+/// §2 `[output] reference_step`).
+#[derive(Debug, Clone, Default)]
+pub struct SolidChange {
+    /// The reference step (1-based).
+    pub reference_step: usize,
+    /// Per point: u − u_ref.
+    pub displacement: Vec<[f64; 3]>,
+    /// Per tetrahedron: σ − σ_ref (the six components).
+    pub stress: Vec<[f64; 6]>,
+    /// Per contact row: p − p_ref.
+    pub contact_pressure: Vec<f64>,
 }
 
 /// The contact surface of a solved solid model (docs/problem-format.md
@@ -99,6 +119,8 @@ pub struct SolidContactOutput {
     pub multiplier: Vec<f64>,
     pub pressure: Vec<f64>,
     pub active: Vec<bool>,
+    /// p − p_ref of `[output] reference_step` (empty before it or without).
+    pub pressure_change: Vec<f64>,
 }
 
 /// The fields of one solved (load) step.

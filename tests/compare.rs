@@ -273,12 +273,12 @@ fn row<'a>(t: &'a Table, method: &str) -> &'a SolvedRow {
 }
 
 /// Largest |a − b| over the probes, relative to the largest |a|.
-fn probe_diff(a: &BTreeMap<String, [f64; 2]>, b: &BTreeMap<String, [f64; 2]>) -> f64 {
+fn probe_diff(a: &BTreeMap<String, Vec<f64>>, b: &BTreeMap<String, Vec<f64>>) -> f64 {
     assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
     let scale = a.values().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     let d = a
         .iter()
-        .flat_map(|(k, u)| (0..2).map(move |i| (u[i] - b[k][i]).abs()))
+        .flat_map(|(k, u)| (0..u.len()).map(move |i| (u[i] - b[k][i]).abs()))
         .fold(0.0f64, f64::max);
     d / scale
 }
@@ -309,13 +309,16 @@ fn frictional_steps_are_compared_along_the_load_path() {
     assert_eq!(code, 0, "{stdout}\n{stderr}");
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("sheared.json")).unwrap()).unwrap();
-    let solved: BTreeMap<String, [f64; 2]> = summary["probes"]
+    let solved: BTreeMap<String, Vec<f64>> = summary["probes"]
         .as_object()
         .unwrap()
         .iter()
         .map(|(k, v)| {
             let u = &v["u"];
-            (k.clone(), [u[0].as_f64().unwrap(), u[1].as_f64().unwrap()])
+            (
+                k.clone(),
+                vec![u[0].as_f64().unwrap(), u[1].as_f64().unwrap()],
+            )
         })
         .collect();
     assert!(
@@ -334,9 +337,9 @@ fn frictional_steps_are_compared_along_the_load_path() {
     )
     .unwrap();
     let cold = run::solve_model(&prep, &last, m, &opts).unwrap();
-    let cold_probes: BTreeMap<String, [f64; 2]> = run::probes(&prep, &last.displacements(&cold.x))
+    let cold_probes: BTreeMap<String, Vec<f64>> = run::probes(&prep, &last.displacements(&cold.x))
         .into_iter()
-        .map(|(n, _, _, u)| (n, u))
+        .map(|(n, _, _, u)| (n, u.to_vec()))
         .collect();
     let d = probe_diff(&solved, &cold_probes);
     assert!(
@@ -427,7 +430,7 @@ fn tangential_forces_enter_the_agreement() {
         (v(None), Ok(good)),
         (v(Some(PrecondKind::Cholesky)), Ok(off)),
     ];
-    let t = table(&prep, &last, &runs, 1e-6, None);
+    let t = table(&prep.problem.name, &last.qp, &runs, 1e-6, None);
     let (a, b) = (&t.rows[0], &t.rows[1]);
     assert!(a.agrees);
     let s = b.solved.as_ref().unwrap();

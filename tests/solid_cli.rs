@@ -5,7 +5,7 @@
 //! HDF5 checkpoint (its 3D layout), the constant stress in every
 //! tetrahedron, loads + reactions = 0; Lamé's thick sphere under internal
 //! pressure against the analytic radial displacement; the 3D refusals
-//! (`plane`, a 2-vector, a contact pair within one body, `[[steps]]`, `uz`
+//! (`plane`, a 2-vector, a contact pair within one body, a step's 2-vector, `uz`
 //! in 2D) with exit
 //! code 2, the file, the line and the key named, and no output written.
 //! Needs Gmsh (as tests/mesh_cmd.rs); without it these tests say so and pass.
@@ -371,7 +371,7 @@ fn keys_that_do_not_fit_the_mesh_are_refused_naming_file_line_and_key() {
         ),
         &["bad.toml", "[[force]] #1", "no physical point"],
     );
-    // A contact pair within one body; load steps are not in 3D yet.
+    // A contact pair within one body; a load step's 2-vector in 3D.
     refused(
         dir,
         &format!(
@@ -382,8 +382,11 @@ fn keys_that_do_not_fit_the_mesh_are_refused_naming_file_line_and_key() {
     );
     refused(
         dir,
-        &format!("{}[[steps]]\nfactor = 0.5\n", block_toml("")),
-        &["bad.toml", "[[steps]]", "3D"],
+        &format!(
+            "{}[[steps]]\nfactor = 0.5\ndirichlet = {{ z0 = [0.0, 0.0] }}\n",
+            block_toml("")
+        ),
+        &["bad.toml", "line", "z0", "expected 3 components"],
     );
     refused(
         dir,

@@ -5,8 +5,9 @@
 use super::progress::progress;
 use super::solve::{bad_input, EXIT_BAD_INPUT};
 use super::SolverFlags;
-use crate::run::compare::{compare, label, CompareSpec, Event, Table};
-use crate::run::{self, Prepared};
+use crate::problem::Problem;
+use crate::run::compare::{compare, label, Comparable, CompareSpec, Event, Table};
+use crate::run::{self, Loaded};
 use clap::Args;
 use std::path::{Path, PathBuf};
 
@@ -62,9 +63,14 @@ pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i3
             ));
         }
     }
-    let prep = match run::prepare_with(&a.problem, a.no_contact, build) {
+    let loaded = match run::load(&a.problem, a.no_contact, build) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
+    };
+    // The one branch on the dimension: everything below asks the model.
+    let prep: &dyn Comparable = match &loaded {
+        Loaded::Plane(p) => p.as_ref(),
+        Loaded::Solid(s) => s.as_ref(),
     };
     if let Some(t) = a.time_limit {
         if !(t > 0.0 && t.is_finite()) {
@@ -81,7 +87,8 @@ pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i3
         time_limit: a.time_limit,
         progress: progress(quiet),
     };
-    let name = &prep.problem.name;
+    let problem = prep.problem();
+    let name = &problem.name;
     let mut report = |e: Event<'_>| {
         if quiet {
             return;
@@ -97,7 +104,7 @@ pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i3
                     crate::errln!(
                         "compare: {name} has {n} load steps and friction; every variant follows the load path as solve does (each step warm-started from the previous) and the last one (step {n}, t = {time}) is compared"
                     );
-                } else if prep.problem.file.steps.len() > 1 {
+                } else if problem.file.steps.len() > 1 {
                     crate::errln!(
                         "compare: {name} has {n} load steps; every variant solves the last one (step {n}, t = {time}) from a cold start"
                     );
@@ -133,12 +140,12 @@ pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i3
             }
         }
     };
-    let table = match compare(&prep, &spec, &mut report) {
+    let table = match compare(prep, &spec, &mut report) {
         Ok(t) => t,
         Err(e) => return bad_input(&e),
     };
     if !quiet {
-        print_table(&prep, &table);
+        print_table(problem, &table);
     }
     if let Some(p) = &a.json {
         if let Err(e) = crate::io::atomic::write_atomic_bytes(p, table.to_json().as_bytes()) {
@@ -162,17 +169,26 @@ fn penalised_row(name: &str) -> bool {
         .any(|m| m.name() == name && crate::run::compare::penalised(*m))
 }
 
-fn print_table(prep: &Prepared, t: &Table) {
-    let names: Vec<String> = prep.problem.file.output.probes.keys().cloned().collect();
+fn print_table(problem: &Problem, t: &Table) {
+    let names: Vec<String> = problem.file.output.probes.keys().cloned().collect();
     crate::outln!(
         "{} — {} DOFs, {} contact constraints",
-        prep.problem.name,
-        prep.model.qp.n(),
-        prep.model.qp.m()
+        problem.name,
+        t.dofs,
+        t.constraints
     );
+    // u1 u2 per probe, and u3 in 3D (the components the rows hold).
+    let dim = t
+        .rows
+        .iter()
+        .filter_map(|r| r.solved.as_ref())
+        .find_map(|s| s.probes.values().next().map(Vec::len))
+        .unwrap_or(2);
     let mut head = format!("{:<8} {:<9}", "method", "precond");
     for n in &names {
-        head += &format!(" {:>12} {:>12}", format!("u1({n})"), format!("u2({n})"));
+        for k in 1..=dim {
+            head += &format!(" {:>12}", format!("u{k}({n})"));
+        }
     }
     head += &format!(
         " {:>7} {:>8} {:>9} {:>9} {:>15} {:>9} {:>9}  agrees",
@@ -193,10 +209,12 @@ fn print_table(prep: &Prepared, t: &Table) {
             continue;
         }
         for n in &names {
-            let u = s.probes.get(n).copied().unwrap_or([f64::NAN; 2]);
             // -0 prints as 0 (`-0.00000e0` reads as a tiny negative value).
             let z = |v: f64| if v == 0.0 { 0.0 } else { v };
-            line += &format!(" {:>12.5e} {:>12.5e}", z(u[0]), z(u[1]));
+            for k in 0..dim {
+                let v = s.probes.get(n).and_then(|u| u.get(k).copied());
+                line += &format!(" {:>12.5e}", z(v.unwrap_or(f64::NAN)));
+            }
         }
         line += &format!(
             " {:>7} {:>8} {:>9.4} {:>9.2e} {:>15.8e} {:>9.2e} {:>9.2e}  {}",

@@ -51,12 +51,13 @@ pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 
 /// A 3D model (tetrahedra, no contact yet): solved and written by
 /// [`run::solve_solid`], its report printed; the exit code as in 2D.
 fn solid(a: &SolveArgs, quiet: bool, t0: Instant, prep: &SolidPrepared) -> i32 {
-    if let Some(r) = &a.restart {
-        return bad_input(&format!(
-            "--restart {}: 3D models (tetrahedra) have no restart yet (issue 45)",
-            r.display()
-        ));
-    }
+    let restart = match &a.restart {
+        Some(p) => match run::solid::SolidRestart::read(p, prep) {
+            Ok(r) => Some(r),
+            Err(e) => return bad_input(&e),
+        },
+        None => None,
+    };
     let (method, mut opts) = match run::options(&prep.problem, &a.solver.section()) {
         Ok(x) => x,
         Err(e) => return bad_input(&e),
@@ -69,8 +70,33 @@ fn solid(a: &SolveArgs, quiet: bool, t0: Instant, prep: &SolidPrepared) -> i32 {
         .or(file.output.dir.clone())
         .unwrap_or_else(|| PathBuf::from("out"));
     let compress = a.compress || file.output.compress;
-    let outcome = match run::solve_solid(prep, method, &opts, a.solver.strict, &dir, compress, t0) {
-        Ok(o) => o,
+    let run = run::solid::SolidRun {
+        method,
+        opts: &opts,
+        strict: a.solver.strict,
+        max_steps: a.max_steps,
+        restart: restart.as_ref(),
+        compress,
+        started: t0,
+    };
+    let outcome = match run::solve_solid(prep, &run, &dir) {
+        Ok(Some(o)) => o,
+        Ok(None) => {
+            // A restart whose checkpoint holds every step asked for.
+            let nsteps = file.nsteps();
+            let done = restart.as_ref().map_or(0, |r| r.steps_done);
+            if !quiet {
+                match a.max_steps {
+                    Some(k) if k < nsteps => crate::outln!(
+                        "nothing to do: the checkpoint already holds {done} steps (--max-steps {k})"
+                    ),
+                    _ => crate::outln!(
+                        "nothing to do: the checkpoint already holds all {nsteps} steps"
+                    ),
+                }
+            }
+            return 0;
+        }
         Err(e) => {
             bad_input(&e);
             return e.exit_code();
@@ -202,6 +228,9 @@ fn print_solid_report(prep: &SolidPrepared, o: &run::SolidOutcome) {
             u[1],
             u[2]
         );
+    }
+    if !s.steps.is_empty() {
+        print_steps("tets", s.steps.iter().map(StepLine::from));
     }
     let t = &s.timings;
     crate::outln!(
@@ -417,7 +446,7 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
         );
     }
     if let Some(rows) = &s.steps {
-        print_steps(rows);
+        print_steps("triangles", rows.iter().map(StepLine::from));
     }
     let phases: Vec<String> = res
         .timings
@@ -575,14 +604,75 @@ fn print_forces(s: &run::Summary) {
     }
 }
 
-/// The per-step table (the report's §3.4 table; `steps` in the JSON).
-fn print_steps(rows: &[run::StepRow]) {
+/// One line of the per-step table, plane or solid.
+struct StepLine {
+    step: usize,
+    t: f64,
+    nodes: usize,
+    cells: usize,
+    dofs: usize,
+    constraints: usize,
+    active: usize,
+    opened: Option<usize>,
+    closed: Option<usize>,
+    iterations: usize,
+    time_solve: f64,
+    time_step: f64,
+    converged: bool,
+    certified: bool,
+}
+
+impl From<&run::StepRow> for StepLine {
+    fn from(r: &run::StepRow) -> Self {
+        StepLine {
+            step: r.step,
+            t: r.t,
+            nodes: r.nodes,
+            cells: r.triangles,
+            dofs: r.dofs,
+            constraints: r.constraints,
+            active: r.active,
+            opened: r.opened,
+            closed: r.closed,
+            iterations: r.iterations,
+            time_solve: r.time_solve,
+            time_step: r.time_step,
+            converged: r.converged,
+            certified: r.certified,
+        }
+    }
+}
+
+impl From<&run::solid::SolidStepRow> for StepLine {
+    fn from(r: &run::solid::SolidStepRow) -> Self {
+        StepLine {
+            step: r.step,
+            t: r.t,
+            nodes: r.nodes,
+            cells: r.tetrahedra,
+            dofs: r.dofs,
+            constraints: r.constraints,
+            active: r.active,
+            opened: r.opened,
+            closed: r.closed,
+            iterations: r.iterations,
+            time_solve: r.time_solve,
+            time_step: r.time_step,
+            converged: r.converged,
+            certified: r.certified,
+        }
+    }
+}
+
+/// The per-step table (the report's §3.4 table; `steps` in the JSON);
+/// `cells` names the cells ("triangles", "tets").
+fn print_steps(cells: &str, rows: impl IntoIterator<Item = StepLine>) {
     crate::outln!(
         "steps       {:>5} {:>10} {:>8} {:>9} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>9} {:>9}",
         "step",
         "t",
         "nodes",
-        "triangles",
+        cells,
         "DOFs",
         "rows",
         "active",
@@ -599,7 +689,7 @@ fn print_steps(rows: &[run::StepRow]) {
             r.step,
             format!("{}", r.t),
             r.nodes,
-            r.triangles,
+            r.cells,
             r.dofs,
             r.constraints,
             r.active,

@@ -10,27 +10,13 @@ use super::element::Vector3;
 use super::solid::{SolidInput, SolidModel, SolidTraction};
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::problem::{shorten, Problem, TractionLoad};
+use crate::problem::{shorten, Force, ProblemFile, TractionLoad};
+use std::path::Path;
 
-/// The [`SolidInput`] of a 3D `problem`; `[[steps]]` and `[output]
-/// reference_step` are refused naming the entry (not in 3D yet).
-pub fn solid_input(problem: &Problem) -> Result<SolidInput, FemError> {
-    let (f, path) = (&problem.file, problem.path.as_path());
-    if !f.steps.is_empty() {
-        return Err(FemError::new(
-            path,
-            "[[steps]]: load steps are not in yet for 3D models (tetrahedra); solve one load case per problem file".to_string(),
-        ));
-    }
-    if let Some(k) = f.output.reference_step {
-        return Err(FemError::new(
-            path,
-            format!(
-                "[output] reference_step = {k}: the *_change fields are not in yet for 3D models (tetrahedra)"
-            ),
-        ));
-    }
-    Ok(SolidInput {
+/// The [`SolidInput`] of a 3D problem file `f` (a load step's:
+/// `ProblemFile::at_step`).
+pub fn solid_input(f: &ProblemFile) -> SolidInput {
+    SolidInput {
         materials: f.materials.clone(),
         gravity: f.model.gravity.map_or([0.0; 3], |g| g.xyz()),
         dirichlet: f
@@ -51,18 +37,19 @@ pub fn solid_input(problem: &Problem) -> Result<SolidInput, FemError> {
                 (t.on.clone(), load)
             })
             .collect(),
-    })
+    }
 }
 
-/// Adds the `[[force]]` entries of `problem` (a force in N at the nodes of
+/// Adds the `[[force]]` entries `forces` of the problem file `path` (a force in N at the nodes of
 /// a Physical Point) to a built model: d += Tᵀ f at each node, and the
 /// nodal loads (the QP's d is linear in the loads, docs/methods.md §2.3).
 pub fn add_point_forces(
     model: &mut SolidModel,
     mesh: &Mesh,
-    problem: &Problem,
+    path: &Path,
+    forces: &[Force],
 ) -> Result<(), FemError> {
-    for (i, fo) in problem.file.force.iter().enumerate() {
+    for (i, fo) in forces.iter().enumerate() {
         let what = format!("[[force]] #{} (on = \"{}\")", i + 1, shorten(&fo.on));
         let Some(g) = mesh.group_any(&fo.on).filter(|g| g.dim == 0) else {
             let points: Vec<&str> = mesh
@@ -72,7 +59,7 @@ pub fn add_point_forces(
                 .map(|g| g.name.as_str())
                 .collect();
             return Err(FemError::new(
-                &problem.path,
+                path,
                 format!(
                     "{what}: no physical point named \"{}\" in {} (points: {})",
                     shorten(&fo.on),

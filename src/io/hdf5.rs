@@ -77,7 +77,10 @@ use crate::output::{
 mod solid;
 mod solid_read;
 mod split;
-pub use solid::write_solid_checkpoint;
+pub use solid::{
+    read_solid_restart, write_solid_checkpoint, write_solid_index, write_solid_mesh_file,
+    write_solid_step_file, SolidRestartData,
+};
 pub use solid_read::{is_solid_checkpoint, read_solid_checkpoint, SolidSteps};
 pub use split::{
     checkpoint_files, mesh_file_name, pack, step_file_name, write_index, write_mesh_file,
@@ -790,7 +793,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
         .is_ok_and(|m| m.as_str() == crate::fem::ElementKind::Solid.model_name());
     if solid {
         return Err(ctx.format(
-            "a 3D (solid) checkpoint: it is read by h5py and `signorini plot` (docs/problem-format.md §6), but not yet by --restart or pack (issue 45)",
+            "a 3D (solid) checkpoint: `signorini plot`, a 3D problem's --restart and h5py read it (docs/problem-format.md §6), pack does not yet (issue 45)",
         ));
     }
 

@@ -255,5 +255,7 @@ pub fn solid_output(
         principal: stress.iter().map(element::principal_solid).collect(),
         displacement,
         stress,
+        reaction: vec![],
+        change: None,
     }
 }

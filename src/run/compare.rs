@@ -14,11 +14,13 @@ use super::prepare::{options, probes, solve_model, step_model, Prepared};
 use super::steps::{Run, Step, Verdict};
 use super::{RunError, StepObserver};
 use crate::fem::Model;
+use crate::problem::Problem;
 use crate::qp::method::Certificate;
 use crate::qp::{
     precond::PrecondKind, registry, Kkt, MethodChoice, MethodId, Note, ProgressDisplay, QpResult,
     SolverSection,
 };
+use crate::qp::{QpProblem, SolveOptions};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -151,7 +153,7 @@ pub struct VariantResult {
     /// The compared (last) step's result.
     pub result: QpResult,
     /// Probe displacements of that step.
-    pub probes: BTreeMap<String, [f64; 2]>,
+    pub probes: BTreeMap<String, Vec<f64>>,
     /// Wall time of the variant (the whole path when it follows one).
     pub time_s: f64,
     /// Outer and inner iterations, time per phase: summed over the steps
@@ -181,13 +183,136 @@ fn fallback_of(notes: &[Note]) -> Option<String> {
 /// (an unknown method, a time limit or KKT target that is no positive
 /// number, a step model that cannot be built); a variant that fails says so
 /// in its row.
+/// A prepared model as [`compare`] sees it, whichever its dimension: the
+/// problem, the model of the compared (last) step, and the load path when
+/// every variant must follow it (friction with several steps,
+/// docs/methods.md §9.1). The plane `Prepared` and the solid
+/// `SolidPrepared` each give one; `compare` asks nothing else of them.
+pub trait Comparable {
+    fn problem(&self) -> &Problem;
+    /// The model of the compared step (with `[[steps]]`, the last one's
+    /// loads and prescribed displacements).
+    fn compared_step(&self) -> Result<Box<dyn ComparedStep + '_>, RunError>;
+    /// Every step of the load path by `method`, warm-started as `solve`
+    /// does, the last one's answer and probes (only asked when the compared
+    /// step has friction and the problem several steps).
+    fn solve_path(
+        &self,
+        method: MethodId,
+        opts: &SolveOptions,
+        t: Instant,
+    ) -> Result<VariantResult, String>;
+}
+
+/// The compared step of a model: its QP, a solve by one method (an
+/// unbounded answer described in the model's words), the probe
+/// displacements of an answer x.
+pub trait ComparedStep {
+    fn qp(&self) -> &QpProblem;
+    fn solve(&self, method: MethodId, opts: &SolveOptions) -> Result<QpResult, RunError>;
+    /// Each probe's displacement components (2 or 3), by name.
+    fn probes(&self, x: &[f64]) -> BTreeMap<String, Vec<f64>>;
+}
+
+impl Comparable for Prepared {
+    fn problem(&self) -> &Problem {
+        &self.problem
+    }
+
+    fn compared_step(&self) -> Result<Box<dyn ComparedStep + '_>, RunError> {
+        let file = &self.problem.file;
+        // The last step's model (with [[steps]], its loads and prescribed
+        // displacements; the reference slip t0 = 0).
+        let model = if file.steps.is_empty() {
+            None
+        } else {
+            Some(step_model(self, file.nsteps() - 1)?)
+        };
+        Ok(Box::new(PlaneStep { prep: self, model }))
+    }
+
+    fn solve_path(
+        &self,
+        m: MethodId,
+        opts: &SolveOptions,
+        t: Instant,
+    ) -> Result<VariantResult, String> {
+        let mut work = PathWork {
+            nsteps: self.problem.file.nsteps(),
+            iterations: 0,
+            inner_iterations: 0,
+            phases: BTreeMap::new(),
+            failed: vec![],
+        };
+        let out = Run::new(self, m, opts)
+            .started(t)
+            .solve(&mut [&mut work], None)
+            .map_err(|e| e.to_string())?;
+        let last = out
+            .last
+            .ok_or_else(|| "no load step was solved".to_string())?;
+        let probes = plane_probes(self, &last.output.displacement);
+        let fallback = fallback_of(&last.result.notes);
+        let mut notes: Vec<String> = last.result.notes.iter().map(ToString::to_string).collect();
+        notes.extend(work.failed.iter().cloned());
+        Ok(VariantResult {
+            probes,
+            time_s: t.elapsed().as_secs_f64(),
+            iterations: work.iterations,
+            inner_iterations: work.inner_iterations,
+            phases: work.phases,
+            path_certified: work.failed.is_empty(),
+            notes,
+            fallback,
+            result: last.result,
+        })
+    }
+}
+
+/// The compared step of a plane or axisymmetric model.
+struct PlaneStep<'a> {
+    prep: &'a Prepared,
+    /// The step's own model (None: the prepared one, no `[[steps]]`).
+    model: Option<Model>,
+}
+
+impl PlaneStep<'_> {
+    fn model(&self) -> &Model {
+        self.model.as_ref().unwrap_or(&self.prep.model)
+    }
+}
+
+impl ComparedStep for PlaneStep<'_> {
+    fn qp(&self) -> &QpProblem {
+        &self.model().qp
+    }
+
+    fn solve(&self, method: MethodId, opts: &SolveOptions) -> Result<QpResult, RunError> {
+        solve_model(self.prep, self.model(), method, opts)
+    }
+
+    fn probes(&self, x: &[f64]) -> BTreeMap<String, Vec<f64>> {
+        plane_probes(self.prep, &self.model().displacements(x))
+    }
+}
+
+fn plane_probes(prep: &Prepared, u: &[[f64; 2]]) -> BTreeMap<String, Vec<f64>> {
+    probes(prep, u)
+        .into_iter()
+        .map(|(n, _, _, u)| (n, u.to_vec()))
+        .collect()
+}
+
+/// Every variant of `spec` on `prep`'s compared step (or load path), and
+/// the table.
 pub fn compare(
-    prep: &Prepared,
+    prep: &(impl Comparable + ?Sized),
     spec: &CompareSpec,
     on: &mut dyn FnMut(Event<'_>),
 ) -> Result<Table, RunError> {
+    let problem = prep.problem();
     let bad = |msg: String| RunError::Solver {
-        path: prep.problem.path.clone(),
+        path: problem.path.clone(),
         msg,
     };
     let list = variants(spec.methods.as_deref()).map_err(|e| bad(e.to_string()))?;
@@ -200,20 +325,13 @@ pub fn compare(
     }
     // The settings every variant shares: the certificate's target and
     // penalty's ε_p (a bad value is bad input before any variant runs).
-    let (_, shared) = options(&prep.problem, &spec.solver)?;
+    let (_, shared) = options(problem, &spec.solver)?;
     let kkt_target = shared.settings.kkt_target;
-    let file = &prep.problem.file;
+    let file = &problem.file;
     let nsteps = file.nsteps();
     let multi = !file.steps.is_empty();
-    // The last step's model (with [[steps]], its loads and prescribed
-    // displacements; the reference slip t0 = 0).
-    let step = if multi {
-        Some(step_model(prep, nsteps - 1)?)
-    } else {
-        None
-    };
-    let model = step.as_ref().unwrap_or(&prep.model);
-    let friction = model.qp.friction.is_some();
+    let step = prep.compared_step()?;
+    let friction = step.qp().friction.is_some();
     let path = multi && nsteps > 1 && friction;
     let steps = TableSteps {
         count: nsteps,
@@ -242,7 +360,7 @@ pub fn compare(
             variant: v,
         });
         let t = Instant::now();
-        let outcome = solve_variant(prep, model, spec, v, path, t, label(index, total, v));
+        let outcome = solve_variant(prep, &*step, spec, v, path, t, label(index, total, v));
         on(Event::Done {
             index,
             total,
@@ -253,7 +371,7 @@ pub fn compare(
         runs.push((v.clone(), outcome));
     }
     let penalty_eps = shared.settings.penalty.eps;
-    let mut table = table(prep, model, &runs, kkt_target, penalty_eps);
+    let mut table = table(&problem.name, step.qp(), &runs, kkt_target, penalty_eps);
     table.steps = steps;
     table.time_limit_s = spec.time_limit;
     Ok(table)
@@ -306,8 +424,8 @@ impl StepObserver for PathWork {
 }
 
 fn solve_variant(
-    prep: &Prepared,
-    model: &Model,
+    prep: &(impl Comparable + ?Sized),
+    step: &dyn ComparedStep,
     spec: &CompareSpec,
     v: &Variant,
     path: bool,
@@ -317,63 +435,27 @@ fn solve_variant(
     let mut c = spec.solver.clone();
     c.method = Some(MethodChoice::Named(v.method));
     c.preconditioner = v.preconditioner;
-    let (m, mut opts) = options(&prep.problem, &c).map_err(|e| e.to_string())?;
+    let (m, mut opts) = options(prep.problem(), &c).map_err(|e| e.to_string())?;
     // Each method pays for its own factorization: every variant gets a
     // fresh workspace (a Run makes one for its steps).
     opts.progress = spec.progress.clone();
     opts.label = Some(label);
     opts.deadline = spec.time_limit.and_then(|s| deadline(t, s));
     if path {
-        let mut work = PathWork {
-            nsteps: prep.problem.file.nsteps(),
-            iterations: 0,
-            inner_iterations: 0,
-            phases: BTreeMap::new(),
-            failed: vec![],
-        };
-        let out = Run::new(prep, m, &opts)
-            .started(t)
-            .solve(&mut [&mut work], None)
-            .map_err(|e| e.to_string())?;
-        let last = out
-            .last
-            .ok_or_else(|| "no load step was solved".to_string())?;
-        let probes = probes(prep, &last.output.displacement)
-            .into_iter()
-            .map(|(n, _, _, u)| (n, u))
-            .collect();
-        let fallback = fallback_of(&last.result.notes);
-        let mut notes: Vec<String> = last.result.notes.iter().map(ToString::to_string).collect();
-        notes.extend(work.failed.iter().cloned());
-        Ok(VariantResult {
-            probes,
-            time_s: t.elapsed().as_secs_f64(),
-            iterations: work.iterations,
-            inner_iterations: work.inner_iterations,
-            phases: work.phases,
-            path_certified: work.failed.is_empty(),
-            notes,
-            fallback,
-            result: last.result,
-        })
-    } else {
-        let q = solve_model(prep, model, m, &opts).map_err(|e| e.to_string())?;
-        let u = model.displacements(&q.x);
-        Ok(VariantResult {
-            probes: probes(prep, &u)
-                .into_iter()
-                .map(|(n, _, _, v)| (n, v))
-                .collect(),
-            time_s: t.elapsed().as_secs_f64(),
-            iterations: q.iterations,
-            inner_iterations: q.inner_iterations,
-            phases: q.timings.iter().cloned().collect(),
-            path_certified: true,
-            notes: q.notes.iter().map(ToString::to_string).collect(),
-            fallback: fallback_of(&q.notes),
-            result: q,
-        })
+        return prep.solve_path(m, &opts, t);
     }
+    let q = step.solve(m, &opts).map_err(|e| e.to_string())?;
+    Ok(VariantResult {
+        probes: step.probes(&q.x),
+        time_s: t.elapsed().as_secs_f64(),
+        iterations: q.iterations,
+        inner_iterations: q.inner_iterations,
+        phases: q.timings.iter().cloned().collect(),
+        path_certified: true,
+        notes: q.notes.iter().map(ToString::to_string).collect(),
+        fallback: fallback_of(&q.notes),
+        result: q,
+    })
 }
 
 /// The rule that a method's answer is that of a penalised problem, O(ε_p)
@@ -418,15 +500,15 @@ pub fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
 /// its force tolerance (`agree_tol_lambda`, λ and λ_t) is 100·ε_p·max diag C
 /// for a given ε_p, or 100/PENALTY_FACTOR for the default one.
 pub fn table(
-    prep: &Prepared,
-    model: &Model,
+    problem: &str,
+    qp: &QpProblem,
     runs: &[(Variant, Result<VariantResult, String>)],
     kkt_target: f64,
     penalty_eps: Option<f64>,
 ) -> Table {
-    let friction = model.qp.friction.is_some();
+    let friction = qp.friction.is_some();
     let penalty_lambda_tol = match penalty_eps {
-        Some(e) => 100.0 * e * model.qp.c.diag().iter().fold(0.0f64, |a, b| a.max(*b)),
+        Some(e) => 100.0 * e * qp.c.diag().iter().fold(0.0f64, |a, b| a.max(*b)),
         None => 100.0 / crate::qp::primal::penalty::PENALTY_FACTOR,
     };
     let certified = |v: &Variant, s: &VariantResult| {
@@ -531,9 +613,9 @@ pub fn table(
         out.push(row);
     }
     Table {
-        problem: prep.problem.name.clone(),
-        dofs: model.qp.n(),
-        constraints: model.qp.m(),
+        problem: problem.to_string(),
+        dofs: qp.n(),
+        constraints: qp.m(),
         kkt_target,
         rows: out,
         steps: TableSteps {
@@ -595,7 +677,7 @@ pub struct SolvedRow {
     pub kkt_max: f64,
     pub energy: f64,
     pub active: usize,
-    pub probes: BTreeMap<String, [f64; 2]>,
+    pub probes: BTreeMap<String, Vec<f64>>,
     pub rel_diff: f64,
     pub rel_diff_lambda: f64,
     /// With friction: ‖λ_t − λ_t,ref‖/‖λ_t,ref‖.
@@ -627,7 +709,10 @@ impl Table {
                 .map(|o| {
                     o.probes
                         .iter()
-                        .map(|(k, v)| format!("{k}={}:{}", js(&v[0]), js(&v[1])))
+                        .map(|(k, v)| {
+                            let u: Vec<String> = v.iter().map(js).collect();
+                            format!("{k}={}", u.join(":"))
+                        })
                         .collect::<Vec<_>>()
                         .join(" ")
                 })

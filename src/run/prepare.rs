@@ -59,7 +59,7 @@ pub enum Loaded {
 pub fn load(path: &Path, no_contact: bool, build: &fem::BuildOptions) -> Result<Loaded, RunError> {
     let (problem, mesh, mesh_hash, t0) = read(path, no_contact)?;
     if mesh.dim() == 3 {
-        let p = super::solid::prepare(problem, mesh, mesh_hash, t0)?;
+        let p = super::solid::prepare(problem, mesh, mesh_hash, t0, no_contact)?;
         return Ok(Loaded::Solid(Box::new(p)));
     }
     Ok(Loaded::Plane(Box::new(plane(
@@ -208,8 +208,23 @@ pub fn fingerprint_before_mortar(prep: &Prepared, no_contact: bool) -> Option<St
 }
 
 fn fingerprint_as(prep: &Prepared, no_contact: bool, before_mortar: bool) -> String {
-    let mut parts = vec![("mesh".to_string(), prep.mesh_hash)];
-    let table: toml::Table = toml::from_str(&prep.problem.text).unwrap_or_default();
+    fingerprint_of(prep.mesh_hash, &prep.problem.text, no_contact, |entries| {
+        with_discretization(entries, &prep.model.topo, before_mortar)
+    })
+}
+
+/// The fingerprint of a problem whose mesh file hashes to `mesh_hash` and
+/// whose TOML is `text`: FNV-1a of each part that defines the answer
+/// (docs/problem-format.md §6); `contact` may rewrite the `[[contact]]`
+/// entries first (the rows a default stands for).
+pub(super) fn fingerprint_of(
+    mesh_hash: u64,
+    text: &str,
+    no_contact: bool,
+    mut contact: impl FnMut(&mut [toml::Value]),
+) -> String {
+    let mut parts = vec![("mesh".to_string(), mesh_hash)];
+    let table: toml::Table = toml::from_str(text).unwrap_or_default();
     for key in [
         "model",
         "materials",
@@ -230,7 +245,7 @@ fn fingerprint_as(prep: &Prepared, no_contact: bool, before_mortar: bool) -> Str
         });
         if key == "contact" {
             if let Some(toml::Value::Array(entries)) = value.as_mut() {
-                with_discretization(entries, &prep.model.topo, before_mortar);
+                contact(entries);
             }
         }
         let text = value

@@ -136,6 +136,20 @@ pub(in crate::fem) fn mortar_rows(
     )?;
     // Reach: how far along the normal a master triangle may lie.
     let reach = c.max_gap.unwrap_or(f64::INFINITY);
+    // Without max_gap (no limit, docs/problem-format.md §2), a master may
+    // lie anywhere ahead of a slave triangle: its search box is the slave's
+    // swept along its normal across the two surfaces' extent.
+    let extent = {
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        let slave_pts = slave.iter().flat_map(|f| f.points.map(|p| points[p]));
+        for v in tris.iter().flatten().copied().chain(slave_pts) {
+            for k in 0..3 {
+                lo[k] = lo[k].min(v[k]);
+                hi[k] = hi[k].max(v[k]);
+            }
+        }
+        (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt()
+    };
     // Per slave point: D_jj, g̃_j and M_jm.
     let mut dj: BTreeMap<usize, f64> = BTreeMap::new();
     let mut gj: BTreeMap<usize, f64> = BTreeMap::new();
@@ -163,15 +177,20 @@ pub(in crate::fem) fn mortar_rows(
             })
             .fold(0.0, f64::max);
         // Candidates: masters whose box meets the slave's, widened by the
-        // reach (or by the slave triangle's size when there is none) along
-        // every axis.
-        let pad = if reach.is_finite() { reach } else { size };
+        // reach along every axis; without one, widened by the triangle's
+        // size and swept along n across the surfaces' extent.
+        let (pad, sweep) = if reach.is_finite() {
+            (reach, 0.0)
+        } else {
+            (size, extent)
+        };
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for v in &x {
             for k in 0..3 {
-                lo[k] = lo[k].min(v[k] - pad);
-                hi[k] = hi[k].max(v[k] + pad);
+                let far = v[k] + sweep * n[k];
+                lo[k] = lo[k].min(v[k].min(far) - pad);
+                hi[k] = hi[k].max(v[k].max(far) + pad);
             }
         }
         let mut gps: Vec<Gp> = vec![];

@@ -383,7 +383,14 @@ pub fn write_solid_vtu(
         },
         types: vec![CellType::Tetra; m],
     };
-    let point = vec![
+    if !out.reaction.is_empty() {
+        check_len(path, "reaction", out.reaction.len(), n)?;
+    }
+    if let Some(c) = &out.change {
+        check_len(path, "displacement_change", c.displacement.len(), n)?;
+        check_len(path, "stress_change", c.stress.len(), m)?;
+    }
+    let mut point = vec![
         array(
             "displacement",
             ElementType::Vectors,
@@ -391,12 +398,31 @@ pub fn write_solid_vtu(
         ),
         i32_array("body", out.point_body.iter().map(|&b| i64::from(b))),
     ];
-    let cell = vec![
+    if !out.reaction.is_empty() {
+        point.push(array(
+            "reaction",
+            ElementType::Vectors,
+            IOBuffer::F64(out.reaction.as_flattened().to_vec()),
+        ));
+    }
+    let mut cell = vec![
         f64_array("stress", 6, out.stress.as_flattened().to_vec()),
         f64_array("von_mises", 1, out.von_mises.clone()),
         f64_array("principal_stress", 3, out.principal.as_flattened().to_vec()),
         i32_array("material", out.material.iter().map(|&k| i64::from(k))),
     ];
+    if let Some(c) = &out.change {
+        point.push(array(
+            "displacement_change",
+            ElementType::Vectors,
+            IOBuffer::F64(c.displacement.as_flattened().to_vec()),
+        ));
+        cell.push(f64_array(
+            "stress_change",
+            6,
+            c.stress.as_flattened().to_vec(),
+        ));
+    }
     let piece = UnstructuredGridPiece {
         points: IOBuffer::F64(out.points.as_flattened().to_vec()),
         cells,
@@ -440,7 +466,7 @@ pub fn write_solid_contact_vtu(
         },
         types: vec![CellType::Triangle; m],
     };
-    let point = vec![
+    let mut point = vec![
         f64_array("contact_pressure", 1, c.pressure.clone()),
         f64_array("gap", 1, c.gap.clone()),
         i32_array("active", c.active.iter().map(|&a| i64::from(a))),
@@ -453,6 +479,14 @@ pub fn write_solid_contact_vtu(
         i32_array("interface", c.interface.iter().map(|&k| i64::from(k))),
         f64_array("gap0", 1, c.gap0.clone()),
     ];
+    if !c.pressure_change.is_empty() {
+        check_len(path, "contact_pressure_change", c.pressure_change.len(), n)?;
+        point.push(f64_array(
+            "contact_pressure_change",
+            1,
+            c.pressure_change.clone(),
+        ));
+    }
     let piece = UnstructuredGridPiece {
         points: IOBuffer::F64(c.points.as_flattened().to_vec()),
         cells,

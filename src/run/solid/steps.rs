@@ -1,0 +1,555 @@
+//! The load steps of a 3D model (docs/problem-format.md §2 `[[steps]]`, §6):
+//! each step's model on the same mesh, points and rows; a warm start from
+//! the previous step (docs/methods.md §8.3) and one workspace, so the
+//! factor of C is computed once for every step (§8.5); the verdict of 2D
+//! on each step's certificate. The files are those of 2D: a single solve
+//! writes `NAME.vtu` (+ `_contact`), `NAME.h5` in one piece and
+//! `NAME.json`; a run with `[[steps]]` writes per step `NAME_NNNN.vtu`
+//! (+ `_contact`) and `NAME_NNNN.h5`, the mesh file and the index
+//! `NAME.h5` of the split layout and `NAME.pvd`, committed step by step,
+//! then `NAME.json`.
+
+use super::forces::{contact_output, forces, probes, Forces3};
+use super::{
+    solve_in, step_model, SolidOutcome, SolidPrepared, SolidRestart, SolidStepRow, SolidSummary,
+    MOMENT_POINT,
+};
+use crate::fem::element::{ElementKind, Vector3};
+use crate::fem::solid::SolidModel;
+use crate::io;
+use crate::output::{SolidChange, SolidContactOutput, SolidOutput, StepInfo};
+use crate::qp::{MethodId, QpResult, SolveOptions};
+use crate::run::output::{check_interrupt, output_paths, Transaction, SIGNAL};
+use crate::run::steps::{preconditioner_label, Verdict};
+use crate::run::summary::{KktSummary, Timings};
+use crate::run::RunError;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// How a 3D run solves: the method and its options, `--strict`
+/// ([`Verdict::of`]), `--max-steps`, compressed VTU, when the run began.
+pub struct SolidRun<'a> {
+    pub method: MethodId,
+    pub opts: &'a SolveOptions,
+    pub strict: bool,
+    /// Stop after this many load steps (None: all).
+    pub max_steps: Option<usize>,
+    /// Continue this checkpoint (`--restart`): its steps are kept and the
+    /// run starts after them.
+    pub restart: Option<&'a SolidRestart>,
+    pub compress: bool,
+    pub started: Instant,
+}
+
+/// Solve the load steps of a 3D model and write the outputs in `dir`, one
+/// commit per step and the JSON summary last (the transaction of 2D: an
+/// error or a signal leaves the directory as it was). None: a restart
+/// whose checkpoint holds every step asked for (nothing is written).
+pub fn solve_solid(
+    prep: &SolidPrepared,
+    run: &SolidRun<'_>,
+    dir: &Path,
+) -> Result<Option<SolidOutcome>, RunError> {
+    let (method, opts, strict, compress, started) =
+        (run.method, run.opts, run.strict, run.compress, run.started);
+    check_interrupt()?;
+    let file = &prep.problem.file;
+    let multi = !file.steps.is_empty();
+    let nsteps = file.nsteps().min(run.max_steps.unwrap_or(usize::MAX));
+    let first = run.restart.map_or(0, |r| r.steps_done);
+    if first >= nsteps {
+        return Ok(None);
+    }
+    let name = &prep.problem.name;
+    let mut tx = Transaction::open(dir, name)?;
+    let mut files = Files::new(prep, tx.stage_dir(), dir, multi, compress);
+    let mut carried = vec![];
+    if let Some(r) = run.restart {
+        carried = files.start_from(r)?;
+    }
+    tx.plan(multi, files.kept, true);
+    let ws = opts.settings.workspace();
+    let target = opts.settings.kkt_target;
+    let mut rows: Vec<SolidStepRow> = vec![];
+    let mut failed: Vec<usize> = vec![];
+    // The last answer: point displacements and the QP rows' active flags.
+    let mut prev: Option<(Vec<Vector3>, Vec<bool>)> = run.restart.map(|r| {
+        let active = prep.model.qp_rows.iter().map(|&k| r.active[k]).collect();
+        (r.displacement.clone(), active)
+    });
+    let mut last = None;
+    // The fields of `[output] reference_step` once it is solved (or read
+    // from the checkpoint a restart continues).
+    let mut reference = run.restart.and_then(|r| r.reference.clone());
+    let (mut t_assemble_all, mut t_solve_all) = (0.0, 0.0);
+    for s in first..nsteps {
+        check_interrupt()?;
+        let ts = Instant::now();
+        let model = step_model(prep, s)?;
+        let t_assemble = if s == 0 {
+            prep.t_assemble
+        } else {
+            ts.elapsed().as_secs_f64()
+        };
+        let mut o = opts.clone();
+        if let Some((u, active)) = &prev {
+            o.x0 = Some(reduce(&model, u));
+            o.active0 = (active.len() == model.qp.m()).then(|| active.clone());
+        }
+        o.stop = Some(&SIGNAL);
+        let t0 = Instant::now();
+        let res = solve_in(prep, &model, method, &o, &ws);
+        // An interrupted solve is no result to write, nor an error of the
+        // problem.
+        check_interrupt()?;
+        let res = res.map_err(|e| match e {
+            RunError::Solver { path, msg } if multi => RunError::Solver {
+                path,
+                msg: format!(
+                    "step {} of {} (t = {}): {msg}",
+                    s + 1,
+                    file.nsteps(),
+                    file.step_time(s)
+                ),
+            },
+            e => e,
+        })?;
+        let time_solve = t0.elapsed().as_secs_f64();
+        let verdict = Verdict::of(method, &res, target, strict);
+        let certified = verdict.certified() && res.status.converged();
+        if !certified {
+            failed.push(s + 1);
+        }
+        let mut out = crate::post::solid_output(&model, &file.materials, &res.x);
+        let mut contact = contact_output(prep, &model, &out.displacement, &res.lambda, &res.active);
+        let f3 = forces(prep, &model, &out.displacement, &contact);
+        out.reaction = f3.reaction.clone();
+        // [output] reference_step: from step K on, the change since K.
+        if let Some(k) = file.output.reference_step {
+            if s + 1 == k {
+                reference = Some(Reference {
+                    displacement: out.displacement.clone(),
+                    stress: out.stress.clone(),
+                    pressure: contact.pressure.clone(),
+                });
+            }
+            if let Some(r) = reference.as_ref().filter(|_| s + 1 >= k) {
+                let change = r.change(k, &out, &contact);
+                contact.pressure_change = change.contact_pressure.clone();
+                out.change = Some(change);
+            }
+        }
+        let info = StepInfo {
+            method: method.name().to_string(),
+            preconditioner: preconditioner_label(method, opts),
+            converged: res.status.converged(),
+            iterations: res.iterations,
+            energy: res.energy,
+            kkt: res.kkt,
+            time_assemble: t_assemble,
+            time_solve,
+            time_total: started.elapsed().as_secs_f64(),
+        };
+        let mut names = files.step(s, file.step_time(s), &out, &contact, &info)?;
+        // A restart's copied files go with its first commit.
+        names.append(&mut carried);
+        tx.commit(&names)?;
+        let active = contact.active.iter().filter(|&&a| a).count();
+        let (opened, closed) = match &prev {
+            Some((_, was)) if was.len() == res.active.len() => (
+                Some(
+                    was.iter()
+                        .zip(&res.active)
+                        .filter(|(a, b)| **a && !**b)
+                        .count(),
+                ),
+                Some(
+                    was.iter()
+                        .zip(&res.active)
+                        .filter(|(a, b)| !**a && **b)
+                        .count(),
+                ),
+            ),
+            _ => (None, None),
+        };
+        rows.push(SolidStepRow {
+            step: s + 1,
+            t: file.step_time(s),
+            converged: res.status.converged(),
+            certified,
+            iterations: res.iterations,
+            inner_iterations: res.inner_iterations,
+            kkt_max: res.kkt.max(),
+            energy: res.energy,
+            nodes: model.points.len(),
+            tetrahedra: model.tets.len(),
+            dofs: model.qp.n(),
+            constraints: model.qp.m(),
+            active,
+            opened,
+            closed,
+            time_solve,
+            time_step: ts.elapsed().as_secs_f64(),
+        });
+        log::debug!(
+            "step {}: assembly {t_assemble:.3} s, solve {time_solve:.3} s",
+            s + 1
+        );
+        t_assemble_all += t_assemble;
+        t_solve_all += time_solve;
+        prev = Some((out.displacement.clone(), res.active.clone()));
+        last = Some((model.into_owned(), res, out, contact, verdict, f3));
+    }
+    let Some((model, res, out, contact, verdict, f3)) = last else {
+        return Err(RunError::Settings(format!(
+            "{}: no load step to solve",
+            prep.problem.path.display()
+        )));
+    };
+    let t_write = Instant::now();
+    let mut summary = summary(
+        prep, &model, method, opts, &res, &out, &contact, verdict, f3,
+    );
+    summary.reference_step = file.output.reference_step;
+    summary.failed_steps = failed;
+    if multi {
+        summary.steps = rows;
+    }
+    summary.timings.assemble = t_assemble_all;
+    summary.timings.solve = t_solve_all;
+    let json_path = output_paths(dir, name, None).json;
+    summary.timings.write = t_write.elapsed().as_secs_f64();
+    summary.timings.total = started.elapsed().as_secs_f64();
+    let json = summary
+        .to_json()
+        .map_err(|e| RunError::Output(format!("{}: {e}", json_path.display())))?;
+    let staged = files.stage.join(file_name(&json_path));
+    io::atomic::write_atomic_bytes(&staged, json.as_bytes())?;
+    check_interrupt()?;
+    tx.commit(&[file_name(&json_path)])?;
+    tx.finish();
+    let certified = summary.failed_steps.is_empty();
+    let mut written = files.written;
+    written.push(json_path);
+    Ok(Some(SolidOutcome {
+        summary,
+        output: out,
+        certified,
+        files: written,
+        contact,
+    }))
+}
+
+/// ξ_p = T_pᵀ(u_p − u0_p): the QP unknowns of point displacements `u` in
+/// `model`'s DOFs (the warm start of the next step; T_p's rows are
+/// orthonormal, `conditions::eliminate`).
+fn reduce(model: &SolidModel, u: &[Vector3]) -> Vec<f64> {
+    let mut x = vec![0.0; model.qp.n()];
+    for (p, pd) in model.dofs.iter().enumerate() {
+        let du = [0, 1, 2].map(|k| u[p][k] - pd.u0[k]);
+        for k in 0..pd.ndof {
+            x[pd.start + k] = pd.t[k][0] * du[0] + pd.t[k][1] * du[1] + pd.t[k][2] * du[2];
+        }
+    }
+    x
+}
+
+fn copy(from: &Path, to: &Path) -> Result<(), RunError> {
+    std::fs::copy(from, to).map(|_| ()).map_err(|e| {
+        RunError::Output(format!(
+            "{}: cannot copy the checkpoint's file: {e}",
+            from.display()
+        ))
+    })
+}
+
+fn file_name(p: &Path) -> String {
+    p.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// The files of a 3D run, staged step by step.
+struct Files<'a> {
+    prep: &'a SolidPrepared,
+    stage: PathBuf,
+    dir: PathBuf,
+    multi: bool,
+    compress: bool,
+    /// Gmsh node tag of each point.
+    tags: Vec<u64>,
+    /// Split layout: the step files the index lists.
+    steps: Vec<(usize, String)>,
+    /// The time series: (t, VTU file) per step and file.
+    series: Vec<(f64, String)>,
+    /// Final paths of every file written.
+    written: Vec<PathBuf>,
+    /// A restart's step files kept where they are (the output directory's).
+    kept: usize,
+    /// The split layout's mesh file is there already (a restart).
+    has_mesh: bool,
+}
+
+impl<'a> Files<'a> {
+    fn new(prep: &'a SolidPrepared, stage: &Path, dir: &Path, multi: bool, compress: bool) -> Self {
+        let tags = prep
+            .model
+            .point_node
+            .iter()
+            .map(|&v| prep.mesh.node_tags[v])
+            .collect();
+        Files {
+            prep,
+            stage: stage.to_path_buf(),
+            dir: dir.to_path_buf(),
+            multi,
+            compress,
+            tags,
+            steps: vec![],
+            series: vec![],
+            written: vec![],
+            kept: 0,
+            has_mesh: false,
+        }
+    }
+
+    /// The files of the checkpoint `r` continues: its mesh and step files
+    /// kept where they are the output directory's, or copied into the
+    /// stage (returned: committed with the first step); the time series
+    /// lists the kept steps' VTU pairs that are in the output directory.
+    fn start_from(&mut self, r: &SolidRestart) -> Result<Vec<String>, RunError> {
+        let name = self.prep.problem.name.clone();
+        let found = io::hdf5::checkpoint_files(&r.path)?;
+        let single = r.path.canonicalize().ok();
+        let dir = self.dir.clone();
+        let here = |f: &Path, want: &str| {
+            let w = dir.join(want);
+            matches!((f.canonicalize(), w.canonicalize()), (Ok(a), Ok(b)) if a == b)
+        };
+        if !self.multi || found.mesh.canonicalize().ok() == single {
+            return Err(RunError::Restart(format!(
+                "--restart: {}: a single solve's checkpoint; a 3D run with [[steps]] continues the split checkpoint of a run with the same steps (docs/problem-format.md §6)",
+                r.path.display()
+            )));
+        }
+        let mut staged = vec![];
+        let mesh_file = io::hdf5::mesh_file_name(&name);
+        if !here(&found.mesh, &mesh_file) {
+            copy(&found.mesh, &self.stage.join(&mesh_file))?;
+            staged.push(mesh_file.clone());
+        }
+        self.keep(&self.dir.join(&mesh_file));
+        self.has_mesh = true;
+        let mut kept = true;
+        for (i, _, f) in found.steps.iter().take(r.steps_done) {
+            let want = io::hdf5::step_file_name(&name, *i);
+            if here(f, &want) {
+                self.kept += usize::from(kept);
+            } else {
+                kept = false;
+                copy(f, &self.stage.join(&want))?;
+                staged.push(want.clone());
+            }
+            self.keep(&self.dir.join(&want));
+            self.steps.push((*i, want));
+            let t = self.prep.problem.file.step_time(i - 1);
+            let pair = output_paths(&self.dir, &name, Some(*i));
+            for v in [&pair.vtu, &pair.contact_vtu] {
+                if v.is_file() {
+                    self.series.push((t, file_name(v)));
+                }
+            }
+        }
+        Ok(staged)
+    }
+
+    fn attrs(&self) -> [(&'static str, String); 4] {
+        let p = &self.prep;
+        [
+            ("problem", p.problem.name.clone()),
+            ("toml", p.problem.text.clone()),
+            ("version", env!("CARGO_PKG_VERSION").to_string()),
+            ("fingerprint", p.fingerprint()),
+        ]
+    }
+
+    /// Stage step `s`'s files; returns their names, the index last.
+    fn step(
+        &mut self,
+        s: usize,
+        time: f64,
+        out: &SolidOutput,
+        contact: &SolidContactOutput,
+        info: &StepInfo,
+    ) -> Result<Vec<String>, RunError> {
+        let name = self.prep.problem.name.clone();
+        let has_contact = !self.prep.problem.file.contact.is_empty();
+        let paths = output_paths(&self.dir, &name, self.multi.then_some(s + 1));
+        let mut names = vec![file_name(&paths.vtu)];
+        io::vtu::write_solid_vtu(&self.stage.join(&names[0]), out, self.compress)?;
+        self.keep(&paths.vtu);
+        if has_contact {
+            let f = file_name(&paths.contact_vtu);
+            io::vtu::write_solid_contact_vtu(&self.stage.join(&f), contact, self.compress)?;
+            self.keep(&paths.contact_vtu);
+            names.push(f);
+        }
+        let attrs = self.attrs();
+        let attrs: Vec<(&str, String)> = attrs.iter().map(|(k, v)| (*k, v.clone())).collect();
+        if !self.multi {
+            let f = file_name(&paths.h5);
+            io::hdf5::write_solid_checkpoint(
+                &self.stage.join(&f),
+                out,
+                contact,
+                &self.tags,
+                &attrs,
+                time,
+                info,
+            )?;
+            self.keep(&paths.h5);
+            names.push(f);
+            return Ok(names);
+        }
+        // The split layout: the mesh file at the first step, the step's
+        // file, the index last (committed after the files it links to).
+        let mesh_file = io::hdf5::mesh_file_name(&name);
+        if !self.has_mesh {
+            self.has_mesh = true;
+            io::hdf5::write_solid_mesh_file(
+                &self.stage.join(&mesh_file),
+                out,
+                contact,
+                &self.tags,
+            )?;
+            self.keep(&self.dir.join(&mesh_file));
+            names.push(mesh_file.clone());
+        }
+        let f = io::hdf5::step_file_name(&name, s + 1);
+        io::hdf5::write_solid_step_file(&self.stage.join(&f), s + 1, out, contact, time, info)?;
+        self.keep(&self.dir.join(&f));
+        names.push(f.clone());
+        self.steps.push((s + 1, f));
+        self.series.push((time, file_name(&paths.vtu)));
+        if has_contact {
+            self.series.push((time, file_name(&paths.contact_vtu)));
+        }
+        let pvd = format!("{name}.pvd");
+        io::vtu::write_pvd(&self.stage.join(&pvd), &self.series)?;
+        self.keep(&self.dir.join(&pvd));
+        names.push(pvd);
+        let index = output_paths(&self.dir, &name, None).h5;
+        io::hdf5::write_solid_index(
+            &self.stage.join(file_name(&index)),
+            &attrs,
+            &mesh_file,
+            &self.steps,
+        )?;
+        self.keep(&index);
+        names.push(file_name(&index));
+        Ok(names)
+    }
+
+    fn keep(&mut self, p: &Path) {
+        if !self.written.iter().any(|w| w == p) {
+            self.written.push(p.to_path_buf());
+        }
+    }
+}
+
+/// The fields of the reference step (`[output] reference_step`).
+#[derive(Debug, Clone)]
+pub struct Reference {
+    pub displacement: Vec<Vector3>,
+    pub stress: Vec<[f64; 6]>,
+    /// Per contact row.
+    pub pressure: Vec<f64>,
+}
+
+impl Reference {
+    /// A step's fields minus these (reference step `k`, 1-based).
+    fn change(&self, k: usize, out: &SolidOutput, c: &SolidContactOutput) -> SolidChange {
+        let sub =
+            |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
+        SolidChange {
+            reference_step: k,
+            displacement: out
+                .displacement
+                .iter()
+                .zip(&self.displacement)
+                .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+                .collect(),
+            stress: out
+                .stress
+                .iter()
+                .zip(&self.stress)
+                .map(|(a, b)| std::array::from_fn(|i| a[i] - b[i]))
+                .collect(),
+            contact_pressure: sub(&c.pressure, &self.pressure),
+        }
+    }
+}
+
+/// The JSON summary of the last step solved.
+#[allow(clippy::too_many_arguments)]
+fn summary(
+    prep: &SolidPrepared,
+    m: &SolidModel,
+    method: MethodId,
+    opts: &SolveOptions,
+    res: &QpResult,
+    out: &SolidOutput,
+    contact: &SolidContactOutput,
+    verdict: Verdict,
+    f: Forces3,
+) -> SolidSummary {
+    let certified = verdict.certified();
+    SolidSummary {
+        problem: prep.problem.name.clone(),
+        model: ElementKind::Solid.model_name(),
+        method: method.name().to_string(),
+        preconditioner: preconditioner_label(method, opts),
+        ordering: match opts.settings.factor_free(method) {
+            Some(why) => format!("none ({why})"),
+            None => opts.settings.ordering.name().to_string(),
+        },
+        converged: res.status.converged(),
+        status: res.status.describe(),
+        iterations: res.iterations,
+        inner_iterations: res.inner_iterations,
+        nodes: m.points.len(),
+        mesh_nodes: prep.mesh.nodes.len(),
+        tetrahedra: m.tets.len(),
+        bodies: m.nbodies,
+        rigid_modes: m.qp.kernel.len(),
+        dofs: m.qp.n(),
+        constraints: m.qp.m(),
+        active: contact.active.iter().filter(|&&a| a).count(),
+        contact: f.interfaces,
+        failed_steps: vec![],
+        energy: res.energy,
+        strain_energy: f.strain_energy,
+        load_work: f.load_work,
+        kkt: KktSummary {
+            residuals: res.kkt,
+            friction_zero: None,
+            target: opts.settings.kkt_target,
+            certified,
+        },
+        moment_point: MOMENT_POINT,
+        loads: f.loads,
+        reactions: f.groups.into_iter().map(|g| (g.on.clone(), g)).collect(),
+        notes: res.notes.iter().map(ToString::to_string).collect(),
+        probes: probes(prep, &out.displacement),
+        steps: vec![],
+        reference_step: None,
+        timings: Timings {
+            read: prep.t_read,
+            assemble: 0.0,
+            solve: 0.0,
+            write: 0.0,
+            total: 0.0,
+            phases: res.timings.iter().cloned().collect(),
+        },
+    }
+}
