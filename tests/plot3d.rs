@@ -542,3 +542,45 @@ fn a_split_checkpoint_is_read_through_its_links() {
     let e = fails(&idx, &["--contact"]);
     assert!(e.contains("two.h5") && e.contains("does not exist"), "{e}");
 }
+
+#[test]
+fn a_3d_run_with_load_steps_draws_each_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let msh = root().join("meshes/3d/flat_punch_3d.msh");
+    let text = std::fs::read_to_string(root().join("meshes/3d/flat_punch_3d.toml"))
+        .unwrap()
+        .replace(
+            "file = \"flat_punch_3d.msh\"",
+            &format!("file = \"{}\"", msh.display()),
+        );
+    let toml = dir.path().join("fp.toml");
+    std::fs::write(
+        &toml,
+        format!("{text}\n[[steps]]\nfactor = 0.5\n[[steps]]\nfactor = 1.0\n"),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let (code, stdout, stderr) = signorini(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    let h5 = out.join("fp.h5");
+    assert!(out.join("fp_0002.h5").is_file(), "the split layout");
+    let all = read_solid_checkpoint(&h5, SolidSteps::All).unwrap();
+    assert_eq!(all.step_indices, [1, 2]);
+    for (k, st) in all.steps.iter().enumerate() {
+        let one = read_solid_checkpoint(&h5, SolidSteps::One(k + 1)).unwrap();
+        let (_, s) = render_solid(&one, "fp", &opts(None, "von_mises", true), Format::Png).unwrap();
+        let pmax = st.contact_pressure.iter().copied().fold(f64::MIN, f64::max);
+        assert_eq!((s.step, s.steps), (k + 1, 2));
+        assert_eq!(s.interfaces[0].max_pressure, pmax);
+    }
+    let (stdout, _) = plots(&h5, &["--contact"], "f.png");
+    assert!(stdout.contains("step 2 (2 steps in the file)"), "{stdout}");
+    let (stdout, _) = plots(&h5, &["--cut", "z=0.3", "--step", "1"], "f.svg");
+    assert!(stdout.contains("step 1 (2 steps in the file)"), "{stdout}");
+}
