@@ -30,7 +30,8 @@ pub struct FootprintSummary {
     pub axes: [String; 2],
 }
 
-/// The panels and summaries of every interface with rows, in entry order.
+/// The panels of the interfaces with slave triangles and the summaries of
+/// every interface with rows, in entry order.
 pub(super) fn footprints(
     ck: &SolidCheckpoint,
     step: &SolidStep,
@@ -109,15 +110,19 @@ pub(super) fn footprints(
             fmt_num(round3(n[1])),
             fmt_num(round3(n[2]))
         );
-        panels.push(Panel {
-            title,
-            labels: frame.labels.clone().map(|s| format!("{s} [{length}]")),
-            pts,
-            tris: ltris,
-            fill: Fill::Nodal(p),
-            edges,
-            outline,
-        });
+        // Rows without a slave triangle (a surface's isolated nodes) are
+        // counted, not drawn.
+        if !ltris.is_empty() {
+            panels.push(Panel {
+                title,
+                labels: frame.labels.clone().map(|s| format!("{s} [{length}]")),
+                pts,
+                tris: ltris,
+                fill: Fill::Nodal(p),
+                edges,
+                outline,
+            });
+        }
         out.push(FootprintSummary {
             interface: k,
             name,

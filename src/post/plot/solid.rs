@@ -185,7 +185,7 @@ pub fn render_solid(
         }
         let names = interface_names(problem);
         let (panels, sums) = footprints(ck, step, &names, &units.length);
-        if panels.iter().all(|p| p.tris.is_empty()) {
+        if panels.is_empty() {
             return Err(err(
                 "--contact: the contact rows have no slave triangles to draw",
             ));
