@@ -234,3 +234,55 @@ pub struct Checkpoint {
     /// The string attributes of the root group (alphabetical order).
     pub attrs: Vec<(String, String)>,
 }
+
+/// A 3D (solid) checkpoint as read back (docs/problem-format.md §6 "The 3D
+/// checkpoint"): the mesh, its contact rows, and the steps asked for.
+#[derive(Debug, Clone, Default)]
+pub struct SolidCheckpoint {
+    pub points: Vec<[f64; 3]>,
+    pub point_tags: Vec<u64>,
+    pub point_body: Vec<u32>,
+    pub tets: Vec<[usize; 4]>,
+    pub material: Vec<u32>,
+    pub material_names: Vec<String>,
+    /// The contact rows (none without `[[contact]]`).
+    pub contact: SolidContactMesh,
+    /// The index of every step group under `/steps`, increasing.
+    pub step_indices: Vec<usize>,
+    /// The steps read (all of them, or the one asked for), increasing.
+    pub steps: Vec<SolidStep>,
+    /// The string attributes of the root group (alphabetical order).
+    pub attrs: Vec<(String, String)>,
+}
+
+/// The contact rows of a 3D checkpoint's mesh.
+#[derive(Debug, Clone, Default)]
+pub struct SolidContactMesh {
+    /// The slave point of each row (index into the points).
+    pub slave: Vec<usize>,
+    pub normal: Vec<[f64; 3]>,
+    pub gap0: Vec<f64>,
+    /// The `[[contact]]` entry of each row (0-based).
+    pub interface: Vec<u32>,
+    /// The slave surfaces' triangles in row indices.
+    pub triangles: Vec<[usize; 3]>,
+}
+
+/// The fields of one step of a 3D checkpoint.
+#[derive(Debug, Clone, Default)]
+pub struct SolidStep {
+    /// The step's index (the number of its group `/steps/NNNN`).
+    pub index: usize,
+    pub time: f64,
+    pub displacement: Vec<[f64; 3]>,
+    /// (σxx, σyy, σzz, σxy, σyz, σxz) per tetrahedron.
+    pub stress: Vec<[f64; 6]>,
+    pub von_mises: Vec<f64>,
+    pub principal: Vec<[f64; 3]>,
+    /// Per contact row: λ, pressure, current gap, active flag.
+    pub multipliers: Vec<f64>,
+    pub contact_pressure: Vec<f64>,
+    pub gap: Vec<f64>,
+    pub active: Vec<u8>,
+    pub info: StepInfo,
+}

@@ -10,6 +10,7 @@ pub mod limit;
 pub mod mesh;
 pub mod pack;
 pub mod plot;
+mod plot3d;
 pub mod progress;
 pub mod section;
 pub mod solve;
@@ -49,7 +50,7 @@ pub enum Command {
     Solve(SolveArgs),
     /// Run every method (or `--methods a,b`) on one problem and print the comparison table.
     Compare(compare::CompareArgs),
-    /// Draw a checkpoint (NAME.h5) as PNG or SVG: the deformed mesh coloured by a field, or the contact pressure.
+    /// Draw a checkpoint (NAME.h5) as PNG or SVG: the deformed mesh coloured by a field, or the contact pressure; 3D: a section by a plane (--cut) or the contact footprint (--contact).
     Plot(plot::PlotArgs),
     /// Mesh a Gmsh .geo file (2D, MSH 4.1) and check it.
     Mesh(mesh::MeshArgs),

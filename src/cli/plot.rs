@@ -20,20 +20,36 @@ pub struct PlotArgs {
     /// Output file: .png or .svg.
     #[arg(long, short)]
     pub output: PathBuf,
-    /// Step to draw (1-based; default: the last one).
+    /// Step to draw (1-based; default: the last one; 3D: the number of
+    /// the group /steps/NNNN, default the root's last_step).
     #[arg(long)]
     pub step: Option<usize>,
     /// von_mises | ux | uy | umag | sxx | syy | sxy | szz | s1 | s2 | material | body;
-    /// axisymmetric models: srr | szz (axial) | srz | stt (hoop).
+    /// axisymmetric models: srr | szz (axial) | srz | stt (hoop);
+    /// 3D (with --cut): von_mises | sxx | syy | szz | sxy | syz | sxz | s1 | s2 | s3 |
+    /// ux | uy | uz | umag.
     #[arg(long, default_value = "von_mises")]
     pub field: String,
+    /// 3D checkpoints: draw the section of the tetrahedra by a plane, x=A,
+    /// y=A, z=A or PX,PY,PZ,NX,NY,NZ (a point and a normal), in the plane's
+    /// own axes. Without --cut or --contact a 3D checkpoint is cut through
+    /// the centre of its bounding box across its smallest extent.
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        value_name = "PLANE",
+        conflicts_with = "contact"
+    )]
+    pub cut: Option<String>,
     /// Displacement magnification (default: the largest displacement drawn
-    /// as 5 % of the bounding-box diagonal).
+    /// as 5 % of the bounding-box diagonal; 3D sections: 0, undeformed).
     #[arg(long, allow_negative_numbers = true)]
     pub scale: Option<f64>,
     /// Plot the contact pressure along each interface against arc length
     /// (and, when the checkpoint has friction data, the tangential traction
-    /// under it with stick and slip rows marked).
+    /// under it with stick and slip rows marked). 3D: the footprint, each
+    /// interface's slave surface in its own plane filled by the pressure,
+    /// the active set outlined.
     #[arg(long)]
     pub contact: bool,
     /// Image width [px].
@@ -49,7 +65,8 @@ pub struct PlotArgs {
     #[arg(long)]
     pub no_edges: bool,
     /// Colour range MIN,MAX of the field (or the pressure axis with
-    /// --contact); values outside get the end colours. Default: the data's range.
+    /// --contact; 3D: the footprint's colours); values outside get the end
+    /// colours. Default: the data's range.
     #[arg(long, allow_hyphen_values = true, value_name = "MIN,MAX")]
     pub range: Option<String>,
     /// Logarithmic colour scale (values ≤ 0 get the bottom colour).
@@ -67,7 +84,7 @@ pub struct PlotArgs {
 }
 
 /// "MIN,MAX" as two numbers.
-fn parse_range(s: &str) -> Result<(f64, f64), String> {
+pub(super) fn parse_range(s: &str) -> Result<(f64, f64), String> {
     let bad = || format!("--range {s}: expected MIN,MAX (two numbers, e.g. 0,2e8)");
     let (a, b) = s.split_once(',').ok_or_else(bad)?;
     let lo: f64 = a.trim().parse().map_err(|_| bad())?;
@@ -76,6 +93,16 @@ fn parse_range(s: &str) -> Result<(f64, f64), String> {
 }
 
 pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
+    if crate::io::hdf5::is_solid_checkpoint(&a.checkpoint) {
+        return super::plot3d::run(a, quiet);
+    }
+    if a.cut.is_some() {
+        crate::errln!(
+            "error: {}: --cut draws a section of a 3D checkpoint; this one is 2D (draw it without --cut)",
+            a.checkpoint.display()
+        );
+        return EXIT_BAD_INPUT;
+    }
     let field = match Field::parse(&a.field) {
         Ok(f) => f,
         Err(e) => {

@@ -75,11 +75,13 @@ use crate::output::{
 };
 
 mod solid;
+mod solid_read;
 mod split;
 pub use solid::{
     read_solid_restart, write_solid_checkpoint, write_solid_index, write_solid_mesh_file,
     write_solid_step_file, SolidRestartData,
 };
+pub use solid_read::{is_solid_checkpoint, read_solid_checkpoint, SolidSteps};
 pub use split::{
     checkpoint_files, mesh_file_name, pack, step_file_name, write_index, write_mesh_file,
     write_step_file, CheckpointFiles, Packed,
@@ -783,15 +785,15 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
         limit: meta.len(),
     };
     let file = File::open(path).map_err(ctx.h5("/"))?;
-    // A 3D checkpoint (write_solid_checkpoint) has another layout, which
-    // nothing reads back yet (issue 45).
+    // A 3D checkpoint (write_solid_checkpoint) has another layout, read
+    // by `read_solid_checkpoint` (issue 45).
     let solid = file
         .attr("model")
         .and_then(|a| a.read_scalar::<VarLenUnicode>())
         .is_ok_and(|m| m.as_str() == crate::fem::ElementKind::Solid.model_name());
     if solid {
         return Err(ctx.format(
-            "a 3D (solid) checkpoint: it is read by h5py (docs/problem-format.md §6), but not yet by signorini's plot, --restart or pack (issue 45)",
+            "a 3D (solid) checkpoint: `signorini plot`, a 3D problem's --restart and h5py read it (docs/problem-format.md §6), pack does not yet (issue 45)",
         ));
     }
 
@@ -939,6 +941,28 @@ fn read_step(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<StepOutput, IoError
         None
     };
 
+    let info = read_step_info(ctx, g)?;
+    Ok(StepOutput {
+        time: get_attr(ctx, g, "time")?,
+        displacement: pairs(&displacement),
+        stress: stress
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect(),
+        von_mises,
+        principal: pairs(&principal),
+        multipliers,
+        contact_pressure,
+        gap,
+        active,
+        reaction: vec![],
+        info,
+        change,
+    })
+}
+
+/// The solver record of the step group `g` (its attributes).
+fn read_step_info(ctx: &Ctx, g: &Group) -> Result<StepInfo, IoError> {
     let iterations = get_attr::<u64>(ctx, g, "iterations")?;
     // Every residual of the certificate; checkpoints written before all
     // were kept have the first four only (the others read as 0).
@@ -961,21 +985,5 @@ fn read_step(ctx: &Ctx, g: &Group, mesh: &OutMesh) -> Result<StepOutput, IoError
         time_solve: get_attr(ctx, g, "time_solve")?,
         time_total: get_attr(ctx, g, "time_total")?,
     };
-    Ok(StepOutput {
-        time: get_attr(ctx, g, "time")?,
-        displacement: pairs(&displacement),
-        stress: stress
-            .chunks_exact(4)
-            .map(|c| [c[0], c[1], c[2], c[3]])
-            .collect(),
-        von_mises,
-        principal: pairs(&principal),
-        multipliers,
-        contact_pressure,
-        gap,
-        active,
-        reaction: vec![],
-        info,
-        change,
-    })
+    Ok(info)
 }

@@ -31,7 +31,7 @@ pub use output::{
     catch_signals, create_checkpoint, interrupted, output_paths, CheckpointWriter, Concurrent,
     Outputs, SummaryWriter, Transaction, VtuWriter,
 };
-pub use plot::plot_file;
+pub use plot::{plot_file, plot_solid_file};
 pub use prepare::{
     fingerprint, fingerprint_before_mortar, fingerprint_diff, fnv1a, load, options, prepare,
     prepare_with, probes, reduce, reduce_active, solve, solve_model, solve_model_in, step_model,

@@ -132,19 +132,25 @@ impl ColorScale {
 /// The colour scale for `values`: `opts.range` if given, else the finite
 /// values' range (the positive values' range on a log scale).
 pub(super) fn color_scale(v: &[f64], opts: &PlotOptions) -> Result<ColorScale, PlotError> {
-    if let Some((lo, hi)) = opts.range {
-        return Ok(ColorScale {
-            lo,
-            hi,
-            log: opts.log,
-        });
+    scale_of(v, opts.range, opts.log, opts.field.name(), opts.change)
+}
+
+/// [`color_scale`] of the field named `name` (a 3D field is no [`Field`]).
+pub(super) fn scale_of(
+    v: &[f64],
+    range: Option<(f64, f64)>,
+    log: bool,
+    name: &str,
+    change: bool,
+) -> Result<ColorScale, PlotError> {
+    if let Some((lo, hi)) = range {
+        return Ok(ColorScale { lo, hi, log });
     }
-    if opts.log {
+    if log {
         let pos: Vec<f64> = v.iter().copied().filter(|x| *x > 0.0).collect();
         if pos.is_empty() {
             return Err(err(format!(
-                "--log: {} has no positive value (give --range MIN,MAX or drop --log)",
-                opts.field.name()
+                "--log: {name} has no positive value (give --range MIN,MAX or drop --log)"
             )));
         }
         let (lo, hi) = finite_range(&pos);
@@ -155,9 +161,8 @@ pub(super) fn color_scale(v: &[f64], opts: &PlotOptions) -> Result<ColorScale, P
     // ticks at ±inf: refused, naming the field (issue 34).
     if !(hi - lo).is_finite() {
         return Err(err(format!(
-            "field {}{}: values from {} to {}, a span too large for the colour scale (give --range MIN,MAX)",
-            opts.field.name(),
-            if opts.change { " (change)" } else { "" },
+            "field {name}{}: values from {} to {}, a span too large for the colour scale (give --range MIN,MAX)",
+            if change { " (change)" } else { "" },
             fmt_num(lo),
             fmt_num(hi)
         )));
@@ -192,6 +197,18 @@ pub(super) fn draw_colorbar<DB: DrawingBackend>(
     bar_w: f64,
     top: u32,
 ) -> Result<(), PlotError> {
+    draw_colorbar_labelled(area, cs, &field.label(units), fs, bar_w, top)
+}
+
+/// [`draw_colorbar`] titled `label` ("von_mises \[Pa\]").
+pub(super) fn draw_colorbar_labelled<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    cs: ColorScale,
+    label_text: &str,
+    fs: f64,
+    bar_w: f64,
+    top: u32,
+) -> Result<(), PlotError> {
     let (_, h) = area.dim_in_pixel();
     let x0 = fs.round() as i32;
     let x1 = x0 + bar_w as i32;
@@ -202,9 +219,9 @@ pub(super) fn draw_colorbar<DB: DrawingBackend>(
     }
     let label = ("sans-serif", fs).into_font().color(&BLACK);
     let title = if cs.log {
-        format!("{} (log)", field.label(units))
+        format!("{label_text} (log)")
     } else {
-        field.label(units)
+        label_text.to_string()
     };
     area.draw(&Text::new(
         title,

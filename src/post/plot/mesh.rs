@@ -24,7 +24,7 @@ pub fn auto_scale(points: &[[f64; 2]], max_u: f64) -> f64 {
     }
 }
 
-fn bbox(points: impl Iterator<Item = [f64; 2]>) -> ([f64; 2], [f64; 2]) {
+pub(super) fn bbox(points: impl Iterator<Item = [f64; 2]>) -> ([f64; 2], [f64; 2]) {
     let mut lo = [f64::INFINITY; 2];
     let mut hi = [f64::NEG_INFINITY; 2];
     for p in points {
@@ -181,7 +181,7 @@ pub(super) fn draw_mesh<DB: DrawingBackend>(
 /// the plotting library's tick search works on multiples of it, hence the
 /// factor 16) must stay finite. An infinite axis drew nothing sensible,
 /// and its tick search never returned (issue 34).
-fn check_extent(lo: [f64; 2], hi: [f64; 2], scale: f64) -> Result<(), PlotError> {
+pub(super) fn check_extent(lo: [f64; 2], hi: [f64; 2], scale: f64) -> Result<(), PlotError> {
     for (k, axis) in ["x", "y"].iter().enumerate() {
         if !((hi[k] - lo[k]) * 16.0).is_finite() {
             return Err(err(format!(
@@ -345,7 +345,7 @@ fn unique_edges(tris: &[[usize; 3]]) -> Vec<(usize, usize)> {
 
 /// The k² sub-triangles of the reference triangle: (barycentric centroid,
 /// barycentric vertices).
-fn subdivide(k: usize) -> Vec<([f64; 3], [[f64; 3]; 3])> {
+pub(super) fn subdivide(k: usize) -> Vec<([f64; 3], [[f64; 3]; 3])> {
     let kf = k as f64;
     let node = |i: usize, j: usize| {
         let (b, c) = (i as f64 / kf, j as f64 / kf);
@@ -377,7 +377,7 @@ fn centroid(t: &[[f64; 3]; 3]) -> [f64; 3] {
 
 /// Calls `put(x, y, barycentric)` for every pixel whose centre lies in the
 /// triangle (pixel coordinates), within `clip` = (x0, y0, x1, y1) inclusive.
-fn fill_triangle(
+pub(super) fn fill_triangle(
     v: [(f64, f64); 3],
     clip: (i32, i32, i32, i32),
     mut put: impl FnMut(i32, i32, [f64; 3]),

@@ -14,6 +14,10 @@
 //! uses DejaVu Sans embedded in the binary (crate `dejavu`), so no system
 //! font is needed. The finished file is written atomically.
 //!
+//! A 3D checkpoint is drawn flat (`solid`): the section of the tetrahedra
+//! by a plane (`--cut`), or the contact footprint of each interface in its
+//! own plane (`--contact`).
+//!
 //! The code: options, checks and the steps drawn here; the mesh figure in
 //! `mesh`, its colour scale, colour bar and legend in `colorbar`, the
 //! contact figure in `contact`, and fonts, colours and number formats in
@@ -21,11 +25,20 @@
 
 mod colorbar;
 mod contact;
+mod cut;
+mod footprint;
 mod mesh;
+mod panel;
+mod solid;
 mod style;
 
 pub use contact::{arc_lengths, interface_chains, Tangential};
+pub use cut::{Frame, Plane};
+pub use footprint::FootprintSummary;
 pub use mesh::auto_scale;
+pub use solid::{
+    default_plane, render_solid, CutSummary, SolidField, SolidPlotOptions, SolidPlotSummary,
+};
 pub use style::{fmt_num, viridis};
 
 use crate::fem::ElementKind;

@@ -1,0 +1,257 @@
+//! The contact footprint of a 3D checkpoint: per interface, its slave
+//! triangles laid in the interface's own plane (through the centroid,
+//! normal to the mean row normal), filled by the contact pressure, the
+//! boundary of the active set outlined.
+
+use super::cut::{cross, norm, sub, Frame};
+use super::panel::{Fill, Panel, P2};
+use super::style::fmt_num;
+use crate::output::{SolidCheckpoint, SolidStep};
+use std::collections::HashMap;
+
+/// What the footprint of one interface shows.
+#[derive(Debug, Clone)]
+pub struct FootprintSummary {
+    /// The `[[contact]]` entry (0-based) and its name ("slave/master").
+    pub interface: usize,
+    pub name: String,
+    pub rows: usize,
+    pub active: usize,
+    pub triangles: usize,
+    /// The slave triangles' area, and the area they cover in the plane
+    /// (equal for a flat surface) \[m²\].
+    pub surface_area: f64,
+    pub area: f64,
+    /// The area where the active flag, linear on the triangles, is ≥ ½.
+    pub active_area: f64,
+    pub max_pressure: f64,
+    /// The plane: its unit normal (the rows' mean) and axes.
+    pub normal: [f64; 3],
+    pub axes: [String; 2],
+}
+
+/// The panels of the interfaces with slave triangles and the summaries of
+/// every interface with rows, in entry order.
+pub(super) fn footprints(
+    ck: &SolidCheckpoint,
+    step: &SolidStep,
+    names: &[String],
+    length: &str,
+) -> (Vec<Panel>, Vec<FootprintSummary>) {
+    let c = &ck.contact;
+    let mut ids: Vec<usize> = c.interface.iter().map(|&i| i as usize).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let at = |r: usize| ck.points[c.slave[r]];
+    let mut panels = Vec::new();
+    let mut out = Vec::new();
+    for k in ids {
+        let rows: Vec<usize> = (0..c.slave.len())
+            .filter(|&r| c.interface[r] as usize == k)
+            .collect();
+        let tris: Vec<[usize; 3]> = c
+            .triangles
+            .iter()
+            .copied()
+            .filter(|t| t.iter().all(|&r| c.interface[r] as usize == k))
+            .collect();
+        let mut n = [0.0; 3];
+        for &r in &rows {
+            for d in 0..3 {
+                n[d] += c.normal[r][d];
+            }
+        }
+        let l = norm(n);
+        let n = if l > 0.0 {
+            n.map(|v| v / l)
+        } else {
+            [0.0, 0.0, 1.0]
+        };
+        let frame = Frame::of_normal(n);
+        // Local point numbers of the rows the triangles use.
+        let mut local: HashMap<usize, usize> = HashMap::new();
+        let mut used: Vec<usize> = Vec::new();
+        let mut ltris = Vec::with_capacity(tris.len());
+        for t in &tris {
+            ltris.push(t.map(|r| {
+                *local.entry(r).or_insert_with(|| {
+                    used.push(r);
+                    used.len() - 1
+                })
+            }));
+        }
+        let pts: Vec<P2> = used.iter().map(|&r| frame.project(at(r))).collect();
+        let p: Vec<f64> = used.iter().map(|&r| step.contact_pressure[r]).collect();
+        let act: Vec<bool> = used.iter().map(|&r| step.active[r] != 0).collect();
+        let mut surface_area = 0.0;
+        let mut area = 0.0;
+        for (t, lt) in tris.iter().zip(&ltris) {
+            surface_area += 0.5 * norm(cross(sub(at(t[1]), at(t[0])), sub(at(t[2]), at(t[0]))));
+            area += area2(pts[lt[0]], pts[lt[1]], pts[lt[2]]);
+        }
+        let (outline, active_area) = active_boundary(&pts, &ltris, &act);
+        let edges = unique_edges(&ltris)
+            .into_iter()
+            .map(|(a, b, _)| [pts[a], pts[b]])
+            .collect();
+        let name = names
+            .get(k)
+            .cloned()
+            .unwrap_or_else(|| format!("interface {k}"));
+        let max_pressure = rows
+            .iter()
+            .map(|&r| step.contact_pressure[r])
+            .fold(f64::NEG_INFINITY, f64::max);
+        let nactive = rows.iter().filter(|&&r| step.active[r] != 0).count();
+        let title = format!(
+            "{name}: {nactive} of {} rows active; plane normal ({}, {}, {})",
+            rows.len(),
+            fmt_num(round3(n[0])),
+            fmt_num(round3(n[1])),
+            fmt_num(round3(n[2]))
+        );
+        // Rows without a slave triangle (a surface's isolated nodes) are
+        // counted, not drawn.
+        if !ltris.is_empty() {
+            panels.push(Panel {
+                title,
+                labels: frame.labels.clone().map(|s| format!("{s} [{length}]")),
+                pts,
+                tris: ltris,
+                fill: Fill::Nodal(p),
+                edges,
+                outline,
+            });
+        }
+        out.push(FootprintSummary {
+            interface: k,
+            name,
+            rows: rows.len(),
+            active: nactive,
+            triangles: tris.len(),
+            surface_area,
+            area,
+            active_area,
+            max_pressure,
+            normal: n,
+            axes: frame.labels,
+        });
+    }
+    (panels, out)
+}
+
+fn round3(v: f64) -> f64 {
+    let r = (v * 1000.0).round() / 1000.0;
+    if r == 0.0 {
+        0.0
+    } else {
+        r
+    }
+}
+
+fn area2(a: P2, b: P2, c: P2) -> f64 {
+    0.5 * ((b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1)).abs()
+}
+
+/// Edges of the triangles, each once, with how many triangles share it.
+fn unique_edges(tris: &[[usize; 3]]) -> Vec<(usize, usize, usize)> {
+    let mut count: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut order = Vec::new();
+    for t in tris {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            let e = (a.min(b), a.max(b));
+            let c = count.entry(e).or_insert(0);
+            if *c == 0 {
+                order.push(e);
+            }
+            *c += 1;
+        }
+    }
+    order.into_iter().map(|e| (e.0, e.1, count[&e])).collect()
+}
+
+/// The boundary of the region where the active flag, linear on each
+/// triangle, is ≥ ½: the ½ contour inside the triangles, and the parts of
+/// the surface's own boundary in that region (a fully active surface is
+/// outlined whole). Returns the segments and the region's area.
+fn active_boundary(pts: &[P2], tris: &[[usize; 3]], act: &[bool]) -> (Vec<[P2; 2]>, f64) {
+    let mid = |a: usize, b: usize| (0.5 * (pts[a].0 + pts[b].0), 0.5 * (pts[a].1 + pts[b].1));
+    let mut seg = Vec::new();
+    let mut area = 0.0;
+    for t in tris {
+        let on = t.iter().filter(|&&i| act[i]).count();
+        let whole = area2(pts[t[0]], pts[t[1]], pts[t[2]]);
+        // The odd vertex out and the two others.
+        let odd = (0..3).find(|&i| (on == 1) == act[t[i]]);
+        match (on, odd) {
+            (3, _) => area += whole,
+            (1 | 2, Some(i)) => {
+                let (a, b, c) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+                seg.push([mid(a, b), mid(a, c)]);
+                // The corner triangle cut off at the midpoints holds ¼.
+                area += if on == 1 { 0.25 } else { 0.75 } * whole;
+            }
+            _ => {}
+        }
+    }
+    for (a, b, n) in unique_edges(tris) {
+        if n != 1 {
+            continue;
+        }
+        match (act[a], act[b]) {
+            (true, true) => seg.push([pts[a], pts[b]]),
+            (true, false) => seg.push([pts[a], mid(a, b)]),
+            (false, true) => seg.push([mid(a, b), pts[b]]),
+            _ => {}
+        }
+    }
+    (seg, area)
+}
+
+/// The name of each `[[contact]]` entry of the problem text: `on`, or
+/// "slave/master" (the JSON summary's keys); empty when unreadable.
+pub(super) fn interface_names(problem: &str) -> Vec<String> {
+    let table: toml::Table = toml::from_str(problem).unwrap_or_default();
+    let Some(list) = table.get("contact").and_then(|c| c.as_array()) else {
+        return vec![];
+    };
+    list.iter()
+        .enumerate()
+        .map(|(k, e)| {
+            let s = |key: &str| e.get(key).and_then(|v| v.as_str());
+            match (s("on"), s("slave"), s("master")) {
+                (Some(on), _, _) => on.to_string(),
+                (_, Some(a), Some(b)) => format!("{a}/{b}"),
+                _ => format!("interface {k}"),
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_active_boundary_of_a_square() {
+        // Two triangles of the unit square, nodes 0 (0,0), 1 (1,0), 2 (1,1), 3 (0,1).
+        let pts = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+        let tris = [[0, 1, 2], [0, 2, 3]];
+        let (seg, a) = active_boundary(&pts, &tris, &[true; 4]);
+        assert_eq!(seg.len(), 4, "the whole boundary");
+        assert!((a - 1.0).abs() < 1e-15);
+        let (seg, a) = active_boundary(&pts, &tris, &[false; 4]);
+        assert!(seg.is_empty() && a == 0.0);
+        // Node 0 alone: a quarter of each triangle, the contour across both.
+        let (seg, a) = active_boundary(&pts, &tris, &[true, false, false, false]);
+        assert!((a - 0.25).abs() < 1e-15);
+        assert_eq!(seg.len(), 4, "two contour pieces and two half edges");
+    }
+
+    #[test]
+    fn interfaces_are_named_as_in_the_summary() {
+        let t = "[[contact]]\non = \"i\"\n[[contact]]\nslave = \"a\"\nmaster = \"b\"\n";
+        assert_eq!(interface_names(t), ["i", "a/b"]);
+        assert!(interface_names("not toml [").is_empty());
+    }
+}
