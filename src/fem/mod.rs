@@ -145,7 +145,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
         return Err(FemError::new(
             path,
             format!(
-                "{}: a 3D mesh (tetrahedra): `signorini solve` runs a 3D model (frictionless contact included), but this command does not run 3D models yet (issue 45)",
+                "{}: a 3D mesh (tetrahedra): `signorini solve`, `compare`, `limit` and `plot` run 3D models, but this command does not yet (issue 45)",
                 mesh.path.display()
             ),
         ));
