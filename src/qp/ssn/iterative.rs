@@ -539,7 +539,7 @@ impl Iterative for State<'_> {
 /// that plane models keep their bits). `diag` in the order of `qp`.
 pub(super) fn rho_rows(qp: &QpProblem, diag: &[f64], cmax: f64) -> Vec<f64> {
     let global = RHO_ITERATIVE * if cmax > 0.0 { cmax } else { 1.0 };
-    if !qp.near.as_ref().is_some_and(|nk| nk.modes.len() >= 6) {
+    if qp.near.as_ref().is_none_or(|nk| nk.modes.len() < 6) {
         return vec![global; qp.m()];
     }
     (0..qp.m())
