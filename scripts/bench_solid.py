@@ -265,9 +265,11 @@ def main(argv=None) -> int:
         for size in [s for s in args.sizes.split(",") if s]:
             if size in SIZES[fam]:
                 rows.append(run_size(args, fam, size, work))
+                # written after every size, so a long run that is stopped keeps what it measured
+                md = table(rows, cmdline)
+                Path(args.out).write_text(md)
+                Path(args.out).with_suffix(".json").write_text(json.dumps(rows, indent=1))
     md = table(rows, cmdline)
-    Path(args.out).write_text(md)
-    Path(args.out).with_suffix(".json").write_text(json.dumps(rows, indent=1))
     print(md)
     if args.check:
         bad = [f"{r['family']} {r['size']} {k}" for r in rows for k in ("solve_iterative", "solve_default")

@@ -553,3 +553,53 @@ fn amg_elasticity3d_contrast() {
     eprintln!("elasticity3d contrast: {rep:?}, levels {:?}", amg.sizes());
     assert!(rep.converged && rep.iterations <= 100, "{rep:?}");
 }
+
+/// `Amg::update` by a spring δ u uᵀ (u on two unknowns of one node, in
+/// K's pattern): the updated hierarchy preconditions K + δ u uᵀ as well as
+/// the first did K, and updating back by −δ gives the first cycle again.
+#[test]
+fn amg_update_follows_a_low_rank_change() {
+    let (k, bp, modes) = elasticity3d(8, |_| 1.0);
+    let s = AmgSettings {
+        coarse_max: 100,
+        ..AmgSettings::for_modes(6)
+    };
+    let near = || NearNull {
+        block_ptr: &bp,
+        modes: &modes,
+    };
+    let mut amg = Amg::new(&k, Some(near()), &s).expect("hierarchy");
+    assert!(amg.levels() >= 3, "{:?}", amg.sizes());
+    let b = rhs(k.nrows);
+    let mut z0 = vec![0.0; k.nrows];
+    amg.apply(&b, &mut z0);
+    let (cols, vals) = ([0usize, 1], [1.0, -0.5]);
+    let delta = 10.0 * k.diag()[0];
+    let mut k2 = k.clone();
+    let (c0, _) = k.row(0);
+    let (c1, _) = k.row(1);
+    let s0 = k.indptr[0];
+    let s1 = k.indptr[1];
+    for (a, &ca) in cols.iter().zip(&vals) {
+        for (bcol, &cb) in cols.iter().zip(&vals) {
+            let (row_cols, start) = if *a == 0 { (c0, s0) } else { (c1, s1) };
+            let p = start + row_cols.binary_search(bcol).expect("in pattern");
+            k2.data[p] += delta * ca * cb;
+        }
+    }
+    amg.update(&k2, &[(delta, &cols, &vals)]).expect("update");
+    let mut x = vec![0.0; k.nrows];
+    let rep = pcg(&k2, &b, &mut x, &|r, z| amg.apply(r, z), 1e-10, 200);
+    assert!(rep.converged && rep.iterations <= 40, "{rep:?}");
+    amg.update(&k, &[(-delta, &cols, &vals)])
+        .expect("update back");
+    let mut z1 = vec![0.0; k.nrows];
+    amg.apply(&b, &mut z1);
+    let diff: Vec<f64> = z0.iter().zip(&z1).map(|(a, b)| a - b).collect();
+    assert!(
+        norm(&diff) <= 1e-8 * norm(&z0),
+        "{} {}",
+        norm(&diff),
+        norm(&z0)
+    );
+}
