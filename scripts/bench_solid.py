@@ -14,7 +14,9 @@ model and runs, each under /usr/bin/time -f %M (peak RSS):
   * `signorini limit` (one Cholesky of C; skipped above --cholesky-max DOFs),
   * `signorini limit --path iterative` (one AMG-PCG solve of the iterative path's operator),
   * `signorini solve --ssn-path iterative` and, up to --cholesky-max, `signorini solve`
-    (the default path: direct below ssn::ITERATIVE_3D_FROM unknowns, iterative above),
+    (the default path: direct below ssn::ITERATIVE_3D_FROM = 200 k unknowns, iterative
+    from there; the table of BENCHMARKS.md "3D contact: speed" was measured with a binary
+    whose threshold was 400 k, so its "solve direct" column is the direct path throughout),
   * FEniCSx (scripts/bench_fenicsx3d.py under /usr/bin/python3): the linear elasticity of
     the same mesh without contact by CG + GAMG (the Hertz ball held by a prescribed u_z on
     its top instead of the pressure, the stack glued through its conforming interface).

@@ -115,7 +115,7 @@ impl Method for SsnMethod {
 
 /// Unknowns from which `ssn_path = "auto"` takes the iterative path on a
 /// solid (3D) model (docs/methods.md §7.2, "The default path in 3D").
-pub const ITERATIVE_3D_FROM: usize = 400_000;
+pub const ITERATIVE_3D_FROM: usize = 200_000;
 
 /// `ssn_path = "auto"` on a frictionless model whose near-null space holds
 /// the six rigid motions of 3D elasticity and that has at least
