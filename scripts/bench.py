@@ -39,6 +39,11 @@ process ÷ limit against 1.5 + 0.15 (N − 1), peak RSS ÷ limit against 1.3, th
 per-step assembly / solve / write times from `--log-level debug`) to
 --steps-out (default bench/steps.md, raw JSON next to it).
 
+3D (issue 45): `--solid [ARGS]` hands the rest of the command line to
+scripts/bench_solid.py (the Hertz sphere on a block and a stack with a
+floating cube at 5 k–1 M DOFs, the Cholesky and AMG-PCG yardsticks, FEniCSx's
+GAMG-CG on the same mesh; `--solid --check` is the CI run at 5 k DOFs).
+
 The mu scan (issue 42 §1): `--mu-scan 0.05,0.1,...` runs, instead of the
 above, meshes/geodynamic_steps.toml with Coulomb friction mu on its three
 faults by ssn and mprgp against the frictionless run, written to
@@ -860,6 +865,10 @@ def run_mu_scan(args, binary, work: Path) -> int:
 
 # ----------------------------------------------------------------- main
 def main() -> int:
+    if "--solid" in sys.argv[1:]:
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        import bench_solid
+        return bench_solid.main([a for a in sys.argv[1:] if a != "--solid"])
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", default="10k,100k,400k,1m,three_bodies:2m",
                     help="comma list of sizes (" + ",".join(SIZES) + "); FAMILY:SIZE runs that size for that family only")

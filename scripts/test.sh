@@ -63,6 +63,8 @@ bash scripts/bench --sizes 10k --repeats 1 --budget 60 --check --families three_
 bash scripts/bench --sizes 10k --repeats 1 --budget 60 --check --families rollers \
     --methods ssn,mprgp,dual,asm,preelim,cgc+cholesky --peers clarabel \
     --work "$bench_tmp/work" --out "$bench_tmp/BENCHMARKS_rollers.md"
+# 3D (issue 45): Hertz and the stack at 5 k DOFs, both paths and FEniCSx
+python3 scripts/bench.py --solid --check --work "$bench_tmp/solid" --out "$bench_tmp/solid.md"
 rm -rf "$bench_tmp"
 
 stage done

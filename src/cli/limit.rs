@@ -1,11 +1,12 @@
-//! `signorini limit model.toml`: the flags of [`crate::run::limit()`] (one
-//! sparse Cholesky factorization of C and one solve C x = d, the benchmark's
-//! yardstick) and its report printed as one JSON line.
+//! `signorini limit model.toml`: the flags of [`crate::run::limit()`] (the
+//! benchmark's yardstick: one sparse Cholesky factorization of C and one
+//! solve C x = d, or with `--path iterative` one AMG-PCG solve as on ssn's
+//! iterative path; plane and solid models) and its report as one JSON line.
 
 use super::solve::bad_input;
 use crate::linalg::ordering::Ordering;
 use crate::qp::ByteSize;
-use crate::run::{self, LimitSpec};
+use crate::run::{self, LimitPath, LimitSpec};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -28,6 +29,12 @@ pub struct LimitArgs {
     /// Largest factor allowed, e.g. "8 GiB"; overrides [solver] memory_limit.
     #[arg(long)]
     pub memory_limit: Option<ByteSize>,
+    /// cholesky | iterative: one sparse Cholesky factorization and solve of
+    /// C, or one AMG-PCG solve of C (C + ρAᵀA when a body floats) with the
+    /// near-null space, multigrid and tol of ssn_path = "iterative"
+    /// (docs/methods.md §7.2); the JSON adds iterations and levels.
+    #[arg(long, default_value = "cholesky")]
+    pub path: LimitPath,
 }
 
 /// A count of at least 1 (`--repeat 0` would time nothing).
@@ -39,7 +46,7 @@ fn at_least_one(s: &str) -> Result<usize, String> {
 }
 
 pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
-    let prep = match run::prepare_with(&a.problem, a.no_contact, build) {
+    let prep = match run::load(&a.problem, a.no_contact, build) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };
@@ -47,8 +54,9 @@ pub fn run(a: &LimitArgs, _quiet: bool, build: &crate::fem::BuildOptions) -> i32
         repeat: a.repeat,
         ordering: a.ordering,
         memory_limit: a.memory_limit,
+        path: a.path,
     };
-    match run::limit(&prep, &spec) {
+    match run::limit(prep.assembled(), &spec) {
         Ok(r) => {
             crate::outln!("{}", r.to_json_line());
             0

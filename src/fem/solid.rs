@@ -797,7 +797,13 @@ fn near_kernel(
     dofs: &[PointDofs<3>],
     n: usize,
 ) -> Option<crate::qp::NearKernel> {
-    let frames = body_frames(points, point_body, nbodies);
+    // One frame for every body (the box of all points): where a stiff row
+    // of J glues two bodies an aggregate may take points of both, and its
+    // six columns must then hold the rigid motions of the pair; per-body
+    // frames (other centres and sizes) would give it a rotation by another
+    // angle on each side (docs/methods.md §7.2).
+    let frames = body_frames(points, &vec![0; points.len()], 1);
+    let _ = (point_body, nbodies);
     let mut modes = vec![vec![0.0; n]; SOLID_MODES.len()];
     let mut block_ptr = vec![0usize];
     for (p, pd) in dofs.iter().enumerate() {
@@ -807,7 +813,7 @@ fn near_kernel(
         if pd.start != *block_ptr.last()? {
             return None;
         }
-        let (c, l) = frames[point_body[p] as usize];
+        let (c, l) = frames[0];
         for (mode, &m) in modes.iter_mut().zip(SOLID_MODES.iter()) {
             let u = m.at(points[p], c, l);
             for j in 0..pd.ndof {

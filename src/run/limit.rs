@@ -1,16 +1,90 @@
-//! What a contact solve is measured against in the benchmark: one sparse
-//! Cholesky factorization of C and one solve C x = d, on the same assembled
-//! C the methods see (with the fixing-DOF springs of `linalg::cholesky` when
-//! a body floats, so it is defined for semicoercive C; that regularisation
-//! costs nothing extra; docs/methods.md §3). `signorini limit` prints the
-//! [`LimitReport`] as one JSON line.
+//! What a contact solve is measured against in the benchmark (the
+//! yardstick, docs/methods.md §3 and §7.2), on the same assembled C the
+//! methods see, for plane and solid models alike ([`Assembled`]):
+//!
+//! * `cholesky` (the default): one sparse Cholesky factorization of C and
+//!   one solve C x = d (with the fixing-DOF springs of `linalg::cholesky`
+//!   when a body floats, so it is defined for semicoercive C; that
+//!   regularisation costs nothing extra);
+//! * `iterative`: one AMG-PCG solve of the iterative ssn path's operator
+//!   ([`crate::qp::ssn::yardstick`]: C, or C + ρAᵀA when C has a kernel)
+//!   with its near-null space, multigrid settings and the settings' tol.
+//!
+//! `signorini limit` prints the [`LimitReport`] as one JSON line.
 
-use super::prepare::{options, Prepared};
+use super::prepare::{options, Loaded, Prepared};
+use super::solid::SolidPrepared;
 use super::RunError;
 use crate::linalg::ordering::Ordering;
-use crate::qp::{ByteSize, SolverSection};
+use crate::problem::Problem;
+use crate::qp::{ByteSize, QpProblem, SolverSection};
 use serde::Serialize;
 use std::time::Instant;
+
+/// What the yardstick reads of a prepared model, plane or solid.
+pub trait Assembled {
+    fn problem(&self) -> &Problem;
+    fn qp(&self) -> &QpProblem;
+    /// Seconds to read the files and to assemble the model.
+    fn times(&self) -> (f64, f64);
+}
+
+impl Assembled for Prepared {
+    fn problem(&self) -> &Problem {
+        &self.problem
+    }
+    fn qp(&self) -> &QpProblem {
+        &self.model.qp
+    }
+    fn times(&self) -> (f64, f64) {
+        (self.t_read, self.t_assemble)
+    }
+}
+
+impl Assembled for SolidPrepared {
+    fn problem(&self) -> &Problem {
+        &self.problem
+    }
+    fn qp(&self) -> &QpProblem {
+        &self.model.qp
+    }
+    fn times(&self) -> (f64, f64) {
+        (self.t_read, self.t_assemble)
+    }
+}
+
+impl Loaded {
+    /// The loaded model as the yardstick reads it.
+    pub fn assembled(&self) -> &dyn Assembled {
+        match self {
+            Loaded::Plane(p) => p.as_ref(),
+            Loaded::Solid(s) => s.as_ref(),
+        }
+    }
+}
+
+/// Which solve is the yardstick.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum LimitPath {
+    /// One sparse Cholesky factorization and solve.
+    #[default]
+    Cholesky,
+    /// One AMG-PCG solve as on ssn's iterative path.
+    Iterative,
+}
+
+impl std::str::FromStr for LimitPath {
+    type Err = String;
+    fn from_str(s: &str) -> Result<LimitPath, String> {
+        match s {
+            "cholesky" => Ok(LimitPath::Cholesky),
+            "iterative" => Ok(LimitPath::Iterative),
+            _ => Err(format!(
+                "unknown path \"{s}\"; expected \"cholesky\" or \"iterative\""
+            )),
+        }
+    }
+}
 
 /// How to measure.
 #[derive(Debug, Clone, Default)]
@@ -22,9 +96,12 @@ pub struct LimitSpec {
     pub ordering: Option<Ordering>,
     /// The largest factor allowed; overrides `[solver] memory_limit`.
     pub memory_limit: Option<ByteSize>,
+    pub path: LimitPath,
 }
 
-/// The measurement (times in seconds, medians over `repeat`).
+/// The measurement (times in seconds, medians over `repeat`). On the
+/// iterative path `t_factor` is the ordering and the multigrid setup,
+/// `t_solve` the PCG.
 #[derive(Debug, Clone, Serialize)]
 pub struct LimitReport {
     pub problem: String,
@@ -39,9 +116,19 @@ pub struct LimitReport {
     pub t_factor_solve: f64,
     pub repeat: usize,
     pub ordering: String,
-    /// ‖Cx − d‖/‖d‖ of the last solve; None when C has a kernel (the
-    /// regularised factor solves another system there).
+    /// ‖Cx − d‖/‖d‖ of the last solve (on the iterative path ‖Kx − d‖/‖d‖);
+    /// None when C has a kernel and the factor is regularised.
     pub relative_residual: Option<f64>,
+    /// The iterative path only: CG steps, unknowns per multigrid level,
+    /// operator complexity and contact rows added as springs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub levels: Option<Vec<usize>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub operator_complexity: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub springs: Option<usize>,
 }
 
 impl LimitReport {
@@ -53,27 +140,43 @@ impl LimitReport {
     }
 }
 
-/// Factor C and solve C x = d `spec.repeat` times on `prep`'s model.
-pub fn limit(prep: &Prepared, spec: &LimitSpec) -> Result<LimitReport, RunError> {
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// Measure the yardstick `spec.path` `spec.repeat` times on `prep`'s model.
+pub fn limit(prep: &dyn Assembled, spec: &LimitSpec) -> Result<LimitReport, RunError> {
     let flags = SolverSection {
         ordering: spec.ordering,
         memory_limit: spec.memory_limit,
         ..Default::default()
     };
-    let settings = options(&prep.problem, &flags)?.1.settings;
-    let qp = &prep.model.qp;
+    let problem = prep.problem();
+    let settings = options(problem, &flags)?.1.settings;
+    let qp = prep.qp();
+    let fail = |msg: String| RunError::Solver {
+        path: problem.path.clone(),
+        msg,
+    };
     let repeat = spec.repeat.max(1);
     let (mut tf, mut ts) = (vec![], vec![]);
     let mut residual = None;
+    let mut iterative = None;
     for _ in 0..repeat {
+        if spec.path == LimitPath::Iterative {
+            let y = crate::qp::ssn::yardstick(qp, settings.tol).map_err(|e| fail(e.to_string()))?;
+            tf.push(y.t_order + y.t_setup);
+            ts.push(y.t_solve);
+            residual = Some(y.rel_residual);
+            iterative = Some(y);
+            continue;
+        }
         let t0 = Instant::now();
         let ch = settings
             .workspace()
             .cholesky(&qp.c, &qp.kernel)
-            .map_err(|e| RunError::Solver {
-                path: prep.problem.path.clone(),
-                msg: e.to_string(),
-            })?;
+            .map_err(|e| fail(e.to_string()))?;
         tf.push(t0.elapsed().as_secs_f64());
         let t1 = Instant::now();
         let x = ch.solve(&qp.d);
@@ -87,23 +190,27 @@ pub fn limit(prep: &Prepared, spec: &LimitSpec) -> Result<LimitReport, RunError>
             );
         }
     }
-    let med = |v: &mut Vec<f64>| {
-        v.sort_by(|a, b| a.total_cmp(b));
-        v[v.len() / 2]
-    };
-    let (f, s) = (med(&mut tf), med(&mut ts));
+    let (f, s) = (median(&mut tf), median(&mut ts));
+    let (t_read, t_assemble) = prep.times();
     Ok(LimitReport {
-        problem: prep.problem.path.display().to_string(),
+        problem: problem.path.display().to_string(),
         n: qp.n(),
         nnz_c: qp.c.nnz(),
         kernel_dim: qp.kernel.len(),
-        t_read: prep.t_read,
-        t_assemble: prep.t_assemble,
+        t_read,
+        t_assemble,
         t_factor: f,
         t_solve: s,
         t_factor_solve: f + s,
         repeat,
-        ordering: settings.ordering.name().to_string(),
+        ordering: match spec.path {
+            LimitPath::Cholesky => settings.ordering.name().to_string(),
+            LimitPath::Iterative => "block-rcm".to_string(),
+        },
         relative_residual: residual.filter(|r| r.is_finite()),
+        iterations: iterative.as_ref().map(|y| y.iterations),
+        levels: iterative.as_ref().map(|y| y.levels.clone()),
+        operator_complexity: iterative.as_ref().map(|y| y.operator_complexity),
+        springs: iterative.as_ref().map(|y| y.springs),
     })
 }

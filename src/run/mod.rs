@@ -25,7 +25,7 @@ mod summary;
 
 pub use compare::{compare, CompareSpec};
 pub use export::{export, ExportReport, ExportSpec};
-pub use limit::{limit, LimitReport, LimitSpec};
+pub use limit::{limit, Assembled, LimitPath, LimitReport, LimitSpec};
 pub use observe::{Progress, StepObserver};
 pub use output::{
     catch_signals, create_checkpoint, interrupted, output_paths, CheckpointWriter, Concurrent,

@@ -36,12 +36,12 @@ const LOOSE: f64 = 1e-6;
 /// residual of every CG step, and a larger ρ costs CG more steps than the
 /// augmented-Lagrangian rounds it saves (three-body, 178 k DOFs: 147 CG
 /// steps at 1, 220 at 10, 696 at 100; the rollers failed at 100).
-const RHO_ITERATIVE: f64 = 1.0;
+pub(super) const RHO_ITERATIVE: f64 = 1.0;
 /// Augmented-Lagrangian updates of μ per KKT solve, at most.
 const AL_MAX: usize = 60;
 /// CG steps per K_J solve, at most (a multigrid-preconditioned CG on an
 /// elastic body takes tens).
-const PCG_MAX: usize = 2000;
+pub(super) const PCG_MAX: usize = 2000;
 /// The multigrid of a set J' serves J when at most
 /// max(STALE_MIN, |J|/STALE_DIV) rows differ.
 const STALE_MIN: usize = 8;
@@ -94,8 +94,9 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
     let mut exec = ctx.executor("ssn");
     let (status, iters) = exec.run(&mut st);
     log::debug!(
-        "ssn iterative: {} multigrid hierarchies, {} CG steps, {:.3} s of setup",
+        "ssn iterative: {} multigrid hierarchies ({} updates), {} CG steps, {:.3} s of setup",
         st.builds,
+        st.updates,
         st.cg_steps,
         st.t_setup
     );
@@ -144,8 +145,9 @@ struct State<'a> {
     amg: Option<(Vec<bool>, Amg)>,
     /// The working set K_J was last assembled for (in `aug`).
     assembled: Option<Vec<bool>>,
-    /// Multigrid hierarchies built.
+    /// Multigrid hierarchies built, and updated (`follow_j`).
     builds: usize,
+    updates: usize,
     /// The most CG steps one loose K_J solve took.
     pcg_max_seen: usize,
     t_setup: f64,
@@ -174,7 +176,7 @@ impl<'a> State<'a> {
     ) -> State<'a> {
         let m = qp.m();
         let cmax = norm_inf(diag);
-        let rho = vec![RHO_ITERATIVE * if cmax > 0.0 { cmax } else { 1.0 }; m];
+        let rho = rho_rows(orig, diag, cmax);
         let cpar = stiffness_scale(diag);
         let ar = (0..m)
             .map(|i| r.iter().map(|rl| qp.a.row_dot(i, rl)).collect())
@@ -200,6 +202,7 @@ impl<'a> State<'a> {
             amg: None,
             assembled: None,
             builds: 0,
+            updates: 0,
             t_setup: 0.0,
         }
     }
@@ -234,6 +237,13 @@ impl<'a> State<'a> {
         // `stale_max` rows from the set it was built for: K_J then differs
         // from that K by a low-rank term, which costs CG a few steps where
         // a rebuild costs tens of V-cycles (counts only: same bits on every run).
+        // On a solid model (six near-null modes) the hierarchy follows J
+        // instead: its operators are updated by the rows that moved with
+        // the prolongators kept (`Amg::update`, docs/methods.md §7.2), a
+        // fraction of a rebuild (163 k unknowns: 4–5 s a rebuild).
+        if qp.near.as_ref().is_some_and(|nk| nk.modes.len() >= 6) {
+            self.follow_j(in_j);
+        }
         let moved = self
             .amg
             .as_ref()
@@ -246,7 +256,8 @@ impl<'a> State<'a> {
                 block_ptr: &nk.block_ptr,
                 modes: &nk.modes,
             });
-            let amg = match Amg::new(self.aug.matrix(), near, &AmgSettings::default()) {
+            let nm = qp.near.as_ref().map_or(1, |nk| nk.modes.len());
+            let amg = match Amg::new(self.aug.matrix(), near, &AmgSettings::for_modes(nm)) {
                 Ok(a) => a,
                 // Not a free motion (that is `holds_kernel`'s verdict
                 // above): say what failed instead of blaming the bodies.
@@ -353,6 +364,37 @@ impl<'a> State<'a> {
         Kkt::Stalled(format!(
             "ssn iterative: the gaps of J did not close in {AL_MAX} augmented-Lagrangian rounds"
         ))
+    }
+
+    /// Update the hierarchy, if any, from its set to `in_j` (K_J is
+    /// assembled for `in_j`); a failed update drops it (a rebuild follows).
+    fn follow_j(&mut self, in_j: &[bool]) {
+        let Some((set, amg)) = self.amg.as_mut() else {
+            return;
+        };
+        let qp = self.qp;
+        let changes: Vec<(f64, &[usize], &[f64])> = (0..qp.m())
+            .filter(|&j| set[j] != in_j[j])
+            .map(|j| {
+                let (c, v) = qp.a.row(j);
+                (if in_j[j] { self.rho[j] } else { -self.rho[j] }, c, v)
+            })
+            .collect();
+        if changes.is_empty() {
+            return;
+        }
+        let t = Instant::now();
+        match amg.update(self.aug.matrix(), &changes) {
+            Ok(()) => {
+                set.copy_from_slice(in_j);
+                self.updates += 1;
+            }
+            Err(e) => {
+                log::debug!("ssn iterative: multigrid not updated ({e}); rebuilt");
+                self.amg = None;
+            }
+        }
+        self.t_setup += t.elapsed().as_secs_f64();
     }
 
     fn record(&self, residual: f64) -> IterRecord {
@@ -489,11 +531,34 @@ impl Iterative for State<'_> {
     }
 }
 
+/// ρ of every row: RHO_ITERATIVE · max diag C; on a solid model (six
+/// near-null modes) max of diag C over the row's own unknowns instead
+/// (docs/methods.md §7.2): diag C scales as E·h in 3D, so the largest
+/// diagonal, on the coarsest elements, would make the rows of a fine
+/// contact zone penalty springs (as E alone in 2D, where ρ stays global so
+/// that plane models keep their bits). `diag` in the order of `qp`.
+pub(super) fn rho_rows(qp: &QpProblem, diag: &[f64], cmax: f64) -> Vec<f64> {
+    let global = RHO_ITERATIVE * if cmax > 0.0 { cmax } else { 1.0 };
+    if qp.near.as_ref().is_none_or(|nk| nk.modes.len() < 6) {
+        return vec![global; qp.m()];
+    }
+    (0..qp.m())
+        .map(|j| {
+            let c = qp.a.row(j).0.iter().map(|&k| diag[k]).fold(0.0, f64::max);
+            if c > 0.0 {
+                RHO_ITERATIVE * c
+            } else {
+                global
+            }
+        })
+        .collect()
+}
+
 /// `qp` on the unknowns in the order `perm` (new → old): A ↦ APᵀ, d, ker C
 /// and the near-null space permuted alike, rows and g unchanged; PCPᵀ only
 /// as the pattern of K_J = PCPᵀ + AᵀΡA (the returned QP's C is empty, n×n).
 /// Blocks of `near` must be whole in `perm` ([`block_rcm`] keeps them).
-fn permuted(qp: &QpProblem, perm: &[usize]) -> (QpProblem, AugPattern) {
+pub(super) fn permuted(qp: &QpProblem, perm: &[usize]) -> (QpProblem, AugPattern) {
     let n = qp.n();
     let mut inv = vec![0usize; n];
     for (new, &old) in perm.iter().enumerate() {

@@ -32,6 +32,7 @@ mod schur;
 mod sets;
 #[cfg(test)]
 mod tests;
+mod yardstick;
 
 use crate::linalg::augmented::AugPattern;
 use crate::linalg::cholesky::{Cholesky, Workspace};
@@ -50,6 +51,7 @@ use path::{Costs, Path};
 use std::collections::{HashMap, HashSet};
 use std::rc::Rc;
 use std::time::Instant;
+pub use yardstick::{yardstick, Yardstick};
 
 /// ρ = RHO_FACTOR · max diag C in K_J = C + ρA_JᵀA_J (one ρ_j = ρ per row;
 /// the code keeps a weight per row, Ρ = diag(ρ_j)).
@@ -101,7 +103,7 @@ impl Method for SsnMethod {
         }
     }
     fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
-        if ctx.settings.ssn.path == SsnPath::Iterative {
+        if ctx.settings.ssn.path == SsnPath::Iterative || iterative_by_default(qp, ctx) {
             return iterative::solve(qp, ctx);
         }
         if qp.friction.is_some() {
@@ -109,6 +111,22 @@ impl Method for SsnMethod {
         }
         solve(qp, ctx)
     }
+}
+
+/// Unknowns from which `ssn_path = "auto"` takes the iterative path on a
+/// solid (3D) model (docs/methods.md §7.2, "The default path in 3D").
+pub const ITERATIVE_3D_FROM: usize = 200_000;
+
+/// `ssn_path = "auto"` on a frictionless model whose near-null space holds
+/// the six rigid motions of 3D elasticity and that has at least
+/// [`ITERATIVE_3D_FROM`] unknowns: in 3D the multigrid solve beats the
+/// sparse factor from there on (docs/methods.md §7.2). Plane models (three
+/// motions) never take it.
+fn iterative_by_default(qp: &QpProblem, ctx: &Context) -> bool {
+    ctx.settings.ssn.path == SsnPath::Auto
+        && qp.friction.is_none()
+        && qp.near.as_ref().is_some_and(|nk| nk.modes.len() >= 6)
+        && qp.n() >= ITERATIVE_3D_FROM
 }
 
 /// Solve `qp` by the semismooth Newton (primal–dual active set) method.
