@@ -14,7 +14,6 @@ use super::prepare::{options, probes, solve_model, step_model, Prepared};
 use super::steps::{Run, Step, Verdict};
 use super::{RunError, StepObserver};
 use crate::fem::Model;
-use crate::problem::Problem;
 use crate::qp::method::Certificate;
 use crate::qp::{
     precond::PrecondKind, registry, Kkt, MethodChoice, MethodId, Note, ProgressDisplay, QpResult,
@@ -183,13 +182,13 @@ fn fallback_of(notes: &[Note]) -> Option<String> {
 /// (an unknown method, a time limit or KKT target that is no positive
 /// number, a step model that cannot be built); a variant that fails says so
 /// in its row.
-/// A prepared model as [`compare`] sees it, whichever its dimension: the
-/// problem, the model of the compared (last) step, and the load path when
+/// A prepared model as [`compare`] sees it, whichever its dimension: what
+/// the yardstick reads ([`super::limit::Assembled`]: the problem, the
+/// QP, the times), the model of the compared (last) step, and the load path when
 /// every variant must follow it (friction with several steps,
 /// docs/methods.md §9.1). The plane `Prepared` and the solid
 /// `SolidPrepared` each give one; `compare` asks nothing else of them.
-pub trait Comparable {
-    fn problem(&self) -> &Problem;
+pub trait Comparable: super::limit::Assembled {
     /// The model of the compared step (with `[[steps]]`, the last one's
     /// loads and prescribed displacements).
     fn compared_step(&self) -> Result<Box<dyn ComparedStep + '_>, RunError>;
@@ -215,10 +214,6 @@ pub trait ComparedStep {
 }
 
 impl Comparable for Prepared {
-    fn problem(&self) -> &Problem {
-        &self.problem
-    }
-
     fn compared_step(&self) -> Result<Box<dyn ComparedStep + '_>, RunError> {
         let file = &self.problem.file;
         // The last step's model (with [[steps]], its loads and prescribed

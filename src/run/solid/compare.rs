@@ -5,7 +5,6 @@
 
 use super::{probes, solve_in, step_model, SolidPrepared};
 use crate::fem::solid::SolidModel;
-use crate::problem::Problem;
 use crate::qp::{MethodId, QpProblem, QpResult, SolveOptions};
 use crate::run::compare::{Comparable, ComparedStep, VariantResult};
 use crate::run::RunError;
@@ -14,10 +13,6 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 impl Comparable for SolidPrepared {
-    fn problem(&self) -> &Problem {
-        &self.problem
-    }
-
     fn compared_step(&self) -> Result<Box<dyn ComparedStep + '_>, RunError> {
         let last = self.problem.file.nsteps() - 1;
         Ok(Box::new(SolidStep {
