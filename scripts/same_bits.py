@@ -73,7 +73,10 @@ def prepared(path, work, gmsh):
     os.makedirs(dst, exist_ok=True)
     out_msh = os.path.join(dst, os.path.basename(msh))
     if not os.path.exists(out_msh):
-        r = subprocess.run([gmsh, "-2", "-format", "msh41", "-v", "1", geo, "-o", out_msh],
+        # A .geo with a Physical Volume is a 3D model (as `signorini mesh`).
+        src = re.sub(r"//[^\n]*", "", open(geo).read())
+        dim = "-3" if "Physical Volume" in src else "-2"
+        r = subprocess.run([gmsh, dim, "-format", "msh41", "-v", "1", geo, "-o", out_msh],
                            capture_output=True, text=True)
         if r.returncode != 0:
             return None
