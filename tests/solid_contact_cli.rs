@@ -23,37 +23,7 @@ fn data(name: &str) -> PathBuf {
 
 /// The stack problem on `msh` with the contact entry `contact`.
 fn stack_toml(msh: &Path, contact: &str) -> String {
-    format!(
-        r#"[mesh]
-file = "{}"
-
-[materials.lower]
-E = 2.0e11
-nu = 0.3
-
-[materials.upper]
-E = 7.0e10
-nu = 0.25
-
-[[slip]]
-on = "x0"
-
-[[slip]]
-on = "y0"
-
-[[slip]]
-on = "bottom"
-
-[[traction]]
-on = "top"
-pn = {}
-
-[[contact]]
-{contact}
-"#,
-        msh.display(),
-        -P
-    )
+    common::solid_stack_toml(msh, contact, -P, "")
 }
 
 /// Solve `toml` in `dir`; the JSON summary.

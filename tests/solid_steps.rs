@@ -21,43 +21,15 @@ use std::path::{Path, PathBuf};
 
 const P: f64 = 1.0e6;
 
+/// The stacked cubes meshed apart, mortar rows, probes; `extra` follows
+/// the `[output]` table's probes.
 fn stack_toml(extra: &str, pn: f64) -> String {
     let msh = common::root().join("tests/data/solid_contact/stack_nm.msh");
-    format!(
-        r#"[mesh]
-file = "{}"
-
-[materials.lower]
-E = 2.0e11
-nu = 0.3
-
-[materials.upper]
-E = 7.0e10
-nu = 0.25
-
-[[slip]]
-on = "x0"
-
-[[slip]]
-on = "y0"
-
-[[slip]]
-on = "bottom"
-
-[[traction]]
-on = "top"
-pn = {pn}
-
-[[contact]]
-slave = "upper_bottom"
-master = "lower_top"
-
-[output]
-probes = {{ corner = [1.0, 1.0, 2.0], mid = [0.5, 0.5, 1.0] }}
-{extra}
-"#,
-        msh.display()
-    )
+    let contact = "slave = \"upper_bottom\"\nmaster = \"lower_top\"";
+    let tail = format!(
+        "\n[output]\nprobes = {{ corner = [1.0, 1.0, 2.0], mid = [0.5, 0.5, 1.0] }}\n{extra}\n"
+    );
+    common::solid_stack_toml(&msh, contact, pn, &tail)
 }
 
 const STEPS: &str = "

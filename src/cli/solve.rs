@@ -230,7 +230,7 @@ fn print_solid_report(prep: &SolidPrepared, o: &run::SolidOutcome) {
         );
     }
     if !s.steps.is_empty() {
-        print_steps("tets", s.steps.iter().map(StepLine::from));
+        print_steps(&s.steps);
     }
     let t = &s.timings;
     crate::outln!(
@@ -446,7 +446,7 @@ fn print_report(prep: &Prepared, outcome: &Outcome, dir: &Path) {
         );
     }
     if let Some(rows) = &s.steps {
-        print_steps("triangles", rows.iter().map(StepLine::from));
+        print_steps(rows);
     }
     let phases: Vec<String> = res
         .timings
@@ -604,69 +604,9 @@ fn print_forces(s: &run::Summary) {
     }
 }
 
-/// One line of the per-step table, plane or solid.
-struct StepLine {
-    step: usize,
-    t: f64,
-    nodes: usize,
-    cells: usize,
-    dofs: usize,
-    constraints: usize,
-    active: usize,
-    opened: Option<usize>,
-    closed: Option<usize>,
-    iterations: usize,
-    time_solve: f64,
-    time_step: f64,
-    converged: bool,
-    certified: bool,
-}
-
-impl From<&run::StepRow> for StepLine {
-    fn from(r: &run::StepRow) -> Self {
-        StepLine {
-            step: r.step,
-            t: r.t,
-            nodes: r.nodes,
-            cells: r.triangles,
-            dofs: r.dofs,
-            constraints: r.constraints,
-            active: r.active,
-            opened: r.opened,
-            closed: r.closed,
-            iterations: r.iterations,
-            time_solve: r.time_solve,
-            time_step: r.time_step,
-            converged: r.converged,
-            certified: r.certified,
-        }
-    }
-}
-
-impl From<&run::solid::SolidStepRow> for StepLine {
-    fn from(r: &run::solid::SolidStepRow) -> Self {
-        StepLine {
-            step: r.step,
-            t: r.t,
-            nodes: r.nodes,
-            cells: r.tetrahedra,
-            dofs: r.dofs,
-            constraints: r.constraints,
-            active: r.active,
-            opened: r.opened,
-            closed: r.closed,
-            iterations: r.iterations,
-            time_solve: r.time_solve,
-            time_step: r.time_step,
-            converged: r.converged,
-            certified: r.certified,
-        }
-    }
-}
-
-/// The per-step table (the report's §3.4 table; `steps` in the JSON);
-/// `cells` names the cells ("triangles", "tets").
-fn print_steps(cells: &str, rows: impl IntoIterator<Item = StepLine>) {
+/// The per-step table (the report's §3.4 table; `steps` in the JSON).
+fn print_steps(rows: &[run::StepRow]) {
+    let cells = rows.first().map_or("cells", |r| r.cells.name());
     crate::outln!(
         "steps       {:>5} {:>10} {:>8} {:>9} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>9} {:>9}",
         "step",
@@ -689,7 +629,7 @@ fn print_steps(cells: &str, rows: impl IntoIterator<Item = StepLine>) {
             r.step,
             format!("{}", r.t),
             r.nodes,
-            r.cells,
+            r.cells.count(),
             r.dofs,
             r.constraints,
             r.active,

@@ -40,7 +40,7 @@ pub use prepare::{
 pub use restart::Restart;
 pub use solid::{solve_solid, SolidOutcome, SolidPrepared, SolidSummary};
 pub use steps::{preconditioner_label, Outcome, Run, Solved, Step, Verdict};
-pub use summary::{KktSummary, Probe, StepRow, Summary, Timings};
+pub use summary::{Cells, KktSummary, Probe, StepRow, Summary, Timings};
 
 use std::path::PathBuf;
 

@@ -11,7 +11,7 @@ use super::prepare::{
     reduce, reduce_active, reduce_rows, solve_model_in, step_model_reusing, Prepared,
 };
 use super::restart::Restart;
-use super::summary::{StepRow, Summary, Timings};
+use super::summary::{Cells, StepRow, Summary, Timings};
 use super::RunError;
 use crate::fem::Model;
 use crate::linalg::cholesky::Workspace;
@@ -723,7 +723,7 @@ fn step_row(step: &Step<'_>, active_prev: Option<&[u8]>, t_solve: f64) -> StepRo
         kkt_max: res.kkt.max(),
         energy: res.energy,
         nodes: model.topo.points.len(),
-        triangles: model.topo.triangles.len(),
+        cells: Cells::Triangles(model.topo.triangles.len()),
         dofs: model.qp.n(),
         constraints: model.qp.m(),
         active: res.active.iter().filter(|a| **a).count(),

@@ -127,6 +127,33 @@ pub struct Timings {
     pub phases: BTreeMap<String, f64>,
 }
 
+/// The cells of a model and their count, under the key of their kind in
+/// the JSON (`"triangles": n` in 2D, `"tetrahedra": n` in 3D).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub enum Cells {
+    #[serde(rename = "triangles")]
+    Triangles(usize),
+    #[serde(rename = "tetrahedra")]
+    Tetrahedra(usize),
+}
+
+impl Cells {
+    /// How many.
+    pub fn count(self) -> usize {
+        match self {
+            Cells::Triangles(n) | Cells::Tetrahedra(n) => n,
+        }
+    }
+
+    /// Their name in a table header.
+    pub fn name(self) -> &'static str {
+        match self {
+            Cells::Triangles(_) => "triangles",
+            Cells::Tetrahedra(_) => "tets",
+        }
+    }
+}
+
 /// One load step in `steps`: the report's per-step table (its §3.4:
 /// elements, equations, contact nodes, iterations, time) and the result.
 #[derive(Debug, Clone, Serialize)]
@@ -140,9 +167,10 @@ pub struct StepRow {
     pub inner_iterations: usize,
     pub kkt_max: f64,
     pub energy: f64,
-    /// Output points (interface nodes once per body), triangles, unknowns.
+    /// Output points (interface nodes once per body), cells, unknowns.
     pub nodes: usize,
-    pub triangles: usize,
+    #[serde(flatten)]
+    pub cells: Cells,
     pub dofs: usize,
     /// Contact rows (constraints of the QP) and those active at the end.
     pub constraints: usize,

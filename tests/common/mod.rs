@@ -361,3 +361,41 @@ p = [1.0e5, -1.0e6]
 {c}"#
     )
 }
+
+/// The stacked cubes of tests/data/solid_contact (`msh`: stack.msh,
+/// conforming, or stack_nm.msh, meshed apart): steel (lower) under
+/// aluminium (upper) on three slip planes, the pressure `pn` on "top", the
+/// upper cube held along z by the contact entry `contact` alone; `tail` is
+/// appended as it is (an `[output]` table, `[[steps]]`).
+pub fn solid_stack_toml(msh: &Path, contact: &str, pn: f64, tail: &str) -> String {
+    format!(
+        r#"[mesh]
+file = "{}"
+
+[materials.lower]
+E = 2.0e11
+nu = 0.3
+
+[materials.upper]
+E = 7.0e10
+nu = 0.25
+
+[[slip]]
+on = "x0"
+
+[[slip]]
+on = "y0"
+
+[[slip]]
+on = "bottom"
+
+[[traction]]
+on = "top"
+pn = {pn}
+
+[[contact]]
+{contact}
+{tail}"#,
+        msh.display()
+    )
+}

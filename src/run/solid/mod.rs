@@ -321,7 +321,7 @@ pub struct SolidSummary {
     pub probes: BTreeMap<String, Probe3>,
     /// With `[[steps]]`: one row per step (docs/problem-format.md §7).
     #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub steps: Vec<SolidStepRow>,
+    pub steps: Vec<super::StepRow>,
     /// `[output] reference_step`: the step the `*_change` fields refer to.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reference_step: Option<usize>,
@@ -334,31 +334,6 @@ impl SolidSummary {
     pub fn to_json(&self) -> Result<String, serde_json::Error> {
         serde_json::to_string_pretty(&serde_json::to_value(self)?)
     }
-}
-
-/// One load step of a 3D run in the JSON summary: the 2D row's keys
-/// (docs/problem-format.md §7) with `tetrahedra` for `triangles`.
-#[derive(Debug, Clone, Serialize)]
-pub struct SolidStepRow {
-    pub step: usize,
-    pub t: f64,
-    pub converged: bool,
-    pub certified: bool,
-    pub iterations: usize,
-    pub inner_iterations: usize,
-    pub kkt_max: f64,
-    pub energy: f64,
-    pub nodes: usize,
-    pub tetrahedra: usize,
-    pub dofs: usize,
-    pub constraints: usize,
-    pub active: usize,
-    /// Rows active after the previous step and not now, and the reverse
-    /// (null for the first step).
-    pub opened: Option<usize>,
-    pub closed: Option<usize>,
-    pub time_solve: f64,
-    pub time_step: f64,
 }
 
 /// What a 3D run did.

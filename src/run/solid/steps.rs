@@ -11,8 +11,7 @@
 
 use super::forces::{contact_output, forces, probes, Forces3};
 use super::{
-    solve_in, step_model, SolidOutcome, SolidPrepared, SolidRestart, SolidStepRow, SolidSummary,
-    MOMENT_POINT,
+    solve_in, step_model, SolidOutcome, SolidPrepared, SolidRestart, SolidSummary, MOMENT_POINT,
 };
 use crate::fem::element::{ElementKind, Vector3};
 use crate::fem::solid::SolidModel;
@@ -21,7 +20,7 @@ use crate::output::{SolidChange, SolidContactOutput, SolidOutput, StepInfo};
 use crate::qp::{MethodId, QpResult, SolveOptions};
 use crate::run::output::{check_interrupt, output_paths, Transaction, SIGNAL};
 use crate::run::steps::{preconditioner_label, Verdict};
-use crate::run::summary::{KktSummary, Timings};
+use crate::run::summary::{Cells, KktSummary, StepRow, Timings};
 use crate::run::RunError;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -70,7 +69,7 @@ pub fn solve_solid(
     tx.plan(multi, files.kept, true);
     let ws = opts.settings.workspace();
     let target = opts.settings.kkt_target;
-    let mut rows: Vec<SolidStepRow> = vec![];
+    let mut rows: Vec<StepRow> = vec![];
     let mut failed: Vec<usize> = vec![];
     // The last answer: point displacements and the QP rows' active flags.
     let mut prev: Option<(Vec<Vector3>, Vec<bool>)> = run.restart.map(|r| {
@@ -172,7 +171,7 @@ pub fn solve_solid(
             ),
             _ => (None, None),
         };
-        rows.push(SolidStepRow {
+        rows.push(StepRow {
             step: s + 1,
             t: file.step_time(s),
             converged: res.status.converged(),
@@ -182,7 +181,7 @@ pub fn solve_solid(
             kkt_max: res.kkt.max(),
             energy: res.energy,
             nodes: model.points.len(),
-            tetrahedra: model.tets.len(),
+            cells: Cells::Tetrahedra(model.tets.len()),
             dofs: model.qp.n(),
             constraints: model.qp.m(),
             active,
