@@ -470,7 +470,7 @@ fn methods_lists_every_method_with_its_capabilities() {
     );
     for l in methods {
         let friction = l.starts_with("mprgp") || l.starts_with("ssn");
-        assert_eq!(l.contains("[friction yes"), friction, "{l}");
+        assert_eq!(l.contains("[friction 2D"), friction, "{l}");
         assert_eq!(l.contains("the default"), l.starts_with("ssn"), "{l}");
     }
 }

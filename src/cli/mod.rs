@@ -184,7 +184,11 @@ fn run_command(cli: Cli) -> i32 {
                     "{:<10} {} [friction {}, floating bodies {}, factor {factor}{}]",
                     id.name(),
                     m.summary(),
-                    if c.friction { "yes" } else { "no" },
+                    match c.friction {
+                        crate::qp::method::FrictionSupport::None => "no",
+                        crate::qp::method::FrictionSupport::Lines => "2D",
+                        crate::qp::method::FrictionSupport::Planes => "2D and 3D",
+                    },
                     if c.semicoercive { "yes" } else { "no" },
                     if id == crate::qp::MethodChoice::Auto.resolve() {
                         "; the default, method = \"auto\""

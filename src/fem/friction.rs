@@ -210,6 +210,7 @@ pub(super) fn build(
         } else {
             SlipBound::Coulomb(bound)
         },
+        frame: crate::qp::Frame::Line,
     }))
 }
 

@@ -653,6 +653,7 @@ mod tests {
             t: Csr::zeros(1, 1),
             t0: vec![0.0],
             bound,
+            frame: crate::qp::Frame::Line,
         }
     }
 

@@ -293,14 +293,18 @@ impl Fallback<'_> {
 
 /// Refuse a problem the method does not solve, naming those that do.
 fn check_capabilities(method: &dyn Method, qp: &QpProblem) -> Result<(), QpError> {
-    if qp.friction.is_some() && !method.capabilities().friction {
+    if !method.capabilities().friction.solves(qp) {
         let able: Vec<&str> = MethodId::ALL
             .into_iter()
-            .filter(|m| m.capabilities().friction)
+            .filter(|m| m.capabilities().friction.solves(qp))
             .map(MethodId::name)
             .collect();
+        let what = match qp.friction.as_ref().map(|f| f.frame) {
+            Some(crate::qp::Frame::Plane) => "3D contact with friction (a disc or cone per contact point, docs/methods.md §12)",
+            _ => "contact with friction",
+        };
         return Err(QpError::Unsupported(format!(
-            "method \"{}\" does not solve contact with friction; the problem has friction ([[contact]] friction or tresca): use {} (or method = \"auto\")",
+            "method \"{}\" does not solve {what}; the problem has friction ([[contact]] friction or tresca): use {} (or method = \"auto\")",
             method.id(),
             able.join(" or ")
         )));

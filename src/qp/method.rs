@@ -162,12 +162,43 @@ pub enum Factor {
     BySettings,
 }
 
+/// The frictional problems a method solves (docs/methods.md §9, §12).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum FrictionSupport {
+    /// Frictionless contact only.
+    None,
+    /// One tangential row per contact row ([`crate::qp::Frame::Line`]: plane
+    /// and axisymmetric models).
+    Lines,
+    /// Lines and the discs and cones of two tangential rows per contact row
+    /// ([`crate::qp::Frame::Plane`]: solid models).
+    Planes,
+}
+
+impl FrictionSupport {
+    /// Whether a method of this support solves `qp` (frictionless problems
+    /// always).
+    pub fn solves(self, qp: &crate::qp::QpProblem) -> bool {
+        match &qp.friction {
+            None => true,
+            Some(f) => match f.frame {
+                crate::qp::Frame::Line => self >= FrictionSupport::Lines,
+                crate::qp::Frame::Plane => self >= FrictionSupport::Planes,
+            },
+        }
+    }
+    /// Solves some friction.
+    pub fn any(self) -> bool {
+        self > FrictionSupport::None
+    }
+}
+
 /// What a method declares about itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Capabilities {
-    /// Solves problems with friction (`QpProblem::friction`,
-    /// docs/methods.md §9); the driver refuses the others such problems.
-    pub friction: bool,
+    /// Which friction laws it solves (`QpProblem::friction`,
+    /// docs/methods.md §9, §12); the driver refuses it the others.
+    pub friction: FrictionSupport,
     /// Solves semicoercive problems (ker C ≠ 0: a body held only by contact)
     /// whatever the kernel, without refusing (docs/methods.md §1.7).
     pub semicoercive: bool,
@@ -194,7 +225,7 @@ pub const SLOW_FRICTION_DOFS: usize = 10_000;
 impl Default for Capabilities {
     fn default() -> Self {
         Capabilities {
-            friction: false,
+            friction: FrictionSupport::None,
             semicoercive: true,
             preconditioned: false,
             factor: Factor::Always,
@@ -258,7 +289,7 @@ mod tests {
                     assert_ne!(f, m, "{m} falls back to itself on {c:?}");
                     if c == FallbackCause::Cycling {
                         // the problem that cycled has friction
-                        assert!(f.capabilities().friction, "{m} → {f}");
+                        assert!(f.capabilities().friction.any(), "{m} → {f}");
                     }
                 }
             }

@@ -39,7 +39,7 @@ pub use crate::linalg::sparse::{self, Csr};
 pub use coulomb::CoulombRelaxation;
 pub use driver::{Context, Note, Output};
 pub use executor::{Observer, ProgressDisplay};
-pub use method::{Capabilities, FallbackCause, Method, MethodChoice, MethodId};
+pub use method::{Capabilities, FallbackCause, FrictionSupport, Method, MethodChoice, MethodId};
 pub use settings::{ByteSize, Release, Settings, SolverSection};
 
 /// min ½xᵀCx − xᵀd subject to Ax ≤ g  (methods.md §2.8 with b = g).
@@ -87,16 +87,53 @@ pub enum SlipBound {
 /// state and a load step's warm-start sets read it alike.
 pub const STICK_MARGIN: f64 = 1e-6;
 
-/// Friction on the contact rows (docs/methods.md §9): one tangential row of
-/// `t` per row of A (same order), the slip v = T x − t0 (t0: the tangential
-/// relative displacement of the previous load step) and its bound. The
-/// Tresca problem adds Σ sᵢ|vᵢ| to the energy; KKT: Cx − d + Aᵀλ_n + Tᵀλ_t = 0,
-/// |λ_tᵢ| ≤ sᵢ, and vᵢ ≠ 0 only where λ_tᵢ = sᵢ·sign vᵢ.
+/// How many tangential rows a contact row has, and so the shape of its
+/// friction law (docs/methods.md §9, §12).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Frame {
+    /// One tangent (plane and axisymmetric models): the bound is on |λ_t|,
+    /// an interval.
+    #[default]
+    Line,
+    /// Two orthonormal tangents t1, t2 (solid models): the bound is on the
+    /// Euclidean norm of the pair (λ_t1, λ_t2), a disc (Tresca) or a cone
+    /// (Coulomb); never a polygon, which would make friction anisotropic.
+    Plane,
+}
+
+impl Frame {
+    /// Tangential rows per contact row.
+    pub fn rows(self) -> usize {
+        match self {
+            Frame::Line => 1,
+            Frame::Plane => 2,
+        }
+    }
+}
+
+/// Friction on the contact rows (docs/methods.md §9, §12): `frame.rows()`
+/// tangential rows of `t` per row of A (same order: contact row i owns rows
+/// k·i .. k·i + k), the slip v = T x − t0 (t0: the tangential relative
+/// displacement of the previous load step) and its bound, one per contact
+/// row. The Tresca problem adds Σ sᵢ‖vᵢ‖ to the energy (vᵢ the row's k
+/// slips); KKT: Cx − d + Aᵀλ_n + Tᵀλ_t = 0, ‖λ_tᵢ‖ ≤ sᵢ, and vᵢ ≠ 0 only
+/// where λ_tᵢ = sᵢ·vᵢ/‖vᵢ‖.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Friction {
     pub t: Csr,
     pub t0: Vec<f64>,
     pub bound: SlipBound,
+    pub frame: Frame,
+}
+
+/// ‖v‖ of one contact row's tangential slice: |v| on a line (the same bits
+/// as `abs`), the Euclidean norm in a plane (`hypot`: no overflow).
+pub fn tangential_norm(v: &[f64]) -> f64 {
+    match v {
+        [a] => a.abs(),
+        [a, b] => a.hypot(*b),
+        _ => v.iter().map(|e| e * e).sum::<f64>().sqrt(),
+    }
 }
 
 /// Coulomb's slip bound sᵢ = μᵢ max(λ_nᵢ, 0), an overflow kept at the largest
@@ -155,9 +192,9 @@ impl QpProblem {
                 let s = f.slip_bound(lambda_n);
                 e + f
                     .slip(x)
-                    .iter()
+                    .chunks(f.frame.rows())
                     .zip(&s)
-                    .map(|(v, s)| s * v.abs())
+                    .map(|(v, s)| s * tangential_norm(v))
                     .sum::<f64>()
             }
         }

@@ -248,6 +248,7 @@ pub(crate) fn friction_point(kx: f64, fx: f64, fy: f64, bound: crate::qp::SlipBo
             t: Csr::from_triplets(1, 2, &[(0, 0, 1.0)]),
             t0: vec![0.0],
             bound,
+            frame: crate::qp::Frame::Line,
         }),
         near: None,
     }

@@ -336,7 +336,7 @@ pub fn compare(
     // With friction only the methods that solve it are run (unless named).
     let list: Vec<Variant> = if friction && spec.methods.is_none() {
         list.into_iter()
-            .filter(|v| v.method.capabilities().friction)
+            .filter(|v| v.method.capabilities().friction.any())
             .collect()
     } else {
         list

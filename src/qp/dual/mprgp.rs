@@ -33,7 +33,7 @@ impl Method for MprgpMethod {
     fn capabilities(&self) -> Capabilities {
         Capabilities {
             // Tresca and Coulomb on the dual with box constraints (docs/methods.md §9.2).
-            friction: true,
+            friction: crate::qp::method::FrictionSupport::Lines,
             friction_caveat: Some(
                 "with friction, mprgp solves every Tresca problem of the Coulomb loop by projected gradients on the dual, whose steps grow in number with the mesh (NAFEMS 1 with μ = 0.1: 5 400 steps at 7.5 k nodes, 10 000 at 80 k, 2.4–4.8 times ssn's time; BENCHMARKS.md); past 48·√n contact and tangential rows the dual Hessian is not formed and every step solves with the factor, tens of times slower; the default method (ssn) solves it exactly in a few Newton steps",
             ),

@@ -83,7 +83,7 @@ impl Method for SsnMethod {
     }
     fn capabilities(&self) -> Capabilities {
         Capabilities {
-            friction: true,
+            friction: crate::qp::method::FrictionSupport::Lines,
             factor: Factor::BySettings,
             warm_start: true,
             ..Default::default()
