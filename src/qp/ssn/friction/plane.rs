@@ -35,6 +35,10 @@ use crate::qp::{
     tangential_norm, Context, Failure, Friction, IterRecord, Output, QpError, QpProblem, Status,
 };
 
+/// Steps without a better residual after which the direct Coulomb
+/// iteration ([`PlaneTresca::coulomb`]) gives way to the shared loop.
+const DIRECT_STALL: usize = 8;
+
 /// How a contact row's tangential pair is held in a working set.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Disc {
@@ -687,7 +691,16 @@ impl Iterative for State<'_> {
                 } else {
                     self.best.1 += 1;
                 }
-                let budget = cycle_budget(self.qp.m());
+                // The direct Coulomb iteration gives up sooner: where it
+                // cycles (sets flipping at the stick zone's border as s
+                // moves with λ_n) the Tresca problems of the shared loop
+                // settle (the sliding block of docs/verification_3d.md
+                // walked 384 steps between two sets before).
+                let budget = if self.coulomb.is_some() {
+                    DIRECT_STALL
+                } else {
+                    cycle_budget(self.qp.m())
+                };
                 if self.best.1 > budget {
                     return Step::Done(
                         Status::Failed(Failure::Cycling {
