@@ -153,6 +153,7 @@ impl PlaneTresca<'_, '_> {
     fn run(&mut self) -> Result<Tresca, QpError> {
         let st = &mut self.st;
         st.started = false;
+        st.visited.clear();
         st.best = (f64::INFINITY, 0);
         let mut exec = self.ctx.executor("ssn");
         exec.max_iter = exec.max_iter.saturating_sub(self.steps);
@@ -203,6 +204,8 @@ struct State<'a> {
     /// A step of the current solve has been taken (the first takes the
     /// sets as they stand).
     started: bool,
+    /// The patterns (N, each row's kind) of this solve's steps.
+    visited: std::collections::HashSet<(Vec<bool>, Vec<u8>)>,
     /// A solve has ended before (the next starts from its answer).
     solved: bool,
     /// Steps of all solves, for the log.
@@ -248,6 +251,7 @@ impl<'a> State<'a> {
             in_n,
             tang: vec![Disc::Stick; m],
             started: false,
+            visited: std::collections::HashSet::new(),
             solved: false,
             outer: 0,
             ax,
@@ -317,6 +321,41 @@ impl<'a> State<'a> {
             })
             .collect();
         (in_n, tang)
+    }
+
+    /// Move the sets one row towards the prediction (`n_set`, `tang`): the
+    /// row whose prediction is violated most (normal: |λ_n + c(Ax − g)|,
+    /// tangential: |‖λ_t + c_t v‖ − s|); rows that slip in both keep the
+    /// predicted direction.
+    fn single_change(&mut self, n_set: &[bool], tang: &[Disc]) {
+        let qp = self.qp;
+        let mut best: Option<(f64, usize, bool)> = None;
+        for i in 0..qp.m() {
+            if n_set[i] != self.in_n[i] {
+                let sc = (self.ln[i] + self.cn[i] * (self.ax[i] - qp.g[i])).abs();
+                if best.is_none_or(|b| sc > b.0) {
+                    best = Some((sc, i, false));
+                }
+            }
+            if tang[i].kind() != self.tang[i].kind() {
+                let v = self.v(i);
+                let xi = [
+                    self.lt[2 * i] + self.ct[i] * v[0],
+                    self.lt[2 * i + 1] + self.ct[i] * v[1],
+                ];
+                let sc = (tangential_norm(&xi) - self.s[i]).abs();
+                if best.is_none_or(|b| sc > b.0) {
+                    best = Some((sc, i, true));
+                }
+            } else if matches!(tang[i], Disc::Slip(..)) {
+                self.tang[i] = tang[i];
+            }
+        }
+        match best {
+            Some((_, i, false)) => self.in_n[i] = n_set[i],
+            Some((_, i, true)) => self.tang[i] = tang[i],
+            None => {}
+        }
     }
 
     /// The rows of B for the sets (`in_n`, `tang`).
@@ -638,6 +677,11 @@ fn combine(t: &Csr, i: usize, w: [f64; 2]) -> (Vec<usize>, Vec<f64>) {
     (cols, vals)
 }
 
+/// A working set's pattern: N and each row's kind (directions left out).
+fn pattern(in_n: &[bool], tang: &[Disc]) -> (Vec<bool>, Vec<u8>) {
+    (in_n.to_vec(), tang.iter().map(|d| d.kind()).collect())
+}
+
 /// dᵀz and Σ|dⱼzⱼ|, the scale it is judged against.
 fn work_of_loads(d: &[f64], z: &[f64]) -> (f64, f64) {
     (dot(d, z), d.iter().zip(z).map(|(a, b)| (a * b).abs()).sum())
@@ -651,8 +695,17 @@ impl Iterative for State<'_> {
     fn step(&mut self) -> Step {
         if self.started || self.solved && !self.glued {
             let (n_set, tang) = self.predict();
-            self.in_n = n_set;
-            self.tang = tang;
+            let key = pattern(&n_set, &tang);
+            if key != pattern(&self.in_n, &self.tang) && self.visited.contains(&key) {
+                // A pattern seen before (the full step cycles: a normal set
+                // flipping between two where a glued block tilts): only
+                // the row that violates its prediction most changes, the
+                // directions of the rows that keep slipping are updated.
+                self.single_change(&n_set, &tang);
+            } else {
+                self.in_n = n_set;
+                self.tang = tang;
+            }
         } else {
             // The start: the rows in N stick (glued), or every row with a
             // positive bound sticks (a first Tresca problem); the others
@@ -671,6 +724,7 @@ impl Iterative for State<'_> {
                 .collect();
         }
         self.started = true;
+        self.visited.insert(pattern(&self.in_n, &self.tang));
         self.outer += 1;
         let it = self.outer;
         match self.solve_set() {
