@@ -300,9 +300,7 @@ fn check_capabilities(method: &dyn Method, qp: &QpProblem) -> Result<(), QpError
             .map(MethodId::name)
             .collect();
         let what = match qp.friction.as_ref().map(|f| f.frame) {
-            Some(crate::qp::Frame::Plane) => {
-                "3D contact with friction (a disc or cone per contact point, docs/methods.md §12)"
-            }
+            Some(crate::qp::Frame::Plane) => "3D contact with friction (a disc or cone per contact point, docs/methods.md §12)",
             _ => "contact with friction",
         };
         return Err(QpError::Unsupported(format!(
@@ -332,12 +330,12 @@ fn checked_start<'a>(
         .map(|a| format!("{} working-set flags for {} contact rows", a.len(), qp.m()));
     let bad_lambda0 = opts.lambda0.as_ref().and_then(|l| {
         let m = qp.m();
-        let mt = qp.friction.as_ref().map_or(m, |f| m * f.frame.rows());
+        let mt = qp.friction.as_ref().map_or(0, |f| m * f.frame.rows());
         if qp.friction.is_none() {
             Some("multipliers of a frictional start for a frictionless problem".to_string())
         } else if l.normal.len() != m || l.tangential.len() != mt {
             Some(format!(
-                "{} normal and {} tangential multipliers for {m} contact rows",
+                "{} normal and {} tangential multipliers for {m} contact rows ({mt} tangential)",
                 l.normal.len(),
                 l.tangential.len()
             ))
@@ -444,7 +442,10 @@ pub fn run(
             kkt::residuals_with_friction(qp, &x, &r.lambda, &r.lambda_t)
                 .within(opts.settings.kkt_target)
         };
-        if let (false, Some(to)) = (proven, method.fallback(FallbackCause::Cycling)) {
+        let to = method
+            .fallback(FallbackCause::Cycling)
+            .filter(|to| to.capabilities().friction.solves(qp));
+        if let (false, Some(to)) = (proven, to) {
             let failure = failure.clone();
             r = fallback.run(
                 method.id(),
@@ -654,7 +655,6 @@ pub fn check_problem(qp: &QpProblem) -> Result<(), QpError> {
             crate::qp::SlipBound::Tresca(s) => (s, "slip bound s"),
             crate::qp::SlipBound::Coulomb(mu) => (mu, "friction coefficient μ"),
         };
-        // `frame.rows()` tangential rows per contact row (docs/methods.md §12.1).
         let mt = m * f.frame.rows();
         if f.t.nrows != mt || f.t.ncols != n || f.t0.len() != mt || s.len() != m {
             return Err(QpError::BadParameter(format!(
@@ -682,11 +682,8 @@ pub fn check_problem(qp: &QpProblem) -> Result<(), QpError> {
         // The force a Tresca bound puts on the unknowns, sᵢ·Σⱼ|Tᵢⱼ|, must be
         // a number: the slip forces and the dissipation are formed from it.
         if let crate::qp::SlipBound::Tresca(s) = &f.bound {
-            let k = f.frame.rows();
             for (i, &si) in s.iter().enumerate() {
-                let row: f64 = (k * i..k * i + k)
-                    .map(|r| f.t.row(r).1.iter().map(|v| v.abs()).sum::<f64>())
-                    .sum();
+                let row: f64 = f.t.row(i).1.iter().map(|v| v.abs()).sum();
                 if !(si * row).is_finite() {
                     return Err(QpError::BadParameter(format!(
                         "the slip bound s of contact row {i} is {si:e}: times its tangential row \
