@@ -365,3 +365,60 @@ fn a_prescribed_slip_takes_the_force_along_it() {
         r.lambda_t
     );
 }
+
+/// Twelve points in a chain, frames turned, loads all round (some inside
+/// their discs, some beyond): Tresca agrees with the dense reference and
+/// Coulomb with `ssn` (its own active-set iteration on the discs) to 10⁻⁸.
+#[test]
+fn a_chain_of_points_agrees_with_the_reference_and_with_ssn() {
+    let loads: Vec<[f64; 3]> = (0..12)
+        .map(|p| {
+            let th = 2.4 * p as f64;
+            let q = 0.2 + 0.15 * (p % 5) as f64;
+            [q * th.cos(), q * th.sin(), -1.0 - 0.1 * (p % 3) as f64]
+        })
+        .collect();
+    let s: Vec<f64> = (0..12).map(|p| 0.25 + 0.05 * (p % 4) as f64).collect();
+    let qp = points_on_a_floor(0.8, 1.3, -0.4, &loads, SlipBound::Tresca(s.clone()));
+    let r = registry::solve("mprgp", &qp, &opts()).unwrap();
+    assert!(
+        r.status.converged() && r.kkt.within(1e-9),
+        "{:?} {:?}",
+        r.status,
+        r.kkt
+    );
+    let (x, ln, lt) = dense_reference(&qp, &s);
+    assert!(rel_diff(&r.x, &x) < 1e-8, "x {:e}", rel_diff(&r.x, &x));
+    assert!(rel_diff(&r.lambda, &ln) < 1e-8);
+    assert!(
+        rel_diff(&r.lambda_t, &lt) < 1e-8,
+        "λ_t {:e}",
+        rel_diff(&r.lambda_t, &lt)
+    );
+    let norms: Vec<f64> = lt.chunks(2).map(crate::qp::tangential_norm).collect();
+    let slipping = norms
+        .iter()
+        .zip(&s)
+        .filter(|(n, s)| (*n - *s).abs() < 1e-9)
+        .count();
+    assert!(slipping > 0 && slipping < 12, "{slipping} of 12 slip");
+    let mu: Vec<f64> = (0..12).map(|p| 0.2 + 0.04 * (p % 3) as f64).collect();
+    let qp = points_on_a_floor(0.8, 1.3, -0.4, &loads, SlipBound::Coulomb(mu));
+    let a = registry::solve("mprgp", &qp, &opts()).unwrap();
+    let b = registry::solve("ssn", &qp, &opts()).unwrap();
+    for r in [&a, &b] {
+        assert!(
+            r.status.converged() && r.kkt.within(1e-9),
+            "{:?} {:?}",
+            r.status,
+            r.kkt
+        );
+    }
+    assert!(rel_diff(&a.x, &b.x) < 1e-8, "x {:e}", rel_diff(&a.x, &b.x));
+    assert!(rel_diff(&a.lambda, &b.lambda) < 1e-8);
+    assert!(
+        rel_diff(&a.lambda_t, &b.lambda_t) < 1e-8,
+        "{:e}",
+        rel_diff(&a.lambda_t, &b.lambda_t)
+    );
+}
