@@ -113,6 +113,9 @@ impl Disc {
 
 impl Block for Disc {
     fn is_free(&self, x: &[f64]) -> bool {
+        if self.radius == f64::INFINITY {
+            return true;
+        }
         let z = self.z(x);
         let slack = DISC_SLACK * (self.radius + self.shift[0].hypot(self.shift[1]));
         self.radius - z[0].hypot(z[1]) > slack
@@ -365,6 +368,9 @@ mod tests {
             disc(f64::INFINITY).feasible_step(&x, &[-1.0, -1.0]),
             f64::INFINITY
         );
+        // Glued (r = ∞): always free, the slack notwithstanding.
+        assert!(disc(f64::INFINITY).is_free(&[1e300, -1e300]));
+        assert!(d.is_free(&[-d.shift[0], -d.shift[1]]));
     }
 
     /// On the circle the chopped gradient is g when −g points inwards, its
