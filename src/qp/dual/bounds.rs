@@ -301,6 +301,20 @@ impl DualState<'_> {
         }
         af
     }
+    /// Whether a disc on its circle has −g leaving it with a tangential
+    /// part (the chopped gradient `beta` nonzero there and νᵀg < 0): a step
+    /// along β would leave the disc at once.
+    pub(crate) fn slides(&self, beta: &[f64]) -> bool {
+        self.discs.iter().enumerate().any(|(k, d)| {
+            let j = self.disc_start + 2 * k;
+            let x = &self.lam[j..j + 2];
+            let z = d.z(x);
+            let g = &self.g[j..j + 2];
+            (beta[j] != 0.0 || beta[j + 1] != 0.0)
+                && !d.is_free(x)
+                && z[0] * g[0] + z[1] * g[1] < 0.0
+        })
+    }
     /// λ̂ ← P(λ̂ − a·d); true when a disc's projection bent the step (then
     /// g − aHd is not the new gradient, [`Block::step`]).
     pub(crate) fn step_projected(&mut self, a: f64, d: &[f64]) -> bool {

@@ -116,6 +116,18 @@ impl BoundStep for Mprgp {
                 self.p = s.phi();
                 Ok(StepKind::Expansion)
             }
+        } else if s.slides(&beta) {
+            // On a disc's circle with −g leaving it β is tangential, and
+            // every step along it leaves the disc: the projected gradient
+            // step of fixed length ᾱ on the factors at their bounds, which
+            // lowers θ for ᾱ ≤ 2/‖H‖ (docs/methods.md §12.4).
+            let at_bound: Vec<f64> = (0..s.lam.len())
+                .map(|i| if s.is_free(i) { 0.0 } else { s.g[i] })
+                .collect();
+            s.step_projected(self.abar, &at_bound);
+            s.refresh();
+            self.p = s.phi();
+            Ok(StepKind::Proportioning)
         } else {
             let ad = s.op.apply(&beta);
             let dad = dot(&beta, &ad);
@@ -126,25 +138,16 @@ impl BoundStep for Mprgp {
                 ));
             }
             let a = dot(&s.g, &beta) / dad;
-            let before = (!s.discs.is_empty()).then(|| {
-                let at_bound: Vec<bool> = (0..s.lam.len()).map(|i| !s.is_free(i)).collect();
-                (s.lam.clone(), s.g.clone(), at_bound)
-            });
+            let before = (!s.discs.is_empty()).then(|| (s.lam.clone(), s.g.clone()));
             if s.step_projected(a, &beta) {
-                // A disc's circle bent the step: the gradient from scratch,
-                // and where that did not lower θ, the projected gradient step
-                // of fixed length ᾱ on the factors at their bounds instead,
-                // which does (docs/methods.md §12.4).
+                // A step across a whole disc came out on its far side: the
+                // gradient from scratch, and where θ rose, the step of fixed
+                // length ᾱ along β instead (docs/methods.md §12.4).
                 s.refresh();
-                if let Some((lam0, g0, at_bound)) = before {
+                if let Some((lam0, g0)) = before {
                     if !lowers(&lam0, &g0, &s.lam, &s.g) {
-                        let bound: Vec<f64> = g0
-                            .iter()
-                            .zip(&at_bound)
-                            .map(|(&g, &b)| if b { g } else { 0.0 })
-                            .collect();
                         s.lam = lam0;
-                        s.step_projected(self.abar, &bound);
+                        s.step_projected(self.abar, &beta);
                         s.refresh();
                     }
                 }
