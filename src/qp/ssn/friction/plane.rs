@@ -358,6 +358,12 @@ impl<'a> State<'a> {
             Some((_, i, true)) => self.tang[i] = tang[i],
             None => {}
         }
+        if self.glued {
+            // Glued, a row sticks exactly when it is in N.
+            for (t, &a) in self.tang.iter_mut().zip(&self.in_n) {
+                *t = if a { Disc::Stick } else { Disc::Free };
+            }
+        }
     }
 
     /// The rows of B for the sets (`in_n`, `tang`).
