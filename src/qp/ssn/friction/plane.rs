@@ -339,7 +339,8 @@ impl<'a> State<'a> {
                     best = Some((sc, i, false));
                 }
             }
-            if tang[i].kind() != self.tang[i].kind() {
+            // Glued, a row's kind follows its N (set below).
+            if tang[i].kind() != self.tang[i].kind() && !self.glued {
                 let v = self.v(i);
                 let xi = [
                     self.lt[2 * i] + self.ct[i] * v[0],
