@@ -4,6 +4,7 @@
 
 pub mod forces;
 pub mod friction;
+pub mod solid_friction;
 pub mod plot;
 
 use crate::fem::element::Point;
