@@ -292,5 +292,12 @@ pub struct SolidStep {
     pub contact_pressure: Vec<f64>,
     pub gap: Vec<f64>,
     pub active: Vec<u8>,
+    /// With friction (else empty): per contact row the tangential force
+    /// (N), traction (Pa) and slip (m) in global coordinates, and the state
+    /// 0 open, 1 stick, 2 slip.
+    pub tangential_force: Vec<[f64; 3]>,
+    pub tangential_traction: Vec<[f64; 3]>,
+    pub slip: Vec<[f64; 3]>,
+    pub friction_state: Vec<u8>,
     pub info: StepInfo,
 }
