@@ -730,8 +730,15 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
     }
     let near = near_kernel(&points, &point_body, nbodies, &dofs, n);
     // Friction: two tangential rows per QP row (docs/methods.md §12.2).
-    let friction =
-        super::contact3d::friction::build(&contact, &qp_rows, &dofs, n, &input.contact, path, node_tag)?;
+    let friction = super::contact3d::friction::build(
+        &contact,
+        &qp_rows,
+        &dofs,
+        n,
+        &input.contact,
+        path,
+        node_tag,
+    )?;
     let qp = QpProblem {
         c,
         d,

@@ -4,8 +4,8 @@
 
 pub mod forces;
 pub mod friction;
-pub mod solid_friction;
 pub mod plot;
+pub mod solid_friction;
 
 use crate::fem::element::Point;
 use crate::fem::{element, Model};

@@ -284,6 +284,66 @@ mod tests {
         assert!(!friction_frame(&r, &moved).1);
     }
 
+    /// A row without a normal (a degenerate facet) is refused naming the
+    /// file, the pair and the node; a Tresca bound that overflows too.
+    #[test]
+    fn rows_without_a_frame_are_refused() {
+        use crate::problem::{ContactPair, NormalKind};
+        let c = Contact {
+            pair: ContactPair::Conforming {
+                on: "face".into(),
+                normals: NormalKind::Averaged,
+            },
+            friction: FrictionLaw::Coulomb(0.2),
+        };
+        let free = PointDofs::<3> {
+            start: 0,
+            ndof: 3,
+            t: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            u0: [0.0; 3],
+        };
+        let dofs: Vec<PointDofs<3>> = (0..3)
+            .map(|p| PointDofs {
+                start: 3 * p,
+                ..free
+            })
+            .collect();
+        let mut bad = row([f64::NAN; 3]);
+        bad.tangents = [[f64::NAN; 3]; 2];
+        let path = Path::new("p.toml");
+        let e = build(&[bad], &[0], &dofs, 9, &[c.clone()], path, |p| {
+            100 + p as u64
+        })
+        .unwrap_err();
+        assert_eq!(e.path, path);
+        assert!(
+            e.msg.contains("[[contact]] #1 (on = \"face\")") && e.msg.contains("node 100"),
+            "{}",
+            e.msg
+        );
+        let ok = build(
+            &[row([0.0, 0.0, 1.0])],
+            &[0],
+            &dofs,
+            9,
+            &[c.clone()],
+            path,
+            |p| p as u64,
+        )
+        .unwrap()
+        .unwrap();
+        assert_eq!(ok.t.nrows, 2);
+        let big = Contact {
+            friction: FrictionLaw::Tresca(1e308),
+            ..c
+        };
+        let e = build(&[row([0.0, 0.0, 1.0])], &[0], &dofs, 9, &[big], path, |p| {
+            p as u64
+        })
+        .unwrap_err();
+        assert!(e.msg.contains("overflows"), "{}", e.msg);
+    }
+
     /// The tangential coefficients are the row's with n replaced by t.
     #[test]
     fn tangential_coefficients_replace_the_normal() {

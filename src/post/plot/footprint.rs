@@ -215,10 +215,7 @@ fn friction(
     let scale = cell / f.max;
     let mut taken = std::collections::HashSet::new();
     for (i, p) in pts.iter().enumerate() {
-        let key = (
-            ((p.0 - lo.0) / cell) as i64,
-            ((p.1 - lo.1) / cell) as i64,
-        );
+        let key = (((p.0 - lo.0) / cell) as i64, ((p.1 - lo.1) / cell) as i64);
         let v = inplane[i];
         if state[used[i]] == 0 || v.0.hypot(v.1) <= 1e-3 * f.max || !taken.insert(key) {
             continue;

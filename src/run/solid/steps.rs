@@ -132,7 +132,8 @@ pub fn solve_solid(
         }
         let mut out = crate::post::solid_output(&model, &file.materials, &res.x);
         let mut contact = contact_output(prep, &model, &out.displacement, &res.lambda, &res.active);
-        let stick_slip = crate::post::solid_friction::solid_friction_output(&model, &res, &mut contact);
+        let stick_slip =
+            crate::post::solid_friction::solid_friction_output(&model, &res, &mut contact);
         let mut f3 = forces(prep, &model, &out.displacement, &contact);
         super::forces::add_stick_slip(&model, &mut f3, &stick_slip);
         out.reaction = f3.reaction.clone();
