@@ -111,14 +111,17 @@ pub(super) fn footprints(
             .map(|&r| step.contact_pressure[r])
             .fold(f64::NEG_INFINITY, f64::max);
         let nactive = rows.iter().filter(|&&r| step.active[r] != 0).count();
+        let fr = friction(step, &rows, &used, &pts, &ltris, &frame);
+        let stick_slip = fr.counts.map_or(String::new(), |(a, b)| {
+            format!("; {a} stick, {b} slip (white line)")
+        });
         let title = format!(
-            "{name}: {nactive} of {} rows active; plane normal ({}, {}, {})",
+            "{name}: {nactive} of {} rows active{stick_slip}; plane normal ({}, {}, {})",
             rows.len(),
             fmt_num(round3(n[0])),
             fmt_num(round3(n[1])),
             fmt_num(round3(n[2]))
         );
-        let fr = friction(step, &rows, &used, &pts, &ltris, &frame);
         // Rows without a slave triangle (a surface's isolated nodes) are
         // counted, not drawn.
         if !ltris.is_empty() {
@@ -196,7 +199,9 @@ fn friction(
         rows.iter().filter(|&&r| state[r] == 2).count(),
     ));
     let slips: Vec<bool> = used.iter().map(|&r| state[r] == 2).collect();
+    // The ½ contour only: the surface's own edges keep the active set's red.
     f.zones = active_boundary(pts, ltris, &slips).0;
+    f.zones.truncate(contour_len(ltris, &slips));
     let tau = &step.tangential_traction;
     let inplane: Vec<P2> = used
         .iter()
@@ -223,6 +228,17 @@ fn friction(
         f.arrows.push([*p, (p.0 + scale * v.0, p.1 + scale * v.1)]);
     }
     f
+}
+
+/// How many of [`active_boundary`]'s segments are the ½ contour inside
+/// the triangles (they come first): one per triangle with mixed flags.
+fn contour_len(tris: &[[usize; 3]], flag: &[bool]) -> usize {
+    tris.iter()
+        .filter(|t| {
+            let on = t.iter().filter(|&&i| flag[i]).count();
+            on == 1 || on == 2
+        })
+        .count()
 }
 
 fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
