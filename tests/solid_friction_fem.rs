@@ -249,12 +249,16 @@ fn friction_outputs_on_a_synthetic_result() {
     assert_eq!(c.friction_state.len(), r);
     assert_eq!(counts.len(), 1);
     assert_eq!(counts[0].0 + counts[0].1, m.qp.m(), "every row in contact");
-    // Synthetic: row i gets λ_t = (i, −2i) scaled; the first at the bound.
+    // Synthetic: row i gets λ_t ∥ (1, −2), the first row with two
+    // tangential rows at the bound, the others well inside.
     let qm = m.qp.m();
     let bound: Vec<f64> = res.lambda.iter().map(|l| 0.3 * l).collect();
+    let f = m.qp.friction.as_ref().unwrap();
+    let idle = |j: usize| f.t.indptr[j] == f.t.indptr[j + 1];
+    let first = (0..qm).find(|&i| !idle(2 * i) && !idle(2 * i + 1)).unwrap();
     for i in 0..qm {
-        let k = if i == 0 {
-            bound[0] / 5f64.sqrt()
+        let k = if i == first {
+            bound[i] / 5f64.sqrt()
         } else {
             1e-3 * bound[i] / 5f64.sqrt()
         };
@@ -263,25 +267,34 @@ fn friction_outputs_on_a_synthetic_result() {
     }
     let mut c = signorini::output::SolidContactOutput::default();
     let counts = signorini::post::solid_friction::solid_friction_output(&m, &res, &mut c);
+    let mut slipping = 0;
     for (i, &rw) in m.qp_rows.iter().enumerate() {
         let row = &m.contact[rw];
         let (t, held) = friction_frame(row, &m.dofs[row.slave]);
-        let l2 = if held { 0.0 } else { res.lambda_t[2 * i + 1] };
+        // A tangential row without unknowns carries no force (t0 = 0 here).
+        let idle = |k: usize| f.t.indptr[2 * i + k] == f.t.indptr[2 * i + k + 1];
+        assert!(!held || idle(1), "a held second row is empty");
+        let l1 = if idle(0) { 0.0 } else { res.lambda_t[2 * i] };
+        let l2 = if idle(1) {
+            0.0
+        } else {
+            res.lambda_t[2 * i + 1]
+        };
         for k in 0..3 {
-            let want = (res.lambda_t[2 * i] * t[0][k] + l2 * t[1][k]) / row.area;
+            let want = (l1 * t[0][k] + l2 * t[1][k]) / row.area;
             assert!((c.tangential_traction[rw][k] - want).abs() <= 1e-12 * want.abs().max(1.0));
         }
         // Tangential to the row.
         assert!(dot(c.tangential_traction[rw], row.normal).abs() < 1e-9 * bound[i] / row.area);
-        let want_state = if i == 0 && !held { 2 } else { 1 };
-        assert_eq!(c.friction_state[rw], want_state, "row {i}");
+        let at_bound = i == first;
+        assert_eq!(
+            c.friction_state[rw],
+            if at_bound { 2 } else { 1 },
+            "row {i}"
+        );
+        slipping += usize::from(at_bound);
     }
-    let first_held = friction_frame(
-        &m.contact[m.qp_rows[0]],
-        &m.dofs[m.contact[m.qp_rows[0]].slave],
-    )
-    .1;
-    assert_eq!(counts[0].1, usize::from(!first_held));
+    assert_eq!((counts[0].1, slipping), (1, 1));
 }
 
 /// A frictional pair none of whose rows has an unknown is refused naming

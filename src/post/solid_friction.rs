@@ -15,9 +15,9 @@ fn combine(t: &[[f64; 3]; 2], a: f64, b: f64) -> [f64; 3] {
 
 /// Fill `c`'s friction fields from `res` on `model` (left empty without
 /// friction or for a result without tangential forces, e.g. unbounded).
-/// A row's second tangent held by a plane of symmetry (its tangential row
-/// empty, `contact3d::friction::friction_frame`) carries no force: its λ_t2
-/// is left out. A row in contact slips when ‖λ_t‖ ≥ (1 − [`STICK_MARGIN`])·s.
+/// A tangential row without unknowns and offset (the second of a row on a
+/// plane of symmetry, `contact3d::friction::friction_frame`, or both on a
+/// symmetry edge) carries no force: its λ_t is left out. A row in contact slips when ‖λ_t‖ ≥ (1 − [`STICK_MARGIN`])·s.
 /// Returns the rows that stick and that slip per interface (empty without
 /// friction).
 pub fn solid_friction_output(
@@ -44,9 +44,20 @@ pub fn solid_friction_output(
     let mut counts = vec![(0, 0); nif];
     for (qi, &r) in model.qp_rows.iter().enumerate() {
         let row = &model.contact[r];
-        let (t, held) = &fr[r];
-        let l1 = res.lambda_t[2 * qi];
-        let l2 = if *held { 0.0 } else { res.lambda_t[2 * qi + 1] };
+        let (t, _) = &fr[r];
+        // A tangential row without unknowns or offset (a plane of symmetry,
+        // an edge of two) carries no force: its λ is whatever the method
+        // left, and is left out.
+        let idle = |k: usize| {
+            let i = 2 * qi + k;
+            f.t.indptr[i] == f.t.indptr[i + 1] && f.t0[i] == 0.0
+        };
+        let l1 = if idle(0) { 0.0 } else { res.lambda_t[2 * qi] };
+        let l2 = if idle(1) {
+            0.0
+        } else {
+            res.lambda_t[2 * qi + 1]
+        };
         let ft = combine(t, l1, l2);
         c.tangential_force[r] = ft;
         if row.area > 0.0 {
