@@ -256,12 +256,8 @@ fn friction_outputs_on_a_synthetic_result() {
     let f = m.qp.friction.as_ref().unwrap();
     let idle = |j: usize| f.t.indptr[j] == f.t.indptr[j + 1];
     let first = (0..qm).find(|&i| !idle(2 * i) && !idle(2 * i + 1)).unwrap();
-    for i in 0..qm {
-        let k = if i == first {
-            bound[i] / 5f64.sqrt()
-        } else {
-            1e-3 * bound[i] / 5f64.sqrt()
-        };
+    for (i, b) in bound.iter().enumerate() {
+        let k = if i == first { 1.0 } else { 1e-3 } * b / 5f64.sqrt();
         res.lambda_t[2 * i] = k;
         res.lambda_t[2 * i + 1] = -2.0 * k;
     }
@@ -280,9 +276,9 @@ fn friction_outputs_on_a_synthetic_result() {
         } else {
             res.lambda_t[2 * i + 1]
         };
-        for k in 0..3 {
+        for (k, got) in c.tangential_traction[rw].iter().enumerate() {
             let want = (l1 * t[0][k] + l2 * t[1][k]) / row.area;
-            assert!((c.tangential_traction[rw][k] - want).abs() <= 1e-12 * want.abs().max(1.0));
+            assert!((got - want).abs() <= 1e-12 * want.abs().max(1.0));
         }
         // Tangential to the row.
         assert!(dot(c.tangential_traction[rw], row.normal).abs() < 1e-9 * bound[i] / row.area);

@@ -311,9 +311,15 @@ mod tests {
         let mut bad = row([f64::NAN; 3]);
         bad.tangents = [[f64::NAN; 3]; 2];
         let path = Path::new("p.toml");
-        let e = build(&[bad], &[0], &dofs, 9, &[c.clone()], path, |p| {
-            100 + p as u64
-        })
+        let e = build(
+            &[bad],
+            &[0],
+            &dofs,
+            9,
+            std::slice::from_ref(&c),
+            path,
+            |p| 100 + p as u64,
+        )
         .unwrap_err();
         assert_eq!(e.path, path);
         assert!(
@@ -326,7 +332,7 @@ mod tests {
             &[0],
             &dofs,
             9,
-            &[c.clone()],
+            std::slice::from_ref(&c),
             path,
             |p| p as u64,
         )
