@@ -35,14 +35,19 @@ use crate::qp::{
     tangential_norm, Context, Failure, Friction, IterRecord, Output, QpError, QpProblem, Status,
 };
 
+/// Steps without a better residual after which the direct Coulomb
+/// iteration ([`PlaneTresca::coulomb`]) gives way to the shared loop.
+const DIRECT_STALL: usize = 8;
+
 /// How a contact row's tangential pair is held in a working set.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Disc {
     /// T_i x = t0_i: both rows constraints.
     Stick,
-    /// The force sᵢe along the unit e (in the row's frame), the slip held
-    /// to e's line.
-    Slip([f64; 2]),
+    /// The force sᵢe along the unit e (in the row's frame); across e, the
+    /// Newton step's compliance κ: the slip across is κ times the force
+    /// across (κ = 0: held to e's line).
+    Slip([f64; 2], f64),
     /// No force, no constraint (sᵢ = 0, or an open row of the glued start).
     Free,
 }
@@ -51,7 +56,7 @@ impl Disc {
     fn kind(self) -> u8 {
         match self {
             Disc::Stick => 0,
-            Disc::Slip(_) => 1,
+            Disc::Slip(..) => 1,
             Disc::Free => 2,
         }
     }
@@ -63,6 +68,9 @@ struct BRow {
     vals: Vec<f64>,
     rhs: f64,
     rho: f64,
+    /// A compliant row (a slipping row's force across its direction): a
+    /// spring of this stiffness 1/κ in K, no multiplier.
+    spring: Option<f64>,
     /// What its multiplier is: the normal force of row i, a tangential
     /// component k of row i, or the λ⊥ of a slipping row i.
     of: Of,
@@ -88,7 +96,11 @@ pub(super) fn solve(qp: &QpProblem, fr: &Friction, ctx: &mut Context) -> Result<
     let r = crate::linalg::kernel::orthonormal_kernel(&qp.c, &qp.kernel)?;
     let mut st = State::new(qp, fr, r, ctx);
     st.hold_free_bodies();
-    let mut step = PlaneTresca { st, ctx, steps: 0 };
+    let mut step = PlaneTresca {
+        st,
+        ctx,
+        steps: 0,
+    };
     let proven = coulomb::certificate(qp);
     coulomb::solve(fr, &mut step, "ssn", &proven, ctx.settings.kkt_target)
 }
@@ -117,7 +129,31 @@ impl TrescaStep for PlaneTresca<'_, '_> {
                 st.glued = false;
             }
         }
+        st.coulomb = None;
+        self.run()
+    }
+
+    /// Coulomb's problem directly: the Newton steps with the bound
+    /// s = μλ_n of the current iterate, from the glued answer
+    /// (docs/methods.md §12.3); not settled, the shared loop goes on
+    /// with Tresca problems from the glued answer.
+    fn coulomb(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+        let st = &mut self.st;
+        st.coulomb = Some(mu.to_vec());
+        st.s = crate::qp::coulomb_bound(mu, &st.ln);
+        st.glued = false;
+        let r = self.run();
+        self.st.coulomb = None;
+        Some(r)
+    }
+}
+
+impl PlaneTresca<'_, '_> {
+    /// Newton steps from the current state until the sets settle.
+    fn run(&mut self) -> Result<Tresca, QpError> {
+        let st = &mut self.st;
         st.started = false;
+        st.visited.clear();
         st.best = (f64::INFINITY, 0);
         let mut exec = self.ctx.executor("ssn");
         exec.max_iter = exec.max_iter.saturating_sub(self.steps);
@@ -160,11 +196,16 @@ struct State<'a> {
     lt: Vec<f64>,
     s: Vec<f64>,
     glued: bool,
+    /// Coulomb's coefficients while the direct iteration runs (s = μλ_n
+    /// of the current iterate).
+    coulomb: Option<Vec<f64>>,
     in_n: Vec<bool>,
     tang: Vec<Disc>,
     /// A step of the current solve has been taken (the first takes the
     /// sets as they stand).
     started: bool,
+    /// The patterns (N, each row's kind) of this solve's steps.
+    visited: std::collections::HashSet<(Vec<bool>, Vec<u8>)>,
     /// A solve has ended before (the next starts from its answer).
     solved: bool,
     /// Steps of all solves, for the log.
@@ -185,11 +226,7 @@ impl<'a> State<'a> {
         let cn = row_stiffness(&qp.a, &diag, cmean, 1.0);
         let kt = row_stiffness(&fr.t, &diag, cmean, 1.0);
         let kt: Vec<f64> = (0..m).map(|i| kt[2 * i].min(kt[2 * i + 1])).collect();
-        let rho = cn
-            .iter()
-            .zip(&kt)
-            .map(|(a, b)| [RHO * a, RHO * b])
-            .collect();
+        let rho = cn.iter().zip(&kt).map(|(a, b)| [RHO * a, RHO * b]).collect();
         let ct = kt.iter().map(|k| CT_FACTOR * k).collect();
         let x = ctx.x0.map_or_else(|| vec![0.0; n], |x0| x0.to_vec());
         let ax = qp.a.mul(&x);
@@ -210,9 +247,11 @@ impl<'a> State<'a> {
             lt: vec![0.0; 2 * m],
             s: vec![0.0; m],
             glued: true,
+            coulomb: None,
             in_n,
             tang: vec![Disc::Stick; m],
             started: false,
+            visited: std::collections::HashSet::new(),
             solved: false,
             outer: 0,
             ax,
@@ -237,9 +276,7 @@ impl<'a> State<'a> {
             work.abs() > 1e-8 * scale
         });
         if loaded {
-            log::debug!(
-                "ssn: discs: the closed rows leave a rigid motion free: every row starts in N"
-            );
+            log::debug!("ssn: discs: the closed rows leave a rigid motion free: every row starts in N");
             self.in_n = vec![true; self.qp.m()];
         }
     }
@@ -276,11 +313,49 @@ impl<'a> State<'a> {
                 if nx <= self.s[i] {
                     Disc::Stick
                 } else {
-                    Disc::Slip([xi[0] / nx, xi[1] / nx])
+                    // Newton on λ_t = s ξ/‖ξ‖ at ξ: along ê the force is s;
+                    // across, λ⊥ = (s/‖ξ‖)(λ⊥ + c_t v⊥), so v⊥ = κλ⊥.
+                    let kappa = (nx - self.s[i]) / (self.s[i] * self.ct[i]);
+                    Disc::Slip([xi[0] / nx, xi[1] / nx], kappa)
                 }
             })
             .collect();
         (in_n, tang)
+    }
+
+    /// Move the sets one row towards the prediction (`n_set`, `tang`): the
+    /// row whose prediction is violated most (normal: |λ_n + c(Ax − g)|,
+    /// tangential: |‖λ_t + c_t v‖ − s|); rows that slip in both keep the
+    /// predicted direction.
+    fn single_change(&mut self, n_set: &[bool], tang: &[Disc]) {
+        let qp = self.qp;
+        let mut best: Option<(f64, usize, bool)> = None;
+        for i in 0..qp.m() {
+            if n_set[i] != self.in_n[i] {
+                let sc = (self.ln[i] + self.cn[i] * (self.ax[i] - qp.g[i])).abs();
+                if best.is_none_or(|b| sc > b.0) {
+                    best = Some((sc, i, false));
+                }
+            }
+            if tang[i].kind() != self.tang[i].kind() {
+                let v = self.v(i);
+                let xi = [
+                    self.lt[2 * i] + self.ct[i] * v[0],
+                    self.lt[2 * i + 1] + self.ct[i] * v[1],
+                ];
+                let sc = (tangential_norm(&xi) - self.s[i]).abs();
+                if best.is_none_or(|b| sc > b.0) {
+                    best = Some((sc, i, true));
+                }
+            } else if matches!(tang[i], Disc::Slip(..)) {
+                self.tang[i] = tang[i];
+            }
+        }
+        match best {
+            Some((_, i, false)) => self.in_n[i] = n_set[i],
+            Some((_, i, true)) => self.tang[i] = tang[i],
+            None => {}
+        }
     }
 
     /// The rows of B for the sets (`in_n`, `tang`).
@@ -295,6 +370,7 @@ impl<'a> State<'a> {
                 vals: v.to_vec(),
                 rhs: qp.g[i],
                 rho: self.rho[i][0],
+                spring: None,
                 of: Of::Normal(i),
             });
         }
@@ -308,18 +384,24 @@ impl<'a> State<'a> {
                             vals: v.to_vec(),
                             rhs: self.fr.t0[2 * i + k],
                             rho: self.rho[i][1],
+                            spring: None,
                             of: Of::Tangential(i, k),
                         });
                     }
                 }
-                Disc::Slip(e) => {
+                Disc::Slip(e, kappa) => {
                     let w = [-e[1], e[0]];
                     let (cols, vals) = combine(t, i, w);
+                    // A spring 1/κ softer than the row's ρ goes into K as
+                    // it is; a stiffer one is held as a constraint (the
+                    // step is then Newton's to κ/ρ⁻¹, no worse conditioned).
+                    let k_s = 1.0 / kappa;
                     rows.push(BRow {
                         cols,
                         vals,
                         rhs: w[0] * self.fr.t0[2 * i] + w[1] * self.fr.t0[2 * i + 1],
                         rho: self.rho[i][1],
+                        spring: (k_s <= self.rho[i][1]).then_some(k_s),
                         of: Of::Across(i),
                     });
                 }
@@ -412,7 +494,7 @@ impl<'a> State<'a> {
         let mut dp = qp.d.clone();
         let mut known = vec![0.0; 2 * m];
         for (i, d) in self.tang.iter().enumerate() {
-            if let (Disc::Slip(e), false) = (d, self.glued) {
+            if let (Disc::Slip(e, _), false) = (d, self.glued) {
                 known[2 * i] = -self.s[i] * e[0];
                 known[2 * i + 1] = -self.s[i] * e[1];
             }
@@ -429,6 +511,7 @@ impl<'a> State<'a> {
         let mut mu: Vec<f64> = rows
             .iter()
             .map(|b| match b.of {
+                _ if b.spring.is_some() => 0.0,
                 Of::Normal(i) => self.ln[i],
                 Of::Tangential(i, k) => self.lt[2 * i + k],
                 Of::Across(_) => 0.0,
@@ -440,7 +523,10 @@ impl<'a> State<'a> {
         for _ in 0..AL_MAX {
             let mut rhs = dp.clone();
             for (b, mk) in rows.iter().zip(&mu) {
-                let w = b.rho * b.rhs - mk;
+                let w = match b.spring {
+                    Some(k_s) => k_s * b.rhs,
+                    None => b.rho * b.rhs - mk,
+                };
                 for (&j, &a) in b.cols.iter().zip(&b.vals) {
                     rhs[j] += w * a;
                 }
@@ -450,15 +536,17 @@ impl<'a> State<'a> {
             let mut res = 0.0f64;
             for (b, mk) in rows.iter().zip(mu.iter_mut()) {
                 let bx: f64 = b.cols.iter().zip(&b.vals).map(|(&j, &a)| a * x[j]).sum();
-                *mk += b.rho * (bx - b.rhs);
-                res = res.max((bx - b.rhs).abs());
+                match b.spring {
+                    // The spring's force λ⊥ = (w x − r)/κ.
+                    Some(k_s) => *mk = k_s * (bx - b.rhs),
+                    None => {
+                        *mk += b.rho * (bx - b.rhs);
+                        res = res.max((bx - b.rhs).abs());
+                    }
+                }
             }
             let xs = norm_inf(&x).max(bscale).max(f64::MIN_POSITIVE);
-            stalled = if res > 0.5 * last * xs {
-                stalled + 1
-            } else {
-                0
-            };
+            stalled = if res > 0.5 * last * xs { stalled + 1 } else { 0 };
             last = res / xs;
             if res <= 1e-14 * xs || stalled >= AL_STALL {
                 break;
@@ -479,7 +567,7 @@ impl<'a> State<'a> {
                 Of::Normal(i) => self.ln[i] = *mk,
                 Of::Tangential(i, k) => self.lt[2 * i + k] = *mk,
                 Of::Across(i) => {
-                    if let Disc::Slip(e) = self.tang[i] {
+                    if let Disc::Slip(e, _) = self.tang[i] {
                         self.lt[2 * i] -= mk * e[1];
                         self.lt[2 * i + 1] += mk * e[0];
                     }
@@ -511,9 +599,10 @@ impl<'a> State<'a> {
             }
         }
         for b in rows {
+            let w = b.spring.unwrap_or(b.rho);
             for (&j, &a) in b.cols.iter().zip(&b.vals) {
                 for (&k, &c) in b.cols.iter().zip(&b.vals) {
-                    trip.push((j, k, b.rho * a * c));
+                    trip.push((j, k, w * a * c));
                 }
             }
         }
@@ -588,6 +677,11 @@ fn combine(t: &Csr, i: usize, w: [f64; 2]) -> (Vec<usize>, Vec<f64>) {
     (cols, vals)
 }
 
+/// A working set's pattern: N and each row's kind (directions left out).
+fn pattern(in_n: &[bool], tang: &[Disc]) -> (Vec<bool>, Vec<u8>) {
+    (in_n.to_vec(), tang.iter().map(|d| d.kind()).collect())
+}
+
 /// dᵀz and Σ|dⱼzⱼ|, the scale it is judged against.
 fn work_of_loads(d: &[f64], z: &[f64]) -> (f64, f64) {
     (dot(d, z), d.iter().zip(z).map(|(a, b)| (a * b).abs()).sum())
@@ -601,8 +695,17 @@ impl Iterative for State<'_> {
     fn step(&mut self) -> Step {
         if self.started || self.solved && !self.glued {
             let (n_set, tang) = self.predict();
-            self.in_n = n_set;
-            self.tang = tang;
+            let key = pattern(&n_set, &tang);
+            if key != pattern(&self.in_n, &self.tang) && self.visited.contains(&key) {
+                // A pattern seen before (the full step cycles: a normal set
+                // flipping between two where a glued block tilts): only
+                // the row that violates its prediction most changes, the
+                // directions of the rows that keep slipping are updated.
+                self.single_change(&n_set, &tang);
+            } else {
+                self.in_n = n_set;
+                self.tang = tang;
+            }
         } else {
             // The start: the rows in N stick (glued), or every row with a
             // positive bound sticks (a first Tresca problem); the others
@@ -621,19 +724,20 @@ impl Iterative for State<'_> {
                 .collect();
         }
         self.started = true;
+        self.visited.insert(pattern(&self.in_n, &self.tang));
         self.outer += 1;
         let it = self.outer;
         match self.solve_set() {
             Ok(None) => {
+                if let Some(mu) = &self.coulomb {
+                    self.s = crate::qp::coulomb_bound(mu, &self.ln);
+                }
                 let rec = self.record(it);
                 log::debug!(
                     "ssn: discs: |N| = {}, stick {}, slip {}: residual {:.3e}",
                     rec.active,
                     self.tang.iter().filter(|d| **d == Disc::Stick).count(),
-                    self.tang
-                        .iter()
-                        .filter(|d| matches!(d, Disc::Slip(_)))
-                        .count(),
+                    self.tang.iter().filter(|d| matches!(d, Disc::Slip(..))).count(),
                     rec.residual
                 );
                 if rec.residual < self.best.0 * (1.0 - 1e-9) {
@@ -641,7 +745,16 @@ impl Iterative for State<'_> {
                 } else {
                     self.best.1 += 1;
                 }
-                let budget = cycle_budget(self.qp.m());
+                // The direct Coulomb iteration gives up sooner: where it
+                // cycles (sets flipping at the stick zone's border as s
+                // moves with λ_n) the Tresca problems of the shared loop
+                // settle (the sliding block of docs/verification_3d.md
+                // walked 384 steps between two sets before).
+                let budget = if self.coulomb.is_some() {
+                    DIRECT_STALL
+                } else {
+                    cycle_budget(self.qp.m())
+                };
                 if self.best.1 > budget {
                     return Step::Done(
                         Status::Failed(Failure::Cycling {
@@ -700,10 +813,7 @@ mod tests {
             for (q_load, mu) in [(0.8, 0.5), (1.5, 0.5), (3.0, 1.0)] {
                 let n = 2.0;
                 let f = [q_load * dir[0], q_load * dir[1], -n];
-                for bound in [
-                    SlipBound::Coulomb(vec![mu]),
-                    SlipBound::Tresca(vec![mu * n]),
-                ] {
+                for bound in [SlipBound::Coulomb(vec![mu]), SlipBound::Tresca(vec![mu * n])] {
                     let r = solve(&friction_point3(4.0, f, bound.clone()));
                     assert!(r.status.converged(), "{deg}° {bound:?}: {:?}", r.status);
                     assert!((r.lambda[0] - n).abs() < 1e-12, "{:?}", r.lambda);
@@ -817,11 +927,7 @@ mod tests {
                 };
                 for c in 0..2 {
                     assert!((lg[c] - size * e[c]).abs() < 1e-10, "{i}: {lg:?}");
-                    assert!(
-                        (r.x[3 * i + c] - slip * e[c]).abs() < 1e-10,
-                        "{i}: {:?}",
-                        r.x
-                    );
+                    assert!((r.x[3 * i + c] - slip * e[c]).abs() < 1e-10, "{i}: {:?}", r.x);
                 }
             }
         }
