@@ -96,11 +96,7 @@ pub(super) fn solve(qp: &QpProblem, fr: &Friction, ctx: &mut Context) -> Result<
     let r = crate::linalg::kernel::orthonormal_kernel(&qp.c, &qp.kernel)?;
     let mut st = State::new(qp, fr, r, ctx);
     st.hold_free_bodies();
-    let mut step = PlaneTresca {
-        st,
-        ctx,
-        steps: 0,
-    };
+    let mut step = PlaneTresca { st, ctx, steps: 0 };
     let proven = coulomb::certificate(qp);
     coulomb::solve(fr, &mut step, "ssn", &proven, ctx.settings.kkt_target)
 }
@@ -226,7 +222,11 @@ impl<'a> State<'a> {
         let cn = row_stiffness(&qp.a, &diag, cmean, 1.0);
         let kt = row_stiffness(&fr.t, &diag, cmean, 1.0);
         let kt: Vec<f64> = (0..m).map(|i| kt[2 * i].min(kt[2 * i + 1])).collect();
-        let rho = cn.iter().zip(&kt).map(|(a, b)| [RHO * a, RHO * b]).collect();
+        let rho = cn
+            .iter()
+            .zip(&kt)
+            .map(|(a, b)| [RHO * a, RHO * b])
+            .collect();
         let ct = kt.iter().map(|k| CT_FACTOR * k).collect();
         let x = ctx.x0.map_or_else(|| vec![0.0; n], |x0| x0.to_vec());
         let ax = qp.a.mul(&x);
@@ -276,7 +276,9 @@ impl<'a> State<'a> {
             work.abs() > 1e-8 * scale
         });
         if loaded {
-            log::debug!("ssn: discs: the closed rows leave a rigid motion free: every row starts in N");
+            log::debug!(
+                "ssn: discs: the closed rows leave a rigid motion free: every row starts in N"
+            );
             self.in_n = vec![true; self.qp.m()];
         }
     }
@@ -546,7 +548,11 @@ impl<'a> State<'a> {
                 }
             }
             let xs = norm_inf(&x).max(bscale).max(f64::MIN_POSITIVE);
-            stalled = if res > 0.5 * last * xs { stalled + 1 } else { 0 };
+            stalled = if res > 0.5 * last * xs {
+                stalled + 1
+            } else {
+                0
+            };
             last = res / xs;
             if res <= 1e-14 * xs || stalled >= AL_STALL {
                 break;
@@ -737,7 +743,10 @@ impl Iterative for State<'_> {
                     "ssn: discs: |N| = {}, stick {}, slip {}: residual {:.3e}",
                     rec.active,
                     self.tang.iter().filter(|d| **d == Disc::Stick).count(),
-                    self.tang.iter().filter(|d| matches!(d, Disc::Slip(..))).count(),
+                    self.tang
+                        .iter()
+                        .filter(|d| matches!(d, Disc::Slip(..)))
+                        .count(),
                     rec.residual
                 );
                 if rec.residual < self.best.0 * (1.0 - 1e-9) {
@@ -813,7 +822,10 @@ mod tests {
             for (q_load, mu) in [(0.8, 0.5), (1.5, 0.5), (3.0, 1.0)] {
                 let n = 2.0;
                 let f = [q_load * dir[0], q_load * dir[1], -n];
-                for bound in [SlipBound::Coulomb(vec![mu]), SlipBound::Tresca(vec![mu * n])] {
+                for bound in [
+                    SlipBound::Coulomb(vec![mu]),
+                    SlipBound::Tresca(vec![mu * n]),
+                ] {
                     let r = solve(&friction_point3(4.0, f, bound.clone()));
                     assert!(r.status.converged(), "{deg}° {bound:?}: {:?}", r.status);
                     assert!((r.lambda[0] - n).abs() < 1e-12, "{:?}", r.lambda);
@@ -927,7 +939,11 @@ mod tests {
                 };
                 for c in 0..2 {
                     assert!((lg[c] - size * e[c]).abs() < 1e-10, "{i}: {lg:?}");
-                    assert!((r.x[3 * i + c] - slip * e[c]).abs() < 1e-10, "{i}: {:?}", r.x);
+                    assert!(
+                        (r.x[3 * i + c] - slip * e[c]).abs() < 1e-10,
+                        "{i}: {:?}",
+                        r.x
+                    );
                 }
             }
         }
