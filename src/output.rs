@@ -121,6 +121,14 @@ pub struct SolidContactOutput {
     pub active: Vec<bool>,
     /// p − p_ref of `[output] reference_step` (empty before it or without).
     pub pressure_change: Vec<f64>,
+    /// With friction (else empty; docs/methods.md §12.6), per row in
+    /// global coordinates: the tangential force λ_t1 t1 + λ_t2 t2 on the
+    /// slave point (N), it over the tributary area (Pa), the step's slip
+    /// v1 t1 + v2 t2 (m), and the state 0 open, 1 stick, 2 slip.
+    pub tangential_force: Vec<[f64; 3]>,
+    pub tangential_traction: Vec<[f64; 3]>,
+    pub slip: Vec<[f64; 3]>,
+    pub friction_state: Vec<u8>,
 }
 
 /// The fields of one solved (load) step.
@@ -284,5 +292,12 @@ pub struct SolidStep {
     pub contact_pressure: Vec<f64>,
     pub gap: Vec<f64>,
     pub active: Vec<u8>,
+    /// With friction (else empty): per contact row the tangential force
+    /// (N), traction (Pa) and slip (m) in global coordinates, and the state
+    /// 0 open, 1 stick, 2 slip.
+    pub tangential_force: Vec<[f64; 3]>,
+    pub tangential_traction: Vec<[f64; 3]>,
+    pub slip: Vec<[f64; 3]>,
+    pub friction_state: Vec<u8>,
     pub info: StepInfo,
 }

@@ -127,6 +127,15 @@ pub fn run(a: &PlotArgs, quiet: bool) -> i32 {
             i.axes[0],
             i.axes[1]
         );
+        if let (Some(stick), Some(slip)) = (i.stick, i.slip) {
+            crate::outln!(
+                "friction {}: {stick} rows stick, {slip} slip (the slip zone outlined in white); {} traction arrows, the longest {} {}",
+                i.name,
+                i.arrows,
+                n(i.max_tangential),
+                u.stress
+            );
+        }
     }
     if !s.interfaces.is_empty() {
         crate::outln!(

@@ -200,6 +200,12 @@ fn print_solid_report(prep: &SolidPrepared, o: &run::SolidOutcome) {
             it.rows,
             it.max_pressure
         );
+        if let (Some(stick), Some(slip)) = (it.stick, it.slip) {
+            crate::outln!(
+                "friction    '{name}': {stick} rows stick, {slip} slip; friction residual {:.2e}",
+                k.friction
+            );
+        }
     }
     let (lf, lm) = (s.loads.force, s.loads.moment);
     crate::outln!(

@@ -47,8 +47,8 @@ pub struct SolidInput {
     pub traction: Vec<(String, SolidTraction)>,
     /// `[[contact]]`, the 2D contract on surfaces: `on` a surface between
     /// two bodies (the mesh is cut there), or `slave`/`master` surfaces of
-    /// two bodies (node-to-surface rows; mortar and friction are refused
-    /// for now, docs/design.md).
+    /// two bodies (mortar or node-to-surface rows), with friction
+    /// (docs/methods.md §12).
     pub contact: Vec<Contact>,
 }
 
@@ -292,17 +292,12 @@ fn contact_what(i: usize, c: &Contact) -> String {
     format!("[[contact]] #{} ({})", i + 1, c.keys())
 }
 
-/// What 3D contact does not have yet, refused naming the entry: friction
-/// (issue 46), one row per triangle normal.
+/// What 3D contact does not have, refused naming the entry: one row per
+/// triangle normal.
 fn check_supported_contact(contact: &[Contact], path: &Path) -> Result<(), FemError> {
     for (i, c) in contact.iter().enumerate() {
         let what = contact_what(i, c);
         let no = |why: &str| Err(FemError::new(path, format!("{what}: {why}")));
-        if c.has_friction() {
-            return no(
-                "friction in a 3D model is not implemented yet (issue 46); remove friction/tresca",
-            );
-        }
         if let ContactPair::Conforming {
             normals: NormalKind::Segment,
             ..
@@ -734,16 +729,26 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         )));
     }
     let near = near_kernel(&points, &point_body, nbodies, &dofs, n);
+    // Friction: two tangential rows per QP row (docs/methods.md §12.2).
+    let friction = super::contact3d::friction::build(
+        &contact,
+        &qp_rows,
+        &dofs,
+        n,
+        &input.contact,
+        path,
+        node_tag,
+    )?;
     let qp = QpProblem {
         c,
         d,
         a,
         g,
         kernel,
-        friction: None,
+        friction,
         near,
     };
-    Ok(SolidModel {
+    let mut model = SolidModel {
         kind,
         points,
         point_node,
@@ -759,7 +764,10 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         qp_rows,
         interface_names,
         kernel_body,
-    })
+    };
+    // The slip of a single solve or first step: from the reference (§12.2).
+    super::contact3d::friction::start_step(&mut model, None);
+    Ok(model)
 }
 
 /// Each body's box centre and size, the frame of its rigid motions.

@@ -5,6 +5,7 @@
 pub mod forces;
 pub mod friction;
 pub mod plot;
+pub mod solid_friction;
 
 use crate::fem::element::Point;
 use crate::fem::{element, Model};

@@ -4,6 +4,7 @@
 //! and a tangent frame (for the two tangential rows of 3D friction, issue
 //! 46), then the rows in the reduced unknowns as in 2D (`contact.rs`).
 
+pub mod friction;
 mod mortar;
 mod nts;
 pub mod search;

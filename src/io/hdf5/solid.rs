@@ -125,6 +125,37 @@ fn check_attrs(ctx: &Ctx, attrs: &[(&str, String)]) -> Result<(), IoError> {
     Ok(())
 }
 
+/// The friction arrays of a step (docs/methods.md §12.6), 2D's names with
+/// three columns: `multipliers_t` the tangential force (N), `tangential_traction`
+/// (Pa), `slip` (m) as \[r, 3\] in global coordinates, `state` \[r\].
+fn write_solid_friction(
+    ctx: &Ctx,
+    s: &Group,
+    c: &crate::output::SolidContactOutput,
+) -> Result<(), IoError> {
+    let r = c.points.len();
+    for (what, got) in [
+        ("multipliers_t", c.tangential_force.len()),
+        ("tangential_traction", c.tangential_traction.len()),
+        ("slip", c.slip.len()),
+        ("state", c.friction_state.len()),
+    ] {
+        if got != r {
+            return Err(ctx.format(format!(
+                "step field {what} has {got} entries, the contact rows {r}"
+            )));
+        }
+    }
+    for (name, v) in [
+        ("multipliers_t", &c.tangential_force),
+        ("tangential_traction", &c.tangential_traction),
+        ("slip", &c.slip),
+    ] {
+        write_ds(ctx, s, name, &[r, 3], v.as_flattened())?;
+    }
+    write_ds(ctx, s, "state", &[r], &c.friction_state)
+}
+
 fn check_sizes(
     ctx: &Ctx,
     out: &crate::output::SolidOutput,
@@ -241,6 +272,9 @@ fn write_step(
     write_ds(ctx, &s, "gap", &[r], &contact.gap)?;
     let active: Vec<u8> = contact.active.iter().map(|&a| u8::from(a)).collect();
     write_ds(ctx, &s, "active", &[r], &active)?;
+    if !contact.friction_state.is_empty() {
+        write_solid_friction(ctx, &s, contact)?;
+    }
     if let Some(c) = &out.change {
         write_ds(
             ctx,

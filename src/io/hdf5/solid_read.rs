@@ -183,6 +183,24 @@ fn read_step(
     } else {
         read_ds::<u8>(ctx, g, "active", None, Some(r))?.1
     };
+    // Friction (all four, or none).
+    let (mut tangential_force, mut tangential_traction, mut slip, mut friction_state) =
+        (vec![], vec![], vec![], vec![]);
+    if g.link_exists("multipliers_t") {
+        let vecs = |name: &str| -> Result<Vec<[f64; 3]>, IoError> {
+            Ok(triples(&read_ds::<f64>(ctx, g, name, Some(3), Some(r))?.1))
+        };
+        tangential_force = vecs("multipliers_t")?;
+        tangential_traction = vecs("tangential_traction")?;
+        slip = vecs("slip")?;
+        friction_state = read_ds::<u8>(ctx, g, "state", None, Some(r))?.1;
+        if let Some(&bad) = friction_state.iter().find(|&&v| v > 2) {
+            return Err(ctx.format(format!(
+                "{}/state: {bad} is not 0 (open), 1 (stick) or 2 (slip)",
+                g.name()
+            )));
+        }
+    }
     Ok(SolidStep {
         index,
         time: get_attr(ctx, g, "time")?,
@@ -197,6 +215,10 @@ fn read_step(
         contact_pressure: rows("contact_pressure")?,
         gap: rows("gap")?,
         active,
+        tangential_force,
+        tangential_traction,
+        slip,
+        friction_state,
         info: read_step_info(ctx, g)?,
     })
 }

@@ -487,6 +487,27 @@ pub fn write_solid_contact_vtu(
             c.pressure_change.clone(),
         ));
     }
+    // Friction (docs/methods.md §12.6): 3-vectors in global coordinates
+    // and the state, as 2D's names.
+    if !c.friction_state.is_empty() {
+        check_len(path, "tangential_traction", c.tangential_traction.len(), n)?;
+        check_len(path, "slip", c.slip.len(), n)?;
+        check_len(path, "state", c.friction_state.len(), n)?;
+        for (name, v) in [
+            ("tangential_traction", &c.tangential_traction),
+            ("slip", &c.slip),
+        ] {
+            point.push(array(
+                name,
+                ElementType::Vectors,
+                IOBuffer::F64(v.as_flattened().to_vec()),
+            ));
+        }
+        point.push(i32_array(
+            "state",
+            c.friction_state.iter().map(|&a| i64::from(a)),
+        ));
+    }
     let piece = UnstructuredGridPiece {
         points: IOBuffer::F64(c.points.as_flattened().to_vec()),
         cells,

@@ -1,7 +1,9 @@
 //! The contact footprint of a 3D checkpoint: per interface, its slave
 //! triangles laid in the interface's own plane (through the centroid,
 //! normal to the mean row normal), filled by the contact pressure, the
-//! boundary of the active set outlined.
+//! boundary of the active set outlined; with friction the boundary of the
+//! slip zone (white) and the tangential traction as arrows (docs/methods.md
+//! §12.6).
 
 use super::cut::{cross, norm, sub, Frame};
 use super::panel::{Fill, Panel, P2};
@@ -28,6 +30,12 @@ pub struct FootprintSummary {
     /// The plane: its unit normal (the rows' mean) and axes.
     pub normal: [f64; 3],
     pub axes: [String; 2],
+    /// With friction: the rows in contact that stick and that slip, the
+    /// arrows drawn and the largest tangential traction \[Pa\].
+    pub stick: Option<usize>,
+    pub slip: Option<usize>,
+    pub arrows: usize,
+    pub max_tangential: f64,
 }
 
 /// The panels of the interfaces with slave triangles and the summaries of
@@ -103,8 +111,12 @@ pub(super) fn footprints(
             .map(|&r| step.contact_pressure[r])
             .fold(f64::NEG_INFINITY, f64::max);
         let nactive = rows.iter().filter(|&&r| step.active[r] != 0).count();
+        let fr = friction(step, &rows, &used, &pts, &ltris, &frame);
+        let stick_slip = fr.counts.map_or(String::new(), |(a, b)| {
+            format!("; {a} stick, {b} slip (white line)")
+        });
         let title = format!(
-            "{name}: {nactive} of {} rows active; plane normal ({}, {}, {})",
+            "{name}: {nactive} of {} rows active{stick_slip}; plane normal ({}, {}, {})",
             rows.len(),
             fmt_num(round3(n[0])),
             fmt_num(round3(n[1])),
@@ -121,6 +133,8 @@ pub(super) fn footprints(
                 fill: Fill::Nodal(p),
                 edges,
                 outline,
+                zones: fr.zones,
+                arrows: fr.arrows.clone(),
             });
         }
         out.push(FootprintSummary {
@@ -135,9 +149,100 @@ pub(super) fn footprints(
             max_pressure,
             normal: n,
             axes: frame.labels,
+            stick: fr.counts.map(|c| c.0),
+            slip: fr.counts.map(|c| c.1),
+            arrows: fr.arrows.len(),
+            max_tangential: fr.max,
         });
     }
     (panels, out)
+}
+
+/// At most this many traction arrows across a footprint's width.
+const ARROWS_ACROSS: f64 = 16.0;
+
+/// What friction adds to a footprint.
+struct FootprintFriction {
+    /// The slip zone's boundary in the plane.
+    zones: Vec<[P2; 2]>,
+    /// Tangential traction arrows (tail at the row, length ∝ traction).
+    arrows: Vec<[P2; 2]>,
+    /// Rows in contact that stick, that slip (None without friction).
+    counts: Option<(usize, usize)>,
+    max: f64,
+}
+
+/// The slip zone (the ½ contour of the slip flag, linear on the
+/// triangles, as the active set's) and the traction arrows of the rows
+/// `rows` (`used`: the drawn rows, at `pts`), subsampled to one per cell of
+/// a grid [`ARROWS_ACROSS`] cells wide, the longest arrow one cell long.
+fn friction(
+    step: &SolidStep,
+    rows: &[usize],
+    used: &[usize],
+    pts: &[P2],
+    ltris: &[[usize; 3]],
+    frame: &Frame,
+) -> FootprintFriction {
+    let mut f = FootprintFriction {
+        zones: vec![],
+        arrows: vec![],
+        counts: None,
+        max: 0.0,
+    };
+    if step.friction_state.is_empty() {
+        return f;
+    }
+    let state = &step.friction_state;
+    f.counts = Some((
+        rows.iter().filter(|&&r| state[r] == 1).count(),
+        rows.iter().filter(|&&r| state[r] == 2).count(),
+    ));
+    let slips: Vec<bool> = used.iter().map(|&r| state[r] == 2).collect();
+    // The ½ contour only: the surface's own edges keep the active set's red.
+    f.zones = active_boundary(pts, ltris, &slips).0;
+    f.zones.truncate(contour_len(ltris, &slips));
+    let tau = &step.tangential_traction;
+    let inplane: Vec<P2> = used
+        .iter()
+        .map(|&r| (dot3(tau[r], frame.e1), dot3(tau[r], frame.e2)))
+        .collect();
+    f.max = inplane.iter().map(|v| v.0.hypot(v.1)).fold(0.0, f64::max);
+    if f.max <= 0.0 || pts.is_empty() {
+        return f;
+    }
+    let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
+    for p in pts {
+        lo = (lo.0.min(p.0), lo.1.min(p.1));
+        hi = (hi.0.max(p.0), hi.1.max(p.1));
+    }
+    let cell = ((hi.0 - lo.0).max(hi.1 - lo.1) / ARROWS_ACROSS).max(1e-300);
+    let scale = cell / f.max;
+    let mut taken = std::collections::HashSet::new();
+    for (i, p) in pts.iter().enumerate() {
+        let key = (((p.0 - lo.0) / cell) as i64, ((p.1 - lo.1) / cell) as i64);
+        let v = inplane[i];
+        if state[used[i]] == 0 || v.0.hypot(v.1) <= 1e-3 * f.max || !taken.insert(key) {
+            continue;
+        }
+        f.arrows.push([*p, (p.0 + scale * v.0, p.1 + scale * v.1)]);
+    }
+    f
+}
+
+/// How many of [`active_boundary`]'s segments are the ½ contour inside
+/// the triangles (they come first): one per triangle with mixed flags.
+fn contour_len(tris: &[[usize; 3]], flag: &[bool]) -> usize {
+    tris.iter()
+        .filter(|t| {
+            let on = t.iter().filter(|&&i| flag[i]).count();
+            on == 1 || on == 2
+        })
+        .count()
+}
+
+fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 fn round3(v: f64) -> f64 {

@@ -32,6 +32,10 @@ pub(super) struct Panel {
     pub edges: Vec<[P2; 2]>,
     /// Bold lines (the active set's boundary).
     pub outline: Vec<[P2; 2]>,
+    /// Bold white lines (friction: the boundary of the slip zone).
+    pub zones: Vec<[P2; 2]>,
+    /// Arrows from tail to tip (friction: the tangential traction).
+    pub arrows: Vec<[P2; 2]>,
 }
 
 /// Draws `panels` side by side (a grid of up to three columns) under
@@ -227,6 +231,29 @@ fn draw_panel<DB: DrawingBackend>(
                 .iter()
                 .map(|&[a, b]| PathElement::new(vec![a, b], bold)),
         )
+        .map_err(de)?;
+    let white = WHITE.stroke_width(((fs / 6.0).round() as u32).max(2));
+    chart
+        .draw_series(
+            p.zones
+                .iter()
+                .map(|&[a, b]| PathElement::new(vec![a, b], white)),
+        )
+        .map_err(de)?;
+    // Arrows: a shaft and two barbs of a quarter of its length at ±25°.
+    let thin = BLACK.stroke_width(((fs / 10.0).round() as u32).max(1));
+    let mut lines = Vec::with_capacity(3 * p.arrows.len());
+    for &[a, b] in &p.arrows {
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        lines.push(vec![a, b]);
+        for ang in [0.436f64, -0.436] {
+            let (c, s) = (ang.cos(), ang.sin());
+            let back = (-0.3 * (c * dx - s * dy), -0.3 * (s * dx + c * dy));
+            lines.push(vec![b, (b.0 + back.0, b.1 + back.1)]);
+        }
+    }
+    chart
+        .draw_series(lines.into_iter().map(|l| PathElement::new(l, thin)))
         .map_err(de)?;
     Ok(())
 }

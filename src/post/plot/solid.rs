@@ -348,6 +348,8 @@ fn cut_panel(
         fill,
         edges,
         outline: vec![],
+        zones: vec![],
+        arrows: vec![],
     };
     let summary = CutSummary {
         plane: plane.clone(),

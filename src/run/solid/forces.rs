@@ -45,8 +45,21 @@ pub(super) fn forces(
         it.active += usize::from(contact.active[r]);
         it.max_pressure = it.max_pressure.max(contact.pressure[r]);
         let slave_body = m.point_body[row.slave];
+        // With friction the tangential force F on the slave point, −w F on
+        // each master (−λ_t c_p of the tangential rows, docs/methods.md §12.6).
+        let ft = contact.tangential_force.get(r).copied();
         for (p, c) in row.coefficients() {
-            let f = c.map(|ck| -lam * ck);
+            let mut f = c.map(|ck| -lam * ck);
+            if let Some(ft) = ft {
+                let w = if p == row.slave {
+                    -1.0
+                } else {
+                    row.masters.iter().find(|q| q.0 == p).map_or(0.0, |q| q.1)
+                };
+                for k in 0..3 {
+                    f[k] -= w * ft[k];
+                }
+            }
             for k in 0..3 {
                 fc[p][k] += f[k];
             }
@@ -202,6 +215,17 @@ pub(super) fn forces(
         strain_energy,
         load_work,
         reaction,
+    }
+}
+
+/// Each interface's rows that stick and that slip (`stick_slip`, by
+/// interface id; empty without friction) into the summary's interfaces.
+pub(super) fn add_stick_slip(m: &SolidModel, f: &mut Forces3, stick_slip: &[(usize, usize)]) {
+    for (i, &(stick, slip)) in stick_slip.iter().enumerate() {
+        if let Some(it) = f.interfaces.get_mut(&m.interface_names[i]) {
+            it.stick = Some(stick);
+            it.slip = Some(slip);
+        }
     }
 }
 

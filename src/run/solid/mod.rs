@@ -265,9 +265,15 @@ pub struct Interface3 {
     pub active: usize,
     /// The largest λ / tributary area (N/m²).
     pub max_pressure: f64,
-    /// On the slave side, from the master side.
+    /// On the slave side, from the master side (normal and tangential
+    /// forces).
     #[serde(flatten)]
     pub resultant: Resultant3,
+    /// With friction: the rows in contact that stick, and that slip.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stick: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slip: Option<usize>,
 }
 
 /// The nearest node to a requested probe and its displacement.

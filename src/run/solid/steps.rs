@@ -76,6 +76,8 @@ pub fn solve_solid(
         let active = prep.model.qp_rows.iter().map(|&k| r.active[k]).collect();
         (r.displacement.clone(), active)
     });
+    // The last answer's λ_n and λ_t per contact row (frictional steps).
+    let mut lambda_prev: Option<RowMultipliers> = None;
     let mut last = None;
     // The fields of `[output] reference_step` once it is solved (or read
     // from the checkpoint a restart continues).
@@ -84,7 +86,12 @@ pub fn solve_solid(
     for s in first..nsteps {
         check_interrupt()?;
         let ts = Instant::now();
-        let model = step_model(prep, s)?;
+        let mut model = step_model(prep, s)?;
+        // Friction: the slip of this step is measured from the last step's
+        // displacements (docs/methods.md §12.2).
+        if let (Some(_), Some((u, _))) = (&model.qp.friction, &prev) {
+            crate::fem::contact3d::friction::start_step(model.to_mut(), Some(u));
+        }
         let t_assemble = if s == 0 {
             prep.t_assemble
         } else {
@@ -95,6 +102,10 @@ pub fn solve_solid(
             o.x0 = Some(reduce(&model, u));
             o.active0 = (active.len() == model.qp.m()).then(|| active.clone());
         }
+        o.lambda0 = lambda_prev
+            .as_ref()
+            .filter(|_| model.qp.friction.is_some())
+            .map(|l| l.reduce(&model));
         o.stop = Some(&SIGNAL);
         let t0 = Instant::now();
         let res = solve_in(prep, &model, method, &o, &ws);
@@ -121,7 +132,10 @@ pub fn solve_solid(
         }
         let mut out = crate::post::solid_output(&model, &file.materials, &res.x);
         let mut contact = contact_output(prep, &model, &out.displacement, &res.lambda, &res.active);
-        let f3 = forces(prep, &model, &out.displacement, &contact);
+        let stick_slip =
+            crate::post::solid_friction::solid_friction_output(&model, &res, &mut contact);
+        let mut f3 = forces(prep, &model, &out.displacement, &contact);
+        super::forces::add_stick_slip(&model, &mut f3, &stick_slip);
         out.reaction = f3.reaction.clone();
         // [output] reference_step: from step K on, the change since K.
         if let Some(k) = file.output.reference_step {
@@ -197,6 +211,7 @@ pub fn solve_solid(
         t_assemble_all += t_assemble;
         t_solve_all += time_solve;
         prev = Some((out.displacement.clone(), res.active.clone()));
+        lambda_prev = RowMultipliers::of(&model, &res);
         last = Some((model.into_owned(), res, out, contact, verdict, f3));
     }
     let Some((model, res, out, contact, verdict, f3)) = last else {
@@ -237,6 +252,46 @@ pub fn solve_solid(
         files: written,
         contact,
     }))
+}
+
+/// λ_n (one) and λ_t (two, in the row's friction frame) per contact row
+/// of a frictional answer: the multiplier warm start of the next step
+/// (docs/methods.md §8.3), carried by contact row since each step's model
+/// is built anew.
+struct RowMultipliers {
+    normal: Vec<f64>,
+    tangential: Vec<[f64; 2]>,
+}
+
+impl RowMultipliers {
+    /// Those of `res` on `model` (None: frictionless, or no λ_t).
+    fn of(model: &SolidModel, res: &QpResult) -> Option<Self> {
+        model.qp.friction.as_ref()?;
+        let m = model.qp.m();
+        if res.lambda.len() != m || res.lambda_t.len() != 2 * m {
+            return None;
+        }
+        let r = model.contact.len();
+        let mut out = RowMultipliers {
+            normal: vec![0.0; r],
+            tangential: vec![[0.0; 2]; r],
+        };
+        for (qi, &k) in model.qp_rows.iter().enumerate() {
+            out.normal[k] = res.lambda[qi];
+            out.tangential[k] = [res.lambda_t[2 * qi], res.lambda_t[2 * qi + 1]];
+        }
+        Some(out)
+    }
+
+    /// In `model`'s QP rows.
+    fn reduce(&self, model: &SolidModel) -> crate::qp::Multipliers {
+        let get = |k: usize| self.normal.get(k).copied().unwrap_or(0.0);
+        let get_t = |k: usize| self.tangential.get(k).copied().unwrap_or([0.0; 2]);
+        crate::qp::Multipliers {
+            normal: model.qp_rows.iter().map(|&k| get(k)).collect(),
+            tangential: model.qp_rows.iter().flat_map(|&k| get_t(k)).collect(),
+        }
+    }
 }
 
 /// ξ_p = T_pᵀ(u_p − u0_p): the QP unknowns of point displacements `u` in
@@ -531,7 +586,7 @@ fn summary(
         load_work: f.load_work,
         kkt: KktSummary {
             residuals: res.kkt,
-            friction_zero: None,
+            friction_zero: (m.qp.friction.is_some() && res.kkt.friction == 0.0).then_some(0.0),
             target: opts.settings.kkt_target,
             certified,
         },
