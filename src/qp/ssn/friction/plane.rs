@@ -129,6 +129,21 @@ impl TrescaStep for PlaneTresca<'_, '_> {
         self.run()
     }
 
+    /// A load step's start: the last step's multipliers (the caller's warm
+    /// start) and their bound μλ_n, in place of the glued start, whose
+    /// normal sets can cycle where the step drags a glued body far (the
+    /// sliding block of docs/verification_3d.md).
+    fn warm_bound(&mut self, mu: &[f64]) -> Option<Vec<f64>> {
+        let st = &mut self.st;
+        let l = st.warm.take()?;
+        log::debug!("ssn: discs: the fixed point starts from the last step's bound μλ_n");
+        st.in_n = l.normal.iter().map(|&v| v > 0.0).collect();
+        st.ln = l.normal;
+        st.lt = l.tangential;
+        st.solved = true;
+        Some(crate::qp::coulomb_bound(mu, &st.ln))
+    }
+
     /// Coulomb's problem directly: the Newton steps with the bound
     /// s = μλ_n of the current iterate, from the glued answer
     /// (docs/methods.md §12.3); not settled, the shared loop goes on
@@ -195,6 +210,8 @@ struct State<'a> {
     /// Coulomb's coefficients while the direct iteration runs (s = μλ_n
     /// of the current iterate).
     coulomb: Option<Vec<f64>>,
+    /// The caller's multipliers of a load step's start, until taken.
+    warm: Option<crate::qp::Multipliers>,
     in_n: Vec<bool>,
     tang: Vec<Disc>,
     /// A step of the current solve has been taken (the first takes the
@@ -248,6 +265,7 @@ impl<'a> State<'a> {
             s: vec![0.0; m],
             glued: true,
             coulomb: None,
+            warm: ctx.lambda0.cloned(),
             in_n,
             tang: vec![Disc::Stick; m],
             started: false,
