@@ -155,7 +155,7 @@ def case_cattaneo3d(args, work):
     the stick radius c = a (1 - Q/(mu P))^(1/3) and Mindlin's traction."""
     np, h5py = V.np, V.h5py
     d = vdir("cattaneo3d")
-    hc = 0.005 if args.fine else 0.015
+    hc = 0.0075 if args.fine else 0.015
     msh = os.path.join(work, "cattaneo3d.msh")
     V.mesh(args, os.path.join(d, "cattaneo3d.geo"), {"hc": hc}, msh, dim=3)
     mu, E, nu, R = 0.5, 2.0e11, 0.3, 1.0
@@ -306,7 +306,7 @@ def case_shrinkfit3d(args, work):
     full slip against mu p 2 pi c^2 L."""
     np, h5py = V.np, V.h5py
     d = vdir("shrinkfit3d")
-    n, N = (12, 32) if args.fine else (6, 16)
+    n, N = (10, 24) if args.fine else (6, 16)
     a, c, b, L, delta, E, nu, mu = 0.5, 1.0, 1.5, 0.5, 1.0e-3, 2.0e11, 0.3, 0.2
     p = V.shrink_fit_pressure(a, c, b, delta, E, nu)
     geo = os.path.join(d, "shrinkfit3d.geo")

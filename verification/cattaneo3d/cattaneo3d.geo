@@ -5,12 +5,12 @@
 // held. Block: a cylinder of radius 1 and height 1 below z = 0 (its top
 // "block_top" flat, its bottom "block_bottom" held). The two volumes are
 // meshed apart (non-matching surfaces). Element size hc (set by
-// scripts/verify: coarse a/7, fine a/20 with a ~ 0.1) within r1 = 0.15 of
+// scripts/verify: coarse a/7, fine a/13 with a ~ 0.1) within r1 = 0.12 of
 // the origin, growing to hmax = 0.25 at 0.8.
 SetFactory("OpenCASCADE");
 DefineConstant[ hc = {0.015, Name "hc"} ];
 R = 1.0;
-r1 = 0.15; r2 = 0.8; hmax = 0.25;
+r1 = 0.12; r2 = 0.8; hmax = 0.25;
 Sphere(1) = {0, 0, R, R, -Pi/2, 0, 2*Pi};
 Cylinder(2) = {0, 0, -1, 0, 0, 1, 1, 2*Pi};
 e = 1e-6;
