@@ -87,7 +87,7 @@ pub(crate) fn residuals_and_cx(
     lambda_t: &[f64],
 ) -> (Kkt, Option<Vec<f64>>) {
     let finite = |v: &[f64]| v.iter().all(|e| e.is_finite());
-    let mt = if qp.friction.is_some() { qp.m() } else { 0 };
+    let mt = qp.friction.as_ref().map_or(0, |f| qp.m() * f.frame.rows());
     if x.len() != qp.n()
         || lambda.len() != qp.m()
         || lambda_t.len() != mt
@@ -204,15 +204,20 @@ pub(crate) fn residuals_and_cx(
                 let tx: f64 = cols.iter().zip(vals).map(|(&j, a)| (a * x[j]).abs()).sum();
                 m.max(tx + f.t0[i].abs())
             });
+            let k = f.frame.rows();
             s.iter()
-                .zip(lambda_t)
-                .zip(&v)
-                .map(|((&si, &li), &vi)| {
-                    // Never a product with s: a huge bound cannot overflow.
-                    let den = si.max(li.abs()).max(force);
-                    let bound = ratio((li.abs() - si).max(0.0), den);
-                    let slip = ratio(vi.abs(), disp) * ratio((si - li * vi.signum()).abs(), den);
-                    bound.max(slip)
+                .zip(lambda_t.chunks(k))
+                .zip(v.chunks(k))
+                .map(|((&si, li), vi)| match (li, vi) {
+                    (&[li], &[vi]) => {
+                        // Never a product with s: a huge bound cannot overflow.
+                        let den = si.max(li.abs()).max(force);
+                        let bound = ratio((li.abs() - si).max(0.0), den);
+                        let slip =
+                            ratio(vi.abs(), disp) * ratio((si - li * vi.signum()).abs(), den);
+                        bound.max(slip)
+                    }
+                    _ => disc_residual(si, li, vi, force, disp),
                 })
                 .fold(0.0f64, |m, r| if r.is_nan() { r } else { m.max(r) })
         }
@@ -233,6 +238,25 @@ pub(crate) fn residuals_and_cx(
     } else {
         (Kkt::not_finite(), Some(cx))
     }
+}
+
+/// The friction residual of one contact row with a disc or cone
+/// (docs/methods.md §12.5): the bound (‖λ_t‖ − s)⁺/F and the slip rule
+/// ‖v‖/X · ‖s v̂ − λ_t‖/F with v̂ = v/‖v‖, zero exactly when the row sticks
+/// (v = 0) or slips with its force along its slip (λ_t = s v̂): the force's
+/// direction is checked, not only its size. s v̂ is formed without a
+/// product s·v, so a huge bound cannot overflow.
+fn disc_residual(s: f64, lt: &[f64], v: &[f64], force: f64, disp: f64) -> f64 {
+    let ln = crate::qp::tangential_norm(lt);
+    let vn = crate::qp::tangential_norm(v);
+    let den = s.max(ln).max(force);
+    let bound = ratio((ln - s).max(0.0), den);
+    if vn == 0.0 {
+        return bound;
+    }
+    let miss: Vec<f64> = lt.iter().zip(v).map(|(l, vi)| s * (vi / vn) - l).collect();
+    let slip = ratio(vn, disp) * ratio(crate::qp::tangential_norm(&miss), den);
+    bound.max(slip)
 }
 
 /// ‖v‖₂ over the entries where `mask` holds.
@@ -498,6 +522,42 @@ mod tests {
         let mut q = crate::qp::testing::friction_point(2.0, 0.3, -3.0, bound);
         q.g = vec![0.5];
         q
+    }
+
+    /// A disc (docs/methods.md §12.5): the exact slip along the load passes;
+    /// the same force turned by 5° (what a 16-sided polygon of the cone can
+    /// give), or above the bound, or a slip with no force fails; NaN fails.
+    #[test]
+    fn the_disc_residual_checks_the_direction_of_the_force() {
+        use crate::qp::SlipBound;
+        let (k, s) = (2.0, 1.0);
+        let dir = [0.6f64, 0.8];
+        // Load 3 along dir, μλ_n = 1 (λ_n = 2, μ = 0.5): u_t = (3 − 1)/k.
+        let q = crate::qp::testing::friction_point3(
+            k,
+            [3.0 * dir[0], 3.0 * dir[1], -2.0],
+            SlipBound::Coulomb(vec![0.5]),
+        );
+        let x = [dir[0], dir[1], 0.0];
+        let lt = [s * dir[0], s * dir[1]];
+        let r = residuals_with_friction(&q, &x, &[2.0], &lt);
+        assert!(r.within(1e-14), "{r:?}");
+        let a = 5f64.to_radians();
+        let turned = [
+            s * (dir[0] * a.cos() - dir[1] * a.sin()),
+            s * (dir[0] * a.sin() + dir[1] * a.cos()),
+        ];
+        let r = residuals_with_friction(&q, &x, &[2.0], &turned);
+        assert!(r.friction > 0.5 * a.sin(), "{r:?}");
+        let r = residuals_with_friction(&q, &x, &[2.0], &[1.1 * lt[0], 1.1 * lt[1]]);
+        assert!(r.friction > 0.05, "{r:?}");
+        let r = residuals_with_friction(&q, &x, &[2.0], &[0.0, 0.0]);
+        assert!(!r.within(1e-3), "{r:?}");
+        let r = residuals_with_friction(&q, &x, &[2.0], &[f64::NAN, 0.0]);
+        assert!(!r.within(1e-3) && !r.max().is_finite(), "{r:?}");
+        // A length-m λ_t (a line's) is not a plane's answer.
+        let r = residuals_with_friction(&q, &x, &[2.0], &[s]);
+        assert!(!r.max().is_finite(), "{r:?}");
     }
 
     /// The friction residual of a sticking answer with a slip of 10⁻¹²

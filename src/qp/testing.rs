@@ -253,3 +253,34 @@ pub(crate) fn friction_point(kx: f64, fx: f64, fy: f64, bound: crate::qp::SlipBo
         near: None,
     }
 }
+
+/// A point on a rigid floor (−u_z ≤ 0) in 3D, held by springs k (none:
+/// floating along x and y) in x and y and 3 along z, loaded by (fx, fy,
+/// fz), with a disc or cone `bound` (`Frame::Plane`, tangents e_x, e_y):
+/// λ_n = −fz; it sticks (u = 0 in the plane, λ_t = (fx, fy)) while
+/// ‖(fx, fy)‖ ≤ s, else slips along the load with λ_t = s·(fx, fy)/‖(fx, fy)‖,
+/// u_t = ((fx, fy) − λ_t)/k.
+pub(crate) fn friction_point3(k: f64, f: [f64; 3], bound: crate::qp::SlipBound) -> QpProblem {
+    let mut trip = vec![(2, 2, 3.0)];
+    if k > 0.0 {
+        trip.extend([(0, 0, k), (1, 1, k)]);
+    }
+    QpProblem {
+        c: Csr::from_triplets(3, 3, &trip),
+        d: f.to_vec(),
+        a: Csr::from_triplets(1, 3, &[(0, 2, -1.0)]),
+        g: vec![0.0],
+        kernel: if k > 0.0 {
+            vec![]
+        } else {
+            vec![vec![1.0, 0.0, 0.0], vec![0.0, 1.0, 0.0]]
+        },
+        friction: Some(crate::qp::Friction {
+            t: Csr::from_triplets(2, 3, &[(0, 0, 1.0), (1, 1, 1.0)]),
+            t0: vec![0.0; 2],
+            bound,
+            frame: crate::qp::Frame::Plane,
+        }),
+        near: None,
+    }
+}
