@@ -309,11 +309,10 @@ def case_shrinkfit3d(args, work):
     n, N = (10, 24) if args.fine else (6, 16)
     a, c, b, L, delta, E, nu, mu = 0.5, 1.0, 1.5, 0.5, 1.0e-3, 2.0e11, 0.3, 0.2
     p = V.shrink_fit_pressure(a, c, b, delta, E, nu)
-    geo = os.path.join(d, "shrinkfit3d.geo")
     mq = os.path.join(work, "shrinkfit3d.msh")
     mf = os.path.join(work, "shrinkfit3d_full.msh")
-    V.mesh(args, geo, {"n": n, "N": N, "full": 0}, mq, dim=3)
-    V.mesh(args, geo, {"n": n, "N": N, "full": 1}, mf, dim=3)
+    V.mesh(args, os.path.join(d, "shrinkfit3d.geo"), {"n": n, "N": N}, mq, dim=3)
+    V.mesh(args, os.path.join(d, "shrinkfit3d_full.geo"), {"n": n, "N": N}, mf, dim=3)
     # the axisymmetric model of the same fit, same n (verification/shrinkfit)
     ma = os.path.join(work, "shrinkfit.msh")
     V.mesh(args, os.path.join(V.VDIR, "shrinkfit", "shrinkfit.geo"), {"n": n}, ma)
