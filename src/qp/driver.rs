@@ -330,11 +330,12 @@ fn checked_start<'a>(
         .map(|a| format!("{} working-set flags for {} contact rows", a.len(), qp.m()));
     let bad_lambda0 = opts.lambda0.as_ref().and_then(|l| {
         let m = qp.m();
+        let mt = qp.friction.as_ref().map_or(0, |f| m * f.frame.rows());
         if qp.friction.is_none() {
             Some("multipliers of a frictional start for a frictionless problem".to_string())
-        } else if l.normal.len() != m || l.tangential.len() != m {
+        } else if l.normal.len() != m || l.tangential.len() != mt {
             Some(format!(
-                "{} normal and {} tangential multipliers for {m} contact rows",
+                "{} normal and {} tangential multipliers for {m} contact rows ({mt} tangential)",
                 l.normal.len(),
                 l.tangential.len()
             ))
@@ -441,7 +442,10 @@ pub fn run(
             kkt::residuals_with_friction(qp, &x, &r.lambda, &r.lambda_t)
                 .within(opts.settings.kkt_target)
         };
-        if let (false, Some(to)) = (proven, method.fallback(FallbackCause::Cycling)) {
+        let to = method
+            .fallback(FallbackCause::Cycling)
+            .filter(|to| to.capabilities().friction.solves(qp));
+        if let (false, Some(to)) = (proven, to) {
             let failure = failure.clone();
             r = fallback.run(
                 method.id(),
@@ -651,9 +655,10 @@ pub fn check_problem(qp: &QpProblem) -> Result<(), QpError> {
             crate::qp::SlipBound::Tresca(s) => (s, "slip bound s"),
             crate::qp::SlipBound::Coulomb(mu) => (mu, "friction coefficient μ"),
         };
-        if f.t.nrows != m || f.t.ncols != n || f.t0.len() != m || s.len() != m {
+        let mt = m * f.frame.rows();
+        if f.t.nrows != mt || f.t.ncols != n || f.t0.len() != mt || s.len() != m {
             return Err(QpError::BadParameter(format!(
-                "inconsistent friction sizes: T {}×{}, t0 {}, {what} {} for {m} contact rows and {n} unknowns",
+                "inconsistent friction sizes: T {}×{}, t0 {}, {what} {} for {m} contact rows ({mt} tangential) and {n} unknowns",
                 f.t.nrows, f.t.ncols, f.t0.len(), s.len()
             )));
         }

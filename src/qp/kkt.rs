@@ -246,7 +246,7 @@ pub(crate) fn residuals_and_cx(
 /// (v = 0) or slips with its force along its slip (λ_t = s v̂): the force's
 /// direction is checked, not only its size. s v̂ is formed without a
 /// product s·v, so a huge bound cannot overflow.
-fn disc_residual(s: f64, lt: &[f64], v: &[f64], force: f64, disp: f64) -> f64 {
+pub(crate) fn disc_residual(s: f64, lt: &[f64], v: &[f64], force: f64, disp: f64) -> f64 {
     let ln = crate::qp::tangential_norm(lt);
     let vn = crate::qp::tangential_norm(v);
     let den = s.max(ln).max(force);

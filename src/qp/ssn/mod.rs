@@ -83,7 +83,7 @@ impl Method for SsnMethod {
     }
     fn capabilities(&self) -> Capabilities {
         Capabilities {
-            friction: crate::qp::method::FrictionSupport::Lines,
+            friction: crate::qp::method::FrictionSupport::Planes,
             factor: Factor::BySettings,
             warm_start: true,
             ..Default::default()

@@ -57,6 +57,7 @@ use std::collections::HashSet;
 mod dual;
 mod motions;
 mod nested;
+mod plane;
 mod sets;
 mod update;
 use dual::{unfinished, Dual, Law};
@@ -84,6 +85,9 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
             "ssn::friction called without friction".into(),
         ));
     };
+    if fr.frame == crate::qp::Frame::Plane {
+        return plane::solve(qp, fr, ctx);
+    }
     let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
     let dual = match ctx.settings.ssn.path {
         SsnPath::Auto | SsnPath::Schur => Dual::new(qp, fr, &r, ctx.ws)?,

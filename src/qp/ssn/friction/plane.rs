@@ -1,0 +1,813 @@
+//! `ssn` on discs and cones (docs/methods.md §12.3): the Tresca problem of
+//! a plane frame (two tangential rows per contact row, ‖λ_tᵢ‖ ≤ sᵢ) by
+//! working sets, and Coulomb by the outer loop shared with 2D
+//! ([`crate::qp::coulomb`]).
+//!
+//! The prediction is Hüeber, Stadler & Wohlmuth's (SISC 30, 2008) in 3D,
+//! with ξᵢ = λ_tᵢ + c_tᵢ vᵢ ∈ ℝ² (v = T x − t0):
+//! * N = {i : λ_nᵢ + cᵢ(Ax − g)ᵢ > 0} as in 2D;
+//! * stick where ‖ξᵢ‖ ≤ sᵢ: both tangential rows are constraints, T_i x = t0_i;
+//! * slip elsewhere (sᵢ > 0), along eᵢ = ξᵢ/‖ξᵢ‖: the force along eᵢ is
+//!   known, sᵢ, and the slip is held to eᵢ's line, e⊥ᵢ·(T_i x − t0_i) = 0
+//!   with e⊥ = (−e₂, e₁) and its own multiplier λ⊥ᵢ, so that
+//!   λ_tᵢ = sᵢeᵢ + λ⊥ᵢe⊥ᵢ;
+//! * free where sᵢ = 0 (no force, no constraint).
+//!
+//! Each step is one equality-constrained solve, on the sparse path of 2D
+//! (K = C + ρBᵀB and augmented Lagrangian sweeps, one factor a step on a
+//! pattern fixed for the whole solve). At the answer of a step, λ⊥ᵢ is
+//! the force the slip's direction still lacks: the next prediction turns eᵢ
+//! by atan(λ⊥ᵢ/(sᵢ + c_tᵢ αᵢ)), and the sets are settled when they repeat
+//! and the residual of the disc law (λ⊥ = 0 on slipping rows, weighted by
+//! the slip as in the certificate) is at `tol`. A direction is a real
+//! number, so settling is judged on the residual, not on sets seen before;
+//! a budget of steps without a better residual stops a cycle, as in 2D.
+//! Rigid motions a working set leaves free are tested for unboundedness
+//! with the disc's dissipation Σ sᵢ‖(T z)ᵢ‖ and otherwise regularised for
+//! the step, as in 2D (§9.3).
+
+use super::{cycle_budget, row_stiffness, AL_MAX, AL_STALL, CT_FACTOR, RHO};
+use crate::linalg::dense::sym_eigen;
+use crate::linalg::sparse::{dot, norm_inf, Csr};
+use crate::qp::coulomb::{self, Bound, Tresca, TrescaStep};
+use crate::qp::executor::{Iterative, Step};
+use crate::qp::{
+    tangential_norm, Context, Failure, Friction, IterRecord, Output, QpError, QpProblem, Status,
+};
+
+/// How a contact row's tangential pair is held in a working set.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Disc {
+    /// T_i x = t0_i: both rows constraints.
+    Stick,
+    /// The force sᵢe along the unit e (in the row's frame), the slip held
+    /// to e's line.
+    Slip([f64; 2]),
+    /// No force, no constraint (sᵢ = 0, or an open row of the glued start).
+    Free,
+}
+
+impl Disc {
+    fn kind(self) -> u8 {
+        match self {
+            Disc::Stick => 0,
+            Disc::Slip(_) => 1,
+            Disc::Free => 2,
+        }
+    }
+}
+
+/// One row of B: its coefficients (sorted columns) and right-hand side.
+struct BRow {
+    cols: Vec<usize>,
+    vals: Vec<f64>,
+    rhs: f64,
+    rho: f64,
+    /// What its multiplier is: the normal force of row i, a tangential
+    /// component k of row i, or the λ⊥ of a slipping row i.
+    of: Of,
+}
+
+#[derive(Clone, Copy)]
+enum Of {
+    Normal(usize),
+    Tangential(usize, usize),
+    Across(usize),
+}
+
+/// Solve the frictional `qp` of a plane frame (`fr.frame` = Plane).
+pub(super) fn solve(qp: &QpProblem, fr: &Friction, ctx: &mut Context) -> Result<Output, QpError> {
+    if fr.t.nrows != 2 * qp.m() || fr.t0.len() != 2 * qp.m() {
+        return Err(QpError::BadParameter(format!(
+            "ssn: a plane frame needs 2 tangential rows per contact row: T has {} rows and t0 {} for {} rows",
+            fr.t.nrows,
+            fr.t0.len(),
+            qp.m()
+        )));
+    }
+    let r = crate::linalg::kernel::orthonormal_kernel(&qp.c, &qp.kernel)?;
+    let mut st = State::new(qp, fr, r, ctx);
+    st.hold_free_bodies();
+    let mut step = PlaneTresca {
+        st,
+        ctx,
+        steps: 0,
+    };
+    let proven = coulomb::certificate(qp);
+    coulomb::solve(fr, &mut step, "ssn", &proven, ctx.settings.kkt_target)
+}
+
+struct PlaneTresca<'c, 'a> {
+    st: State<'a>,
+    ctx: &'c Context<'a>,
+    /// Steps of all solves so far (they share one MAXIT).
+    steps: usize,
+}
+
+impl TrescaStep for PlaneTresca<'_, '_> {
+    fn resolution(&self) -> f64 {
+        self.st.tol
+    }
+
+    fn solve(&mut self, bound: Bound<'_>) -> Result<Tresca, QpError> {
+        let st = &mut self.st;
+        match bound {
+            Bound::Glued => {
+                st.s = vec![0.0; st.qp.m()];
+                st.glued = true;
+            }
+            Bound::Given(s) => {
+                st.s = s.to_vec();
+                st.glued = false;
+            }
+        }
+        st.started = false;
+        st.best = (f64::INFINITY, 0);
+        let mut exec = self.ctx.executor("ssn");
+        exec.max_iter = exec.max_iter.saturating_sub(self.steps);
+        let inner0 = st.inner;
+        let (status, iters) = exec.run(st);
+        st.solved = true;
+        self.steps += iters;
+        if let Some(e) = st.error.take() {
+            return Err(e);
+        }
+        Ok(Tresca {
+            x: st.x.clone(),
+            lambda_n: st.ln.clone(),
+            lambda_t: st.lt.clone(),
+            active: st.in_n.clone(),
+            status,
+            iterations: iters,
+            inner_iterations: st.inner - inner0,
+            log: exec.log,
+        })
+    }
+}
+
+struct State<'a> {
+    qp: &'a QpProblem,
+    fr: &'a Friction,
+    ws: &'a crate::linalg::cholesky::Workspace,
+    /// Orthonormal basis of ker C.
+    r: Vec<Vec<f64>>,
+    /// cᵢ of the normal prediction and c_tᵢ of the slip prediction, per
+    /// contact row (c_t from the softer of its two tangential rows).
+    cn: Vec<f64>,
+    ct: Vec<f64>,
+    /// ρ of a normal and of a tangential row of B, per contact row.
+    rho: Vec<[f64; 2]>,
+    tol: f64,
+    x: Vec<f64>,
+    ln: Vec<f64>,
+    /// (λ_t1, λ_t2) per contact row.
+    lt: Vec<f64>,
+    s: Vec<f64>,
+    glued: bool,
+    in_n: Vec<bool>,
+    tang: Vec<Disc>,
+    /// A step of the current solve has been taken (the first takes the
+    /// sets as they stand).
+    started: bool,
+    /// A solve has ended before (the next starts from its answer).
+    solved: bool,
+    /// Steps of all solves, for the log.
+    outer: usize,
+    /// Ax and Tx of the current iterate.
+    ax: Vec<f64>,
+    tx: Vec<f64>,
+    inner: usize,
+    best: (f64, usize),
+    error: Option<QpError>,
+}
+
+impl<'a> State<'a> {
+    fn new(qp: &'a QpProblem, fr: &'a Friction, r: Vec<Vec<f64>>, ctx: &Context<'a>) -> Self {
+        let (n, m) = (qp.n(), qp.m());
+        let diag = qp.c.diag();
+        let cmean = (diag.iter().sum::<f64>() / n.max(1) as f64).max(f64::MIN_POSITIVE);
+        let cn = row_stiffness(&qp.a, &diag, cmean, 1.0);
+        let kt = row_stiffness(&fr.t, &diag, cmean, 1.0);
+        let kt: Vec<f64> = (0..m).map(|i| kt[2 * i].min(kt[2 * i + 1])).collect();
+        let rho = cn.iter().zip(&kt).map(|(a, b)| [RHO * a, RHO * b]).collect();
+        let ct = kt.iter().map(|k| CT_FACTOR * k).collect();
+        let x = ctx.x0.map_or_else(|| vec![0.0; n], |x0| x0.to_vec());
+        let ax = qp.a.mul(&x);
+        let tx = fr.t.mul(&x);
+        let scale = norm_inf(&x).max(norm_inf(&qp.g)).max(f64::MIN_POSITIVE);
+        let in_n = (0..m).map(|i| ax[i] - qp.g[i] >= -1e-12 * scale).collect();
+        State {
+            qp,
+            fr,
+            ws: ctx.ws,
+            r,
+            cn,
+            ct,
+            rho,
+            tol: ctx.settings.tol,
+            x,
+            ln: vec![0.0; m],
+            lt: vec![0.0; 2 * m],
+            s: vec![0.0; m],
+            glued: true,
+            in_n,
+            tang: vec![Disc::Stick; m],
+            started: false,
+            solved: false,
+            outer: 0,
+            ax,
+            tx,
+            inner: 0,
+            best: (f64::INFINITY, 0),
+            error: None,
+        }
+    }
+
+    /// Every row starts in N when the rows closed at the start leave free
+    /// a rigid motion the loads work on (a body pressed towards its support
+    /// across a gap), as 2D does (§9.2).
+    fn hold_free_bodies(&mut self) {
+        if self.r.is_empty() || self.in_n.iter().all(|a| *a) {
+            return;
+        }
+        let tang = vec![Disc::Stick; self.qp.m()];
+        let rows = self.brows(&self.in_n, &tang);
+        let loaded = self.free_motions(&rows).iter().any(|z| {
+            let (work, scale) = work_of_loads(&self.qp.d, z);
+            work.abs() > 1e-8 * scale
+        });
+        if loaded {
+            log::debug!("ssn: discs: the closed rows leave a rigid motion free: every row starts in N");
+            self.in_n = vec![true; self.qp.m()];
+        }
+    }
+
+    /// v = T x − t0 of row i.
+    fn v(&self, i: usize) -> [f64; 2] {
+        [
+            self.tx[2 * i] - self.fr.t0[2 * i],
+            self.tx[2 * i + 1] - self.fr.t0[2 * i + 1],
+        ]
+    }
+
+    /// The sets predicted at the current iterate.
+    fn predict(&self) -> (Vec<bool>, Vec<Disc>) {
+        let qp = self.qp;
+        let m = qp.m();
+        let in_n: Vec<bool> = (0..m)
+            .map(|i| self.ln[i] + self.cn[i] * (self.ax[i] - qp.g[i]) > 0.0)
+            .collect();
+        let tang = (0..m)
+            .map(|i| {
+                if self.glued {
+                    return if in_n[i] { Disc::Stick } else { Disc::Free };
+                }
+                if !(self.s[i] > 0.0) {
+                    return Disc::Free;
+                }
+                let v = self.v(i);
+                let xi = [
+                    self.lt[2 * i] + self.ct[i] * v[0],
+                    self.lt[2 * i + 1] + self.ct[i] * v[1],
+                ];
+                let nx = tangential_norm(&xi);
+                if nx <= self.s[i] {
+                    Disc::Stick
+                } else {
+                    Disc::Slip([xi[0] / nx, xi[1] / nx])
+                }
+            })
+            .collect();
+        (in_n, tang)
+    }
+
+    /// The rows of B for the sets (`in_n`, `tang`).
+    fn brows(&self, in_n: &[bool], tang: &[Disc]) -> Vec<BRow> {
+        let qp = self.qp;
+        let t = &self.fr.t;
+        let mut rows = vec![];
+        for (i, _) in in_n.iter().enumerate().filter(|(_, n)| **n) {
+            let (c, v) = qp.a.row(i);
+            rows.push(BRow {
+                cols: c.to_vec(),
+                vals: v.to_vec(),
+                rhs: qp.g[i],
+                rho: self.rho[i][0],
+                of: Of::Normal(i),
+            });
+        }
+        for (i, d) in tang.iter().enumerate() {
+            match *d {
+                Disc::Stick => {
+                    for k in 0..2 {
+                        let (c, v) = t.row(2 * i + k);
+                        rows.push(BRow {
+                            cols: c.to_vec(),
+                            vals: v.to_vec(),
+                            rhs: self.fr.t0[2 * i + k],
+                            rho: self.rho[i][1],
+                            of: Of::Tangential(i, k),
+                        });
+                    }
+                }
+                Disc::Slip(e) => {
+                    let w = [-e[1], e[0]];
+                    let (cols, vals) = combine(t, i, w);
+                    rows.push(BRow {
+                        cols,
+                        vals,
+                        rhs: w[0] * self.fr.t0[2 * i] + w[1] * self.fr.t0[2 * i + 1],
+                        rho: self.rho[i][1],
+                        of: Of::Across(i),
+                    });
+                }
+                Disc::Free => {}
+            }
+        }
+        rows
+    }
+
+    /// An orthonormal basis (in ℝⁿ) of the rigid motions z with B z = 0.
+    fn free_motions(&self, rows: &[BRow]) -> Vec<Vec<f64>> {
+        let k = self.r.len();
+        if k == 0 {
+            return vec![];
+        }
+        let mut g = vec![vec![0.0; k]; k];
+        let mut bnorm = 0.0;
+        for b in rows {
+            bnorm += b.vals.iter().map(|v| v * v).sum::<f64>();
+            let br: Vec<f64> = self
+                .r
+                .iter()
+                .map(|rl| b.cols.iter().zip(&b.vals).map(|(&j, &a)| a * rl[j]).sum())
+                .collect();
+            for a in 0..k {
+                for c in 0..k {
+                    g[a][c] += br[a] * br[c];
+                }
+            }
+        }
+        let (vals, vecs) = sym_eigen(&g);
+        let tol = 1e-9 * bnorm.max(1.0) / self.qp.n().max(1) as f64;
+        vals.iter()
+            .zip(&vecs)
+            .filter(|(e, _)| !(**e > tol))
+            .map(|(_, v)| {
+                let mut z = vec![0.0; self.qp.n()];
+                for (c, rl) in v.iter().zip(&self.r) {
+                    for (zj, rj) in z.iter_mut().zip(rl) {
+                        *zj += c * rj;
+                    }
+                }
+                z
+            })
+            .collect()
+    }
+
+    /// A free rigid motion along which the loads do more work than the
+    /// discs dissipate, Σ sᵢ‖(T z)ᵢ‖, and no contact row closes (§9.3 with
+    /// the disc's dissipation); under the glued start only the loads' own
+    /// direction is tried, as in 2D.
+    fn unbounded_along(&self, free: &[Vec<f64>]) -> Option<Vec<f64>> {
+        let qp = self.qp;
+        let mut p = vec![0.0; qp.n()];
+        for z in free {
+            let w = dot(&qp.d, z);
+            for (pj, zj) in p.iter_mut().zip(z) {
+                *pj += w * zj;
+            }
+        }
+        let mut cands = vec![p];
+        if !self.glued {
+            for z in free {
+                cands.push(z.clone());
+                cands.push(z.iter().map(|v| -v).collect());
+            }
+        }
+        cands.into_iter().find(|z| {
+            if !(norm_inf(z) > 0.0) || crate::qp::recession::certify(qp, z).is_err() {
+                return false;
+            }
+            let tz = self.fr.t.mul(z);
+            let (work, scale) = work_of_loads(&qp.d, z);
+            let dissipation: f64 = tz
+                .chunks(2)
+                .zip(&self.s)
+                .map(|(t, s)| s * tangential_norm(t))
+                .sum();
+            work - dissipation > 1e-10 * scale
+        })
+    }
+
+    /// Solve the working set's equality-constrained problem; Ok(Some) when
+    /// it ends the solve (unbounded, or a breakdown).
+    fn solve_set(&mut self) -> Result<Option<Status>, QpError> {
+        let qp = self.qp;
+        let (n, m) = (qp.n(), qp.m());
+        let rows = self.brows(&self.in_n, &self.tang);
+        // d' = d − Σ_slip sᵢ T_iᵀ eᵢ.
+        let mut dp = qp.d.clone();
+        let mut known = vec![0.0; 2 * m];
+        for (i, d) in self.tang.iter().enumerate() {
+            if let (Disc::Slip(e), false) = (d, self.glued) {
+                known[2 * i] = -self.s[i] * e[0];
+                known[2 * i + 1] = -self.s[i] * e[1];
+            }
+        }
+        self.fr.t.mul_t_add(&known, &mut dp);
+        let free = self.free_motions(&rows);
+        if !free.is_empty() {
+            if let Some(z) = self.unbounded_along(&free) {
+                return Ok(Some(Status::Unbounded { direction: z }));
+            }
+        }
+        let kmat = self.k_matrix(&rows);
+        let fac = self.ws.cholesky(&kmat, &free)?;
+        let mut mu: Vec<f64> = rows
+            .iter()
+            .map(|b| match b.of {
+                Of::Normal(i) => self.ln[i],
+                Of::Tangential(i, k) => self.lt[2 * i + k],
+                Of::Across(_) => 0.0,
+            })
+            .collect();
+        let bscale = rows.iter().fold(0.0f64, |a, b| a.max(b.rhs.abs()));
+        let mut x = vec![0.0; n];
+        let (mut last, mut stalled) = (f64::INFINITY, 0);
+        for _ in 0..AL_MAX {
+            let mut rhs = dp.clone();
+            for (b, mk) in rows.iter().zip(&mu) {
+                let w = b.rho * b.rhs - mk;
+                for (&j, &a) in b.cols.iter().zip(&b.vals) {
+                    rhs[j] += w * a;
+                }
+            }
+            x = fac.solve(&rhs);
+            self.inner += 1;
+            let mut res = 0.0f64;
+            for (b, mk) in rows.iter().zip(mu.iter_mut()) {
+                let bx: f64 = b.cols.iter().zip(&b.vals).map(|(&j, &a)| a * x[j]).sum();
+                *mk += b.rho * (bx - b.rhs);
+                res = res.max((bx - b.rhs).abs());
+            }
+            let xs = norm_inf(&x).max(bscale).max(f64::MIN_POSITIVE);
+            stalled = if res > 0.5 * last * xs { stalled + 1 } else { 0 };
+            last = res / xs;
+            if res <= 1e-14 * xs || stalled >= AL_STALL {
+                break;
+            }
+        }
+        if !x.iter().all(|v| v.is_finite()) {
+            return Ok(Some(Status::Failed(Failure::Breakdown(
+                "the KKT solve of a working set gave a non-finite iterate".into(),
+            ))));
+        }
+        self.ax = qp.a.mul(&x);
+        self.tx = self.fr.t.mul(&x);
+        self.x = x;
+        self.ln = vec![0.0; m];
+        self.lt = known.iter().map(|k| -k).collect();
+        for (b, mk) in rows.iter().zip(&mu) {
+            match b.of {
+                Of::Normal(i) => self.ln[i] = *mk,
+                Of::Tangential(i, k) => self.lt[2 * i + k] = *mk,
+                Of::Across(i) => {
+                    if let Disc::Slip(e) = self.tang[i] {
+                        self.lt[2 * i] -= mk * e[1];
+                        self.lt[2 * i + 1] += mk * e[0];
+                    }
+                }
+            }
+        }
+        Ok(None)
+    }
+
+    /// K = C + Σ_B ρ bᵀb on the pattern of C, AᵀA and each contact row's
+    /// tangential pair (the same pattern every step: one symbolic factor).
+    fn k_matrix(&self, rows: &[BRow]) -> Csr {
+        let qp = self.qp;
+        let n = qp.n();
+        let mut trip: Vec<(usize, usize, f64)> = Vec::with_capacity(qp.c.nnz());
+        for i in 0..n {
+            let (cols, vals) = qp.c.row(i);
+            trip.extend(cols.iter().zip(vals).map(|(&j, &v)| (i, j, v)));
+        }
+        // The pattern: zero-weight products of every row's columns.
+        for i in 0..qp.m() {
+            let (c, _) = qp.a.row(i);
+            for &j in c {
+                trip.extend(c.iter().map(|&k| (j, k, 0.0)));
+            }
+            let (c, _) = combine(&self.fr.t, i, [1.0, 1.0]);
+            for &j in &c {
+                trip.extend(c.iter().map(|&k| (j, k, 0.0)));
+            }
+        }
+        for b in rows {
+            for (&j, &a) in b.cols.iter().zip(&b.vals) {
+                for (&k, &c) in b.cols.iter().zip(&b.vals) {
+                    trip.push((j, k, b.rho * a * c));
+                }
+            }
+        }
+        Csr::from_triplets(n, n, &trip)
+    }
+
+    /// The residual of the current iterate against the Tresca problem at
+    /// its bound: the normal conditions and the disc law (§12.5), forces
+    /// relative to the largest multiplier and bound, lengths to the
+    /// largest of |Ax|, |Tx|, g, t0.
+    fn residual(&self) -> f64 {
+        let qp = self.qp;
+        let fs = norm_inf(&self.ln)
+            .max(norm_inf(&self.lt))
+            .max(if self.glued { 0.0 } else { norm_inf(&self.s) })
+            .max(f64::MIN_POSITIVE);
+        let xs = norm_inf(&self.x)
+            .max(norm_inf(&self.ax))
+            .max(norm_inf(&self.tx))
+            .max(norm_inf(&qp.g))
+            .max(norm_inf(&self.fr.t0))
+            .max(f64::MIN_POSITIVE);
+        let mut r = 0.0f64;
+        for i in 0..qp.m() {
+            let gap = self.ax[i] - qp.g[i];
+            let ln = self.ln[i];
+            r = r
+                .max(gap.max(0.0) / xs)
+                .max((-ln).max(0.0) / fs)
+                .max((ln * gap).abs() / (fs * xs));
+            let lt = &self.lt[2 * i..2 * i + 2];
+            let v = self.v(i);
+            r = r.max(match self.tang[i] {
+                // Glued: T_i x = t0_i is the law, its force unbounded.
+                Disc::Stick if self.glued => tangential_norm(&v) / xs,
+                _ => crate::qp::kkt::disc_residual(self.s[i], lt, &v, fs, xs),
+            });
+        }
+        r
+    }
+
+    fn record(&self, iter: usize) -> IterRecord {
+        IterRecord {
+            iter,
+            residual: self.residual(),
+            active: self.in_n.iter().filter(|a| **a).count(),
+            inner: self.inner,
+        }
+    }
+}
+
+/// Σ_k w_k T_{2i+k}: one combination of row i's tangential pair, columns
+/// sorted (the two rows touch the same points; a column one of them lacks
+/// counts as 0 there).
+fn combine(t: &Csr, i: usize, w: [f64; 2]) -> (Vec<usize>, Vec<f64>) {
+    let mut e: Vec<(usize, f64)> = vec![];
+    for (k, wk) in w.iter().enumerate() {
+        let (c, v) = t.row(2 * i + k);
+        e.extend(c.iter().zip(v).map(|(&j, &a)| (j, wk * a)));
+    }
+    e.sort_by_key(|p| p.0);
+    let mut cols: Vec<usize> = vec![];
+    let mut vals: Vec<f64> = vec![];
+    for (j, a) in e {
+        if cols.last() == Some(&j) {
+            *vals.last_mut().unwrap_or(&mut 0.0) += a;
+        } else {
+            cols.push(j);
+            vals.push(a);
+        }
+    }
+    (cols, vals)
+}
+
+/// dᵀz and Σ|dⱼzⱼ|, the scale it is judged against.
+fn work_of_loads(d: &[f64], z: &[f64]) -> (f64, f64) {
+    (dot(d, z), d.iter().zip(z).map(|(a, b)| (a * b).abs()).sum())
+}
+
+impl Iterative for State<'_> {
+    /// One step: the sets predicted at the last answer (the first step of
+    /// a solve: the sets as they stand, glued or predicted at the new
+    /// bound), their solve, and the end when they repeat at a residual of
+    /// `tol`.
+    fn step(&mut self) -> Step {
+        if self.started || self.solved && !self.glued {
+            let (n_set, tang) = self.predict();
+            self.in_n = n_set;
+            self.tang = tang;
+        } else {
+            // The start: the rows in N stick (glued), or every row with a
+            // positive bound sticks (a first Tresca problem); the others
+            // are free.
+            self.tang = self
+                .in_n
+                .iter()
+                .zip(&self.s)
+                .map(|(&a, &s)| {
+                    if self.glued && a || !self.glued && s > 0.0 {
+                        Disc::Stick
+                    } else {
+                        Disc::Free
+                    }
+                })
+                .collect();
+        }
+        self.started = true;
+        self.outer += 1;
+        let it = self.outer;
+        match self.solve_set() {
+            Ok(None) => {
+                let rec = self.record(it);
+                log::debug!(
+                    "ssn: discs: |N| = {}, stick {}, slip {}: residual {:.3e}",
+                    rec.active,
+                    self.tang.iter().filter(|d| **d == Disc::Stick).count(),
+                    self.tang.iter().filter(|d| matches!(d, Disc::Slip(_))).count(),
+                    rec.residual
+                );
+                if rec.residual < self.best.0 * (1.0 - 1e-9) {
+                    self.best = (rec.residual, 0);
+                } else {
+                    self.best.1 += 1;
+                }
+                let budget = cycle_budget(self.qp.m());
+                if self.best.1 > budget {
+                    return Step::Done(
+                        Status::Failed(Failure::Cycling {
+                            best: self.best.0,
+                            steps: budget,
+                        }),
+                        rec,
+                    );
+                }
+                let (n_set, tang) = self.predict();
+                let same = n_set == self.in_n
+                    && tang
+                        .iter()
+                        .zip(&self.tang)
+                        .all(|(a, b)| a.kind() == b.kind());
+                if same && rec.residual <= self.tol {
+                    Step::Done(Status::Converged, rec)
+                } else {
+                    Step::Continue(rec)
+                }
+            }
+            Ok(Some(status)) => Step::Done(status, self.record(it)),
+            Err(e) => {
+                let msg = e.to_string();
+                self.error = Some(e);
+                Step::Done(
+                    Status::Failed(Failure::Breakdown(msg)),
+                    IterRecord::default(),
+                )
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::qp::testing::friction_point3;
+    use crate::qp::{registry, SlipBound, SolveOptions};
+
+    fn solve(q: &crate::qp::QpProblem) -> crate::qp::QpResult {
+        let r = registry::solve("ssn", q, &SolveOptions::default()).unwrap();
+        if r.status.converged() {
+            assert!(r.kkt.within(1e-10), "{:?}", r.kkt);
+        }
+        r
+    }
+
+    /// A point on a floor under an oblique load, at angles off the frame's
+    /// axes: it sticks below μN with λ_t the load, and above it slips along
+    /// the load with ‖λ_t‖ = μN exactly (the test a polygonal cone fails).
+    #[test]
+    fn a_point_sticks_below_mu_n_and_slips_along_the_load_above() {
+        for deg in [0.0f64, 17.0, 30.0, 45.0, 133.0, 250.0] {
+            let a = deg.to_radians();
+            let dir = [a.cos(), a.sin()];
+            for (q_load, mu) in [(0.8, 0.5), (1.5, 0.5), (3.0, 1.0)] {
+                let n = 2.0;
+                let f = [q_load * dir[0], q_load * dir[1], -n];
+                for bound in [SlipBound::Coulomb(vec![mu]), SlipBound::Tresca(vec![mu * n])] {
+                    let r = solve(&friction_point3(4.0, f, bound.clone()));
+                    assert!(r.status.converged(), "{deg}° {bound:?}: {:?}", r.status);
+                    assert!((r.lambda[0] - n).abs() < 1e-12, "{:?}", r.lambda);
+                    let s = mu * n;
+                    let lt = &r.lambda_t;
+                    if q_load <= s {
+                        assert!((lt[0] - f[0]).abs() < 1e-12 && (lt[1] - f[1]).abs() < 1e-12);
+                        assert!(r.x[0].abs() < 1e-12 && r.x[1].abs() < 1e-12, "{:?}", r.x);
+                    } else {
+                        let ln = lt[0].hypot(lt[1]);
+                        assert!((ln - s).abs() < 1e-12 * s, "{deg}°: {lt:?}");
+                        let cross = lt[0] * dir[1] - lt[1] * dir[0];
+                        assert!(cross.abs() < 1e-12, "{deg}°: {lt:?}");
+                        let u = (q_load - s) / 4.0;
+                        assert!((r.x[0] - u * dir[0]).abs() < 1e-12, "{:?}", r.x);
+                        assert!((r.x[1] - u * dir[1]).abs() < 1e-12, "{:?}", r.x);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Held by friction alone (no spring in the plane): below μN it
+    /// sticks; above, the point slides away (unbounded, along the load).
+    #[test]
+    fn a_floating_point_sticks_or_slides_away() {
+        let f = [0.3, 0.4, -2.0];
+        let r = solve(&friction_point3(0.0, f, SlipBound::Coulomb(vec![0.5])));
+        assert!(r.status.converged(), "{:?}", r.status);
+        assert!((r.lambda_t[0] - 0.3).abs() < 1e-12 && (r.lambda_t[1] - 0.4).abs() < 1e-12);
+        let r = solve(&friction_point3(0.0, f, SlipBound::Tresca(vec![0.4])));
+        match &r.status {
+            crate::qp::Status::Unbounded { direction } => {
+                let c = direction[0] * 0.4 - direction[1] * 0.3;
+                assert!(c.abs() < 1e-9 * direction[0].abs().max(direction[1].abs()));
+            }
+            s => panic!("{s:?}"),
+        }
+    }
+
+    /// A ring of p points on a floor, each tied by a spring k to a driver
+    /// turned by θ (loads k·θ ẑ × rᵢ) and to its neighbours by springs kc
+    /// in each component, with tangent frames turned by a different angle
+    /// at each point: the slip and the friction force are circumferential
+    /// at every point, of size s when kθρ > s (by symmetry every point
+    /// slips alike, its load s plus the springs' force on the slip), and
+    /// every point sticks with λ_t its load when kθρ ≤ s.
+    #[test]
+    fn a_ring_turned_on_a_floor_slips_around_the_circle() {
+        use crate::qp::{Csr, Friction, QpProblem};
+        let (p, rho, k, kc, n) = (12usize, 0.5, 3.0, 40.0, 2.0);
+        for (theta, mu) in [(1.0, 0.25), (0.2, 0.5)] {
+            let mut trip = vec![];
+            let mut d = vec![0.0; 3 * p];
+            let (mut a, mut t) = (vec![], vec![]);
+            for i in 0..p {
+                let phi = 2.0 * std::f64::consts::PI * i as f64 / p as f64;
+                let (x, y) = (rho * phi.cos(), rho * phi.sin());
+                d[3 * i] = k * (-theta * y);
+                d[3 * i + 1] = k * (theta * x);
+                d[3 * i + 2] = -n;
+                for c in 0..2 {
+                    trip.push((3 * i + c, 3 * i + c, k));
+                }
+                trip.push((3 * i + 2, 3 * i + 2, 3.0));
+                let j = (i + 1) % p;
+                for c in 0..3 {
+                    let (u, v) = (3 * i + c, 3 * j + c);
+                    trip.extend([(u, u, kc), (v, v, kc), (u, v, -kc), (v, u, -kc)]);
+                }
+                a.push((i, 3 * i + 2, -1.0));
+                let f = 0.7 * i as f64;
+                t.push((2 * i, 3 * i, f.cos()));
+                t.push((2 * i, 3 * i + 1, f.sin()));
+                t.push((2 * i + 1, 3 * i, -f.sin()));
+                t.push((2 * i + 1, 3 * i + 1, f.cos()));
+            }
+            let q = QpProblem {
+                c: Csr::from_triplets(3 * p, 3 * p, &trip),
+                d,
+                a: Csr::from_triplets(p, 3 * p, &a),
+                g: vec![0.1; p],
+                kernel: vec![],
+                friction: Some(Friction {
+                    t: Csr::from_triplets(2 * p, 3 * p, &t),
+                    t0: vec![0.0; 2 * p],
+                    bound: SlipBound::Coulomb(vec![mu; p]),
+                    frame: crate::qp::Frame::Plane,
+                }),
+                near: None,
+            };
+            let r = solve(&q);
+            assert!(r.status.converged(), "{:?}", r.status);
+            // The floor 0.1 below: λ_n = n − 3·0.1 (a point at rest would
+            // be judged against max|x| = rounding, docs/methods.md §9.4).
+            let s = mu * (n - 0.3);
+            for i in 0..p {
+                let phi = 2.0 * std::f64::consts::PI * i as f64 / p as f64;
+                let e = [-phi.sin(), phi.cos()];
+                let f = 0.7 * i as f64;
+                let (l1, l2) = (r.lambda_t[2 * i], r.lambda_t[2 * i + 1]);
+                let lg = [l1 * f.cos() - l2 * f.sin(), l1 * f.sin() + l2 * f.cos()];
+                let load = k * theta * rho;
+                // The ring's springs resist a turn of every point by a
+                // along its circle with kc·a·(2 − 2cos(2π/p)) along it.
+                let ring = kc * (2.0 - 2.0 * (2.0 * std::f64::consts::PI / p as f64).cos());
+                let (size, slip) = if load > s {
+                    (s, (load - s) / (k + ring))
+                } else {
+                    (load, 0.0)
+                };
+                for c in 0..2 {
+                    assert!((lg[c] - size * e[c]).abs() < 1e-10, "{i}: {lg:?}");
+                    assert!((r.x[3 * i + c] - slip * e[c]).abs() < 1e-10, "{i}: {:?}", r.x);
+                }
+            }
+        }
+    }
+}
