@@ -104,6 +104,14 @@ def vec3(f, st, name):
     raise V.Failure(f"{name}: shape {a.shape}, want [rows, 3] or [rows, 2]")
 
 
+def tforce(f, st):
+    """Each row's tangential contact force [r, 3] (N): the checkpoint's
+    multipliers_t, or the traction times the tributary area."""
+    if "multipliers_t" in st and st["multipliers_t"].ndim == 2:
+        return vec3(f, st, "multipliers_t")
+    return vec3(f, st, "tangential_traction") * trib(st)[:, None]
+
+
 def state(st):
     for k in ("friction_state", "state"):
         if k in st:
@@ -353,8 +361,7 @@ def case_shrinkfit3d(args, work):
         s1, s2, s3 = steps(f)
         z = rows_xyz(f)[:, 2]
         inner = (z > 1e-9) & (z < L - 1e-9)
-        q2 = 4 * float(np.linalg.norm(
-            (vec3(f, s2, "tangential_traction") * trib(s2)[:, None]).sum(0)))
+        q2 = 4 * float(np.linalg.norm(tforce(f, s2).sum(0)))
         st2, st3 = state(s2), state(s3)
     c1 = f"{cs}, quarter, push-out"
     rows += [V.row(c1, "push force at full slip (1e-4 m) [N]", limit, push, tol,
@@ -377,8 +384,7 @@ def case_shrinkfit3d(args, work):
         inner = (xyz[:, 2] > 1e-9) & (xyz[:, 2] < L - 1e-9)
         st2, st3 = state(s2), state(s3)
         # the friction torque of the rows, about z: sum of x x (q trib)
-        t2, t3 = (float(np.cross(xyz, vec3(f, st, "tangential_traction")
-                                 * trib(st)[:, None])[:, 2].sum()) for st in (s2, s3))
+        t2, t3 = (float(np.cross(xyz, tforce(f, st))[:, 2].sum()) for st in (s2, s3))
     c2 = f"{cs}, ring, turned"
     rows += [V.row(c2, "torque at full slip (1e-3 rad) [N m]", tlim, abs(T), tol,
                    source="Coulomb, mu x Lame: mu p 2 pi c^2 L"),
