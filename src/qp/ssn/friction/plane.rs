@@ -40,9 +40,10 @@ use crate::qp::{
 enum Disc {
     /// T_i x = t0_i: both rows constraints.
     Stick,
-    /// The force sᵢe along the unit e (in the row's frame), the slip held
-    /// to e's line.
-    Slip([f64; 2]),
+    /// The force sᵢe along the unit e (in the row's frame); across e, the
+    /// Newton step's compliance κ: the slip across is κ times the force
+    /// across (κ = 0: held to e's line).
+    Slip([f64; 2], f64),
     /// No force, no constraint (sᵢ = 0, or an open row of the glued start).
     Free,
 }
@@ -51,7 +52,7 @@ impl Disc {
     fn kind(self) -> u8 {
         match self {
             Disc::Stick => 0,
-            Disc::Slip(_) => 1,
+            Disc::Slip(..) => 1,
             Disc::Free => 2,
         }
     }
@@ -63,6 +64,9 @@ struct BRow {
     vals: Vec<f64>,
     rhs: f64,
     rho: f64,
+    /// A compliant row (a slipping row's force across its direction): a
+    /// spring of this stiffness 1/κ in K, no multiplier.
+    spring: Option<f64>,
     /// What its multiplier is: the normal force of row i, a tangential
     /// component k of row i, or the λ⊥ of a slipping row i.
     of: Of,
@@ -274,7 +278,10 @@ impl<'a> State<'a> {
                 if nx <= self.s[i] {
                     Disc::Stick
                 } else {
-                    Disc::Slip([xi[0] / nx, xi[1] / nx])
+                    // Newton on λ_t = s ξ/‖ξ‖ at ξ: along ê the force is s;
+                    // across, λ⊥ = (s/‖ξ‖)(λ⊥ + c_t v⊥), so v⊥ = κλ⊥.
+                    let kappa = (nx - self.s[i]) / (self.s[i] * self.ct[i]);
+                    Disc::Slip([xi[0] / nx, xi[1] / nx], kappa)
                 }
             })
             .collect();
@@ -293,6 +300,7 @@ impl<'a> State<'a> {
                 vals: v.to_vec(),
                 rhs: qp.g[i],
                 rho: self.rho[i][0],
+                spring: None,
                 of: Of::Normal(i),
             });
         }
@@ -306,18 +314,24 @@ impl<'a> State<'a> {
                             vals: v.to_vec(),
                             rhs: self.fr.t0[2 * i + k],
                             rho: self.rho[i][1],
+                            spring: None,
                             of: Of::Tangential(i, k),
                         });
                     }
                 }
-                Disc::Slip(e) => {
+                Disc::Slip(e, kappa) => {
                     let w = [-e[1], e[0]];
                     let (cols, vals) = combine(t, i, w);
+                    // A spring 1/κ softer than the row's ρ goes into K as
+                    // it is; a stiffer one is held as a constraint (the
+                    // step is then Newton's to κ/ρ⁻¹, no worse conditioned).
+                    let k_s = 1.0 / kappa;
                     rows.push(BRow {
                         cols,
                         vals,
                         rhs: w[0] * self.fr.t0[2 * i] + w[1] * self.fr.t0[2 * i + 1],
                         rho: self.rho[i][1],
+                        spring: (k_s <= self.rho[i][1]).then_some(k_s),
                         of: Of::Across(i),
                     });
                 }
@@ -410,7 +424,7 @@ impl<'a> State<'a> {
         let mut dp = qp.d.clone();
         let mut known = vec![0.0; 2 * m];
         for (i, d) in self.tang.iter().enumerate() {
-            if let (Disc::Slip(e), false) = (d, self.glued) {
+            if let (Disc::Slip(e, _), false) = (d, self.glued) {
                 known[2 * i] = -self.s[i] * e[0];
                 known[2 * i + 1] = -self.s[i] * e[1];
             }
@@ -427,6 +441,7 @@ impl<'a> State<'a> {
         let mut mu: Vec<f64> = rows
             .iter()
             .map(|b| match b.of {
+                _ if b.spring.is_some() => 0.0,
                 Of::Normal(i) => self.ln[i],
                 Of::Tangential(i, k) => self.lt[2 * i + k],
                 Of::Across(_) => 0.0,
@@ -438,7 +453,10 @@ impl<'a> State<'a> {
         for _ in 0..AL_MAX {
             let mut rhs = dp.clone();
             for (b, mk) in rows.iter().zip(&mu) {
-                let w = b.rho * b.rhs - mk;
+                let w = match b.spring {
+                    Some(k_s) => k_s * b.rhs,
+                    None => b.rho * b.rhs - mk,
+                };
                 for (&j, &a) in b.cols.iter().zip(&b.vals) {
                     rhs[j] += w * a;
                 }
@@ -448,8 +466,14 @@ impl<'a> State<'a> {
             let mut res = 0.0f64;
             for (b, mk) in rows.iter().zip(mu.iter_mut()) {
                 let bx: f64 = b.cols.iter().zip(&b.vals).map(|(&j, &a)| a * x[j]).sum();
-                *mk += b.rho * (bx - b.rhs);
-                res = res.max((bx - b.rhs).abs());
+                match b.spring {
+                    // The spring's force λ⊥ = (w x − r)/κ.
+                    Some(k_s) => *mk = k_s * (bx - b.rhs),
+                    None => {
+                        *mk += b.rho * (bx - b.rhs);
+                        res = res.max((bx - b.rhs).abs());
+                    }
+                }
             }
             let xs = norm_inf(&x).max(bscale).max(f64::MIN_POSITIVE);
             stalled = if res > 0.5 * last * xs { stalled + 1 } else { 0 };
@@ -473,7 +497,7 @@ impl<'a> State<'a> {
                 Of::Normal(i) => self.ln[i] = *mk,
                 Of::Tangential(i, k) => self.lt[2 * i + k] = *mk,
                 Of::Across(i) => {
-                    if let Disc::Slip(e) = self.tang[i] {
+                    if let Disc::Slip(e, _) = self.tang[i] {
                         self.lt[2 * i] -= mk * e[1];
                         self.lt[2 * i + 1] += mk * e[0];
                     }
@@ -505,9 +529,10 @@ impl<'a> State<'a> {
             }
         }
         for b in rows {
+            let w = b.spring.unwrap_or(b.rho);
             for (&j, &a) in b.cols.iter().zip(&b.vals) {
                 for (&k, &c) in b.cols.iter().zip(&b.vals) {
-                    trip.push((j, k, b.rho * a * c));
+                    trip.push((j, k, w * a * c));
                 }
             }
         }
@@ -624,7 +649,7 @@ impl Iterative for State<'_> {
                     "ssn: discs: |N| = {}, stick {}, slip {}: residual {:.3e}",
                     rec.active,
                     self.tang.iter().filter(|d| **d == Disc::Stick).count(),
-                    self.tang.iter().filter(|d| matches!(d, Disc::Slip(_))).count(),
+                    self.tang.iter().filter(|d| matches!(d, Disc::Slip(..))).count(),
                     rec.residual
                 );
                 if rec.residual < self.best.0 * (1.0 - 1e-9) {
