@@ -244,8 +244,9 @@ def case_sliding_block3d(args, work):
     cs = f"sliding block 3D, h = {h:g} m"
     s0, h0 = solve(args, d, "sliding_block3d.toml", msh, work, "_mu0", frictionless)
     F0 = iface(s0)["force"]
-    rows = [V.row(cs + ", mu = 0", "normal contact force / platen's reaction", 1.0,
-                  F0[2] / -s0["reactions"]["block_top"]["force"][2], 1e-9, source="statics"),
+    rows = [V.row(cs + ", mu = 0", "normal contact force / platen's reaction - 1", 0.0,
+                  F0[2] / -s0["reactions"]["block_top"]["force"][2] - 1, 1e-9, kind="abs",
+                  source="statics"),
             V.row(cs + ", mu = 0", "tangential contact force / normal", 0.0,
                   math.hypot(F0[0], F0[1]) / F0[2], 1e-12, kind="abs", source="no friction")]
     try:
@@ -265,10 +266,12 @@ def case_sliding_block3d(args, work):
     rows += [
         V.row(c, "share of rows slipping", 1.0, float((fs == 2).mean()), 0.0,
               source="full slip"),
-        V.row(c, "normal contact force / platen's reaction", 1.0,
-              F[2] / -s["reactions"]["block_top"]["force"][2], 1e-9, source="statics"),
-        V.row(c, "friction force / (mu N)", 1.0, float(np.linalg.norm(Ft)) / (mu * F[2]),
-              1e-8, source="Coulomb: disc"),
+        V.row(c, "normal contact force / platen's reaction - 1", 0.0,
+              F[2] / -s["reactions"]["block_top"]["force"][2] - 1, 1e-9, kind="abs",
+              source="statics"),
+        V.row(c, "friction force / (mu N) - 1", 0.0,
+              float(np.linalg.norm(Ft)) / (mu * F[2]) - 1, 1e-8, kind="abs",
+              source="Coulomb: disc"),
         V.row(c, "angle(friction force, -push) [rad]", 0.0,
               angle(np.append(Ft, 0.0), -e30), 1e-6, kind="abs", source="statics"),
         V.row(c, "max angle(row slip, push line) [rad]", 0.0, dev, 1e-4, kind="abs",
@@ -278,15 +281,16 @@ def case_sliding_block3d(args, work):
         def edit(text, r=r):
             tau = r * mu * p
             return text.replace("p = [12990.381056766580, 7500.0, -1.0e5]",
-                                f"p = [{tau * e30[0]!r}, {tau * e30[1]!r}, -1.0e5]")
+                                f"p = [{float(tau * e30[0])!r}, {float(tau * e30[1])!r}, -1.0e5]")
         s, h5 = solve(args, d, "sliding_block3d_force.toml", msh, work, f"_r{r:g}", edit)
         F = np.array(iface(s)["force"])
         with h5py.File(h5) as f:
             fs = state(steps(f)[-1])
             stick_area = float(trib(steps(f)[-1])[fs == 1].sum())
         c = cs + f", pushed by {r:g} mu p at 30 deg"
-        rows += [V.row(c, "friction force / (mu N)", r, float(np.linalg.norm(F[:2])) / (mu * F[2]),
-                       1e-8, source="statics"),
+        rows += [V.row(c, f"friction force / (mu N) - {r:g}", 0.0,
+                       float(np.linalg.norm(F[:2])) / (mu * F[2]) - r, 1e-8, kind="abs",
+                       source="statics"),
                  V.row(c, "angle(friction force, -push) [rad]", 0.0,
                        angle(np.append(F[:2], 0.0), -e30), 1e-6, kind="abs",
                        source="statics")]
@@ -296,8 +300,8 @@ def case_sliding_block3d(args, work):
                               0.0, kind="above", source="it sticks"))
     err = solve(args, d, "sliding_block3d_force.toml", msh, work, "_r1.001",
                 lambda t: t.replace("p = [12990.381056766580, 7500.0, -1.0e5]",
-                                    f"p = [{1.001 * mu * p * e30[0]!r}, "
-                                    f"{1.001 * mu * p * e30[1]!r}, -1.0e5]"), expect=2)
+                                    f"p = [{float(1.001 * mu * p * e30[0])!r}, "
+                                    f"{float(1.001 * mu * p * e30[1])!r}, -1.0e5]"), expect=2)
     rows.append(V.row(cs + ", pushed by 1.001 mu p at 30 deg", "refused as unbounded (exit 2)",
                       1.0, float(bool(re.search(r"unbounded|slid", err))), 0.0,
                       source="no equilibrium"))
