@@ -125,6 +125,29 @@ impl TrescaStep for PlaneTresca<'_, '_> {
                 st.glued = false;
             }
         }
+        st.coulomb = None;
+        self.run()
+    }
+
+    /// Coulomb's problem directly: the Newton steps with the bound
+    /// s = μλ_n of the current iterate, from the glued answer
+    /// (docs/methods.md §12.3); not settled, the shared loop goes on
+    /// with Tresca problems from the glued answer.
+    fn coulomb(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+        let st = &mut self.st;
+        st.coulomb = Some(mu.to_vec());
+        st.s = crate::qp::coulomb_bound(mu, &st.ln);
+        st.glued = false;
+        let r = self.run();
+        self.st.coulomb = None;
+        Some(r)
+    }
+}
+
+impl PlaneTresca<'_, '_> {
+    /// Newton steps from the current state until the sets settle.
+    fn run(&mut self) -> Result<Tresca, QpError> {
+        let st = &mut self.st;
         st.started = false;
         st.best = (f64::INFINITY, 0);
         let mut exec = self.ctx.executor("ssn");
@@ -168,6 +191,9 @@ struct State<'a> {
     lt: Vec<f64>,
     s: Vec<f64>,
     glued: bool,
+    /// Coulomb's coefficients while the direct iteration runs (s = μλ_n
+    /// of the current iterate).
+    coulomb: Option<Vec<f64>>,
     in_n: Vec<bool>,
     tang: Vec<Disc>,
     /// A step of the current solve has been taken (the first takes the
@@ -214,6 +240,7 @@ impl<'a> State<'a> {
             lt: vec![0.0; 2 * m],
             s: vec![0.0; m],
             glued: true,
+            coulomb: None,
             in_n,
             tang: vec![Disc::Stick; m],
             started: false,
@@ -644,6 +671,9 @@ impl Iterative for State<'_> {
         let it = self.outer;
         match self.solve_set() {
             Ok(None) => {
+                if let Some(mu) = &self.coulomb {
+                    self.s = crate::qp::coulomb_bound(mu, &self.ln);
+                }
                 let rec = self.record(it);
                 log::debug!(
                     "ssn: discs: |N| = {}, stick {}, slip {}: residual {:.3e}",
