@@ -300,7 +300,9 @@ fn check_capabilities(method: &dyn Method, qp: &QpProblem) -> Result<(), QpError
             .map(MethodId::name)
             .collect();
         let what = match qp.friction.as_ref().map(|f| f.frame) {
-            Some(crate::qp::Frame::Plane) => "3D contact with friction (a disc or cone per contact point, docs/methods.md §12)",
+            Some(crate::qp::Frame::Plane) => {
+                "3D contact with friction (a disc or cone per contact point, docs/methods.md §12)"
+            }
             _ => "contact with friction",
         };
         return Err(QpError::Unsupported(format!(

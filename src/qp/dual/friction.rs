@@ -12,7 +12,7 @@
 //! last multipliers: the outer loop of §9.1 shared with `ssn`
 //! ([`crate::qp::coulomb`]), of which this file is the Tresca solve.
 
-use super::{dense_h, row_scaling_of, BoundStep, BoxBounds, DualOp, Smalbe};
+use super::{dense_h, row_scaling_of, row_weights_of, BoundStep, BoxBounds, DualOp, Smalbe};
 use crate::linalg::kernel::orthonormal_kernel;
 use crate::linalg::sparse::Csr;
 use crate::qp::coulomb::{self, Bound, Tresca, TrescaStep};
@@ -57,8 +57,12 @@ pub(crate) fn solve_friction<S: BoundStep>(
             trip.extend(cols.iter().zip(vals).map(|(&j, &v)| (off + i, j, v)));
         }
     }
-    let mut b = Csr::from_triplets(2 * m, qp.n(), &trip);
-    let sc = row_scaling_of(&qp.c, &b);
+    let k = fr.frame.rows();
+    let mut b = Csr::from_triplets(m + fr.t.nrows, qp.n(), &trip);
+    let mut sc = row_scaling_of(&qp.c, &b);
+    if k == 2 {
+        pair_scaling(&qp.c, &b, m, &mut sc);
+    }
     for (i, si) in sc.iter().enumerate() {
         for v in &mut b.data[b.indptr[i]..b.indptr[i + 1]] {
             *v *= si;
@@ -84,11 +88,31 @@ pub(crate) fn solve_friction<S: BoundStep>(
     // offset (it holds nothing and moves nothing) and its λ_t is set after
     // each solve ([`DualTresca::prescribed`]). A zero row without an
     // offset (a symmetry line) is left as it was.
+    // In 3D the pair of a contact point is prescribed when both its rows
+    // are empty: v = −t0 (a 2-vector), λ_t = s·v/‖v‖; a pair with one empty
+    // row is left to the host (docs/methods.md §12.4).
     let mut prescribed = vec![];
-    for i in m..2 * m {
-        if g[i] != 0.0 && b.row(i).1.iter().all(|&v| v == 0.0) {
-            prescribed.push((i - m, -g[i].signum()));
-            g[i] = 0.0;
+    for (c, rows) in (m..m + fr.t.nrows)
+        .collect::<Vec<_>>()
+        .chunks(k)
+        .enumerate()
+    {
+        let empty = rows.iter().all(|&i| b.row(i).1.iter().all(|&v| v == 0.0));
+        if empty && rows.iter().any(|&i| g[i] != 0.0) {
+            let dir: Vec<f64> = match rows {
+                [i] => vec![-g[*i].signum()],
+                _ => {
+                    // One scale for the pair: the direction of the scaled
+                    // offsets is that of t0.
+                    let v: Vec<f64> = rows.iter().map(|&i| -g[i]).collect();
+                    let n = crate::qp::tangential_norm(&v);
+                    v.iter().map(|e| e / n).collect()
+                }
+            };
+            prescribed.push((c, dir));
+            for &i in rows {
+                g[i] = 0.0;
+            }
         }
     }
     let sq = QpProblem {
@@ -102,6 +126,7 @@ pub(crate) fn solve_friction<S: BoundStep>(
     };
     let mut step = DualTresca {
         qp,
+        frame: fr.frame,
         sq: &sq,
         sc,
         ctx,
@@ -118,6 +143,29 @@ pub(crate) fn solve_friction<S: BoundStep>(
     let mut out = coulomb::solve(fr, &mut step, name, &proven, target)?;
     out.timings = vec![("iterate".into(), t_start.elapsed().as_secs_f64())];
     Ok(out)
+}
+
+/// One scale for the two tangential rows of each contact point (rows m + 2i,
+/// m + 2i + 1 of `b`), so that the disc ‖λ_t‖ ≤ s stays a disc in the
+/// scaled multipliers (docs/methods.md §12.4): 1/√h̄ with h̄ the mean of the
+/// pair's Jacobi estimates hᵢ = bᵢᵀdiag(C)⁻¹bᵢ (of those that are
+/// positive; 1 when neither is).
+fn pair_scaling(c: &Csr, b: &Csr, m: usize, sc: &mut [f64]) {
+    let h = row_weights_of(c, b);
+    for j in (m..b.nrows.saturating_sub(1)).step_by(2) {
+        let ok: Vec<f64> = h[j..j + 2]
+            .iter()
+            .copied()
+            .filter(|h| *h > 0.0 && h.is_finite())
+            .collect();
+        let s = if ok.is_empty() {
+            1.0
+        } else {
+            1.0 / (ok.iter().sum::<f64>() / ok.len() as f64).sqrt()
+        };
+        sc[j] = s;
+        sc[j + 1] = s;
+    }
 }
 
 /// What the frictional dual derives from C, B and ker C alone, kept in the
@@ -141,6 +189,8 @@ const KEPT_HESSIAN_TAG: u64 = 0x6d70_7267_705f_6873;
 /// the box |λ_t| ≤ s, warm-started from the last multipliers.
 struct DualTresca<'q, 'c, 'a, F> {
     qp: &'q QpProblem,
+    /// One tangential row per contact row (2D) or a pair (3D).
+    frame: crate::qp::Frame,
     /// The scaled stacked problem (B = [A; T], c = [g; t0]).
     sq: &'q QpProblem,
     /// The row scaling of B: λ = sc·μ for the host's multiplier μ.
@@ -150,10 +200,11 @@ struct DualTresca<'q, 'c, 'a, F> {
     name: &'static str,
     /// The scaled multipliers of the last solve (the next one's start).
     lam0: Option<Vec<f64>>,
-    /// Tangential rows whose slip is prescribed (an empty row of B with
-    /// an offset): (row, sign of the slip −t0). Their λ_t is s·sign v
-    /// (0 in the glued solve), not the host's.
-    prescribed: Vec<(usize, f64)>,
+    /// Contact points whose slip is prescribed (empty rows of B with an
+    /// offset): (contact row, the slip's direction −t0/‖t0‖, one entry per
+    /// tangential row: its sign in 2D). Their λ_t is s·that (0 in the glued
+    /// solve), not the host's.
+    prescribed: Vec<(usize, Vec<f64>)>,
     /// The orthonormal kernel basis, the same for every Tresca solve.
     kernel: Option<Vec<Vec<f64>>>,
     /// ‖PHP‖ of the first solve ([`BoxBounds::hnorm`]).
@@ -208,13 +259,20 @@ impl<S: BoundStep, F: FnMut() -> S> TrescaStep for DualTresca<'_, '_, '_, F> {
         }
         // |λ_t| ≤ s ⇔ |μ| ≤ s/sc for the scaled multiplier μ = λ/sc; glued:
         // no bound (s = ∞).
+        // ‖λ_t‖ ≤ s likewise in 3D, the pair sharing one scale.
+        let k = self.frame.rows();
         let upper: Vec<f64> = match bound {
             Bound::Glued => vec![f64::INFINITY; m],
-            Bound::Given(s) => s.iter().zip(&self.sc[m..]).map(|(s, c)| s / c).collect(),
+            Bound::Given(s) => s
+                .iter()
+                .zip(self.sc[m..].iter().step_by(k))
+                .map(|(s, c)| s / c)
+                .collect(),
         };
         let boxed = BoxBounds {
             m_n: m,
             upper,
+            frame: self.frame,
             lam0: self.lam0.take(),
             hnorm: self.hnorm,
         };
@@ -247,11 +305,13 @@ impl<S: BoundStep, F: FnMut() -> S> TrescaStep for DualTresca<'_, '_, '_, F> {
         self.lam0 = Some(out.lambda);
         // The host solved the stacked rows [A; T] (docs/methods.md §9.2).
         let mut lambda_t = lambda.split_off(m);
-        for &(k, sign) in &self.prescribed {
-            lambda_t[k] = match bound {
-                Bound::Glued => 0.0,
-                Bound::Given(s) => sign * s[k],
-            };
+        for (c, dir) in &self.prescribed {
+            for (r, e) in dir.iter().enumerate() {
+                lambda_t[c * k + r] = match bound {
+                    Bound::Glued => 0.0,
+                    Bound::Given(s) => e * s[*c],
+                };
+            }
         }
         Ok(Tresca {
             x: out.x,

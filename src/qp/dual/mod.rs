@@ -14,6 +14,9 @@
 //! Counts: `iterations` = steps + multiplier updates, `inner_iterations` =
 //! solves with the factor.
 
+mod bounds;
+#[cfg(test)]
+mod disc_tests;
 mod friction;
 pub mod mprgp;
 mod op;
@@ -162,21 +165,29 @@ fn row_scaling(qp: &QpProblem) -> Vec<f64> {
 
 /// [`row_scaling`] of the rows of `a` against the diagonal of `c`.
 fn row_scaling_of(c: &crate::qp::Csr, a: &crate::qp::Csr) -> Vec<f64> {
-    let diag = c.diag();
-    (0..a.nrows)
-        .map(|i| {
-            let (cols, vals) = a.row(i);
-            let h: f64 = cols
-                .iter()
-                .zip(vals)
-                .filter(|(&j, _)| diag[j] > 0.0)
-                .map(|(&j, &a)| a * a / diag[j])
-                .sum();
+    row_weights_of(c, a)
+        .into_iter()
+        .map(|h| {
             if h > 0.0 && h.is_finite() {
                 1.0 / h.sqrt()
             } else {
                 1.0
             }
+        })
+        .collect()
+}
+
+/// hᵢ = aᵢᵀ diag(C)⁻¹ aᵢ of each row of `a` (over the positive diagonal).
+fn row_weights_of(c: &crate::qp::Csr, a: &crate::qp::Csr) -> Vec<f64> {
+    let diag = c.diag();
+    (0..a.nrows)
+        .map(|i| {
+            let (cols, vals) = a.row(i);
+            cols.iter()
+                .zip(vals)
+                .filter(|(&j, _)| diag[j] > 0.0)
+                .map(|(&j, &a)| a * a / diag[j])
+                .sum()
         })
         .collect()
 }
@@ -191,7 +202,14 @@ pub(crate) struct DualState<'a> {
     /// Upper bounds u of λ̂: +∞ on the contact rows, s − λ̃ on the
     /// tangential rows of a frictional problem (docs/methods.md §9.2).
     pub(crate) ub: Vec<f64>,
-    /// The iterate λ̂ (λ = λ̂ + λ̃), always in [ℓ, u].
+    /// Rows from here on are in pairs, each pair a disc of `discs`
+    /// (docs/methods.md §12.4; `lb`, `ub` unused there); the length of λ̂
+    /// when there is none.
+    pub(crate) disc_start: usize,
+    /// The discs ‖λ̂ₖ + λ̃ₖ‖ ≤ rₖ of the tangential pairs of a 3D frictional
+    /// dual, pair k on rows disc_start + 2k, disc_start + 2k + 1.
+    pub(crate) discs: Vec<bounds::Disc>,
+    /// The iterate λ̂ (λ = λ̂ + λ̃), always in [ℓ, u] and in the discs.
     pub(crate) lam: Vec<f64>,
     /// The gradient g = (PHP + ρQ)λ̂ − b, kept current by every step.
     pub(crate) g: Vec<f64>,
@@ -223,56 +241,6 @@ impl DualState<'_> {
         let ax = self.op.apply(&self.lam);
         self.g = ax.iter().zip(&self.b).map(|(a, b)| a - b).collect();
         self.fresh = true;
-    }
-    /// λ̂ᵢ off its bounds.
-    pub(crate) fn is_free(&self, i: usize) -> bool {
-        self.lam[i] > self.lb[i] && self.lam[i] < self.ub[i]
-    }
-    /// The projected gradient of a row at a bound: min(g, 0) at ℓ, max(g, 0)
-    /// at u, 0 when ℓ = u (a row with slip bound 0).
-    fn chopped(&self, i: usize) -> f64 {
-        if self.lam[i] <= self.lb[i] {
-            if self.lam[i] >= self.ub[i] {
-                0.0
-            } else {
-                self.g[i].min(0.0)
-            }
-        } else {
-            self.g[i].max(0.0)
-        }
-    }
-    /// Free gradient φ (zero at the bounds).
-    pub(crate) fn phi(&self) -> Vec<f64> {
-        (0..self.lam.len())
-            .map(|i| if self.is_free(i) { self.g[i] } else { 0.0 })
-            .collect()
-    }
-    /// Chopped gradient β = min(g, 0) at the lower bounds, max(g, 0) at the
-    /// upper ones (zero on the free set).
-    pub(crate) fn beta(&self) -> Vec<f64> {
-        (0..self.lam.len())
-            .map(|i| {
-                if self.is_free(i) {
-                    0.0
-                } else {
-                    self.chopped(i)
-                }
-            })
-            .collect()
-    }
-    /// ‖gᴾ‖ = ‖φ + β‖
-    pub(crate) fn gp_norm(&self) -> f64 {
-        (0..self.lam.len())
-            .map(|i| {
-                let v = if self.is_free(i) {
-                    self.g[i]
-                } else {
-                    self.chopped(i)
-                };
-                v * v
-            })
-            .sum::<f64>()
-            .sqrt()
     }
 }
 
@@ -323,12 +291,15 @@ struct Smalbe<'a, S> {
     measured_lam: Vec<f64>,
 }
 
-/// The box of a frictional dual (docs/methods.md §9.2): rows `0..m_n` of
-/// the stacked B = [A; T] are contact rows with λ ≥ 0, row m_n + i is
-/// tangential with |λ| ≤ `upper[i]`; `lam0` (all rows) is a warm start.
+/// The bounds of a frictional dual (docs/methods.md §9.2, §12.4): rows
+/// `0..m_n` of the stacked B = [A; T] are contact rows with λ ≥ 0; with
+/// `Frame::Line` row m_n + i is tangential with |λ| ≤ `upper[i]`, with
+/// `Frame::Plane` rows m_n + 2i, m_n + 2i + 1 are a pair with ‖λ‖ ≤
+/// `upper[i]` (a disc); `lam0` (all rows) is a warm start.
 pub(crate) struct BoxBounds {
     pub(crate) m_n: usize,
     pub(crate) upper: Vec<f64>,
+    pub(crate) frame: crate::qp::Frame,
     pub(crate) lam0: Option<Vec<f64>>,
     /// ‖PHP‖ as the last solve of the same operator estimated it: the
     /// Tresca solves of one Coulomb loop share H (only the box moves), and
@@ -401,20 +372,50 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
         let mut lb: Vec<f64> = shift.iter().map(|s| -s).collect();
         let mut ub = vec![f64::INFINITY; m];
         let m_n = boxed.map_or(m, |b| b.m_n);
+        let plane = boxed.is_some_and(|b| b.frame == crate::qp::Frame::Plane);
+        let (disc_start, mut discs) = (if plane { m_n } else { m }, vec![]);
         if let Some(b) = boxed {
-            for i in m_n..m {
-                lb[i] = -b.upper[i - m_n] - shift[i];
-                ub[i] = b.upper[i - m_n] - shift[i];
+            if plane {
+                // The disc ‖λ̂ + λ̃‖ ≤ u of each pair (docs/methods.md §12.4).
+                for (k, &u) in b.upper.iter().enumerate() {
+                    let j = m_n + 2 * k;
+                    discs.push(bounds::Disc {
+                        shift: [shift[j], shift[j + 1]],
+                        radius: u,
+                    });
+                    lb[j..j + 2].fill(f64::NEG_INFINITY);
+                }
+            } else {
+                for i in m_n..m {
+                    lb[i] = -b.upper[i - m_n] - shift[i];
+                    ub[i] = b.upper[i - m_n] - shift[i];
+                }
             }
         }
         let mut lam: Vec<f64> = lb.iter().map(|&l| l.max(0.0)).collect();
         if let Some(b) = boxed {
-            for i in m_n..m {
+            for i in m_n..disc_start {
                 lam[i] = lam[i].min(ub[i]);
             }
             if let Some(l0) = &b.lam0 {
-                for i in 0..m {
+                for i in 0..disc_start {
                     lam[i] = (l0[i] - shift[i]).max(lb[i]).min(ub[i]);
+                }
+            }
+            // A disc starts at the projection of λ (of the warm start, or
+            // λ = λ̃: λ̂ = 0) onto it.
+            for (k, d) in discs.iter().enumerate() {
+                let j = m_n + 2 * k;
+                let z = match &b.lam0 {
+                    Some(l0) => [l0[j], l0[j + 1]],
+                    None => d.shift,
+                };
+                let p = bounds::Disc::project(z, d.radius);
+                if p != z || b.lam0.is_some() {
+                    lam[j] = p[0] - d.shift[0];
+                    lam[j + 1] = p[1] - d.shift[1];
+                } else {
+                    lam[j..j + 2].fill(0.0);
                 }
             }
         }
@@ -424,6 +425,8 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
             op,
             lb,
             ub,
+            disc_start,
+            discs,
             lam,
             g: vec![0.0; m],
             b: bhat,
@@ -521,7 +524,8 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
         let qp = s.op.qp;
         let m = qp.m();
         let m_n = self.m_n;
-        let lam: Vec<f64> = (0..m)
+        let disc_start = s.disc_start;
+        let mut lam: Vec<f64> = (0..disc_start)
             .map(|i| {
                 if i >= m_n {
                     // A tangential row: exactly ±s at its bounds.
@@ -540,6 +544,21 @@ impl<'a, S: BoundStep> Smalbe<'a, S> {
                 }
             })
             .collect();
+        // A disc: λ = λ̂ + λ̃ in the disc, exactly of norm s on its circle
+        // (docs/methods.md §12.4).
+        for (k, d) in s.discs.iter().enumerate() {
+            let j = disc_start + 2 * k;
+            let z = [s.lam[j] + self.shift[j], s.lam[j + 1] + self.shift[j + 1]];
+            let u = d.radius;
+            let n = z[0].hypot(z[1]);
+            let free = s.is_free(j);
+            let p = if !free && n > 0.0 && u < f64::INFINITY {
+                [z[0] * (u / n), z[1] * (u / n)]
+            } else {
+                bounds::Disc::project(z, u)
+            };
+            lam.extend(p);
+        }
         let mut x = s.op.x_of(&lam);
         let k = s.op.k();
         if k > 0 {

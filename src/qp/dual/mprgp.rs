@@ -32,8 +32,9 @@ impl Method for MprgpMethod {
     }
     fn capabilities(&self) -> Capabilities {
         Capabilities {
-            // Tresca and Coulomb on the dual with box constraints (docs/methods.md §9.2).
-            friction: crate::qp::method::FrictionSupport::Lines,
+            // Tresca and Coulomb on the dual with boxes (2D) and discs (3D)
+            // (docs/methods.md §9.2, §12.4).
+            friction: crate::qp::method::FrictionSupport::Planes,
             friction_caveat: Some(
                 "with friction, mprgp solves every Tresca problem of the Coulomb loop by projected gradients on the dual, whose steps grow in number with the mesh (NAFEMS 1 with μ = 0.1: 5 400 steps at 7.5 k nodes, 10 000 at 80 k, 2.4–4.8 times ssn's time; BENCHMARKS.md); past 48·√n contact and tangential rows the dual Hessian is not formed and every step solves with the factor, tens of times slower; the default method (ssn) solves it exactly in a few Newton steps",
             ),
@@ -75,21 +76,12 @@ impl BoundStep for Mprgp {
         self.p = s.phi();
     }
 
-    /// One MPRGP step (CG, expansion or proportioning).
+    /// One MPRGP step (CG, expansion or proportioning), on intervals and
+    /// discs alike ([`super::bounds`], docs/methods.md §4.11, §12.4).
     fn step(&mut self, s: &mut DualState) -> Result<StepKind, String> {
-        let mdim = s.lam.len();
         let phi = s.phi();
         let beta = s.beta();
-        let phit_phi: f64 = (0..mdim)
-            .filter(|&i| s.is_free(i))
-            .map(|i| {
-                if phi[i] < 0.0 && s.ub[i] < f64::INFINITY {
-                    ((s.lam[i] - s.ub[i]) / self.abar).max(phi[i]) * phi[i]
-                } else {
-                    ((s.lam[i] - s.lb[i]) / self.abar).min(phi[i]) * phi[i]
-                }
-            })
-            .sum();
+        let phit_phi = s.reduced_dot(&phi, self.abar);
         s.fresh = false;
         if dot(&beta, &beta) <= GAMMA * GAMMA * phit_phi {
             if dot(&self.p, &self.p) == 0.0 {
@@ -104,14 +96,7 @@ impl BoundStep for Mprgp {
                 ));
             }
             let acg = dot(&s.g, &self.p) / pap;
-            let mut af = f64::INFINITY;
-            for i in 0..mdim {
-                if self.p[i] > 0.0 {
-                    af = af.min(((s.lam[i] - s.lb[i]) / self.p[i]).max(0.0));
-                } else if self.p[i] < 0.0 && s.ub[i] < f64::INFINITY {
-                    af = af.min(((s.lam[i] - s.ub[i]) / self.p[i]).max(0.0));
-                }
-            }
+            let af = s.feasible_step(&self.p);
             if acg <= af {
                 axpy(-acg, &self.p, &mut s.lam);
                 axpy(-acg, &ap, &mut s.g);
@@ -123,18 +108,26 @@ impl BoundStep for Mprgp {
                 Ok(StepKind::Cg)
             } else {
                 // Feasible part of the CG step, then a projected gradient step.
-                for (i, (xi, pi)) in s.lam.iter_mut().zip(&self.p).enumerate() {
-                    *xi = (*xi - af * pi).max(s.lb[i]).min(s.ub[i]);
-                }
+                s.step_projected(af, &self.p);
                 axpy(-af, &ap, &mut s.g);
                 let phih = s.phi();
-                for (i, (xi, fi)) in s.lam.iter_mut().zip(&phih).enumerate() {
-                    *xi = (*xi - self.abar * fi).max(s.lb[i]).min(s.ub[i]);
-                }
+                s.step_projected(self.abar, &phih);
                 s.refresh();
                 self.p = s.phi();
                 Ok(StepKind::Expansion)
             }
+        } else if s.slides(&beta) {
+            // On a disc's circle with −g leaving it β is tangential, and
+            // every step along it leaves the disc: the projected gradient
+            // step of fixed length ᾱ on the factors at their bounds, which
+            // lowers θ for ᾱ ≤ 2/‖H‖ (docs/methods.md §12.4).
+            let at_bound: Vec<f64> = (0..s.lam.len())
+                .map(|i| if s.is_free(i) { 0.0 } else { s.g[i] })
+                .collect();
+            s.step_projected(self.abar, &at_bound);
+            s.refresh();
+            self.p = s.phi();
+            Ok(StepKind::Proportioning)
         } else {
             let ad = s.op.apply(&beta);
             let dad = dot(&beta, &ad);
@@ -145,14 +138,40 @@ impl BoundStep for Mprgp {
                 ));
             }
             let a = dot(&s.g, &beta) / dad;
-            for i in 0..mdim {
-                s.lam[i] = (s.lam[i] - a * beta[i]).max(s.lb[i]).min(s.ub[i]);
-                s.g[i] -= a * ad[i];
+            let before = (!s.discs.is_empty()).then(|| (s.lam.clone(), s.g.clone()));
+            if s.step_projected(a, &beta) {
+                // A step across a whole disc came out on its far side: the
+                // gradient from scratch, and where θ rose, the step of fixed
+                // length ᾱ along β instead (docs/methods.md §12.4).
+                s.refresh();
+                if let Some((lam0, g0)) = before {
+                    if !lowers(&lam0, &g0, &s.lam, &s.g) {
+                        s.lam = lam0;
+                        s.step_projected(self.abar, &beta);
+                        s.refresh();
+                    }
+                }
+            } else {
+                for (gi, adi) in s.g.iter_mut().zip(&ad) {
+                    *gi -= a * adi;
+                }
             }
             self.p = s.phi();
             Ok(StepKind::Proportioning)
         }
     }
+}
+
+/// Whether the move from λ₀ (gradient g₀) to λ₁ (g₁) lowered θ:
+/// θ(λ₁) − θ(λ₀) = ½(g₀ + g₁)ᵀ(λ₁ − λ₀) for a quadratic θ.
+fn lowers(l0: &[f64], g0: &[f64], l1: &[f64], g1: &[f64]) -> bool {
+    let change: f64 = l0
+        .iter()
+        .zip(l1)
+        .zip(g0.iter().zip(g1))
+        .map(|((a, b), (c, d))| 0.5 * (c + d) * (b - a))
+        .sum();
+    change <= 0.0
 }
 
 #[cfg(test)]
