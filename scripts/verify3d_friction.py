@@ -22,11 +22,11 @@ import sys
 
 V = None  # scripts/verify.py, set by cases()
 
-# Cases whose frictional solves do not yet converge with the binary on main
-# (docs/verification_3d.md §7g, §7i: ssn's Coulomb iteration cycles on
-# cattaneo3d's step 1 and stagnates on shrinkfit3d's push): their friction
-# rows run only with VERIFY_PENDING=1 in the environment, so that CI keeps
-# its time; the frictionless rows always run. Remove a case from here once
+# Cases whose frictional solves are too slow for CI or do not yet converge
+# (docs/verification_3d.md §7g: cattaneo3d's coarse friction solve takes
+# 167 s; §7i: shrinkfit3d's push stagnated, its turn cycled, on the trial
+# binary): their friction rows run only with VERIFY_PENDING=1 in the
+# environment, so that CI keeps its time; the frictionless rows always run. Remove a case from here once
 # its friction rows pass: from then on a failure fails.
 PENDING = {"cattaneo3d", "shrinkfit3d"}
 
@@ -241,7 +241,8 @@ def case_cattaneo3d(args, work):
         V.row(cs, "c [m] against a(P) (1 - Q/muP)^(1/3)", c_ref, c_fe, tol_c, source=src),
         V.row(cs, "share of the stick area outside c or slip inside", 0.0, wrong,
               0.10 if args.fine else 0.2, kind="abs", source="one stick disc"),
-        V.row(cs, "rms(abs(q) - q_CM)/(mu p0)", 0.0, q_rms, 0.08, kind="abs", source=src)]
+        V.row(cs, "rms(abs(q) - q_CM)/(mu p0)", 0.0, q_rms, 0.08 if args.fine else 0.15,
+              kind="abs", source=src)]
 
 
 # ------------------------------------------------------ the sliding block
