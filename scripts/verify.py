@@ -685,6 +685,10 @@ CASES = {"nafems1": case_nafems1, "patch": case_patch, "nonmatching": case_nonma
          "punch": case_punch, "cattaneo": case_cattaneo, "hertz_sphere": case_hertz_sphere,
          "sneddon": case_sneddon, "nafems2": case_nafems2, "shrinkfit": case_shrinkfit,
          "ssnv104": case_ssnv104, "sneddon3d": case_sneddon3d, "patch3d": case_patch3d}
+# the 3D friction cases (issue 46): scripts/verify3d_friction.py
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import verify3d_friction  # noqa: E402
+CASES.update(verify3d_friction.cases(sys.modules[__name__]))
 
 
 EXIT_USAGE = 2
