@@ -885,7 +885,8 @@ fn rigid_kernel(
             if val > 1e-9 {
                 continue;
             }
-            let coef: Vec<f64> = (0..6).map(|i| vecs[i][k]).collect();
+            // sym_eigen returns the eigenvectors as rows (as 2D reads them, rigid.rs).
+            let coef: Vec<f64> = vecs[k].clone();
             let mut z = vec![0.0; n];
             for (p, pd) in dofs
                 .iter()
