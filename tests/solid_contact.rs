@@ -226,6 +226,31 @@ fn floating_cube_on_a_block_is_certified() {
     }
 }
 
+/// The upper cube held on its top face along x and y only: its free
+/// motions are the translation along z and the turns about axes in the top
+/// face (z = 2), not about the cube's centre, so the kernel's basis mixes
+/// the six modes. Each kernel vector is a motion C does not resist, and
+/// the solve is certified (before, the eigenvectors of the modes' Gram
+/// matrix were read as columns and the run was refused: "kernel vector 0
+/// is not in ker C").
+#[test]
+fn a_partial_kernel_off_the_centre_is_in_ker_c() {
+    let mesh = read_msh(&data("stack_nm.msh")).unwrap();
+    let mut inp = stack_input(nts("upper_bottom", "lower_top"));
+    inp.slip = vec!["bottom".into(), "lower_x0".into(), "lower_y0".into()];
+    inp.dirichlet = vec![("top".into(), [Some(0.0), Some(0.0), None])];
+    let m = build(&mesh, Path::new("partial.toml"), &inp).unwrap();
+    assert_eq!(m.qp.kernel.len(), 3, "z and two turns about the top face");
+    let cmax = m.qp.c.data.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    for z in &m.qp.kernel {
+        let cz = m.qp.c.mul(z);
+        let r = cz.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let zmax = z.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        assert!(r <= 1e-10 * cmax * zmax, "|Cz| {r:e} of {:e}", cmax * zmax);
+    }
+    solve(&m);
+}
+
 /// A wrong-facing slave (the upper cube's top, which faces away from the
 /// lower cube) and a conforming surface on the outer boundary are refused,
 /// naming the entry and the group.
