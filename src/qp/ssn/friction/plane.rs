@@ -727,7 +727,20 @@ impl Iterative for State<'_> {
         if self.started || self.solved && !self.glued {
             let (n_set, tang) = self.predict();
             let key = pattern(&n_set, &tang);
-            if key != pattern(&self.in_n, &self.tang) && self.visited.contains(&key) {
+            let seen = key != pattern(&self.in_n, &self.tang) && self.visited.contains(&key);
+            if seen && self.coulomb.is_some() {
+                // The direct Coulomb iteration flips a row at the stick
+                // zone's border as s moves with λ_n: the shared loop's
+                // Tresca problems settle it (each step here is a factor).
+                return Step::Done(
+                    Status::Failed(Failure::Cycling {
+                        best: self.best.0,
+                        steps: self.best.1,
+                    }),
+                    self.record(self.outer),
+                );
+            }
+            if seen {
                 // A pattern seen before (the full step cycles: a normal set
                 // flipping between two where a glued block tilts): only
                 // the row that violates its prediction most changes, the
