@@ -1,0 +1,149 @@
+//! Tests of ssn on discs (the parent module, docs/methods.md §12.3).
+use crate::qp::testing::friction_point3;
+use crate::qp::{registry, SlipBound, SolveOptions};
+
+fn solve(q: &crate::qp::QpProblem) -> crate::qp::QpResult {
+    let r = registry::solve("ssn", q, &SolveOptions::default()).unwrap();
+    if r.status.converged() {
+        assert!(r.kkt.within(1e-10), "{:?}", r.kkt);
+    }
+    r
+}
+
+/// A point on a floor under an oblique load, at angles off the frame's
+/// axes: it sticks below μN with λ_t the load, and above it slips along
+/// the load with ‖λ_t‖ = μN exactly (the test a polygonal cone fails).
+#[test]
+fn a_point_sticks_below_mu_n_and_slips_along_the_load_above() {
+    for deg in [0.0f64, 17.0, 30.0, 45.0, 133.0, 250.0] {
+        let a = deg.to_radians();
+        let dir = [a.cos(), a.sin()];
+        for (q_load, mu) in [(0.8, 0.5), (1.5, 0.5), (3.0, 1.0)] {
+            let n = 2.0;
+            let f = [q_load * dir[0], q_load * dir[1], -n];
+            for bound in [
+                SlipBound::Coulomb(vec![mu]),
+                SlipBound::Tresca(vec![mu * n]),
+            ] {
+                let r = solve(&friction_point3(4.0, f, bound.clone()));
+                assert!(r.status.converged(), "{deg}° {bound:?}: {:?}", r.status);
+                assert!((r.lambda[0] - n).abs() < 1e-12, "{:?}", r.lambda);
+                let s = mu * n;
+                let lt = &r.lambda_t;
+                if q_load <= s {
+                    assert!((lt[0] - f[0]).abs() < 1e-12 && (lt[1] - f[1]).abs() < 1e-12);
+                    assert!(r.x[0].abs() < 1e-12 && r.x[1].abs() < 1e-12, "{:?}", r.x);
+                } else {
+                    let ln = lt[0].hypot(lt[1]);
+                    assert!((ln - s).abs() < 1e-12 * s, "{deg}°: {lt:?}");
+                    let cross = lt[0] * dir[1] - lt[1] * dir[0];
+                    assert!(cross.abs() < 1e-12, "{deg}°: {lt:?}");
+                    let u = (q_load - s) / 4.0;
+                    assert!((r.x[0] - u * dir[0]).abs() < 1e-12, "{:?}", r.x);
+                    assert!((r.x[1] - u * dir[1]).abs() < 1e-12, "{:?}", r.x);
+                }
+            }
+        }
+    }
+}
+
+/// Held by friction alone (no spring in the plane): below μN it
+/// sticks; above, the point slides away (unbounded, along the load).
+#[test]
+fn a_floating_point_sticks_or_slides_away() {
+    let f = [0.3, 0.4, -2.0];
+    let r = solve(&friction_point3(0.0, f, SlipBound::Coulomb(vec![0.5])));
+    assert!(r.status.converged(), "{:?}", r.status);
+    assert!((r.lambda_t[0] - 0.3).abs() < 1e-12 && (r.lambda_t[1] - 0.4).abs() < 1e-12);
+    let r = solve(&friction_point3(0.0, f, SlipBound::Tresca(vec![0.4])));
+    match &r.status {
+        crate::qp::Status::Unbounded { direction } => {
+            let c = direction[0] * 0.4 - direction[1] * 0.3;
+            assert!(c.abs() < 1e-9 * direction[0].abs().max(direction[1].abs()));
+        }
+        s => panic!("{s:?}"),
+    }
+}
+
+/// A ring of p points on a floor, each tied by a spring k to a driver
+/// turned by θ (loads k·θ ẑ × rᵢ) and to its neighbours by springs kc
+/// in each component, with tangent frames turned by a different angle
+/// at each point: the slip and the friction force are circumferential
+/// at every point, of size s when kθρ > s (by symmetry every point
+/// slips alike, its load s plus the springs' force on the slip), and
+/// every point sticks with λ_t its load when kθρ ≤ s.
+#[test]
+fn a_ring_turned_on_a_floor_slips_around_the_circle() {
+    use crate::qp::{Csr, Friction, QpProblem};
+    let (p, rho, k, kc, n) = (12usize, 0.5, 3.0, 40.0, 2.0);
+    for (theta, mu) in [(1.0, 0.25), (0.2, 0.5)] {
+        let mut trip = vec![];
+        let mut d = vec![0.0; 3 * p];
+        let (mut a, mut t) = (vec![], vec![]);
+        for i in 0..p {
+            let phi = 2.0 * std::f64::consts::PI * i as f64 / p as f64;
+            let (x, y) = (rho * phi.cos(), rho * phi.sin());
+            d[3 * i] = k * (-theta * y);
+            d[3 * i + 1] = k * (theta * x);
+            d[3 * i + 2] = -n;
+            for c in 0..2 {
+                trip.push((3 * i + c, 3 * i + c, k));
+            }
+            trip.push((3 * i + 2, 3 * i + 2, 3.0));
+            let j = (i + 1) % p;
+            for c in 0..3 {
+                let (u, v) = (3 * i + c, 3 * j + c);
+                trip.extend([(u, u, kc), (v, v, kc), (u, v, -kc), (v, u, -kc)]);
+            }
+            a.push((i, 3 * i + 2, -1.0));
+            let f = 0.7 * i as f64;
+            t.push((2 * i, 3 * i, f.cos()));
+            t.push((2 * i, 3 * i + 1, f.sin()));
+            t.push((2 * i + 1, 3 * i, -f.sin()));
+            t.push((2 * i + 1, 3 * i + 1, f.cos()));
+        }
+        let q = QpProblem {
+            c: Csr::from_triplets(3 * p, 3 * p, &trip),
+            d,
+            a: Csr::from_triplets(p, 3 * p, &a),
+            g: vec![0.1; p],
+            kernel: vec![],
+            friction: Some(Friction {
+                t: Csr::from_triplets(2 * p, 3 * p, &t),
+                t0: vec![0.0; 2 * p],
+                bound: SlipBound::Coulomb(vec![mu; p]),
+                frame: crate::qp::Frame::Plane,
+            }),
+            near: None,
+        };
+        let r = solve(&q);
+        assert!(r.status.converged(), "{:?}", r.status);
+        // The floor 0.1 below: λ_n = n − 3·0.1 (a point at rest would
+        // be judged against max|x| = rounding, docs/methods.md §9.4).
+        let s = mu * (n - 0.3);
+        for i in 0..p {
+            let phi = 2.0 * std::f64::consts::PI * i as f64 / p as f64;
+            let e = [-phi.sin(), phi.cos()];
+            let f = 0.7 * i as f64;
+            let (l1, l2) = (r.lambda_t[2 * i], r.lambda_t[2 * i + 1]);
+            let lg = [l1 * f.cos() - l2 * f.sin(), l1 * f.sin() + l2 * f.cos()];
+            let load = k * theta * rho;
+            // The ring's springs resist a turn of every point by a
+            // along its circle with kc·a·(2 − 2cos(2π/p)) along it.
+            let ring = kc * (2.0 - 2.0 * (2.0 * std::f64::consts::PI / p as f64).cos());
+            let (size, slip) = if load > s {
+                (s, (load - s) / (k + ring))
+            } else {
+                (load, 0.0)
+            };
+            for c in 0..2 {
+                assert!((lg[c] - size * e[c]).abs() < 1e-10, "{i}: {lg:?}");
+                assert!(
+                    (r.x[3 * i + c] - slip * e[c]).abs() < 1e-10,
+                    "{i}: {:?}",
+                    r.x
+                );
+            }
+        }
+    }
+}
