@@ -121,13 +121,15 @@ pub fn certify(qp: &QpProblem, r: &[f64]) -> Result<Recession, String> {
             ));
         }
     }
-    // Ar ≤ 0, row by row.
+    // Ar ≤ 0, row by row, against the row's size times the motion's
+    // (r is scaled to max|r| = 1): a motion along the contact plane gives
+    // round-off of either sign on every term, so Σ|a r| is no yardstick.
     for i in 0..qp.m() {
         let (cols, vals) = qp.a.row(i);
         let (mut s, mut abs) = (0.0, 0.0);
         for (&c, &a) in cols.iter().zip(vals) {
             s += a * r[c];
-            abs += (a * r[c]).abs();
+            abs += a.abs();
         }
         if s > SIGN_TOL * abs {
             return Err(format!("it closes contact row {i}"));

@@ -63,6 +63,7 @@ impl Disc {
 }
 
 /// One row of B: its coefficients (sorted columns) and right-hand side.
+#[derive(Clone)]
 struct BRow {
     cols: Vec<usize>,
     vals: Vec<f64>,
@@ -438,7 +439,12 @@ impl<'a> State<'a> {
         rows
     }
 
-    /// An orthonormal basis (in ℝⁿ) of the rigid motions z with B z = 0.
+    /// An orthonormal basis (in ℝⁿ) of the rigid motions z that B holds
+    /// with no stiffness: Σ w_b (b z)² ≈ 0, each row weighted by what it
+    /// adds to K (ρ, or a slipping row's spring 1/κ). A motion held only by
+    /// springs far softer than the rows' ρ (a body sliding away, ‖ξ‖ → ∞)
+    /// counts as free: K is singular along it to round-off, so it is
+    /// tested for unboundedness and regularised, not factored (§12.3).
     fn free_motions(&self, rows: &[BRow]) -> Vec<Vec<f64>> {
         let k = self.r.len();
         if k == 0 {
@@ -447,6 +453,7 @@ impl<'a> State<'a> {
         let mut g = vec![vec![0.0; k]; k];
         let mut bnorm = 0.0;
         for b in rows {
+            let w = b.spring.map_or(1.0, |k_s| k_s / b.rho);
             bnorm += b.vals.iter().map(|v| v * v).sum::<f64>();
             let br: Vec<f64> = self
                 .r
@@ -455,7 +462,7 @@ impl<'a> State<'a> {
                 .collect();
             for a in 0..k {
                 for c in 0..k {
-                    g[a][c] += br[a] * br[c];
+                    g[a][c] += w * br[a] * br[c];
                 }
             }
         }
@@ -495,9 +502,11 @@ impl<'a> State<'a> {
                 cands.push(z.clone());
                 cands.push(z.iter().map(|v| -v).collect());
             }
+            cands.push(self.steepest_slide(free));
         }
         cands.into_iter().find(|z| {
-            if !(norm_inf(z) > 0.0) || crate::qp::recession::certify(qp, z).is_err() {
+            let cert = crate::qp::recession::certify(qp, z);
+            if !(norm_inf(z) > 0.0) || cert.is_err() {
                 return false;
             }
             let tz = self.fr.t.mul(z);
@@ -509,6 +518,65 @@ impl<'a> State<'a> {
                 .sum();
             work - dissipation > 1e-10 * scale
         })
+    }
+
+    /// The unit motion z in span(`free`) that maximises the loads' work
+    /// less the discs' dissipation, f(z) = d·z − Σ sᵢ‖T_i z‖ (concave), by
+    /// projected subgradient ascent on the unit sphere from the loads' own
+    /// direction: the test of §12.3 needs a z with f(z) > 0 when one exists,
+    /// and the loads' direction misses it when a turn of the body costs
+    /// less than it gains. Deterministic: a fixed number of steps.
+    fn steepest_slide(&self, free: &[Vec<f64>]) -> Vec<f64> {
+        let q = free.len();
+        let a: Vec<f64> = free.iter().map(|z| dot(&self.qp.d, z)).collect();
+        let tz: Vec<Vec<f64>> = free.iter().map(|z| self.fr.t.mul(z)).collect();
+        let m = self.s.len();
+        let f_and_grad = |c: &[f64]| -> (f64, Vec<f64>) {
+            let mut f: f64 = a.iter().zip(c).map(|(x, y)| x * y).sum();
+            let mut g = a.clone();
+            for i in 0..m {
+                let v = [0, 1].map(|k| (0..q).map(|j| c[j] * tz[j][2 * i + k]).sum::<f64>());
+                let nv = tangential_norm(&v);
+                f -= self.s[i] * nv;
+                if nv > 0.0 {
+                    for (j, gj) in g.iter_mut().enumerate() {
+                        *gj -= self.s[i] * (v[0] * tz[j][2 * i] + v[1] * tz[j][2 * i + 1]) / nv;
+                    }
+                }
+            }
+            (f, g)
+        };
+        let unit = |c: &mut Vec<f64>| {
+            let n = c.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if n > 0.0 {
+                c.iter_mut().for_each(|v| *v /= n);
+            }
+        };
+        let mut c = a.clone();
+        unit(&mut c);
+        let (mut best_f, mut best) = (f_and_grad(&c).0, c.clone());
+        for it in 0..200 {
+            let (_, g) = f_and_grad(&c);
+            let gc: f64 = g.iter().zip(&c).map(|(x, y)| x * y).sum();
+            let mut gt: Vec<f64> = g.iter().zip(&c).map(|(x, y)| x - gc * y).collect();
+            unit(&mut gt);
+            let step = 0.5 / (1.0 + it as f64).sqrt();
+            for (cj, gj) in c.iter_mut().zip(&gt) {
+                *cj += step * gj;
+            }
+            unit(&mut c);
+            let f = f_and_grad(&c).0;
+            if f > best_f {
+                (best_f, best) = (f, c.clone());
+            }
+        }
+        let mut z = vec![0.0; self.qp.n()];
+        for (cj, fz) in best.iter().zip(free) {
+            for (zk, fk) in z.iter_mut().zip(fz) {
+                *zk += cj * fk;
+            }
+        }
+        z
     }
 
     /// Solve the working set's equality-constrained problem; Ok(Some) when
@@ -531,6 +599,23 @@ impl<'a> State<'a> {
         if !free.is_empty() {
             if let Some(z) = self.unbounded_along(&free) {
                 return Ok(Some(Status::Unbounded { direction: z }));
+            }
+        }
+        // A body held tangentially by friction alone slides away when the
+        // loads along a motion the normal rows leave free outwork the discs
+        // (Σ sᵢ‖T_i z‖): tested whatever the tangential sets, which may
+        // cycle between stick and slip on such a body and never free it.
+        if !self.glued {
+            let normal: Vec<BRow> = rows
+                .iter()
+                .filter(|b| matches!(b.of, Of::Normal(_)))
+                .cloned()
+                .collect();
+            let slide = self.free_motions(&normal);
+            if !slide.is_empty() && slide.len() > free.len() {
+                if let Some(z) = self.unbounded_along(&slide) {
+                    return Ok(Some(Status::Unbounded { direction: z }));
+                }
             }
         }
         let kmat = self.k_matrix(&rows);

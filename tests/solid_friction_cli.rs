@@ -1,0 +1,117 @@
+//! `signorini solve` on a 3D frictional model through the binary (issue
+//! 46): a soft cube (E = 2e7 Pa, ν = 0.45) on a steel one, non-matching
+//! mortar rows with Coulomb μ = 0.3, the upper cube held tangentially by
+//! friction alone, a pressure 1e6 Pa and a tangential traction on its top
+//! (1 m²). Under 0.6 μN the answer is certified and the interface carries
+//! the tangential load exactly (statics of the upper cube); under 1.03 μN
+//! no equilibrium exists: the run is refused as unbounded, naming the body
+//! that slides, exit 2, nothing written. (Before the fix the second run
+//! ended in "C is not positive definite": the springs across the slip of
+//! a body sliding away vanish and the Newton matrix with them.)
+
+mod common;
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+fn toml(msh: &Path, pt: [f64; 2]) -> String {
+    format!(
+        r#"[mesh]
+file = "{}"
+
+[materials.lower]
+E = 2.0e11
+nu = 0.3
+
+[materials.upper]
+E = 2.0e7
+nu = 0.45
+
+[[dirichlet]]
+on = "bottom"
+u = [0.0, 0.0, 0.0]
+
+[[slip]]
+on = "lower_x0"
+
+[[slip]]
+on = "lower_y0"
+
+[[traction]]
+on = "top"
+p = [{:e}, {:e}, -1.0e6]
+
+[[contact]]
+slave = "upper_bottom"
+master = "lower_top"
+discretization = "mortar"
+friction = 0.3
+"#,
+        msh.display(),
+        pt[0],
+        pt[1]
+    )
+}
+
+fn run(dir: &Path, pt: [f64; 2]) -> (Option<i32>, String) {
+    let msh: PathBuf = common::root().join("tests/data/solid_contact/stack_nm.msh");
+    let path = dir.join("cube.toml");
+    std::fs::write(&path, toml(&msh, pt)).unwrap();
+    let o = common::command()
+        .args(["solve", path.to_str().unwrap(), "--out"])
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    (o.status.code(), text)
+}
+
+#[test]
+fn a_soft_cube_held_by_friction_carries_a_tangential_load_below_mu_n() {
+    let dir = tempfile::tempdir().unwrap();
+    let pt = [1.5e5, 1.0e5]; // ‖pt‖ = 1.80e5 = 0.6 μN
+    let (code, text) = run(dir.path(), pt);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("certified"), "{text}");
+    let json: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("out/cube.json")).unwrap())
+            .unwrap();
+    let it = &json["contact"]["upper_bottom/lower_top"];
+    let f: Vec<f64> = it["force"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    // The slave side's resultant balances the loads on the upper cube.
+    let want = [-pt[0], -pt[1], 1.0e6];
+    for k in 0..3 {
+        assert!(
+            (f[k] - want[k]).abs() <= 1e-6 * 1.0e6,
+            "component {k}: {} vs {}",
+            f[k],
+            want[k]
+        );
+    }
+    assert!(f[0].hypot(f[1]) <= 0.3 * f[2] * (1.0 + 1e-9));
+}
+
+#[test]
+fn a_soft_cube_pushed_past_mu_n_is_refused_as_unbounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let pt = [2.5e5, 1.8e5]; // ‖pt‖ = 3.08e5 = 1.03 μN
+    let (code, text) = run(dir.path(), pt);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(text.contains("unbounded"), "{text}");
+    assert!(text.contains("\"upper\""), "{text}");
+    assert!(text.contains("friction"), "{text}");
+    assert!(!text.contains("positive definite"), "{text}");
+    let written = std::fs::read_dir(dir.path().join("out"))
+        .map(|d| d.count())
+        .unwrap_or(0);
+    assert_eq!(written, 0, "an unbounded run writes nothing");
+}
