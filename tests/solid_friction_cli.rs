@@ -98,6 +98,34 @@ fn a_soft_cube_held_by_friction_carries_a_tangential_load_below_mu_n() {
         );
     }
     assert!(f[0].hypot(f[1]) <= 0.3 * f[2] * (1.0 + 1e-9));
+
+    // The footprint names the stick/slip border only where both zones
+    // exist (with every row slipping it would trace the open zone's edge).
+    let svg = dir.path().join("fp.svg");
+    let o = common::command()
+        .args(["plot", "--contact", "-o"])
+        .arg(&svg)
+        .arg(dir.path().join("out/cube.h5"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    let at = text
+        .find(" stick, ")
+        .expect("stick/slip counts in the title");
+    let head = &text[..at];
+    let stick: usize = head[head.rfind(|c: char| !c.is_ascii_digit()).unwrap() + 1..]
+        .parse()
+        .unwrap();
+    let tail = &text[at + " stick, ".len()..];
+    let slip: usize = tail[..tail.find(' ').unwrap()].parse().unwrap();
+    let active = it["active"].as_u64().unwrap() as usize;
+    assert_eq!(stick + slip, active, "{stick} stick, {slip} slip");
+    assert_eq!(
+        text.contains("white line"),
+        stick > 0 && slip > 0,
+        "{stick} stick, {slip} slip"
+    );
 }
 
 #[test]

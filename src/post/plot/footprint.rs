@@ -113,7 +113,13 @@ pub(super) fn footprints(
         let nactive = rows.iter().filter(|&&r| step.active[r] != 0).count();
         let fr = friction(step, &rows, &used, &pts, &ltris, &frame);
         let stick_slip = fr.counts.map_or(String::new(), |(a, b)| {
-            format!("; {a} stick, {b} slip (white line)")
+            // The white line is the edge between the zones: with one zone
+            // only it would be the contact zone's edge, so it is not named.
+            if a > 0 && b > 0 {
+                format!("; {a} stick, {b} slip (white line: the slip zone's edge)")
+            } else {
+                format!("; {a} stick, {b} slip")
+            }
         });
         let title = format!(
             "{name}: {nactive} of {} rows active{stick_slip}; plane normal ({}, {}, {})",
@@ -200,8 +206,12 @@ fn friction(
     ));
     let slips: Vec<bool> = used.iter().map(|&r| state[r] == 2).collect();
     // The ½ contour only: the surface's own edges keep the active set's red.
-    f.zones = active_boundary(pts, ltris, &slips).0;
-    f.zones.truncate(contour_len(ltris, &slips));
+    // Drawn only where both zones exist: with no stick row the contour
+    // would trace the open zone's edge and read as a stick/slip border.
+    if f.counts.is_some_and(|(a, b)| a > 0 && b > 0) {
+        f.zones = active_boundary(pts, ltris, &slips).0;
+        f.zones.truncate(contour_len(ltris, &slips));
+    }
     let tau = &step.tangential_traction;
     let inplane: Vec<P2> = used
         .iter()
