@@ -99,3 +99,19 @@ pub const EXIT_NOT_CONVERGED: i32 = 3;
 /// disk) by a command that would otherwise have exited 0: its report is
 /// lost, the files it wrote are complete and committed.
 pub const EXIT_STDOUT: i32 = 4;
+
+/// The error text of an unbounded problem (a certified recession direction,
+/// docs/methods.md §1.7): `who` moves as a rigid body, the loads doing
+/// `work` on a motion of 1 m; with friction, the slide friction cannot
+/// hold (`section`: the methods section of the dimension's test).
+pub(crate) fn unbounded_message(who: &str, work: f64, friction: bool, section: &str) -> String {
+    if friction {
+        format!(
+            "the problem is unbounded: {who} slides as a rigid body, its friction cannot hold the loads (dᵀr = {work:.4e} J for a motion of 1 m exceeds what friction dissipates, methods.md {section})"
+        )
+    } else {
+        format!(
+            "the problem is unbounded: {who} can move as a rigid body without closing any contact, and the loads do positive work on it (dᵀr = {work:.4e} J for a motion of 1 m; a body pulled away from its support, methods.md §1.7)"
+        )
+    }
+}

@@ -469,15 +469,11 @@ pub fn solve_model_in(
         // component of 1; described per body as the rigid motion it is.
         let u = model.motions(direction);
         let work = crate::linalg::sparse::dot(&model.qp.d, direction);
-        if model.qp.friction.is_some() {
-            return Err(bad(format!(
-                "the problem is unbounded: {} slides as a rigid body, its friction cannot hold the loads (dᵀr = {work:.4e} J for a motion of 1 m exceeds what friction dissipates, methods.md §9.3)",
-                model.describe_rigid_motion(&u)
-            )));
-        }
-        return Err(bad(format!(
-            "the problem is unbounded: {} can move as a rigid body without closing any contact, and the loads do positive work on it (dᵀr = {work:.4e} J for a motion of 1 m; a body pulled away from its support, methods.md §1.7)",
-            model.describe_rigid_motion(&u)
+        return Err(bad(crate::run::unbounded_message(
+            &model.describe_rigid_motion(&u),
+            work,
+            model.qp.friction.is_some(),
+            "§9.3",
         )));
     }
     Ok(res)

@@ -123,15 +123,11 @@ pub(super) fn solve_in(
     if let Status::Unbounded { direction } = &res.status {
         let u = model.displacements(direction);
         let work = crate::linalg::sparse::dot(&model.qp.d, direction);
-        if model.qp.friction.is_some() {
-            return Err(bad(format!(
-                "the problem is unbounded: {} slides as a rigid body, its friction cannot hold the loads (dᵀr = {work:.4e} J for a motion of 1 m exceeds what friction dissipates, methods.md §12.3)",
-                moving_bodies(model, &u)
-            )));
-        }
-        return Err(bad(format!(
-            "the problem is unbounded: {} can move as a rigid body without closing any contact, and the loads do positive work on it (dᵀr = {work:.4e} J for a motion of 1 m; a body pulled away from its support, methods.md §1.7)",
-            moving_bodies(model, &u)
+        return Err(bad(crate::run::unbounded_message(
+            &moving_bodies(model, &u),
+            work,
+            model.qp.friction.is_some(),
+            "§12.3",
         )));
     }
     Ok(res)

@@ -63,7 +63,6 @@ impl Disc {
 }
 
 /// One row of B: its coefficients (sorted columns) and right-hand side.
-#[derive(Clone)]
 struct BRow {
     cols: Vec<usize>,
     vals: Vec<f64>,
@@ -445,7 +444,7 @@ impl<'a> State<'a> {
     /// springs far softer than the rows' ρ (a body sliding away, ‖ξ‖ → ∞)
     /// counts as free: K is singular along it to round-off, so it is
     /// tested for unboundedness and regularised, not factored (§12.3).
-    fn free_motions(&self, rows: &[BRow]) -> Vec<Vec<f64>> {
+    fn free_motions<'r>(&self, rows: impl IntoIterator<Item = &'r BRow>) -> Vec<Vec<f64>> {
         let k = self.r.len();
         if k == 0 {
             return vec![];
@@ -505,8 +504,7 @@ impl<'a> State<'a> {
             cands.push(self.steepest_slide(free));
         }
         cands.into_iter().find(|z| {
-            let cert = crate::qp::recession::certify(qp, z);
-            if !(norm_inf(z) > 0.0) || cert.is_err() {
+            if !(norm_inf(z) > 0.0) || crate::qp::recession::certify(qp, z).is_err() {
                 return false;
             }
             let tz = self.fr.t.mul(z);
@@ -554,9 +552,15 @@ impl<'a> State<'a> {
         };
         let mut c = a.clone();
         unit(&mut c);
-        let (mut best_f, mut best) = (f_and_grad(&c).0, c.clone());
-        for it in 0..200 {
-            let (_, g) = f_and_grad(&c);
+        let (mut best_f, mut best) = (f64::NEG_INFINITY, c.clone());
+        for it in 0..=200 {
+            let (f, g) = f_and_grad(&c);
+            if f > best_f {
+                (best_f, best) = (f, c.clone());
+            }
+            if it == 200 {
+                break;
+            }
             let gc: f64 = g.iter().zip(&c).map(|(x, y)| x * y).sum();
             let mut gt: Vec<f64> = g.iter().zip(&c).map(|(x, y)| x - gc * y).collect();
             unit(&mut gt);
@@ -565,10 +569,6 @@ impl<'a> State<'a> {
                 *cj += step * gj;
             }
             unit(&mut c);
-            let f = f_and_grad(&c).0;
-            if f > best_f {
-                (best_f, best) = (f, c.clone());
-            }
         }
         let mut z = vec![0.0; self.qp.n()];
         for (cj, fz) in best.iter().zip(free) {
@@ -606,12 +606,7 @@ impl<'a> State<'a> {
         // (Σ sᵢ‖T_i z‖): tested whatever the tangential sets, which may
         // cycle between stick and slip on such a body and never free it.
         if !self.glued {
-            let normal: Vec<BRow> = rows
-                .iter()
-                .filter(|b| matches!(b.of, Of::Normal(_)))
-                .cloned()
-                .collect();
-            let slide = self.free_motions(&normal);
+            let slide = self.free_motions(rows.iter().filter(|b| matches!(b.of, Of::Normal(_))));
             if !slide.is_empty() && slide.len() > free.len() {
                 if let Some(z) = self.unbounded_along(&slide) {
                     return Ok(Some(Status::Unbounded { direction: z }));
