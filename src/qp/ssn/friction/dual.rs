@@ -130,21 +130,22 @@ impl Dual {
         ws: &crate::linalg::cholesky::Workspace,
     ) -> Result<Option<Dual>, QpError> {
         let (n, m) = (qp.n(), qp.m());
-        if m == 0 || 2 * m > DUAL_ROWS_MAX {
+        // B's rows: m normal, then T's (m on a line, 2m in a plane frame).
+        let mb = m + fr.t.nrows;
+        if m == 0 || mb > DUAL_ROWS_MAX {
             log::debug!(
-                "ssn: friction: the sparse path: {} rows of B = [A; T] (the dense dual form takes 1 to {DUAL_ROWS_MAX}); no coarse start",
-                2 * m
+                "ssn: friction: the sparse path: {mb} rows of B = [A; T] (the dense dual form takes 1 to {DUAL_ROWS_MAX}); no coarse start"
             );
             return Ok(None);
         }
         let mut trip = Vec::with_capacity(qp.a.nnz() + fr.t.nnz());
         for (off, mat) in [(0, &qp.a), (m, &fr.t)] {
-            for i in 0..m {
+            for i in 0..mat.nrows {
                 let (cols, vals) = mat.row(i);
                 trip.extend(cols.iter().zip(vals).map(|(&j, &v)| (off + i, j, v)));
             }
         }
-        let b = Csr::from_triplets(2 * m, n, &trip);
+        let b = Csr::from_triplets(mb, n, &trip);
         let rb = RowBorder::new(&qp.c, &qp.kernel, &b);
         let nb = rb.len();
         log::debug!("ssn: friction: border of B = [A; T]: {nb} unknowns");
@@ -200,7 +201,7 @@ impl Dual {
             skip();
             return Ok(None);
         };
-        let br = (0..2 * m)
+        let br = (0..mb)
             .map(|i| r.iter().map(|rl| b.row_dot(i, rl)).collect())
             .collect();
         let e = r.iter().map(|rl| dot(rl, &qp.d)).collect();
@@ -208,8 +209,8 @@ impl Dual {
             "ssn: friction: dual form: bordered factor {t_fac:.3} s, H and B K⁻¹d {:.3} s",
             t0.elapsed().as_secs_f64() - t_fac
         );
-        let hmax = (0..2 * m).fold(0.0f64, |a, j| a.max(h[(j, j)]));
-        let null = (0..2 * m).map(|j| !(h[(j, j)] > NULL_ROW * hmax)).collect();
+        let hmax = (0..mb).fold(0.0f64, |a, j| a.max(h[(j, j)]));
+        let null = (0..mb).map(|j| !(h[(j, j)] > NULL_ROW * hmax)).collect();
         Ok(Some(Dual {
             b,
             fac,
@@ -332,8 +333,7 @@ impl DenseDual {
                 }
             },
         );
-        let fac = SpdFactor::new(hjj.as_ref())?;
-        let mut rhs = Mat::from_fn(nj, 1 + k, |t, col| {
+        let rhs = Mat::from_fn(nj, 1 + k, |t, col| {
             let j = rows[t];
             if col == 0 {
                 // H is symmetric: read column j.
@@ -342,58 +342,74 @@ impl DenseDual {
                 self.br[j][col - 1]
             }
         });
-        fac.solve_mat_in_place(rhs.as_mut());
-        let mut w: Vec<f64> = rhs.col(0).iter().copied().collect();
-        let mut alpha = vec![0.0; k];
-        if k > 0 {
-            // F = (BR)_Jᵀ Y, Y = H_JJ⁻¹(BR)_J; F α = e − (BR)ᵀf − (BR)_Jᵀw.
-            let mut fm = vec![vec![0.0; k]; k];
-            for (a, row) in fm.iter_mut().enumerate() {
-                for (b, v) in row.iter_mut().enumerate() {
-                    *v = rows
+        let q0: Vec<f64> = (0..k)
+            .map(|l| e[l] - fl.iter().map(|&(j, v)| self.br[j][l] * v).sum::<f64>())
+            .collect();
+        solve_dense(hjj, rhs, |t, l| self.br[rows[t]][l], q0)
+    }
+
+    /// The multipliers of a working set whose rows are combinations of
+    /// B's rows (a plane frame's slipping row holds e⊥·T_i, docs/methods.md
+    /// §12.3), each with a compliance κ (its multiplier μ moves it by κμ:
+    /// W_J B x − c_J = κμ_J), under the known forces `f` on B's rows: μ_J
+    /// and α from (W H Wᵀ + κ)_JJ μ_J − (W B R)_J α = W_J(BK⁻¹d − H f) − c_J
+    /// and (W B R)_Jᵀμ_J = Rᵀd − (BR)ᵀf. None if the system is singular.
+    pub(super) fn solve_rows(&self, rows: &[DualRow], f: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let nj = rows.len();
+        let k = self.e.len();
+        let h = &self.h;
+        let fl: Vec<(usize, f64)> = f
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| **v != 0.0)
+            .map(|(l, &v)| (l, v))
+            .collect();
+        // (H f)_j on the rows the working set reads.
+        let mut hf = vec![0.0; f.len()];
+        for r in rows {
+            for &(j, _) in &r.terms {
+                hf[j] = fl.iter().map(|&(l, v)| h[(l, j)] * v).sum::<f64>();
+            }
+        }
+        let hjj = Mat::from_fn(nj, nj, |a, b| {
+            if b > a {
+                return 0.0;
+            }
+            let mut v: f64 = rows[a]
+                .terms
+                .iter()
+                .map(|&(p, wp)| {
+                    rows[b]
+                        .terms
                         .iter()
-                        .enumerate()
-                        .map(|(t, &j)| self.br[j][a] * rhs[(t, 1 + b)])
-                        .sum();
-                }
-            }
-            for a in 0..k {
-                for b in 0..a {
-                    let v = 0.5 * (fm[a][b] + fm[b][a]);
-                    fm[a][b] = v;
-                    fm[b][a] = v;
-                }
-            }
-            let mut q: Vec<f64> = (0..k)
-                .map(|l| {
-                    let known: f64 = fl.iter().map(|&(j, v)| self.br[j][l] * v).sum();
-                    let bw: f64 = rows.iter().zip(&w).map(|(&j, wt)| self.br[j][l] * wt).sum();
-                    e[l] - known - bw
+                        .map(|&(q, wq)| wp * wq * h[(p, q)])
+                        .sum::<f64>()
                 })
-                .collect();
-            // α = F⁺q: the motions null F leaves free get none.
-            let (vals, vecs) = sym_eigen(&fm);
-            let top = vals.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            let mut out = vec![0.0; k];
-            for (lam, v) in vals.iter().zip(&vecs) {
-                if !(lam.abs() > 1e-12 * top) {
-                    continue;
-                }
-                let p = dot(v, &q) / lam;
-                for (o, vi) in out.iter_mut().zip(v) {
-                    *o += p * vi;
-                }
+                .sum();
+            if a == b {
+                v += rows[a].kappa;
             }
-            q = out;
-            for (t, wt) in w.iter_mut().enumerate() {
-                *wt += (0..k).map(|l| rhs[(t, 1 + l)] * q[l]).sum::<f64>();
+            v
+        });
+        let brj = |t: usize, l: usize| -> f64 {
+            rows[t].terms.iter().map(|&(j, w)| w * self.br[j][l]).sum()
+        };
+        let rhs = Mat::from_fn(nj, 1 + k, |t, col| {
+            if col == 0 {
+                rows[t]
+                    .terms
+                    .iter()
+                    .map(|&(j, w)| w * (self.bk0[j] - hf[j]))
+                    .sum::<f64>()
+                    - rows[t].c
+            } else {
+                brj(t, col - 1)
             }
-            alpha = q;
-        }
-        if !w.iter().chain(&alpha).all(|v| v.is_finite()) {
-            return None;
-        }
-        Some((w, alpha))
+        });
+        let q0: Vec<f64> = (0..k)
+            .map(|l| self.e[l] - fl.iter().map(|&(j, v)| self.br[j][l] * v).sum::<f64>())
+            .collect();
+        solve_dense(hjj, rhs, brj, q0)
     }
 
     /// The multipliers of a working set of Coulomb's problem with the slip
@@ -512,6 +528,79 @@ impl DenseDual {
         }
         out
     }
+}
+
+/// The dense core of a working set's dual solve: `hjj` (its lower
+/// triangle), `rhs` = [r₀ | (BR)_J] and q₀ = Rᵀb − (BR)ᵀf give μ_J and α
+/// (docs/methods.md §9.2): H_JJ μ_J − (BR)_J α = r₀, (BR)_Jᵀ μ_J = q₀. A
+/// rigid motion the rows leave free (a singular coarse matrix F) gets no
+/// α: the step is solved as if it were held, as the sparse path
+/// regularises K along it. None if H_JJ is singular.
+fn solve_dense(
+    hjj: Mat<f64>,
+    mut rhs: Mat<f64>,
+    brj: impl Fn(usize, usize) -> f64,
+    q0: Vec<f64>,
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    let nj = hjj.nrows();
+    let k = q0.len();
+    let fac = SpdFactor::new(hjj.as_ref())?;
+    fac.solve_mat_in_place(rhs.as_mut());
+    let mut w: Vec<f64> = rhs.col(0).iter().copied().collect();
+    let mut alpha = vec![0.0; k];
+    if k > 0 {
+        // F = (BR)_Jᵀ Y, Y = H_JJ⁻¹(BR)_J; F α = q₀ − (BR)_Jᵀw.
+        let mut fm = vec![vec![0.0; k]; k];
+        for (a, row) in fm.iter_mut().enumerate() {
+            for (b, v) in row.iter_mut().enumerate() {
+                *v = (0..nj).map(|t| brj(t, a) * rhs[(t, 1 + b)]).sum();
+            }
+        }
+        for a in 0..k {
+            for b in 0..a {
+                let v = 0.5 * (fm[a][b] + fm[b][a]);
+                fm[a][b] = v;
+                fm[b][a] = v;
+            }
+        }
+        let mut q: Vec<f64> = (0..k)
+            .map(|l| {
+                let bw: f64 = (0..nj).map(|t| brj(t, l) * w[t]).sum();
+                q0[l] - bw
+            })
+            .collect();
+        // α = F⁺q: the motions null F leaves free get none.
+        let (vals, vecs) = sym_eigen(&fm);
+        let top = vals.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let mut out = vec![0.0; k];
+        for (lam, v) in vals.iter().zip(&vecs) {
+            if !(lam.abs() > 1e-12 * top) {
+                continue;
+            }
+            let p = dot(v, &q) / lam;
+            for (o, vi) in out.iter_mut().zip(v) {
+                *o += p * vi;
+            }
+        }
+        q = out;
+        for (t, wt) in w.iter_mut().enumerate() {
+            *wt += (0..k).map(|l| rhs[(t, 1 + l)] * q[l]).sum::<f64>();
+        }
+        alpha = q;
+    }
+    if !w.iter().chain(&alpha).all(|v| v.is_finite()) {
+        return None;
+    }
+    Some((w, alpha))
+}
+
+/// A row of a working set in the dual space ([`DenseDual::solve_rows`]):
+/// Σ w·(row j of B) with its right-hand side c and compliance κ.
+pub(super) struct DualRow {
+    /// (j, w): at most two rows of B.
+    pub(super) terms: Vec<(usize, f64)>,
+    pub(super) c: f64,
+    pub(super) kappa: f64,
 }
 
 /// A bordered factor that cannot finish a solve (it always can: B is its border).

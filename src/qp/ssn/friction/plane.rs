@@ -26,11 +26,13 @@
 //! with the disc's dissipation Σ sᵢ‖(T z)ᵢ‖ and otherwise regularised for
 //! the step, as in 2D (§9.3).
 
+use super::dual::Dual;
 use super::{cycle_budget, row_stiffness, AL_MAX, AL_STALL, CT_FACTOR, RHO};
 use crate::linalg::dense::sym_eigen;
 use crate::linalg::sparse::{dot, norm_inf, Csr};
 use crate::qp::coulomb::{self, Bound, Tresca, TrescaStep};
 use crate::qp::executor::{Iterative, Step};
+use crate::qp::settings::SsnPath;
 use crate::qp::{
     tangential_norm, Context, Failure, Friction, IterRecord, Output, QpError, QpProblem, Status,
 };
@@ -94,8 +96,19 @@ pub(super) fn solve(qp: &QpProblem, fr: &Friction, ctx: &mut Context) -> Result<
         )));
     }
     let r = crate::linalg::kernel::orthonormal_kernel(&qp.c, &qp.kernel)?;
+    let dual = match ctx.settings.ssn.path {
+        SsnPath::Auto | SsnPath::Schur => Dual::new(qp, fr, &r, ctx.ws)?,
+        path => {
+            log::debug!("ssn: discs: the sparse path (ssn_path = {path:?})");
+            None
+        }
+    };
     let mut st = State::new(qp, fr, r, ctx);
     st.hold_free_bodies();
+    if let Some(d) = dual {
+        st.inner += d.solves;
+        st.dual = Some(d);
+    }
     let mut step = PlaneTresca { st, ctx, steps: 0 };
     let proven = coulomb::certificate(qp);
     coulomb::solve(fr, &mut step, "ssn", &proven, ctx.settings.kkt_target)
@@ -175,6 +188,7 @@ impl PlaneTresca<'_, '_> {
         if let Some(e) = st.error.take() {
             return Err(e);
         }
+        st.ensure_x()?;
         Ok(Tresca {
             x: st.x.clone(),
             lambda_n: st.ln.clone(),
@@ -229,6 +243,13 @@ struct State<'a> {
     inner: usize,
     best: (f64, usize),
     error: Option<QpError>,
+    /// The dual-space solves (None: the sparse path, K = C + ρBᵀB).
+    dual: Option<Dual>,
+    /// The multipliers on B = [A; T] and α of the last dual-space solve.
+    mu: Vec<f64>,
+    alpha: Vec<f64>,
+    /// x is not yet formed from (μ, α) ([`State::ensure_x`]).
+    x_stale: bool,
 }
 
 impl<'a> State<'a> {
@@ -277,6 +298,10 @@ impl<'a> State<'a> {
             inner: 0,
             best: (f64::INFINITY, 0),
             error: None,
+            dual: None,
+            mu: vec![],
+            alpha: vec![],
+            x_stale: false,
         }
     }
 
@@ -613,6 +638,9 @@ impl<'a> State<'a> {
                 }
             }
         }
+        if free.is_empty() && self.solve_set_dual(&rows, &known) {
+            return Ok(None);
+        }
         let kmat = self.k_matrix(&rows);
         let fac = self.ws.cholesky(&kmat, &free)?;
         let mut mu: Vec<f64> = rows
@@ -671,6 +699,7 @@ impl<'a> State<'a> {
         self.ax = qp.a.mul(&x);
         self.tx = self.fr.t.mul(&x);
         self.x = x;
+        self.x_stale = false;
         self.ln = vec![0.0; m];
         self.lt = known.iter().map(|k| -k).collect();
         for (b, mk) in rows.iter().zip(&mu) {
@@ -730,7 +759,9 @@ impl<'a> State<'a> {
             .max(norm_inf(&self.lt))
             .max(if self.glued { 0.0 } else { norm_inf(&self.s) })
             .max(f64::MIN_POSITIVE);
-        let xs = norm_inf(&self.x)
+        // A dual-space step forms x only when the solve ends.
+        let xn = if self.x_stale { 0.0 } else { norm_inf(&self.x) };
+        let xs = xn
             .max(norm_inf(&self.ax))
             .max(norm_inf(&self.tx))
             .max(norm_inf(&qp.g))
@@ -915,6 +946,9 @@ impl Iterative for State<'_> {
         }
     }
 }
+
+#[path = "plane_dual.rs"]
+mod dual_space;
 
 #[cfg(test)]
 #[path = "plane_tests.rs"]

@@ -1,0 +1,108 @@
+//! ssn on discs in the dual space (docs/methods.md §12.3): the working
+//! sets of a plane frame solved on the one bordered factor of C that 2D's
+//! dual path keeps ([`Dual`], B = [A; T] with each contact row's
+//! tangential pair), a dense system on the set's rows per Newton step, x
+//! formed once a solve ends. The sparse path refactored K = C + ρBᵀB at
+//! every Newton step: 37 times the frictionless run on the coarse
+//! Cattaneo–Mindlin sphere (docs/verification_3d.md §7g).
+
+use super::super::dual::{unfinished, DualRow};
+use super::{BRow, Disc, Of, State};
+use crate::qp::QpError;
+
+impl State<'_> {
+    /// Solve the working set whose rows of B are `rows`, under the known
+    /// slip forces −`known` on T's rows, in the dual space: a stick row
+    /// holds its tangential pair, a slipping row e⊥·T_i with its
+    /// compliance κ (the Newton step of the disc law across the slip)
+    /// exactly, where the sparse path chose between a spring and a
+    /// constraint. Returns false (the step goes to the sparse path) when
+    /// there is no dual form or the set's system is singular.
+    pub(super) fn solve_set_dual(&mut self, rows: &[BRow], known: &[f64]) -> bool {
+        let Some(d) = self.dual.as_ref() else {
+            return false;
+        };
+        let m = self.qp.m();
+        let mut drows = Vec::with_capacity(rows.len());
+        for b in rows {
+            let (terms, kappa) = match b.of {
+                Of::Normal(i) => (vec![(i, 1.0)], 0.0),
+                Of::Tangential(i, k) => (vec![(m + 2 * i + k, 1.0)], 0.0),
+                Of::Across(i) => {
+                    let Disc::Slip(e, kappa) = self.tang[i] else {
+                        continue;
+                    };
+                    (vec![(m + 2 * i, -e[1]), (m + 2 * i + 1, e[0])], kappa)
+                }
+            };
+            // A row of B that holds nothing (H_jj = 0) is left out, its
+            // multiplier 0, as in 2D; one that moves nothing K⁻¹ reaches
+            // but holds a rigid motion (it touches only a floating body's
+            // fixing unknowns: a single point) has no place in H_JJ.
+            if terms
+                .iter()
+                .any(|&(j, w)| w != 0.0 && d.null[j] && holds_motion(d, j))
+            {
+                log::debug!(
+                    "ssn: discs: row {j} holds a rigid motion K⁻¹ does not reach: the sparse path",
+                    j = terms[0].0
+                );
+                return false;
+            }
+            let terms: Vec<(usize, f64)> = terms
+                .into_iter()
+                .filter(|&(j, w)| !d.null[j] && w != 0.0)
+                .collect();
+            if !terms.is_empty() {
+                drows.push(DualRow {
+                    terms,
+                    c: b.rhs,
+                    kappa,
+                });
+            }
+        }
+        let mut f = vec![0.0; 3 * m];
+        for (fj, k) in f[m..].iter_mut().zip(known) {
+            *fj = -k;
+        }
+        let Some((w, alpha)) = d.solve_rows(&drows, &f) else {
+            log::debug!("ssn: discs: the working set's dual system is singular: the sparse path");
+            return false;
+        };
+        let mut mu = f;
+        for (r, wj) in drows.iter().zip(&w) {
+            for &(j, c) in &r.terms {
+                mu[j] += c * wj;
+            }
+        }
+        let bx = d.bx(&mu, &alpha);
+        self.ax = bx[..m].to_vec();
+        self.tx = bx[m..].to_vec();
+        self.ln = mu[..m].to_vec();
+        self.lt = mu[m..].to_vec();
+        self.mu = mu;
+        self.alpha = alpha;
+        self.x_stale = true;
+        true
+    }
+
+    /// Form x from the last dual-space answer if it is not yet: one
+    /// backward pass on the bordered factor, x = K⁻¹(d − Bᵀμ) + Rα.
+    pub(super) fn ensure_x(&mut self) -> Result<(), QpError> {
+        if !self.x_stale {
+            return Ok(());
+        }
+        let d = self.dual.as_ref().ok_or_else(unfinished)?;
+        self.x = d.x(&self.mu, &self.alpha, &self.r).ok_or_else(unfinished)?;
+        self.inner += 1;
+        self.x_stale = false;
+        Ok(())
+    }
+}
+
+/// Whether row j of B moves a rigid motion: |(B R)_j| beyond round-off of
+/// the row's size (R is orthonormal).
+fn holds_motion(d: &super::super::dual::Dual, j: usize) -> bool {
+    let size = d.b.row(j).1.iter().map(|v| v * v).sum::<f64>().sqrt();
+    d.br[j].iter().any(|v| v.abs() > 1e-12 * size)
+}
