@@ -65,8 +65,8 @@ pub fn residuals(qp: &QpProblem, x: &[f64], lambda: &[f64]) -> Kkt {
 ///
 /// with Fᵢ = max(sᵢ, |λ_tᵢ|, max|λ|, max|λ_t|) (the row's bound or the
 /// contact-force scale, whichever is larger), X = max(max|x|,
-/// maxᵢ (|T||x| + |t0|)ᵢ) (the displacements and the scale the slips are
-/// formed at), s
+/// ‖d‖∞/max Cᵢᵢ, maxᵢ (|T||x| + |t0|)ᵢ) (the displacements, their floor
+/// [`length_floor`] and the scale the slips are formed at), s
 /// the slip bound at λ and v = T x − t0 (docs/methods.md §9.4). Both are
 /// unitless and do not grow with μ or s: a row far below a huge bound
 /// (μ = 10⁶, a Tresca bound of 10¹²: glued) is judged by its slip alone,
@@ -78,8 +78,9 @@ pub fn residuals_with_friction(qp: &QpProblem, x: &[f64], lambda: &[f64], lambda
 }
 
 /// ‖d‖∞ / max Cᵢᵢ: the certificate's floor of the length scale max|x|
-/// (0 with no loads or no stiffness).
-fn length_floor(qp: &QpProblem) -> f64 {
+/// (0 with no loads or no stiffness), so that a point at rest is not
+/// judged rounding against rounding (docs/methods.md §8.4).
+pub(crate) fn length_floor(qp: &QpProblem) -> f64 {
     let cmax = qp.c.diag().iter().fold(0.0f64, |m, v| m.max(*v));
     let f = norm_inf(&qp.d) / cmax;
     if f.is_finite() {

@@ -250,6 +250,11 @@ struct State<'a> {
     alpha: Vec<f64>,
     /// x is not yet formed from (μ, α) ([`State::ensure_x`]).
     x_stale: bool,
+    /// The certificate's floor of the length scale (‖d‖∞/max Cᵢᵢ,
+    /// docs/methods.md §8.4): a glued conforming interface has Ax = g = 0
+    /// and T x = t₀ = 0, and without x (a dual-space step) the residual's
+    /// scale was rounding.
+    x_floor: f64,
 }
 
 impl<'a> State<'a> {
@@ -298,6 +303,7 @@ impl<'a> State<'a> {
             inner: 0,
             best: (f64::INFINITY, 0),
             error: None,
+            x_floor: crate::qp::kkt::length_floor(qp),
             dual: None,
             mu: vec![],
             alpha: vec![],
@@ -762,6 +768,7 @@ impl<'a> State<'a> {
         // A dual-space step forms x only when the solve ends.
         let xn = if self.x_stale { 0.0 } else { norm_inf(&self.x) };
         let xs = xn
+            .max(self.x_floor)
             .max(norm_inf(&self.ax))
             .max(norm_inf(&self.tx))
             .max(norm_inf(&qp.g))
