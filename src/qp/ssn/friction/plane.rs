@@ -915,7 +915,12 @@ impl Iterative for State<'_> {
                 // moves with λ_n) the Tresca problems of the shared loop
                 // settle (the sliding block of docs/verification_3d.md
                 // walked 384 steps between two sets before).
-                let budget = if self.coulomb.is_some() {
+                // So does the glued start, which is only a start: a row at
+                // the contact's edge can have no glued fixed point (stuck,
+                // it pulls; free, it penetrates), and on Cattaneo's fine
+                // sphere N flipped between 630 and 631 rows for the whole
+                // budget of 2m + 100 steps (6 minutes).
+                let budget = if self.coulomb.is_some() || self.glued {
                     DIRECT_STALL
                 } else {
                     cycle_budget(self.qp.m())
