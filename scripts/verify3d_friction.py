@@ -28,7 +28,7 @@ V = None  # scripts/verify.py, set by cases()
 # binary): their friction rows run only with VERIFY_PENDING=1 in the
 # environment, so that CI keeps its time; the frictionless rows always run. Remove a case from here once
 # its friction rows pass: from then on a failure fails.
-PENDING = {"cattaneo3d", "shrinkfit3d"}
+PENDING = {"shrinkfit3d"}
 
 NOT_YET = re.compile(r"friction in a 3D model is not implemented yet|"
                      r"does not solve 3D contact with friction")
