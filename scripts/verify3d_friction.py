@@ -24,8 +24,8 @@ V = None  # scripts/verify.py, set by cases()
 
 # Cases whose frictional solves are too slow for CI or do not yet converge
 # (docs/verification_3d.md §7g: cattaneo3d's coarse friction solve takes
-# 167 s; §7i: shrinkfit3d's push stagnated, its turn cycled, on the trial
-# binary): their friction rows run only with VERIFY_PENDING=1 in the
+# 167 s; shrinkfit3d left the set once its turn was driven over the whole
+# bore, §7i): their friction rows run only with VERIFY_PENDING=1 in the
 # environment, so that CI keeps its time; the frictionless rows always run. Remove a case from here once
 # its friction rows pass: from then on a failure fails.
 PENDING = {"cattaneo3d"}
