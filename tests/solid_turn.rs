@@ -325,3 +325,78 @@ fn a_tube_turned_in_its_bore_has_balanced_torques() {
     let fb = vec3(&r["bore"]["force"]);
     assert!(fb.iter().all(|c| c.abs() < 0.05 * t / 0.5), "{fb:?}");
 }
+
+/// The plane form: a ring (tests/data/ring, no contact pairs, the plates
+/// clamped) turned by θ about z through a point off its centre on its
+/// outer circle turns rigidly, u = θ e_z × (x − o) at every ring node, and
+/// the reactions there carry no force or torque; a ring turned against a
+/// fixed component at the same nodes is refused as a conflict.
+#[test]
+fn a_plane_ring_turned_on_its_rim_turns_rigidly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let msh = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ring/ring.msh");
+    let (th, o) = (1.0e-3, [0.05, -0.02]);
+    let head = format!(
+        "[mesh]\nfile = \"{}\"\n[materials.bottom]\nE = 2.0e11\nnu = 0.3\n[materials.top]\nE = 2.0e11\nnu = 0.3\n\
+         [materials.ring]\nE = 1.0e7\nnu = 0.45\n[[dirichlet]]\non = \"base\"\nu = [0.0, 0.0]\n\
+         [[dirichlet]]\non = \"lid\"\nu = [0.0, 0.0]\n\
+         [[dirichlet]]\non = \"ring_out\"\nturn = {{ angle = {th:e}, origin = [{}, {}] }}\n",
+        msh.display(),
+        o[0],
+        o[1]
+    );
+    let path = tmp.path().join("ring.toml");
+    std::fs::write(&path, &head).unwrap();
+    let (prep, res) = common::solve_file(&path, &Default::default());
+    let m = &prep.model;
+    let ring = m.body_names.iter().position(|n| n == "ring").unwrap() as u32;
+    let mut n = 0;
+    for (p, pd) in m.dofs.iter().enumerate() {
+        if m.topo.point_body[p] != ring {
+            continue;
+        }
+        let x = m.topo.points[p];
+        let mut u = pd.u0;
+        for k in 0..pd.ndof {
+            for c in 0..2 {
+                u[c] += pd.t[k][c] * res.x[pd.start + k];
+            }
+        }
+        let want = [-th * (x[1] - o[1]), th * (x[0] - o[0])];
+        for c in 0..2 {
+            assert!((u[c] - want[c]).abs() < 1e-10 * th, "{x:?}: {u:?} {want:?}");
+        }
+        n += 1;
+    }
+    assert!(n > 100, "{n}");
+    // The turn is part of the checkpoint's fingerprint: another angle is
+    // another problem, named by its part.
+    let other = tmp.path().join("ring2.toml");
+    std::fs::write(&other, head.replace(&format!("{th:e}"), "2e-3")).unwrap();
+    let prep2 = signorini::run::prepare(&other, false).unwrap();
+    let (f1, f2) = (
+        signorini::run::fingerprint(&prep, false),
+        signorini::run::fingerprint(&prep2, false),
+    );
+    assert_eq!(signorini::run::fingerprint_diff(&f1, &f2), ["dirichlet"]);
+    // A turn about the ring's centre against ux = 0 on the rim: e_θ and
+    // e_x are independent at most rim nodes, but at the rim's top and
+    // bottom, (0, ±R), e_θ = ∓e_x and they disagree.
+    let head = head.replace(
+        &format!("origin = [{}, {}]", o[0], o[1]),
+        "origin = [0.0, 0.0]",
+    );
+    std::fs::write(
+        &path,
+        format!("{head}[[dirichlet]]\non = \"ring_out\"\nux = 0.0\n"),
+    )
+    .unwrap();
+    let e = match signorini::run::prepare(&path, false) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("accepted"),
+    };
+    assert!(
+        e.contains("conflicting conditions") && e.contains("ring_out"),
+        "{e}"
+    );
+}
