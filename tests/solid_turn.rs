@@ -357,9 +357,9 @@ fn a_plane_ring_turned_on_its_rim_turns_rigidly() {
         }
         let x = m.topo.points[p];
         let mut u = pd.u0;
-        for k in 0..pd.ndof {
-            for c in 0..2 {
-                u[c] += pd.t[k][c] * res.x[pd.start + k];
+        for (k, tk) in pd.t.iter().enumerate().take(pd.ndof) {
+            for (uc, tc) in u.iter_mut().zip(tk) {
+                *uc += tc * res.x[pd.start + k];
             }
         }
         let want = [-th * (x[1] - o[1]), th * (x[0] - o[0])];
