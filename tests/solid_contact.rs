@@ -238,7 +238,7 @@ fn a_partial_kernel_off_the_centre_is_in_ker_c() {
     let mesh = read_msh(&data("stack_nm.msh")).unwrap();
     let mut inp = stack_input(nts("upper_bottom", "lower_top"));
     inp.slip = vec!["bottom".into(), "lower_x0".into(), "lower_y0".into()];
-    inp.dirichlet = vec![("top".into(), [Some(0.0), Some(0.0), None])];
+    inp.dirichlet = vec![("top".into(), [Some(0.0), Some(0.0), None].into())];
     let m = build(&mesh, Path::new("partial.toml"), &inp).unwrap();
     assert_eq!(m.qp.kernel.len(), 3, "z and two turns about the top face");
     let cmax = m.qp.c.data.iter().fold(0.0f64, |a, v| a.max(v.abs()));

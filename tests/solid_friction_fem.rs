@@ -301,8 +301,8 @@ fn friction_on_a_pair_without_rows_is_refused() {
     let mut inp = input(conforming(FrictionLaw::Tresca(1e6)));
     inp.slip.clear();
     inp.dirichlet = vec![
-        ("lower".into(), [Some(0.0); 3]),
-        ("upper".into(), [Some(0.0); 3]),
+        ("lower".into(), [Some(0.0); 3].into()),
+        ("upper".into(), [Some(0.0); 3].into()),
     ];
     let e = match build(&conf, Path::new("fixed.toml"), &inp) {
         Err(e) => e,

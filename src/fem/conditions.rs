@@ -14,7 +14,7 @@ use super::element::{PointD, Vector};
 use super::topology::{dim_name, Topology};
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::problem::{Dirichlet, Slip};
+use crate::problem::{model_size, Dirichlet, Prescribed, Slip};
 use std::path::Path;
 
 /// Per-point elimination: u = u0 + T ξ with `ndof` columns of T used, in
@@ -87,9 +87,15 @@ impl Conditions {
         path: &Path,
         dirichlet: &[Dirichlet],
     ) -> Result<(), FemError> {
+        // The model's size, for a turn's nodes on its axis.
+        let size = || model_size(topo.points.iter().map(|x| [x[0], x[1], 0.0]));
         for (i, dch) in dirichlet.iter().enumerate() {
             let what = format!("[[dirichlet]] #{} (on = \"{}\")", i + 1, dch.on);
             let [ux, uy, _] = dch.value.components();
+            let turn = match dch.value {
+                Prescribed::Turn(t) => Some((t, size())),
+                _ => None,
+            };
             let mut pts: Vec<usize> = topo
                 .group_points(mesh, path, &dch.on, &what)?
                 .into_iter()
@@ -101,6 +107,15 @@ impl Conditions {
             self.src.push(format!("[[dirichlet]] on = \"{}\"", dch.on));
             self.groups.push(("dirichlet", dch.on.clone()));
             for p in pts {
+                // A turn about z: u·e_θ = θρ (none on the axis).
+                let x = topo.points[p];
+                if let Some((r, v)) = turn.and_then(|(t, s)| t.condition([x[0], x[1], 0.0], s)) {
+                    self.at[p].push(Cond {
+                        r: [r[0], r[1]],
+                        v,
+                        src,
+                    });
+                }
                 if let Some(v) = ux {
                     self.at[p].push(Cond {
                         r: [1.0, 0.0],

@@ -12,7 +12,7 @@ use super::contact::{ContactRow, RowKind};
 use super::element::Vector;
 use super::topology::Topology;
 use super::{FemError, Model};
-use crate::problem::{Contact, ContactPair, Dirichlet, FrictionLaw, LoadStep};
+use crate::problem::{Contact, ContactPair, Dirichlet, FrictionLaw, LoadStep, Prescribed};
 use crate::qp::{Csr, Friction, SlipBound};
 use std::path::Path;
 
@@ -60,13 +60,17 @@ pub(super) fn symmetry_rows(
     dirichlet: &[Dirichlet],
     steps: &[LoadStep],
 ) -> Vec<bool> {
-    // Whether Dirichlet group `name`'s component k is 0 as given and in
-    // every step that names it explicitly (factors keep a zero zero).
+    // Whether Dirichlet group `name`'s component k (a turn: its angle) is
+    // 0 as given and in every step that names it explicitly (factors keep
+    // a zero zero; a turn takes no explicit step values).
     let zero_always = |name: &str, k: usize| {
         dirichlet
             .iter()
             .filter(|d| d.on == name)
-            .all(|d| d.value.components()[k].unwrap_or(0.0) == 0.0)
+            .all(|d| match d.value {
+                Prescribed::Turn(t) => t.angle == 0.0,
+                v => v.components()[k].unwrap_or(0.0) == 0.0,
+            })
             && steps
                 .iter()
                 .all(|st| st.dirichlet.get(name).is_none_or(|u| u.xyz()[k] == 0.0))

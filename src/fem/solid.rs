@@ -18,7 +18,9 @@ use super::stiffness::{assemble, Cells, Materials};
 use super::topology::cell_bodies;
 use super::FemError;
 use crate::mesh::Mesh;
-use crate::problem::{Contact, ContactPair, Discretization, Material, NormalKind};
+use crate::problem::{
+    model_size, Contact, ContactPair, Discretization, Material, NormalKind, Prescribed,
+};
 use crate::qp::QpProblem;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -39,8 +41,9 @@ pub struct SolidInput {
     pub materials: BTreeMap<String, Material>,
     /// g (m/s²): the body force ρg.
     pub gravity: Vector3,
-    /// `[[dirichlet]]`: the group and its prescribed ux, uy, uz.
-    pub dirichlet: Vec<(String, [Option<f64>; 3])>,
+    /// `[[dirichlet]]`: the group and what it prescribes (components, or
+    /// a turn about an axis).
+    pub dirichlet: Vec<(String, Prescribed)>,
     /// `[[slip]]`: plane surfaces on which u·n = 0.
     pub slip: Vec<String>,
     /// `[[traction]]`: the surface and its load.
@@ -508,9 +511,18 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         };
         gnodes.sort_unstable();
         gnodes.dedup();
+        let turn = match u {
+            Prescribed::Turn(t) => Some((t, model_size(nodes.iter().copied()))),
+            _ => None,
+        };
         for v in gnodes {
+            // A turn: u·e_θ = θρ, nothing on the axis (methods.md §2.5).
+            let tc = turn.and_then(|(t, size)| t.condition(nodes[v], size));
             for p in cut.points(v) {
-                for (k, uk) in u.iter().enumerate() {
+                if let Some((r, val)) = tc {
+                    conds[p].push(cond(r, val));
+                }
+                for (k, uk) in u.components().iter().enumerate() {
                     if let Some(val) = uk {
                         let mut r = [0.0; 3];
                         r[k] = 1.0;

@@ -22,7 +22,7 @@ pub fn solid_input(f: &ProblemFile) -> SolidInput {
         dirichlet: f
             .dirichlet
             .iter()
-            .map(|d| (d.on.clone(), d.value.components()))
+            .map(|d| (d.on.clone(), d.value))
             .collect(),
         slip: f.slip.iter().map(|s| s.on.clone()).collect(),
         contact: f.contact.clone(),

@@ -310,7 +310,8 @@ pub struct Dirichlet {
 }
 
 /// What a `[[dirichlet]]` prescribes: `u = [ux, uy]` (`[ux, uy, uz]` in
-/// 3D), or any of `ux`, `uy`, `uz` (a component not given stays free).
+/// 3D), any of `ux`, `uy`, `uz` (a component not given stays free), or a
+/// `turn` about an axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Prescribed {
     /// `u`: every component.
@@ -321,6 +322,70 @@ pub enum Prescribed {
         uy: Option<f64>,
         uz: Option<f64>,
     },
+    /// `turn = { angle, axis, origin }`: u·e_θ = angle·ρ at each node, the
+    /// radial and axial components free (docs/methods.md §2.5).
+    Turn(Turn),
+}
+
+/// A rigid turn by `angle` (radians) about the axis through `origin` along
+/// the unit `axis`: at a node x, ρ = |axis × (x − origin)| and
+/// e_θ = axis × (x − origin)/ρ; the condition is u·e_θ = angle·ρ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Turn {
+    pub angle: f64,
+    /// The unit axis as written and normalised (3D); None in a plane
+    /// model, whose axis is z.
+    pub axis: Option<Components>,
+    /// The point on the axis; None: the origin.
+    pub origin: Option<Components>,
+}
+
+impl Turn {
+    /// The unit axis [x, y, z] (z when not given).
+    pub fn axis_xyz(&self) -> [f64; 3] {
+        self.axis.map_or([0.0, 0.0, 1.0], |a| a.xyz())
+    }
+
+    /// The origin [x, y, z] (z = 0 for a 2-vector; 0 when not given).
+    pub fn origin_xyz(&self) -> [f64; 3] {
+        self.origin.map_or([0.0; 3], |o| o.xyz())
+    }
+
+    /// The condition r·u = v at a node `x` ([x, y, 0] in a plane model):
+    /// r = e_θ, v = angle·ρ; None on the axis, ρ ≤ 1e-12 × `size` (the
+    /// model's size), where the turn sets nothing.
+    pub fn condition(&self, x: [f64; 3], size: f64) -> Option<([f64; 3], f64)> {
+        let (e, o) = (self.axis_xyz(), self.origin_xyz());
+        let d = [x[0] - o[0], x[1] - o[1], x[2] - o[2]];
+        let c = [
+            e[1] * d[2] - e[2] * d[1],
+            e[2] * d[0] - e[0] * d[2],
+            e[0] * d[1] - e[1] * d[0],
+        ];
+        let rho = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+        (rho > 1e-12 * size).then(|| (c.map(|v| v / rho), self.angle * rho))
+    }
+}
+
+/// The size of a model for [`Turn::condition`]: the diagonal of the
+/// bounding box of its points.
+pub fn model_size(points: impl IntoIterator<Item = [f64; 3]>) -> f64 {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for x in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(x[k]);
+            hi[k] = hi[k].max(x[k]);
+        }
+    }
+    let d: f64 = (0..3).map(|k| (hi[k] - lo[k]).max(0.0).powi(2)).sum();
+    d.sqrt()
+}
+
+impl From<[Option<f64>; 3]> for Prescribed {
+    /// `ux`, `uy`, `uz` as given (None: free).
+    fn from([ux, uy, uz]: [Option<f64>; 3]) -> Prescribed {
+        Prescribed::Components { ux, uy, uz }
+    }
 }
 
 impl Prescribed {
@@ -333,6 +398,8 @@ impl Prescribed {
                 [Some(x), Some(y), (u.len() == 3).then_some(z)]
             }
             Prescribed::Components { ux, uy, uz } => [ux, uy, uz],
+            // Along e_θ, which varies from node to node: no fixed component.
+            Prescribed::Turn(_) => [None; 3],
         }
     }
 
@@ -345,6 +412,10 @@ impl Prescribed {
                 uy: uy.map(|v| v * f),
                 uz: uz.map(|v| v * f),
             },
+            Prescribed::Turn(t) => Prescribed::Turn(Turn {
+                angle: t.angle * f,
+                ..t
+            }),
         }
     }
 
@@ -359,6 +430,8 @@ impl Prescribed {
                 uy: uy.map(|_| c[1]),
                 uz: uz.map(|_| c[2]),
             },
+            // Refused when the file is read (validate::check_steps).
+            Prescribed::Turn(t) => Prescribed::Turn(t),
         }
     }
 }
@@ -691,6 +764,33 @@ impl Problem {
                     ))
                 }
                 Prescribed::Components { .. } => {}
+                Prescribed::Turn(t) => {
+                    let on = shorten(&d.on);
+                    let refuse = match (dim, t.axis) {
+                        _ if dim == 2 && f.model.plane == Plane::Axisymmetric => Some(format!(
+                            "[[dirichlet]] on = \"{on}\": turn is refused in an axisymmetric model, which has no circumferential displacement (u_θ = 0); model the part in 3D"
+                        )),
+                        (2, Some(a)) => {
+                            return Err(bad(a.at, format!(
+                                "[[dirichlet]] on = \"{on}\": turn.axis is a key of 3D models only, and the mesh {} is 2D (triangles): a plane model turns about z; give turn = {{ angle, origin = [x, y] }}",
+                                self.mesh_path().display()
+                            )))
+                        }
+                        (3, None) => Some(format!(
+                            "[[dirichlet]] on = \"{on}\": turn needs axis = [x, y, z] in a 3D model"
+                        )),
+                        _ => None,
+                    };
+                    if let Some(msg) = refuse {
+                        return Err(bad(None, msg));
+                    }
+                    if let Some(a) = t.axis {
+                        keys.push((format!("[[dirichlet]] on = \"{on}\": turn.axis"), a));
+                    }
+                    if let Some(o) = t.origin {
+                        keys.push((format!("[[dirichlet]] on = \"{on}\": turn.origin"), o));
+                    }
+                }
             }
         }
         for t in &f.traction {

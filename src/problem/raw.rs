@@ -20,6 +20,18 @@ pub(super) struct RawDirichlet {
     pub ux: Option<f64>,
     pub uy: Option<f64>,
     pub uz: Option<f64>,
+    pub turn: Option<RawTurn>,
+}
+
+/// `turn = { angle, axis, origin }` of a `[[dirichlet]]` as written.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawTurn {
+    pub angle: f64,
+    #[serde(default, deserialize_with = "opt_vector")]
+    pub axis: Option<Components>,
+    #[serde(default, deserialize_with = "opt_vector")]
+    pub origin: Option<Components>,
 }
 
 impl RawDirichlet {

@@ -4,10 +4,10 @@
 //! message naming the table, entry and key (the caller adds the file).
 //! Names are checked against the mesh in `fem::topology`.
 
-use super::raw::{RawContact, RawDirichlet, RawFile, RawTraction};
+use super::raw::{RawContact, RawDirichlet, RawFile, RawTraction, RawTurn};
 use super::{
     num, shorten, Contact, ContactPair, Dirichlet, Discretization, FrictionLaw, NonMatchingPair,
-    Prescribed, ProblemFile, Traction, TractionLoad, MAX_MAGNITUDE, MAX_NAME,
+    Prescribed, ProblemFile, Traction, TractionLoad, Turn, MAX_MAGNITUDE, MAX_NAME,
 };
 use crate::fem::ElementKind;
 
@@ -283,9 +283,33 @@ fn check_materials(f: &RawFile) -> Check {
     Ok(())
 }
 
-/// `[[dirichlet]]` #i: `u = [ux, uy]` (or `[ux, uy, uz]`), or any of `ux`,
-/// `uy`, `uz`, finite.
+/// `[[dirichlet]]` #i: `u = [ux, uy]` (or `[ux, uy, uz]`), any of `ux`,
+/// `uy`, `uz`, finite, or a `turn` alone ([`turn`]).
 fn dirichlet(i: usize, d: &RawDirichlet) -> Check<Dirichlet> {
+    if let Some(t) = &d.turn {
+        let given: Vec<&str> = [
+            ("u", d.u.is_some()),
+            ("ux", d.ux.is_some()),
+            ("uy", d.uy.is_some()),
+            ("uz", d.uz.is_some()),
+        ]
+        .iter()
+        .filter(|k| k.1)
+        .map(|k| k.0)
+        .collect();
+        if !given.is_empty() {
+            return Err(format!(
+                "[[dirichlet]] #{} (on = \"{}\"): turn excludes {}: a turn prescribes u·e_θ only; put the other components in an entry of their own",
+                i + 1,
+                shorten(&d.on),
+                given.join(", ")
+            ));
+        }
+        return Ok(Dirichlet {
+            on: d.on.clone(),
+            value: Prescribed::Turn(turn(i, &d.on, t)?),
+        });
+    }
     let value = match (d.u, d.ux, d.uy, d.uz) {
         (Some(u), None, None, None) => Prescribed::All(u),
         (None, ux, uy, uz) if ux.is_some() || uy.is_some() || uz.is_some() => {
@@ -293,7 +317,7 @@ fn dirichlet(i: usize, d: &RawDirichlet) -> Check<Dirichlet> {
         }
         _ => {
             return Err(format!(
-                "[[dirichlet]] #{} (on = \"{}\"): give either u = [ux, uy] or ux and/or uy",
+                "[[dirichlet]] #{} (on = \"{}\"): give either u = [ux, uy] or ux and/or uy (or a turn = {{ angle, axis, origin }})",
                 i + 1,
                 d.on
             ))
@@ -308,6 +332,49 @@ fn dirichlet(i: usize, d: &RawDirichlet) -> Check<Dirichlet> {
     Ok(Dirichlet {
         on: d.on.clone(),
         value,
+    })
+}
+
+/// `turn` of `[[dirichlet]]` #i on `on`: a finite angle within
+/// ±[`MAX_MAGNITUDE`], a finite origin, a finite non-zero axis (made unit).
+/// Which keys the mesh's dimension takes is checked with the mesh
+/// (`Problem::check_dimension`).
+fn turn(i: usize, on: &str, t: &RawTurn) -> Check<Turn> {
+    let at = format!("[[dirichlet]] #{} (on = \"{}\")", i + 1, shorten(on));
+    if !t.angle.is_finite() || beyond(t.angle) {
+        return Err(format!(
+            "{at}: turn.angle = {} must be finite and within ±{MAX_MAGNITUDE:e} (radians)",
+            num(t.angle)
+        ));
+    }
+    if let Some(o) = t.origin {
+        if let Some(v) = o.values().iter().find(|v| !v.is_finite() || beyond(**v)) {
+            return Err(format!(
+                "{at}: turn.origin = {}: {} must be finite and within ±{MAX_MAGNITUDE:e}",
+                o.show(),
+                num(*v)
+            ));
+        }
+    }
+    let axis = match t.axis {
+        None => None,
+        Some(a) => {
+            let big = a.values().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if !(a.values().iter().all(|v| v.is_finite()) && big > 0.0) {
+                return Err(format!(
+                    "{at}: turn.axis = {}: the axis must be a finite, non-zero vector",
+                    a.show()
+                ));
+            }
+            let s = a.scaled(1.0 / big);
+            let len = s.values().iter().map(|v| v * v).sum::<f64>().sqrt();
+            Some(s.scaled(1.0 / len))
+        }
+    };
+    Ok(Turn {
+        angle: t.angle,
+        axis,
+        origin: t.origin,
     })
 }
 
@@ -534,6 +601,16 @@ fn check_steps(f: &RawFile) -> Check {
             if !f.dirichlet.iter().any(|d| &d.on == name) {
                 return Err(format!(
                     "[[steps]] #{n}: dirichlet.{name}: no [[dirichlet]] with on = \"{name}\""
+                ));
+            }
+            if f.dirichlet
+                .iter()
+                .any(|d| &d.on == name && d.turn.is_some())
+            {
+                return Err(format!(
+                    "[[steps]] #{n}: dirichlet.{}: [[dirichlet]] on = \"{}\" is a turn, which takes no explicit step values; scale its angle with the step's displacement (or factor)",
+                    shorten(name),
+                    shorten(name)
                 ));
             }
             if !u.values().iter().all(|v| v.is_finite()) {

@@ -135,9 +135,20 @@ pub(super) fn forces(
             .flat_map(|&n| node_ptr[n]..node_ptr[n + 1])
             .collect()
     };
+    // The model's size, as the build measured it for a turn's axis.
+    let size = || crate::problem::model_size((0..mesh.nodes.len()).map(|i| mesh.node::<3>(i)));
     for d in &f.dirichlet {
         let gi = group(&d.on, "dirichlet");
         let comps = d.value.components();
+        if let crate::problem::Prescribed::Turn(t) = d.value {
+            // Held along each node's e_θ (none on the axis).
+            let size = size();
+            for v in nodes_of(&d.on) {
+                if let Some((r, _)) = t.condition(m.points[v], size) {
+                    held[v].push((gi, r));
+                }
+            }
+        }
         for v in nodes_of(&d.on) {
             for (k, c) in comps.iter().enumerate() {
                 if c.is_some() {
@@ -187,11 +198,13 @@ pub(super) fn forces(
         let (vals, vecs) = crate::linalg::dense::sym_eigen(&mmt);
         let top = vals.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
         let mut y = [0.0; 3];
+        // sym_eigen gives the eigenvectors as rows: vecs[k] (read as
+        // columns before, which only axis-aligned directions survived).
         for (k, &l) in vals.iter().enumerate() {
             if l.abs() > 1e-12 * top {
-                let c: f64 = (0..3).map(|i| vecs[i][k] * r[i]).sum::<f64>() / l;
+                let c: f64 = (0..3).map(|i| vecs[k][i] * r[i]).sum::<f64>() / l;
                 for i in 0..3 {
-                    y[i] += c * vecs[i][k];
+                    y[i] += c * vecs[k][i];
                 }
             }
         }
