@@ -66,7 +66,7 @@ pub fn residuals(qp: &QpProblem, x: &[f64], lambda: &[f64]) -> Kkt {
 /// with Fᵢ = max(sᵢ, |λ_tᵢ|, max|λ|, max|λ_t|) (the row's bound or the
 /// contact-force scale, whichever is larger), X = max(max|x|,
 /// ‖d‖∞/max Cᵢᵢ, maxᵢ (|T||x| + |t0|)ᵢ) (the displacements, their floor
-/// [`length_floor`] and the scale the slips are formed at), s
+/// `length_floor` and the scale the slips are formed at), s
 /// the slip bound at λ and v = T x − t0 (docs/methods.md §9.4). Both are
 /// unitless and do not grow with μ or s: a row far below a huge bound
 /// (μ = 10⁶, a Tresca bound of 10¹²: glued) is judged by its slip alone,
