@@ -29,11 +29,12 @@ from __future__ import annotations
 import argparse
 import json
 import re
+import subprocess
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_solid import ROOT, fmt, log, repeated, timed  # noqa: E402
+from bench_solid import ROOT, TOML, fmt, log, repeated, timed  # noqa: E402
 
 SIZES = {
     "cattaneo": {"s": 0.03, "m": 0.015, "l": 0.0075},
@@ -44,34 +45,8 @@ GEO = {
     "stack": (ROOT / "tests" / "data" / "solid_contact" / "stack.geo", "h"),
 }
 
-STACK = """[mesh]
-file = "{msh}"
-
-[materials.lower]
-E = 2.0e11
-nu = 0.3
-
-[materials.upper]
-E = 7.0e10
-nu = 0.33
-
-[[slip]]
-on = "x0"
-
-[[slip]]
-on = "y0"
-
-[[slip]]
-on = "bottom"
-
-[[traction]]
-on = "top"
-pn = -1.0e8
-
-[[contact]]
-on = "interface"
-friction = 0.3
-"""
+# bench_solid's stack (the 3D benchmark's family) with Coulomb friction on its interface.
+STACK = TOML["stack"] + "friction = 0.3\n"
 
 
 def model(fam: str, msh: Path) -> str:
@@ -95,7 +70,6 @@ def mesh(fam: str, size: str, work: Path) -> Path:
     msh = work / f"{fam}_{val}.msh"
     if not msh.exists():
         log(f"{fam} {size}: gmsh {param} = {val}")
-        import subprocess
         subprocess.run(["gmsh", "-3", "-order", "1", "-format", "msh22", "-setnumber", param, str(val),
                         str(geo), "-o", str(msh)], check=True, capture_output=True)
     return msh
