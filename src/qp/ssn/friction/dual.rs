@@ -355,6 +355,9 @@ impl DenseDual {
     /// and α from (W H Wᵀ + κ)_JJ μ_J − (W B R)_J α = W_J(BK⁻¹d − H f) − c_J
     /// and (W B R)_Jᵀμ_J = Rᵀd − (BR)ᵀf. None if the system is singular.
     pub(super) fn solve_rows(&self, rows: &[DualRow], f: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        if rows.iter().any(|r| !r.force.is_empty()) {
+            return self.solve_rows_coupled(rows, f);
+        }
         let nj = rows.len();
         let k = self.e.len();
         let h = &self.h;
@@ -515,6 +518,78 @@ impl DenseDual {
         Some((mu, alpha))
     }
 
+    /// [`DenseDual::solve_rows`] with rows whose multipliers also set
+    /// forces on other rows (`DualRow::force`): the force of unknown b is
+    /// F_b = W_b + its `force` terms, so μ = f + Σ w_b F_b, and the system
+    /// (W H Fᵀ + diag κ) w − W(BR) α = W(b₀ − Hf) − c, (F BR)ᵀ w = q₀ is
+    /// nonsymmetric: LU with the coarse unknowns scaled to H's size, as
+    /// [`DenseDual::solve_coulomb`]. Returns the multipliers of the rows
+    /// (their own terms; the caller adds the forces) and α; None if the
+    /// system is singular to working precision (a rigid motion the rows
+    /// leave free included: the step goes to the sparse path).
+    fn solve_rows_coupled(&self, rows: &[DualRow], f: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let nj = rows.len();
+        let k = self.e.len();
+        let size = nj + k;
+        let h = &self.h;
+        let hs = (0..h.nrows())
+            .fold(0.0f64, |a, j| a.max(h[(j, j)]))
+            .max(f64::MIN_POSITIVE);
+        let fl: Vec<(usize, f64)> = f
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| **v != 0.0)
+            .map(|(l, &v)| (l, v))
+            .collect();
+        let forces: Vec<Vec<(usize, f64)>> = rows
+            .iter()
+            .map(|r| r.terms.iter().chain(&r.force).copied().collect())
+            .collect();
+        let mut w = vec![0.0; size * size];
+        let mut rhs = vec![0.0; size];
+        for (a, ra) in rows.iter().enumerate() {
+            for (b, fb) in forces.iter().enumerate() {
+                let mut v: f64 = ra
+                    .terms
+                    .iter()
+                    .map(|&(p, wp)| fb.iter().map(|&(q, wq)| wp * wq * h[(p, q)]).sum::<f64>())
+                    .sum();
+                if a == b {
+                    v += ra.kappa;
+                }
+                w[a * size + b] = v;
+            }
+            for l in 0..k {
+                let brl: f64 = ra.terms.iter().map(|&(j, wj)| wj * self.br[j][l]).sum();
+                w[a * size + nj + l] = -brl * hs;
+            }
+            rhs[a] = ra
+                .terms
+                .iter()
+                .map(|&(j, wj)| {
+                    wj * (self.bk0[j] - fl.iter().map(|&(q, v)| h[(q, j)] * v).sum::<f64>())
+                })
+                .sum::<f64>()
+                - ra.c;
+        }
+        for l in 0..k {
+            for (b, fb) in forces.iter().enumerate() {
+                let brl: f64 = fb.iter().map(|&(j, wj)| wj * self.br[j][l]).sum();
+                w[(nj + l) * size + b] = brl * hs;
+            }
+            let q0 = self.e[l] - fl.iter().map(|&(j, v)| self.br[j][l] * v).sum::<f64>();
+            rhs[nj + l] = q0 * hs;
+        }
+        let lu = crate::linalg::dense::Lu::from_row_major(&w, size)?;
+        lu.solve_in_place(&mut rhs);
+        if !rhs.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let alpha = rhs[nj..].iter().map(|a| a * hs).collect();
+        rhs.truncate(nj);
+        Some((rhs, alpha))
+    }
+
     /// B x for the multipliers `mu` (2m) and α: B K⁻¹(d − Bᵀμ) + BRα.
     pub(super) fn bx(&self, mu: &[f64], alpha: &[f64]) -> Vec<f64> {
         let mut out = self.bk0.clone();
@@ -601,6 +676,11 @@ pub(super) struct DualRow {
     pub(super) terms: Vec<(usize, f64)>,
     pub(super) c: f64,
     pub(super) kappa: f64,
+    /// (j, w): forces the row's multiplier sets on other rows of B besides
+    /// its own (a slipping row's μλ_n ê on its tangential pair when the
+    /// slip bound is inside the step, docs/methods.md §12.3); empty
+    /// otherwise.
+    pub(super) force: Vec<(usize, f64)>,
 }
 
 /// A bordered factor that cannot finish a solve (it always can: B is its border).
