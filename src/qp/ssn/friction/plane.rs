@@ -149,6 +149,33 @@ impl TrescaStep for PlaneTresca<'_, '_> {
         self.run()
     }
 
+    /// A load step's start on the dual path: the direct iteration (the
+    /// bound inside the step) from the last step's multipliers; if it does
+    /// not settle, the state is put back and the fixed point follows.
+    fn coulomb_first(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+        let st = &mut self.st;
+        st.dual.as_ref()?;
+        let l = st.warm.clone()?;
+        let saved = (st.x.clone(), st.ax.clone(), st.tx.clone(), st.tang.clone());
+        st.in_n = l.normal.iter().map(|&v| v > 0.0).collect();
+        st.ln = l.normal;
+        st.lt = l.tangential;
+        st.solved = true;
+        st.glued = false;
+        st.coulomb = Some(mu.to_vec());
+        st.s = crate::qp::coulomb_bound(mu, &st.ln);
+        let r = self.run();
+        let st = &mut self.st;
+        st.coulomb = None;
+        if matches!(&r, Ok(t) if t.status.converged()) {
+            st.warm = None;
+        } else {
+            (st.x, st.ax, st.tx, st.tang) = saved;
+            st.x_stale = false;
+        }
+        Some(r)
+    }
+
     /// A load step's start: the last step's multipliers (the caller's warm
     /// start) and their bound μλ_n, in place of the glued start, whose
     /// normal sets can cycle where the step drags a glued body far (the
