@@ -41,11 +41,8 @@ use crate::qp::{
 /// iteration ([`PlaneTresca::coulomb`]) gives way to the shared loop.
 const DIRECT_STALL: usize = 8;
 
-/// Steps in a row that predict their own sets without halving the residual
-/// after which a solve stops at its rounding floor (docs/methods.md §12.3):
-/// on the stack of BENCHMARKS.md at h = 0.05 (42 k DOFs, 511 rows) the dense
-/// dual's residual wandered between 1.3 and 1.9·10⁻¹⁰ against tol = 10⁻¹⁰
-/// on one set for 84 577 steps.
+/// Steps in a row that repeat their sets without halving the residual
+/// after which a solve ends at its rounding floor (docs/methods.md §12.3).
 const FLOOR_STEPS: usize = 3;
 
 /// How a contact row's tangential pair is held in a working set.
@@ -149,9 +146,8 @@ impl TrescaStep for PlaneTresca<'_, '_> {
         self.run()
     }
 
-    /// A load step's start on the dual path: the direct iteration (the
-    /// bound inside the step) from the last step's multipliers; if it does
-    /// not settle, the state is put back and the fixed point follows.
+    /// A load step's start on the dual path: the direct iteration from the
+    /// last step's multipliers (docs/methods.md §12.3).
     fn coulomb_first(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
         let st = &mut self.st;
         st.dual.as_ref()?;
@@ -176,10 +172,8 @@ impl TrescaStep for PlaneTresca<'_, '_> {
         Some(r)
     }
 
-    /// A load step's start: the last step's multipliers (the caller's warm
-    /// start) and their bound μλ_n, in place of the glued start, whose
-    /// normal sets can cycle where the step drags a glued body far (the
-    /// sliding block of docs/verification_3d.md).
+    /// A load step's fixed point from the last step's multipliers and
+    /// their bound μλ_n, not the glued start (docs/methods.md §12.3).
     fn warm_bound(&mut self, mu: &[f64]) -> Option<Vec<f64>> {
         let st = &mut self.st;
         let l = st.warm.take()?;
@@ -243,8 +237,7 @@ struct State<'a> {
     ws: &'a crate::linalg::cholesky::Workspace,
     /// Orthonormal basis of ker C.
     r: Vec<Vec<f64>>,
-    /// cᵢ of the normal prediction and c_tᵢ of the slip prediction, per
-    /// contact row (c_t from the softer of its two tangential rows).
+    /// cᵢ and c_tᵢ of the predictions (c_t: the softer tangential row).
     cn: Vec<f64>,
     ct: Vec<f64>,
     /// ρ of a normal and of a tangential row of B, per contact row.
@@ -277,8 +270,7 @@ struct State<'a> {
     tx: Vec<f64>,
     inner: usize,
     best: (f64, usize),
-    /// The residual of the last step and how many steps in a row have
-    /// repeated their sets without halving it ([`FLOOR_STEPS`]).
+    /// The last residual and the steps in a row at it ([`FLOOR_STEPS`]).
     floor: (f64, usize),
     error: Option<QpError>,
     /// The dual-space solves (None: the sparse path, K = C + ρBᵀB).
@@ -288,10 +280,7 @@ struct State<'a> {
     alpha: Vec<f64>,
     /// x is not yet formed from (μ, α) ([`State::ensure_x`]).
     x_stale: bool,
-    /// The certificate's floor of the length scale (‖d‖∞/max Cᵢᵢ,
-    /// docs/methods.md §8.4): a glued conforming interface has Ax = g = 0
-    /// and T x = t₀ = 0, and without x (a dual-space step) the residual's
-    /// scale was rounding.
+    /// The certificate's floor of the length scale (docs/methods.md §8.4, §12.3).
     x_floor: f64,
 }
 
@@ -949,16 +938,8 @@ impl Iterative for State<'_> {
                 } else {
                     self.best.1 += 1;
                 }
-                // The direct Coulomb iteration gives up sooner: where it
-                // cycles (sets flipping at the stick zone's border as s
-                // moves with λ_n) the Tresca problems of the shared loop
-                // settle (the sliding block of docs/verification_3d.md
-                // walked 384 steps between two sets before).
-                // So does the glued start, which is only a start: a row at
-                // the contact's edge can have no glued fixed point (stuck,
-                // it pulls; free, it penetrates), and on Cattaneo's fine
-                // sphere N flipped between 630 and 631 rows for the whole
-                // budget of 2m + 100 steps (0.14 s each).
+                // The direct Coulomb iteration and the glued start are
+                // starts and give up sooner (docs/methods.md §12.3).
                 let budget = if self.coulomb.is_some() || self.glued {
                     DIRECT_STALL
                 } else {
@@ -979,10 +960,8 @@ impl Iterative for State<'_> {
                         .iter()
                         .zip(&self.tang)
                         .all(|(a, b)| a.kind() == b.kind());
-                // The sets repeat and Newton's steps no longer halve the
-                // residual: what is left is the rounding of the set's
-                // solves, which more steps only stir. The solve is at its
-                // fixed point; the driver's certificate judges the answer.
+                // At the rounding floor (docs/methods.md §12.3); the
+                // driver's certificate judges the answer.
                 self.floor = if same && rec.residual > 0.5 * self.floor.0 {
                     (rec.residual, self.floor.1 + 1)
                 } else {
