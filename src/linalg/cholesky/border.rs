@@ -436,7 +436,9 @@ fn border_gram(
             w[(p, r)] += a;
         }
     }
-    let mut h = Mat::<f64>::zeros(m, m);
+    // H accumulated row-major: a chunk adds along its rows of H, which
+    // stay in cache (column-major, each add was a stride of m).
+    let mut h = vec![0.0f64; m * m];
     for (si, &sn) in sns.iter().enumerate() {
         let a = &mut act[si];
         if a.is_empty() {
@@ -479,9 +481,9 @@ fn border_gram(
                 par,
             );
             for i in q0..q1 {
-                let hi = a[i].1;
-                for j in 0..=i {
-                    h[(hi, a[j].1)] += g[(i - q0, j)];
+                let hrow = &mut h[a[i].1 * m..(a[i].1 + 1) * m];
+                for (j, &(_, aj)) in a[..=i].iter().enumerate() {
+                    hrow[aj] += g[(i - q0, j)];
                 }
             }
             if !pattern.is_empty() {
@@ -504,14 +506,14 @@ fn border_gram(
         }
     }
     // Each pair landed in one triangle or the other (local order): sum.
-    for j in 0..m {
-        for i in j + 1..m {
-            let v = h[(i, j)] + h[(j, i)];
-            h[(i, j)] = v;
-            h[(j, i)] = v;
+    Mat::from_fn(m, m, |i, j| {
+        if i == j {
+            h[i * m + i]
+        } else {
+            let (i, j) = (i.max(j), i.min(j));
+            h[i * m + j] + h[j * m + i]
         }
-    }
-    h
+    })
 }
 
 #[cfg(test)]
