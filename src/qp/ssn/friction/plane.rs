@@ -36,6 +36,7 @@ use crate::qp::settings::SsnPath;
 use crate::qp::{
     tangential_norm, Context, Failure, Friction, IterRecord, Output, QpError, QpProblem, Status,
 };
+use dual_space::combine;
 
 /// Steps without a better residual after which the direct Coulomb
 /// iteration ([`PlaneTresca::coulomb`]) gives way to the shared loop.
@@ -136,6 +137,9 @@ impl TrescaStep for PlaneTresca<'_, '_> {
             Bound::Glued => {
                 st.s = vec![0.0; st.qp.m()];
                 st.glued = true;
+                if !st.solved {
+                    st.normal_start();
+                }
             }
             Bound::Given(s) => {
                 st.s = s.to_vec();
@@ -208,6 +212,7 @@ impl PlaneTresca<'_, '_> {
         st.visited.clear();
         st.best = (f64::INFINITY, 0);
         st.floor = (f64::INFINITY, 0);
+        st.repeats = 0;
         let mut exec = self.ctx.executor("ssn");
         exec.max_iter = exec.max_iter.saturating_sub(self.steps);
         let inner0 = st.inner;
@@ -272,6 +277,8 @@ struct State<'a> {
     best: (f64, usize),
     /// The last residual and the steps in a row at it ([`FLOOR_STEPS`]).
     floor: (f64, usize),
+    /// Steps of this solve whose predicted pattern was seen before.
+    repeats: usize,
     error: Option<QpError>,
     /// The dual-space solves (None: the sparse path, K = C + ρBᵀB).
     dual: Option<Dual>,
@@ -330,6 +337,7 @@ impl<'a> State<'a> {
             inner: 0,
             best: (f64::INFINITY, 0),
             floor: (f64::INFINITY, 0),
+            repeats: 0,
             error: None,
             x_floor: crate::qp::kkt::length_floor(qp),
             dual: None,
@@ -831,29 +839,6 @@ impl<'a> State<'a> {
     }
 }
 
-/// Σ_k w_k T_{2i+k}: one combination of row i's tangential pair, columns
-/// sorted (the two rows touch the same points; a column one of them lacks
-/// counts as 0 there).
-fn combine(t: &Csr, i: usize, w: [f64; 2]) -> (Vec<usize>, Vec<f64>) {
-    let mut e: Vec<(usize, f64)> = vec![];
-    for (k, wk) in w.iter().enumerate() {
-        let (c, v) = t.row(2 * i + k);
-        e.extend(c.iter().zip(v).map(|(&j, &a)| (j, wk * a)));
-    }
-    e.sort_by_key(|p| p.0);
-    let mut cols: Vec<usize> = vec![];
-    let mut vals: Vec<f64> = vec![];
-    for (j, a) in e {
-        if cols.last() == Some(&j) {
-            *vals.last_mut().unwrap_or(&mut 0.0) += a;
-        } else {
-            cols.push(j);
-            vals.push(a);
-        }
-    }
-    (cols, vals)
-}
-
 /// A working set's pattern: N and each row's kind (directions left out).
 fn pattern(in_n: &[bool], tang: &[Disc]) -> (Vec<bool>, Vec<u8>) {
     (in_n.to_vec(), tang.iter().map(|d| d.kind()).collect())
@@ -874,7 +859,12 @@ impl Iterative for State<'_> {
             let (n_set, tang) = self.predict();
             let key = pattern(&n_set, &tang);
             let seen = key != pattern(&self.in_n, &self.tang) && self.visited.contains(&key);
-            if seen && self.coulomb.is_some() {
+            self.repeats += usize::from(seen);
+            // The glued solve is a start: a pattern met again after one
+            // single change (below) ends it, where a row at the contact
+            // zone's edge flipped until DIRECT_STALL (Cattaneo hc 0.0075:
+            // ten steps, 0.7 s; docs/methods.md §12.3).
+            if seen && (self.coulomb.is_some() || self.glued && self.repeats > 1) {
                 // The direct Coulomb iteration flips a row at the stick
                 // zone's border as s moves with λ_n: the shared loop's
                 // Tresca problems settle it (each step here is a factor).

@@ -147,3 +147,74 @@ fn a_ring_turned_on_a_floor_slips_around_the_circle() {
         }
     }
 }
+
+/// A line of points pressed onto a curved floor (gaps xᵢ²/2R, a
+/// parabolic obstacle as under a sphere) by a load at its middle and
+/// pulled sideways: the unconstrained answer penetrates far more rows
+/// than touch. The glued solve starts from the frictionless normal set
+/// (`State::normal_start`, docs/methods.md §12.3), so its Newton steps
+/// only settle the stick rows; the answer is certified and agrees with
+/// mprgp's on the same discs.
+#[test]
+fn a_line_pressed_on_a_curved_floor_starts_from_the_frictionless_set() {
+    use crate::qp::{Csr, Friction, QpProblem};
+    let (p, h, radius, kc) = (41usize, 0.05, 1.0, 20.0);
+    let mut trip = vec![];
+    let mut d = vec![0.0; 3 * p];
+    let (mut a, mut t, mut g) = (vec![], vec![], vec![]);
+    for i in 0..p {
+        let x = (i as f64 - 20.0) * h;
+        for c in 0..3 {
+            trip.push((3 * i + c, 3 * i + c, if c == 2 { 0.05 } else { 1.0 }));
+        }
+        if i + 1 < p {
+            for c in 0..3 {
+                let (u, v) = (3 * i + c, 3 * i + 3 + c);
+                trip.extend([(u, u, kc), (v, v, kc), (u, v, -kc), (v, u, -kc)]);
+            }
+        }
+        if (18..=22).contains(&i) {
+            d[3 * i + 2] = -3.0;
+            d[3 * i] = 0.4;
+        }
+        a.push((i, 3 * i + 2, -1.0));
+        g.push(x * x / (2.0 * radius));
+        t.push((2 * i, 3 * i, 1.0));
+        t.push((2 * i + 1, 3 * i + 1, 1.0));
+    }
+    let q = QpProblem {
+        c: Csr::from_triplets(3 * p, 3 * p, &trip),
+        d,
+        a: Csr::from_triplets(p, 3 * p, &a),
+        g,
+        kernel: vec![],
+        friction: Some(Friction {
+            t: Csr::from_triplets(2 * p, 3 * p, &t),
+            t0: vec![0.0; 2 * p],
+            bound: SlipBound::Coulomb(vec![0.3; p]),
+            frame: crate::qp::Frame::Plane,
+        }),
+        near: None,
+    };
+    let r = solve(&q);
+    assert!(r.status.converged(), "{:?}", r.status);
+    let touching = r.lambda.iter().filter(|l| **l > 0.0).count();
+    // The unconstrained answer (the glued start's first set before)
+    // penetrates more rows than end in contact.
+    let x0 = {
+        let f = crate::linalg::cholesky::Workspace::default()
+            .cholesky(&q.c, &[])
+            .unwrap();
+        f.solve(&q.d)
+    };
+    let penetrating = (0..p).filter(|&i| -x0[3 * i + 2] > q.g[i]).count();
+    assert!(penetrating > touching + 5, "{penetrating} {touching}");
+    // 1 step (15 when the glued steps found N themselves).
+    assert!(r.iterations <= 4, "{} Newton steps", r.iterations);
+    let m = registry::solve("mprgp", &q, &SolveOptions::default()).unwrap();
+    assert!(m.status.converged(), "{:?}", m.status);
+    let scale = r.x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    for (u, v) in r.x.iter().zip(&m.x) {
+        assert!((u - v).abs() < 1e-6 * scale, "ssn {u}, mprgp {v}");
+    }
+}
