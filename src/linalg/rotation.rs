@@ -46,7 +46,7 @@ pub struct Rotation {
 /// rotated basis) and the rotation that made them few.
 #[derive(Debug, Clone)]
 pub struct RowBorder {
-    /// Distinct; body by body (components of C), each ascending ([`group_by_body`]).
+    /// Distinct; body by body (components of C), each ascending (docs/methods.md §7).
     pub dofs: Vec<usize>,
     pub rotation: Arc<Rotation>,
     /// Rows whose unknowns were rotated (one border unknown per part).
