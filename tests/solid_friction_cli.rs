@@ -144,6 +144,48 @@ fn a_soft_cube_pushed_past_mu_n_is_refused_as_unbounded() {
     assert_eq!(written, 0, "an unbounded run writes nothing");
 }
 
+/// The same cube under Tresca friction (s = 3·10⁵ Pa, below the push's
+/// 3.08·10⁵) solved by mprgp: its SMALBE stagnates (exit 3 and a written,
+/// uncertified answer before), and the driver decides the Tresca problem
+/// unbounded from the rigid motions (docs/methods.md §9.3): exit 2, the
+/// sliding body named, nothing written. With s = 3.2·10⁵ the run is not
+/// refused as unbounded.
+#[test]
+fn mprgp_pushed_past_a_tresca_bound_is_refused_as_unbounded() {
+    let msh: PathBuf = common::root().join("tests/data/solid_contact/stack_nm.msh");
+    for (s, unbounded) in [("3.0e5", true), ("3.2e5", false)] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("cube.toml");
+        let text = toml(&msh, [2.5e5, 1.8e5]).replace("friction = 0.3", &format!("tresca = {s}"));
+        std::fs::write(&path, text).unwrap();
+        let o = common::command()
+            .args([
+                "solve",
+                path.to_str().unwrap(),
+                "--method",
+                "mprgp",
+                "--out",
+            ])
+            .arg(dir.path().join("out"))
+            .output()
+            .unwrap();
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_eq!(text.contains("unbounded"), unbounded, "s = {s}: {text}");
+        if unbounded {
+            assert_eq!(o.status.code(), Some(2), "{text}");
+            assert!(text.contains("\"upper\""), "{text}");
+            let written = std::fs::read_dir(dir.path().join("out"))
+                .map(|d| d.count())
+                .unwrap_or(0);
+            assert_eq!(written, 0, "an unbounded run writes nothing");
+        }
+    }
+}
+
 /// The quarter of two stacked cubes (conforming interface, aluminium on
 /// steel, 1e8 Pa on the top, Coulomb μ = 0.3): the glued start's
 /// interface has Ax = g = 0 and T x = t₀ = 0, and on the dual path (no x

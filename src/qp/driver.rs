@@ -460,7 +460,23 @@ pub fn run(
         }
     }
     recession::without_free(&mut r.x, &free);
-    Ok(certify(method.id(), qp, r, &free, &opts.settings, notes))
+    let res = certify(method.id(), qp, r, &free, &opts.settings, notes);
+    // A Tresca problem a method did not solve may have no solution: its
+    // rigid motions' loads beyond what the rows can resist, decided and
+    // checked independently of the method (docs/methods.md §9.3).
+    if qp.friction.is_some()
+        && !res.status.converged()
+        && !matches!(res.status, Status::Unbounded { .. })
+    {
+        if let Some(c) = super::recession_tresca::tresca_recession(qp) {
+            log::info!(
+                "{}: not converged; the Tresca problem is unbounded: a rigid motion on which the loads' work exceeds what friction dissipates",
+                method.id()
+            );
+            return Ok(unbounded_result(qp, c.direction));
+        }
+    }
+    Ok(res)
 }
 
 /// What [`judge_claim`] makes of a method's answer.

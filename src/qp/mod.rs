@@ -27,6 +27,7 @@ pub mod method;
 pub mod precond;
 pub mod primal;
 pub mod recession;
+pub mod recession_tresca;
 pub mod registry;
 pub mod settings;
 pub mod ssn;
