@@ -154,33 +154,17 @@ impl RowBorder {
 /// three columns whose rank-3 updates made H memory-bound (5.7 s against
 /// the factor's 4.5 s). A border already grouped keeps its order.
 fn group_by_body(c: &Csr, dofs: &mut [usize]) {
-    let n = c.nrows;
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
-    for i in 0..n {
-        for &j in c.row(i).0 {
-            let (ri, rj) = (root(&mut parent, i), root(&mut parent, j));
-            if ri != rj {
-                parent[ri.max(rj)] = ri.min(rj);
-            }
-        }
-    }
-    let mut rank: Vec<usize> = vec![usize::MAX; n];
+    let (body, nb) = c.components();
+    let mut rank: Vec<usize> = vec![usize::MAX; nb];
     let mut next = 0;
     let mut key: Vec<(usize, usize)> = Vec::with_capacity(dofs.len());
     for &k in dofs.iter() {
-        let r = root(&mut parent, k);
-        if rank[r] == usize::MAX {
-            rank[r] = next;
+        let b = body[k];
+        if rank[b] == usize::MAX {
+            rank[b] = next;
             next += 1;
         }
-        key.push((rank[r], k));
+        key.push((rank[b], k));
     }
     key.sort_unstable();
     for (d, (_, k)) in dofs.iter_mut().zip(key) {

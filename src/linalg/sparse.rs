@@ -85,6 +85,42 @@ impl<T> Shared<T> {
 }
 
 impl Csr {
+    /// Connected components of the graph of a square matrix (C: its
+    /// uncoupled diagonal blocks, the bodies): the component of every
+    /// unknown, numbered in the order of their first unknown, and their
+    /// count.
+    pub fn components(&self) -> (Vec<usize>, usize) {
+        let n = self.nrows;
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn root(p: &mut [usize], mut i: usize) -> usize {
+            while p[i] != i {
+                p[i] = p[p[i]];
+                i = p[i];
+            }
+            i
+        }
+        for i in 0..n {
+            for &j in self.row(i).0 {
+                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+                if a != b {
+                    parent[a.max(b)] = a.min(b);
+                }
+            }
+        }
+        let mut id = vec![usize::MAX; n];
+        let mut block = vec![0; n];
+        let mut nb = 0;
+        for i in 0..n {
+            let r = root(&mut parent, i);
+            if id[r] == usize::MAX {
+                id[r] = nb;
+                nb += 1;
+            }
+            block[i] = id[r];
+        }
+        (block, nb)
+    }
+
     pub fn zeros(nrows: usize, ncols: usize) -> Csr {
         Csr {
             nrows,

@@ -101,7 +101,7 @@ pub fn certify(qp: &QpProblem, r: &[f64]) -> Result<Recession, String> {
     }
     let r: Vec<f64> = r.iter().map(|v| v / rmax).collect();
     // Cr = 0, block by block in each block's own scale.
-    let (block, nb) = blocks(&qp.c);
+    let (block, nb) = qp.c.components();
     let cr = qp.c.mul(&r);
     let diag = qp.c.diag();
     let mut cr2 = vec![0.0; nb];
@@ -143,40 +143,6 @@ pub fn certify(qp: &QpProblem, r: &[f64]) -> Result<Recession, String> {
         ));
     }
     Ok(Recession { direction: r, work })
-}
-
-/// Connected components of the graph of C: its uncoupled diagonal blocks
-/// (the bodies). Returns the block of every unknown and the block count.
-pub fn blocks(c: &Csr) -> (Vec<usize>, usize) {
-    let n = c.nrows;
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
-    for i in 0..n {
-        for &j in c.row(i).0 {
-            let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-            if a != b {
-                parent[a.max(b)] = a.min(b);
-            }
-        }
-    }
-    let mut id = vec![usize::MAX; n];
-    let mut block = vec![0; n];
-    let mut nb = 0;
-    for i in 0..n {
-        let r = root(&mut parent, i);
-        if id[r] == usize::MAX {
-            id[r] = nb;
-            nb += 1;
-        }
-        block[i] = id[r];
-    }
-    (block, nb)
 }
 
 /// An eigenvalue of (BR)ᵀ(BR) at most this share of the largest is zero
@@ -700,7 +666,7 @@ mod tests {
             near: None,
         };
         assert!(certify(&q, &[0.0, 1.0]).is_err());
-        assert_eq!(blocks(&q.c).1, 2);
+        assert_eq!(q.c.components().1, 2);
     }
 
     #[test]
