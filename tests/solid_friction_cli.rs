@@ -12,7 +12,7 @@
 mod common;
 
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 fn toml(msh: &Path, pt: [f64; 2]) -> String {
     format!(
@@ -53,29 +53,46 @@ friction = 0.3
     )
 }
 
-fn run(dir: &Path, pt: [f64; 2]) -> (Option<i32>, String) {
-    let msh: PathBuf = common::root().join("tests/data/solid_contact/stack_nm.msh");
+/// `signorini solve` of the problem `text` written in `dir`, with `flags`,
+/// to dir/out: (exit code, stdout + stderr).
+fn run(dir: &Path, text: &str, flags: &[&str]) -> (i32, String) {
     let path = dir.join("cube.toml");
-    std::fs::write(&path, toml(&msh, pt)).unwrap();
-    let o = common::command()
-        .args(["solve", path.to_str().unwrap(), "--out"])
-        .arg(dir.join("out"))
-        .output()
-        .unwrap();
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    (o.status.code(), text)
+    std::fs::write(&path, text).unwrap();
+    let out = dir.join("out");
+    let mut args = vec!["solve", path.to_str().unwrap()];
+    args.extend_from_slice(flags);
+    args.extend(["--out", out.to_str().unwrap()]);
+    common::run(&args)
+}
+
+/// The soft cube on the steel one, pushed by `pt` on its top.
+fn cube(pt: [f64; 2]) -> String {
+    toml(
+        &common::root().join("tests/data/solid_contact/stack_nm.msh"),
+        pt,
+    )
+}
+
+/// A run refused as unbounded: exit 2, the sliding body and friction
+/// named, nothing written to dir/out.
+fn assert_refused_as_sliding(dir: &Path, code: i32, text: &str) {
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("unbounded"), "{text}");
+    assert!(text.contains("\"upper\""), "{text}");
+    assert!(text.contains("friction"), "{text}");
+    assert!(!text.contains("positive definite"), "{text}");
+    let written = std::fs::read_dir(dir.join("out"))
+        .map(|d| d.count())
+        .unwrap_or(0);
+    assert_eq!(written, 0, "an unbounded run writes nothing");
 }
 
 #[test]
 fn a_soft_cube_held_by_friction_carries_a_tangential_load_below_mu_n() {
     let dir = tempfile::tempdir().unwrap();
     let pt = [1.5e5, 1.0e5]; // ‖pt‖ = 1.80e5 = 0.6 μN
-    let (code, text) = run(dir.path(), pt);
-    assert_eq!(code, Some(0), "{text}");
+    let (code, text) = run(dir.path(), &cube(pt), &[]);
+    assert_eq!(code, 0, "{text}");
     assert!(text.contains("certified"), "{text}");
     let json: Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("out/cube.json")).unwrap())
@@ -132,16 +149,8 @@ fn a_soft_cube_held_by_friction_carries_a_tangential_load_below_mu_n() {
 fn a_soft_cube_pushed_past_mu_n_is_refused_as_unbounded() {
     let dir = tempfile::tempdir().unwrap();
     let pt = [2.5e5, 1.8e5]; // ‖pt‖ = 3.08e5 = 1.03 μN
-    let (code, text) = run(dir.path(), pt);
-    assert_eq!(code, Some(2), "{text}");
-    assert!(text.contains("unbounded"), "{text}");
-    assert!(text.contains("\"upper\""), "{text}");
-    assert!(text.contains("friction"), "{text}");
-    assert!(!text.contains("positive definite"), "{text}");
-    let written = std::fs::read_dir(dir.path().join("out"))
-        .map(|d| d.count())
-        .unwrap_or(0);
-    assert_eq!(written, 0, "an unbounded run writes nothing");
+    let (code, text) = run(dir.path(), &cube(pt), &[]);
+    assert_refused_as_sliding(dir.path(), code, &text);
 }
 
 /// The same cube under Tresca friction (s = 3·10⁵ Pa, below the push's
@@ -152,36 +161,14 @@ fn a_soft_cube_pushed_past_mu_n_is_refused_as_unbounded() {
 /// refused as unbounded.
 #[test]
 fn mprgp_pushed_past_a_tresca_bound_is_refused_as_unbounded() {
-    let msh: PathBuf = common::root().join("tests/data/solid_contact/stack_nm.msh");
     for (s, unbounded) in [("3.0e5", true), ("3.2e5", false)] {
         let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("cube.toml");
-        let text = toml(&msh, [2.5e5, 1.8e5]).replace("friction = 0.3", &format!("tresca = {s}"));
-        std::fs::write(&path, text).unwrap();
-        let o = common::command()
-            .args([
-                "solve",
-                path.to_str().unwrap(),
-                "--method",
-                "mprgp",
-                "--out",
-            ])
-            .arg(dir.path().join("out"))
-            .output()
-            .unwrap();
-        let text = format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        );
-        assert_eq!(text.contains("unbounded"), unbounded, "s = {s}: {text}");
+        let text = cube([2.5e5, 1.8e5]).replace("friction = 0.3", &format!("tresca = {s}"));
+        let (code, text) = run(dir.path(), &text, &["--method", "mprgp"]);
         if unbounded {
-            assert_eq!(o.status.code(), Some(2), "{text}");
-            assert!(text.contains("\"upper\""), "{text}");
-            let written = std::fs::read_dir(dir.path().join("out"))
-                .map(|d| d.count())
-                .unwrap_or(0);
-            assert_eq!(written, 0, "an unbounded run writes nothing");
+            assert_refused_as_sliding(dir.path(), code, &text);
+        } else {
+            assert!(!text.contains("unbounded"), "s = {s}: {text}");
         }
     }
 }

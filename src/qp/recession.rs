@@ -428,7 +428,7 @@ pub fn without_free(x: &mut [f64], free: &[Vec<f64>]) {
 /// orthogonality (r = Rρ satisfies Ar ≤ 0 and dᵀr = ‖ρ‖² for any R), and
 /// keeping the FEM's modes (a translation, a rotation about a fixed point)
 /// makes the direction found the one a user recognises.
-fn normalized(kernel: &[Vec<f64>]) -> Vec<Vec<f64>> {
+pub(crate) fn normalized(kernel: &[Vec<f64>]) -> Vec<Vec<f64>> {
     kernel
         .iter()
         .filter_map(|z| {

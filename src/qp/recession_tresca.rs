@@ -17,7 +17,7 @@
 //! rigid motions alone (λ_n comes from the bodies' elastic balance), so
 //! this decision is Tresca's only.
 
-use crate::linalg::sparse::dot;
+use crate::linalg::sparse::{dot, norm};
 use crate::qp::recession::{self, Recession};
 use crate::qp::{tangential_norm, QpProblem, SlipBound};
 
@@ -35,14 +35,7 @@ pub fn tresca_recession(qp: &QpProblem) -> Option<Recession> {
     let SlipBound::Tresca(s) = &fr.bound else {
         return None;
     };
-    let r: Vec<Vec<f64>> = qp
-        .kernel
-        .iter()
-        .filter_map(|z| {
-            let nz = crate::linalg::sparse::norm(z);
-            (nz > 0.0 && nz.is_finite()).then(|| z.iter().map(|a| a / nz).collect())
-        })
-        .collect();
+    let r = recession::normalized(&qp.kernel);
     let k = r.len();
     if k == 0 {
         return None;
@@ -54,7 +47,7 @@ pub fn tresca_recession(qp: &QpProblem) -> Option<Recession> {
         .chain((0..fr.t.nrows).map(|j| r.iter().map(|z| fr.t.row_dot(j, z)).collect()))
         .collect();
     let w: Vec<f64> = r.iter().map(|z| dot(z, &qp.d)).collect();
-    let wn = crate::linalg::sparse::norm(&w);
+    let wn = norm(&w);
     if !(wn > 0.0) {
         return None;
     }
@@ -112,13 +105,13 @@ pub fn tresca_recession(qp: &QpProblem) -> Option<Recession> {
         prev.clone_from(&lam);
         if step % 100 == 99 {
             let rho = residual(&lam);
-            let change = crate::linalg::sparse::norm(
+            let change = norm(
                 &rho.iter()
                     .zip(&rho_last)
                     .map(|(a, b)| a - b)
                     .collect::<Vec<_>>(),
             );
-            let rn = crate::linalg::sparse::norm(&rho);
+            let rn = norm(&rho);
             if rn <= BALANCED * wn {
                 return None;
             }
@@ -129,7 +122,7 @@ pub fn tresca_recession(qp: &QpProblem) -> Option<Recession> {
         }
     }
     let rho = residual(&lam);
-    if crate::linalg::sparse::norm(&rho) <= BALANCED * wn {
+    if norm(&rho) <= BALANCED * wn {
         return None;
     }
     let mut dir = vec![0.0; qp.n()];

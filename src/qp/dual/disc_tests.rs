@@ -320,22 +320,19 @@ fn pushed_past_its_disc(bound_at: impl Fn(f64) -> SlipBound) {
         let th = deg.to_radians();
         for scale in [1.0, 1e4] {
             let load = [0.9 * scale * th.cos(), 0.9 * scale * th.sin(), -scale];
-            {
-                let bound = bound_at(scale);
-                let qp = points_on_a_floor(0.0, 0.0, 0.0, &[load], bound);
-                let r = registry::solve("mprgp", &qp, &opts()).unwrap();
-                match &r.status {
-                    crate::qp::Status::Unbounded { direction } => {
-                        let (a, b) = (direction[0], direction[1]);
-                        let cross = a * th.sin() - b * th.cos();
-                        let along = a * th.cos() + b * th.sin();
-                        assert!(
-                            along > 0.0 && cross.abs() < 1e-9 * along,
-                            "{deg}°: {direction:?}"
-                        );
-                    }
-                    s => panic!("{deg}° scale {scale}: {s:?}"),
+            let qp = points_on_a_floor(0.0, 0.0, 0.0, &[load], bound_at(scale));
+            let r = registry::solve("mprgp", &qp, &opts()).unwrap();
+            match &r.status {
+                crate::qp::Status::Unbounded { direction } => {
+                    let (a, b) = (direction[0], direction[1]);
+                    let cross = a * th.sin() - b * th.cos();
+                    let along = a * th.cos() + b * th.sin();
+                    assert!(
+                        along > 0.0 && cross.abs() < 1e-9 * along,
+                        "{deg}°: {direction:?}"
+                    );
                 }
+                s => panic!("{deg}° scale {scale}: {s:?}"),
             }
         }
     }
