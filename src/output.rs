@@ -129,6 +129,11 @@ pub struct SolidContactOutput {
     pub tangential_traction: Vec<[f64; 3]>,
     pub slip: Vec<[f64; 3]>,
     pub friction_state: Vec<u8>,
+    /// With friction: the QP's own λ_t1, λ_t2 of each row along its
+    /// tangent frame, as the solve left them (`--restart` reads them back
+    /// as the next step's warm start, so that a continued run is the
+    /// uninterrupted one bit for bit).
+    pub multiplier_t: Vec<[f64; 2]>,
 }
 
 /// The fields of one solved (load) step.

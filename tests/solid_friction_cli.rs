@@ -287,3 +287,27 @@ fn a_tol_below_the_rounding_floor_ends_at_the_floor() {
         assert!((fx(a) - fx(b)).abs() <= 1e-9 * fz(b).abs(), "{name}");
     }
 }
+
+/// At zero load no row carries a force, so every row is open, whatever the
+/// method (post::friction::row_state): mprgp keeps the closed gaps of a
+/// conforming interface active and, with s = μ·0 = 0, counted all 45 rows
+/// as slipping where ssn counted none.
+#[test]
+fn at_zero_load_every_row_is_open_whatever_the_method() {
+    let dir = tempfile::tempdir().unwrap();
+    let msh = common::root().join("tests/data/solid_contact/stack.msh");
+    for contact in [
+        "on = \"interface\"\nfriction = 0.3",
+        "on = \"interface\"\ntresca = 1e6",
+    ] {
+        let text = common::solid_stack_toml(&msh, contact, 0.0, "");
+        for method in ["ssn", "mprgp"] {
+            let (code, out) = run(dir.path(), &text, &["--method", method]);
+            assert_eq!(code, 0, "{method} {contact}: {out}");
+            assert!(
+                out.contains("'interface': 0 rows stick, 0 slip"),
+                "{method} {contact}: {out}"
+            );
+        }
+    }
+}

@@ -285,6 +285,56 @@ fn a_3d_run_continues_from_its_checkpoint_bit_for_bit() {
     assert!(!tmp.path().join("bad").exists());
 }
 
+/// `--restart` of a frictional 3D run (Coulomb μ = 0.3 on the mortar rows,
+/// the steps of the test above): the checkpoint's `multipliers` and
+/// `multipliers_t_frame` are the continued step's warm start, as the last
+/// step's λ is in the uninterrupted run, so the continued steps are the
+/// same bit for bit (displacement, λ_n, λ_t, state).
+#[test]
+fn a_frictional_3d_run_continues_from_its_checkpoint_bit_for_bit() {
+    let tmp = tempfile::tempdir().unwrap();
+    let msh = common::root().join("tests/data/solid_contact/stack_nm.msh");
+    let contact = "slave = \"upper_bottom\"\nmaster = \"lower_top\"\nfriction = 0.3";
+    // Aluminium's ν = 0.33 on steel: both stick and slip zones.
+    let toml = common::solid_stack_toml(&msh, contact, -P, STEPS).replace("nu = 0.25", "nu = 0.33");
+    let dir = |d: &str| tmp.path().join(d).to_str().unwrap().to_string();
+    let (full, part) = (dir("full"), dir("part"));
+    let solve = |args: &[&str]| {
+        let mut a = vec!["solve"];
+        a.extend_from_slice(args);
+        let (code, text, _) = run(tmp.path(), &toml, &a);
+        assert_eq!(code, 0, "{args:?}: {text}");
+        text
+    };
+    let text = solve(&["--out", &full]);
+    assert!(text.contains("slip;"), "{text}");
+    solve(&["--out", &part, "--max-steps", "1"]);
+    solve(&["--out", &part, "--restart", &format!("{part}/stack.h5")]);
+    let f = hdf5::File::open(format!("{full}/stack.h5")).unwrap();
+    let g = hdf5::File::open(format!("{part}/stack.h5")).unwrap();
+    let state = |h: &hdf5::File, name: &str| -> Vec<u8> {
+        h.dataset(name).unwrap().read_raw::<u8>().unwrap()
+    };
+    for s in ["0002", "0003"] {
+        for ds in [
+            "displacement",
+            "multipliers",
+            "multipliers_t",
+            "multipliers_t_frame",
+        ] {
+            let name = format!("steps/{s}/{ds}");
+            let (a, b) = (read(&f, &name), read(&g, &name));
+            assert_eq!(a.len(), b.len(), "{name}");
+            assert!(
+                a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{name}"
+            );
+        }
+        let name = format!("steps/{s}/state");
+        assert_eq!(state(&f, &name), state(&g, &name), "{name}");
+    }
+}
+
 /// `[output] reference_step` in 3D: from step K on, the `*_change` fields
 /// are the step's minus step K's in the HDF5 and the VTU (and a restart
 /// keeps them); the VTU's `reaction` point data balance the loads.

@@ -53,19 +53,35 @@ pub fn friction_output(model: &Model, res: &QpResult) -> Option<FrictionOutput> 
             0.0
         };
         out.slip[r] = v[qi];
-        let in_contact = res.active.get(qi).copied().unwrap_or(false) || res.lambda[qi] > 0.0;
+        let active = res.active.get(qi).copied().unwrap_or(false);
         // A mortar row on a line of symmetry has no tangential row (bound 0):
         // the line holds its slave point, so it sticks (docs/methods.md §9).
         let held = on_symmetry_line(model, r);
-        out.state[r] = if !in_contact {
-            0
-        } else if !held && lt.abs() >= (1.0 - STICK_MARGIN) * s[qi] {
-            out.slip_count += 1;
-            2
-        } else {
-            out.stick_count += 1;
-            1
-        };
+        out.state[r] = row_state(res.lambda[qi], lt.abs(), s[qi], active, held);
+        match out.state[r] {
+            1 => out.stick_count += 1,
+            2 => out.slip_count += 1,
+            _ => {}
+        }
     }
     Some(out)
+}
+
+/// The state of one frictional row: 0 open, 1 stick, 2 slip
+/// (docs/problem-format.md §6). A row is in contact when it carries a
+/// normal force, or is active and carries a tangential one: a row without
+/// any force is open whatever a method's active set says (mprgp keeps a
+/// closed gap at zero load active, ssn does not, and with s = μ·0 = 0 every
+/// such row read "slip" under one and "open" under the other). In contact,
+/// it slips when ‖λ_t‖ ≥ (1 − STICK_MARGIN)·s and is not `held` (a row
+/// whose tangential motion a symmetry plane or line fixes).
+pub fn row_state(lambda_n: f64, lt_norm: f64, s: f64, active: bool, held: bool) -> u8 {
+    let in_contact = lambda_n > 0.0 || active && lt_norm > 0.0;
+    if !in_contact {
+        0
+    } else if !held && lt_norm >= (1.0 - STICK_MARGIN) * s {
+        2
+    } else {
+        1
+    }
 }

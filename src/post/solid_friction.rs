@@ -6,7 +6,8 @@
 use crate::fem::contact3d::friction::frames;
 use crate::fem::solid::SolidModel;
 use crate::output::SolidContactOutput;
-use crate::qp::{tangential_norm, QpResult, STICK_MARGIN};
+use crate::post::friction::row_state;
+use crate::qp::{tangential_norm, QpResult};
 
 /// a·t1 + b·t2.
 fn combine(t: &[[f64; 3]; 2], a: f64, b: f64) -> [f64; 3] {
@@ -17,7 +18,8 @@ fn combine(t: &[[f64; 3]; 2], a: f64, b: f64) -> [f64; 3] {
 /// friction or for a result without tangential forces, e.g. unbounded).
 /// A tangential row without unknowns and offset (the second of a row on a
 /// plane of symmetry, `contact3d::friction::friction_frame`, or both on a
-/// symmetry edge) carries no force: its λ_t is left out. A row in contact slips when ‖λ_t‖ ≥ (1 − [`STICK_MARGIN`])·s.
+/// symmetry edge) carries no force: its λ_t is left out. The state is
+/// [`row_state`]'s.
 /// Returns the rows that stick and that slip per interface (empty without
 /// friction).
 pub fn solid_friction_output(
@@ -40,6 +42,7 @@ pub fn solid_friction_output(
     c.tangential_traction = vec![[0.0; 3]; nrow];
     c.slip = vec![[0.0; 3]; nrow];
     c.friction_state = vec![0; nrow];
+    c.multiplier_t = vec![[0.0; 2]; nrow];
     let nif = model.interface_names.len();
     let mut counts = vec![(0, 0); nif];
     for (qi, &r) in model.qp_rows.iter().enumerate() {
@@ -58,23 +61,27 @@ pub fn solid_friction_output(
         } else {
             res.lambda_t[2 * qi + 1]
         };
+        c.multiplier_t[r] = [res.lambda_t[2 * qi], res.lambda_t[2 * qi + 1]];
         let ft = combine(t, l1, l2);
         c.tangential_force[r] = ft;
         if row.area > 0.0 {
             c.tangential_traction[r] = ft.map(|x| x / row.area);
         }
         c.slip[r] = combine(t, v[2 * qi], v[2 * qi + 1]);
-        let in_contact = res.active.get(qi).copied().unwrap_or(false) || res.lambda[qi] > 0.0;
+        let active = res.active.get(qi).copied().unwrap_or(false);
         let k = &mut counts[row.interface as usize];
-        c.friction_state[r] = if !in_contact {
-            0
-        } else if tangential_norm(&[l1, l2]) >= (1.0 - STICK_MARGIN) * s[qi] {
-            k.1 += 1;
-            2
-        } else {
-            k.0 += 1;
-            1
-        };
+        c.friction_state[r] = row_state(
+            res.lambda[qi],
+            tangential_norm(&[l1, l2]),
+            s[qi],
+            active,
+            false,
+        );
+        match c.friction_state[r] {
+            1 => k.0 += 1,
+            2 => k.1 += 1,
+            _ => {}
+        }
     }
     counts
 }

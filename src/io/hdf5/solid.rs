@@ -127,7 +127,9 @@ fn check_attrs(ctx: &Ctx, attrs: &[(&str, String)]) -> Result<(), IoError> {
 
 /// The friction arrays of a step (docs/methods.md §12.6), 2D's names with
 /// three columns: `multipliers_t` the tangential force (N), `tangential_traction`
-/// (Pa), `slip` (m) as \[r, 3\] in global coordinates, `state` \[r\].
+/// (Pa), `slip` (m) as \[r, 3\] in global coordinates, `state` \[r\]; and
+/// `multipliers_t_frame` \[r, 2\], the QP's λ_t along each row's frame
+/// (the warm start of `--restart`).
 fn write_solid_friction(
     ctx: &Ctx,
     s: &Group,
@@ -152,6 +154,15 @@ fn write_solid_friction(
         ("slip", &c.slip),
     ] {
         write_ds(ctx, s, name, &[r, 3], v.as_flattened())?;
+    }
+    if c.multiplier_t.len() == r {
+        write_ds(
+            ctx,
+            s,
+            "multipliers_t_frame",
+            &[r, 2],
+            c.multiplier_t.as_flattened(),
+        )?;
     }
     write_ds(ctx, s, "state", &[r], &c.friction_state)
 }
@@ -337,6 +348,11 @@ pub struct SolidRestartData {
     /// read when the sizes are the `n` and `r` asked for.
     pub displacement: Option<Vec<[f64; 3]>>,
     pub active: Option<Vec<u8>>,
+    /// The last step's λ_n \[rows\] and, with friction, λ_t along each
+    /// row's frame \[rows, 2\] (`multipliers_t_frame`; None in a checkpoint
+    /// without friction or written before it existed).
+    pub multipliers: Option<Vec<f64>>,
+    pub multipliers_t: Option<Vec<[f64; 2]>>,
 }
 
 /// Reads what a restart needs of the 3D checkpoint at `path` (single file
@@ -427,6 +443,12 @@ pub fn read_solid_restart(
         out.displacement = Some(u.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect());
         let (_, a) = super::read_ds::<u8>(&ctx, &g, "active", None, Some(r))?;
         out.active = Some(a);
+        let (_, l) = super::read_ds::<f64>(&ctx, &g, "multipliers", None, Some(r))?;
+        out.multipliers = Some(l);
+        if g.link_exists("multipliers_t_frame") {
+            let (_, t) = super::read_ds::<f64>(&ctx, &g, "multipliers_t_frame", Some(2), Some(r))?;
+            out.multipliers_t = Some(t.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+        }
     }
     Ok(out)
 }

@@ -198,7 +198,7 @@ impl<'a> State<'a> {
     ) -> State<'a> {
         let m = qp.m();
         let cmax = norm_inf(diag);
-        let rho = rho_rows(orig, diag, cmax);
+        let rho = rho_rows(orig, diag, cmax, RHO_SOLID);
         let cpar = stiffness_scale(diag);
         let solid = orig.near.as_ref().is_some_and(|nk| nk.modes.len() >= 6);
         let ar = (0..m)
@@ -567,12 +567,12 @@ impl Iterative for State<'_> {
 }
 
 /// ρ of every row: RHO_ITERATIVE · max diag C; on a solid model (six
-/// near-null modes) RHO_SOLID · max of diag C over the row's own unknowns instead
+/// near-null modes) `solid` · max of diag C over the row's own unknowns instead
 /// (docs/methods.md §7.2): diag C scales as E·h in 3D, so the largest
 /// diagonal, on the coarsest elements, would make the rows of a fine
 /// contact zone penalty springs (as E alone in 2D, where ρ stays global so
 /// that plane models keep their bits). `diag` in the order of `qp`.
-pub(super) fn rho_rows(qp: &QpProblem, diag: &[f64], cmax: f64) -> Vec<f64> {
+pub(super) fn rho_rows(qp: &QpProblem, diag: &[f64], cmax: f64, solid: f64) -> Vec<f64> {
     let global = RHO_ITERATIVE * if cmax > 0.0 { cmax } else { 1.0 };
     if qp.near.as_ref().is_none_or(|nk| nk.modes.len() < 6) {
         return vec![global; qp.m()];
@@ -581,7 +581,7 @@ pub(super) fn rho_rows(qp: &QpProblem, diag: &[f64], cmax: f64) -> Vec<f64> {
         .map(|j| {
             let c = qp.a.row(j).0.iter().map(|&k| diag[k]).fold(0.0, f64::max);
             if c > 0.0 {
-                RHO_SOLID * c
+                solid * c
             } else {
                 global
             }

@@ -27,6 +27,9 @@ pub struct SolidRestart {
     /// The fields of `[output] reference_step` when the checkpoint holds
     /// that step.
     pub reference: Option<super::Reference>,
+    /// The last step's λ_n and λ_t (frame) per contact row, with friction:
+    /// the next step's multiplier warm start, as in an uninterrupted run.
+    pub multipliers: Option<(Vec<f64>, Vec<[f64; 2]>)>,
 }
 
 impl SolidRestart {
@@ -128,7 +131,21 @@ impl SolidRestart {
                 step_name(ck.steps.len())
             )));
         }
+        // λ_n with λ_t in the row frames: both, finite, or no warm start.
+        let multipliers = match (ck.multipliers, ck.multipliers_t) {
+            (Some(n), Some(t)) => {
+                if !n.iter().chain(t.iter().flatten()).all(|v| v.is_finite()) {
+                    return Err(fail(format!(
+                        "{shown}: /steps/{}/multipliers or multipliers_t_frame hold values that are not finite; they cannot be a warm start",
+                        step_name(ck.steps.len())
+                    )));
+                }
+                Some((n, t))
+            }
+            _ => None,
+        };
         Ok(SolidRestart {
+            multipliers,
             path: path.to_path_buf(),
             steps_done: ck.steps.len(),
             displacement: u,

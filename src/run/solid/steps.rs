@@ -77,7 +77,10 @@ pub fn solve_solid(
         (r.displacement.clone(), active)
     });
     // The last answer's λ_n and λ_t per contact row (frictional steps).
-    let mut lambda_prev: Option<RowMultipliers> = None;
+    let mut lambda_prev: Option<RowMultipliers> = run
+        .restart
+        .and_then(|r| r.multipliers.clone())
+        .map(|(normal, tangential)| RowMultipliers { normal, tangential });
     let mut last = None;
     // The fields of `[output] reference_step` once it is solved (or read
     // from the checkpoint a restart continues).
