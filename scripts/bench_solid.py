@@ -14,7 +14,7 @@ model and runs, each under /usr/bin/time -f %M (peak RSS):
   * `signorini limit` (one Cholesky of C; skipped above --cholesky-max DOFs),
   * `signorini limit --path iterative` (one AMG-PCG solve of the iterative path's operator),
   * `signorini solve --ssn-path iterative` and, up to --cholesky-max, `signorini solve`
-    (the default path: direct below ssn::ITERATIVE_3D_FROM = 200 k unknowns, iterative
+    (the default path: direct below ssn::ITERATIVE_3D_FROM = 100 k unknowns, iterative
     from there; the table of BENCHMARKS.md "3D contact: speed" was measured with a binary
     whose threshold was 400 k, so its "solve direct" column is the direct path throughout),
   * FEniCSx (scripts/bench_fenicsx3d.py under /usr/bin/python3): the linear elasticity of
@@ -41,7 +41,7 @@ GEO = ROOT / "tests" / "data" / "solid_contact"
 
 # family → size label → the .geo's size parameter (measured DOFs in BENCHMARKS.md)
 SIZES = {
-    "hertz": {"5k": 0.02, "50k": 0.008, "160k": 0.005, "300k": 0.004, "1m": 0.0027},
+    "hertz": {"5k": 0.02, "50k": 0.008, "160k": 0.005, "300k": 0.004, "1m": 0.0027, "3m": 0.00187},
     "stack": {"5k": 0.11, "50k": 0.05, "300k": 0.028, "1m": 0.019},
 }
 PARAM = {"hertz": "hc", "stack": "h"}

@@ -114,8 +114,10 @@ impl Method for SsnMethod {
 }
 
 /// Unknowns from which `ssn_path = "auto"` takes the iterative path on a
-/// solid (3D) model (docs/methods.md §7.2, "The default path in 3D").
-pub const ITERATIVE_3D_FROM: usize = 200_000;
+/// solid (3D) model (docs/methods.md §7.2, "The default path in 3D"):
+/// with rough steps Hertz at 98 k unknowns ties (8.8 s either way, 0.58
+/// against 1.54 GB), at 163 k the iterative path is 1.7× faster.
+pub const ITERATIVE_3D_FROM: usize = 100_000;
 
 /// `ssn_path = "auto"` on a frictionless model whose near-null space holds
 /// the six rigid motions of 3D elasticity and that has at least
