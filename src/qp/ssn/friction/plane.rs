@@ -860,11 +860,11 @@ impl Iterative for State<'_> {
             let key = pattern(&n_set, &tang);
             let seen = key != pattern(&self.in_n, &self.tang) && self.visited.contains(&key);
             self.repeats += usize::from(seen);
-            // The glued solve is a start: a pattern met again after one
-            // single change (below) ends it, where a row at the contact
-            // zone's edge flipped until DIRECT_STALL (Cattaneo hc 0.0075:
-            // ten steps, 0.7 s; docs/methods.md §12.3).
-            if seen && (self.coulomb.is_some() || self.glued && self.repeats > 1) {
+            // The glued solve is a start: a pattern met again ends it,
+            // where a row at the contact zone's edge flipped until
+            // DIRECT_STALL (Cattaneo hc 0.0075: ten steps, 0.7 s; then
+            // three with one single change before the end; docs/methods.md §12.3).
+            if seen && (self.coulomb.is_some() || self.glued && self.repeats > 0) {
                 // The direct Coulomb iteration flips a row at the stick
                 // zone's border as s moves with λ_n: the shared loop's
                 // Tresca problems settle it (each step here is a factor).
@@ -963,7 +963,10 @@ impl Iterative for State<'_> {
                         rec.residual
                     );
                 }
-                if same && (rec.residual <= self.tol || self.floor.1 >= FLOOR_STEPS) {
+                // The glued start ends when its sets repeat: it is a start,
+                // and the same sets give the same solve (the stack at
+                // h = 0.05 spent 3 more steps proving its floor).
+                if same && (rec.residual <= self.tol || self.floor.1 >= FLOOR_STEPS || self.glued) {
                     Step::Done(Status::Converged, rec)
                 } else {
                     Step::Continue(rec)
