@@ -272,8 +272,12 @@ fn a_tol_below_the_rounding_floor_ends_at_the_floor() {
             "{name}: {usual_it} Newton steps at tol 1e-10"
         );
         assert_eq!(tight["kkt"]["certified"], Value::Bool(true), "{tight}");
+        // Coulomb's glued start ends as soon as its sets repeat, without
+        // the floor's three steps (docs/methods.md §12.3): 8 Newton steps,
+        // 11 before; Tresca (no glued start) 10.
         let it = tight["iterations"].as_u64().unwrap();
-        assert!(it <= 20, "{name}: {it} Newton steps at tol 1e-15");
+        let most = if name == "coulomb" { 8 } else { 20 };
+        assert!(it <= most, "{name}: {it} Newton steps at tol 1e-15");
         let (a, b) = (
             &tight["contact"]["interface"],
             &usual["contact"]["interface"],
