@@ -62,6 +62,15 @@ fn run(dir: &Path, toml: &str, args: &[&str]) -> (i32, String, PathBuf) {
     (o.status.code().unwrap_or(-1), text, path)
 }
 
+/// `signorini solve TOML ARGS…` as [`run`], asserting exit 0: its output.
+fn solve_ok(dir: &Path, toml: &str, args: &[&str]) -> String {
+    let mut a = vec!["solve"];
+    a.extend_from_slice(args);
+    let (code, text, _) = run(dir, toml, &a);
+    assert_eq!(code, 0, "{args:?}: {text}");
+    text
+}
+
 fn json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
@@ -238,13 +247,7 @@ fn a_3d_run_continues_from_its_checkpoint_bit_for_bit() {
     let toml = stack_toml(STEPS, -P);
     let dir = |d: &str| tmp.path().join(d).to_str().unwrap().to_string();
     let (full, part, other) = (dir("full"), dir("part"), dir("other"));
-    let solve = |args: &[&str]| {
-        let mut a = vec!["solve"];
-        a.extend_from_slice(args);
-        let (code, text, _) = run(tmp.path(), &toml, &a);
-        assert_eq!(code, 0, "{args:?}: {text}");
-        text
-    };
+    let solve = |args: &[&str]| solve_ok(tmp.path(), &toml, args);
     solve(&["--out", &full]);
     solve(&["--out", &part, "--max-steps", "2"]);
     let h5 = format!("{part}/stack.h5");
@@ -299,13 +302,7 @@ fn a_frictional_3d_run_continues_from_its_checkpoint_bit_for_bit() {
     let toml = common::solid_stack_toml(&msh, contact, -P, STEPS).replace("nu = 0.25", "nu = 0.33");
     let dir = |d: &str| tmp.path().join(d).to_str().unwrap().to_string();
     let (full, part) = (dir("full"), dir("part"));
-    let solve = |args: &[&str]| {
-        let mut a = vec!["solve"];
-        a.extend_from_slice(args);
-        let (code, text, _) = run(tmp.path(), &toml, &a);
-        assert_eq!(code, 0, "{args:?}: {text}");
-        text
-    };
+    let solve = |args: &[&str]| solve_ok(tmp.path(), &toml, args);
     let text = solve(&["--out", &full]);
     assert!(text.contains("slip;"), "{text}");
     solve(&["--out", &part, "--max-steps", "1"]);
