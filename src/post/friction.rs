@@ -57,31 +57,40 @@ pub fn friction_output(model: &Model, res: &QpResult) -> Option<FrictionOutput> 
         // A mortar row on a line of symmetry has no tangential row (bound 0):
         // the line holds its slave point, so it sticks (docs/methods.md §9).
         let held = on_symmetry_line(model, r);
-        out.state[r] = row_state(res.lambda[qi], lt.abs(), s[qi], active, held);
-        match out.state[r] {
-            1 => out.stick_count += 1,
-            2 => out.slip_count += 1,
-            _ => {}
+        let state = row_state(res.lambda[qi], lt.abs(), s[qi], active, held);
+        out.state[r] = state as u8;
+        match state {
+            RowState::Stick => out.stick_count += 1,
+            RowState::Slip => out.slip_count += 1,
+            RowState::Open => {}
         }
     }
     Some(out)
 }
 
-/// The state of one frictional row: 0 open, 1 stick, 2 slip
-/// (docs/problem-format.md §6). A row is in contact when it carries a
+/// The state of a frictional row, written as its number (u8) in the
+/// outputs (docs/problem-format.md §6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RowState {
+    Open = 0,
+    Stick = 1,
+    Slip = 2,
+}
+
+/// The state of one frictional row. A row is in contact when it carries a
 /// normal force, or is active and carries a tangential one: a row without
 /// any force is open whatever a method's active set says (mprgp keeps a
 /// closed gap at zero load active, ssn does not, and with s = μ·0 = 0 every
 /// such row read "slip" under one and "open" under the other). In contact,
 /// it slips when ‖λ_t‖ ≥ (1 − STICK_MARGIN)·s and is not `held` (a row
 /// whose tangential motion a symmetry plane or line fixes).
-pub fn row_state(lambda_n: f64, lt_norm: f64, s: f64, active: bool, held: bool) -> u8 {
+pub fn row_state(lambda_n: f64, lt_norm: f64, s: f64, active: bool, held: bool) -> RowState {
     let in_contact = lambda_n > 0.0 || active && lt_norm > 0.0;
     if !in_contact {
-        0
+        RowState::Open
     } else if !held && lt_norm >= (1.0 - STICK_MARGIN) * s {
-        2
+        RowState::Slip
     } else {
-        1
+        RowState::Stick
     }
 }

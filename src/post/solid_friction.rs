@@ -6,7 +6,7 @@
 use crate::fem::contact3d::friction::frames;
 use crate::fem::solid::SolidModel;
 use crate::output::SolidContactOutput;
-use crate::post::friction::row_state;
+use crate::post::friction::{row_state, RowState};
 use crate::qp::{tangential_norm, QpResult};
 
 /// a·t1 + b·t2.
@@ -70,17 +70,18 @@ pub fn solid_friction_output(
         c.slip[r] = combine(t, v[2 * qi], v[2 * qi + 1]);
         let active = res.active.get(qi).copied().unwrap_or(false);
         let k = &mut counts[row.interface as usize];
-        c.friction_state[r] = row_state(
+        let state = row_state(
             res.lambda[qi],
             tangential_norm(&[l1, l2]),
             s[qi],
             active,
             false,
         );
-        match c.friction_state[r] {
-            1 => k.0 += 1,
-            2 => k.1 += 1,
-            _ => {}
+        c.friction_state[r] = state as u8;
+        match state {
+            RowState::Stick => k.0 += 1,
+            RowState::Slip => k.1 += 1,
+            RowState::Open => {}
         }
     }
     counts

@@ -74,6 +74,16 @@ pub struct NearKernel {
     pub modes: Vec<Vec<f64>>,
 }
 
+impl QpProblem {
+    /// A near-null space of the six rigid motions of 3D elasticity: the
+    /// iterative ssn path's settings for solid models are chosen by this,
+    /// so that plane models (three motions) keep theirs and their bits
+    /// (docs/methods.md §7.2).
+    pub fn has_solid_modes(&self) -> bool {
+        self.near.as_ref().is_some_and(|nk| nk.modes.len() >= 6)
+    }
+}
+
 /// The slip bound of each tangential row (docs/methods.md §9.1).
 #[derive(Debug, Clone, PartialEq)]
 pub enum SlipBound {

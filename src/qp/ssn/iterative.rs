@@ -200,7 +200,7 @@ impl<'a> State<'a> {
         let cmax = norm_inf(diag);
         let rho = rho_rows(orig, diag, cmax, RHO_SOLID);
         let cpar = stiffness_scale(diag);
-        let solid = orig.near.as_ref().is_some_and(|nk| nk.modes.len() >= 6);
+        let solid = orig.has_solid_modes();
         let ar = (0..m)
             .map(|i| r.iter().map(|rl| qp.a.row_dot(i, rl)).collect())
             .collect();
@@ -567,21 +567,21 @@ impl Iterative for State<'_> {
 }
 
 /// ρ of every row: RHO_ITERATIVE · max diag C; on a solid model (six
-/// near-null modes) `solid` · max of diag C over the row's own unknowns instead
+/// near-null modes) `factor` · max of diag C over the row's own unknowns instead
 /// (docs/methods.md §7.2): diag C scales as E·h in 3D, so the largest
 /// diagonal, on the coarsest elements, would make the rows of a fine
 /// contact zone penalty springs (as E alone in 2D, where ρ stays global so
 /// that plane models keep their bits). `diag` in the order of `qp`.
-pub(super) fn rho_rows(qp: &QpProblem, diag: &[f64], cmax: f64, solid: f64) -> Vec<f64> {
+pub(super) fn rho_rows(qp: &QpProblem, diag: &[f64], cmax: f64, factor: f64) -> Vec<f64> {
     let global = RHO_ITERATIVE * if cmax > 0.0 { cmax } else { 1.0 };
-    if qp.near.as_ref().is_none_or(|nk| nk.modes.len() < 6) {
+    if !qp.has_solid_modes() {
         return vec![global; qp.m()];
     }
     (0..qp.m())
         .map(|j| {
             let c = qp.a.row(j).0.iter().map(|&k| diag[k]).fold(0.0, f64::max);
             if c > 0.0 {
-                solid * c
+                factor * c
             } else {
                 global
             }

@@ -127,7 +127,7 @@ pub const ITERATIVE_3D_FROM: usize = 100_000;
 fn iterative_by_default(qp: &QpProblem, ctx: &Context) -> bool {
     ctx.settings.ssn.path == SsnPath::Auto
         && qp.friction.is_none()
-        && qp.near.as_ref().is_some_and(|nk| nk.modes.len() >= 6)
+        && qp.has_solid_modes()
         && qp.n() >= ITERATIVE_3D_FROM
 }
 

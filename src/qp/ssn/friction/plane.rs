@@ -212,7 +212,6 @@ impl PlaneTresca<'_, '_> {
         st.visited.clear();
         st.best = (f64::INFINITY, 0);
         st.floor = (f64::INFINITY, 0);
-        st.repeats = 0;
         let mut exec = self.ctx.executor("ssn");
         exec.max_iter = exec.max_iter.saturating_sub(self.steps);
         let inner0 = st.inner;
@@ -277,8 +276,6 @@ struct State<'a> {
     best: (f64, usize),
     /// The last residual and the steps in a row at it ([`FLOOR_STEPS`]).
     floor: (f64, usize),
-    /// Steps of this solve whose predicted pattern was seen before.
-    repeats: usize,
     error: Option<QpError>,
     /// The dual-space solves (None: the sparse path, K = C + ρBᵀB).
     dual: Option<Dual>,
@@ -337,7 +334,6 @@ impl<'a> State<'a> {
             inner: 0,
             best: (f64::INFINITY, 0),
             floor: (f64::INFINITY, 0),
-            repeats: 0,
             error: None,
             x_floor: crate::qp::kkt::length_floor(qp),
             dual: None,
@@ -859,12 +855,11 @@ impl Iterative for State<'_> {
             let (n_set, tang) = self.predict();
             let key = pattern(&n_set, &tang);
             let seen = key != pattern(&self.in_n, &self.tang) && self.visited.contains(&key);
-            self.repeats += usize::from(seen);
             // The glued solve is a start: a pattern met again ends it,
             // where a row at the contact zone's edge flipped until
             // DIRECT_STALL (Cattaneo hc 0.0075: ten steps, 0.7 s; then
             // three with one single change before the end; docs/methods.md §12.3).
-            if seen && (self.coulomb.is_some() || self.glued && self.repeats > 0) {
+            if seen && (self.coulomb.is_some() || self.glued) {
                 // The direct Coulomb iteration flips a row at the stick
                 // zone's border as s moves with λ_n: the shared loop's
                 // Tresca problems settle it (each step here is a factor).
