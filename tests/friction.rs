@@ -846,3 +846,36 @@ friction = 0.3
         r.solution.iterations
     );
 }
+
+/// `ssn_path = "iterative"` (AMG-PCG on K) solves friction on solid
+/// models' discs only (docs/methods.md §12.3); on a plane model's lines it
+/// is refused by name, not solved as if frictionless, and the same model
+/// on `ssn_path = "auto"` is certified.
+#[test]
+fn plane_friction_on_the_iterative_path_is_refused_by_name() {
+    let d = tempfile::tempdir().unwrap();
+    let msh = punch_mesh(d.path(), 0.1);
+    let p = model_file(d.path(), "punch", &msh, PUNCH);
+    let prep = run::prepare(&p, false).unwrap_or_else(|e| panic!("{e}"));
+    let attempt = |path: &str| {
+        let flags = SolverSection {
+            method: Some("ssn".parse().unwrap()),
+            ssn_path: Some(path.parse().unwrap()),
+            ..Default::default()
+        };
+        let (m, opts) = run::options(&prep.problem, &flags).unwrap();
+        run::Run::new(&prep, m, &opts).solve(&mut [], None)
+    };
+    match attempt("iterative") {
+        Ok(out) => panic!("solved on the iterative path: certified {}", out.certified),
+        Err(e) => {
+            let text = format!("{e:#}");
+            assert!(
+                text.contains("solid models") && text.contains("§12.3"),
+                "{text}"
+            );
+        }
+    }
+    let out = attempt("auto").unwrap_or_else(|e| panic!("{e}"));
+    assert!(out.certified);
+}

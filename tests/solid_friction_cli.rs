@@ -180,7 +180,9 @@ fn mprgp_pushed_past_a_tresca_bound_is_refused_as_unbounded() {
 /// glued solve ran its whole cycling budget (198 Newton steps here, 2m +
 /// 100) before Coulomb's loop began. Now the scale is floored as the
 /// certificate's is (docs/methods.md §8.4) and it takes a few steps; the
-/// sparse path (`--ssn-path augmented`) gives the same interface forces.
+/// sparse path (`--ssn-path augmented`) and the multigrid one
+/// (`--ssn-path iterative`, AMG-PCG on K, §12.3) give the same interface
+/// forces and the same stick zone.
 #[test]
 fn the_dual_path_does_not_cycle_on_a_glued_conforming_interface() {
     let dir = tempfile::tempdir().unwrap();
@@ -211,7 +213,8 @@ fn the_dual_path_does_not_cycle_on_a_glued_conforming_interface() {
     };
     let dual = solve("schur", "dual");
     let sparse = solve("augmented", "sparse");
-    for j in [&dual, &sparse] {
+    let multigrid = solve("iterative", "multigrid");
+    for j in [&dual, &sparse, &multigrid] {
         assert_eq!(j["kkt"]["certified"], Value::Bool(true), "{j}");
     }
     let it = dual["iterations"].as_u64().unwrap();
@@ -228,11 +231,14 @@ fn the_dual_path_does_not_cycle_on_a_glued_conforming_interface() {
             .map(|v| v.as_f64().unwrap())
             .collect()
     };
-    let (a, b) = (force(&dual), force(&sparse));
-    for k in 0..3 {
-        assert!((a[k] - b[k]).abs() <= 1e-7 * a[2].abs(), "{a:?} vs {b:?}");
+    let a = force(&dual);
+    for other in [&sparse, &multigrid] {
+        let b = force(other);
+        for k in 0..3 {
+            assert!((a[k] - b[k]).abs() <= 1e-7 * a[2].abs(), "{a:?} vs {b:?}");
+        }
+        assert_eq!(c["stick"], other["contact"]["interface"]["stick"]);
     }
-    assert_eq!(c["stick"], sparse["contact"]["interface"]["stick"]);
 }
 
 /// The same stack under Tresca (s = 2·10⁷ Pa, both zones) and Coulomb, at

@@ -103,11 +103,11 @@ impl Method for SsnMethod {
         }
     }
     fn solve(&self, qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError> {
-        if ctx.settings.ssn.path == SsnPath::Iterative || iterative_by_default(qp, ctx) {
-            return iterative::solve(qp, ctx);
-        }
         if qp.friction.is_some() {
             return friction::solve(qp, ctx);
+        }
+        if ctx.settings.ssn.path == SsnPath::Iterative || iterative_by_default(qp, ctx) {
+            return iterative::solve(qp, ctx);
         }
         solve(qp, ctx)
     }
@@ -125,10 +125,14 @@ pub const ITERATIVE_3D_FROM: usize = 100_000;
 /// sparse factor from there on (docs/methods.md §7.2). Plane models (three
 /// motions) never take it.
 fn iterative_by_default(qp: &QpProblem, ctx: &Context) -> bool {
-    ctx.settings.ssn.path == SsnPath::Auto
-        && qp.friction.is_none()
-        && qp.has_solid_modes()
-        && qp.n() >= ITERATIVE_3D_FROM
+    ctx.settings.ssn.path == SsnPath::Auto && qp.friction.is_none() && iterative_by_size(qp)
+}
+
+/// A solid (3D) model of at least [`ITERATIVE_3D_FROM`] unknowns, where
+/// `ssn_path = "auto"` tries the multigrid path first, with or without
+/// friction (docs/methods.md §7.2, §12.3).
+pub(crate) fn iterative_by_size(qp: &QpProblem) -> bool {
+    qp.has_solid_modes() && qp.n() >= ITERATIVE_3D_FROM
 }
 
 /// Solve `qp` by the semismooth Newton (primal–dual active set) method.

@@ -88,6 +88,13 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
     if fr.frame == crate::qp::Frame::Plane {
         return plane::solve(qp, fr, ctx);
     }
+    if ctx.settings.ssn.path == SsnPath::Iterative {
+        return Err(QpError::Unsupported(
+            "ssn_path = \"iterative\" solves friction on solid models (discs) only; \
+             use ssn_path = \"auto\" for plane friction (docs/methods.md §12.3)"
+                .into(),
+        ));
+    }
     let r = orthonormal_kernel(&qp.c, &qp.kernel)?;
     let dual = match ctx.settings.ssn.path {
         SsnPath::Auto | SsnPath::Schur => Dual::new(qp, fr, &r, ctx.ws)?,

@@ -100,15 +100,45 @@ pub(super) fn solve(qp: &QpProblem, fr: &Friction, ctx: &mut Context) -> Result<
             qp.m()
         )));
     }
+    let by_size = ctx.settings.ssn.path == SsnPath::Auto && super::super::iterative_by_size(qp);
+    if ctx.settings.ssn.path == SsnPath::Iterative || by_size {
+        match run(qp, fr, ctx, true) {
+            Err(QpError::Unsupported(why)) if by_size => {
+                log::info!(
+                    "ssn: discs: the multigrid path gave up ({why}); the sparse factor takes over"
+                );
+            }
+            out => return out,
+        }
+    }
+    run(qp, fr, ctx, false)
+}
+
+/// One run of the fixed point on the discs: on the sparse factor (and the
+/// dual path where it applies) or, `iterative`, on AMG-PCG
+/// (docs/methods.md §12.3, "The iterative path").
+fn run(
+    qp: &QpProblem,
+    fr: &Friction,
+    ctx: &mut Context,
+    iterative: bool,
+) -> Result<Output, QpError> {
     let r = crate::linalg::kernel::orthonormal_kernel(&qp.c, &qp.kernel)?;
     let dual = match ctx.settings.ssn.path {
-        SsnPath::Auto | SsnPath::Schur => Dual::new(qp, fr, &r, ctx.ws)?,
+        SsnPath::Auto | SsnPath::Schur if !iterative => Dual::new(qp, fr, &r, ctx.ws)?,
         path => {
-            log::debug!("ssn: discs: the sparse path (ssn_path = {path:?})");
+            log::debug!("ssn: discs: the sparse path (ssn_path = {path:?}, multigrid {iterative})");
             None
         }
     };
     let mut st = State::new(qp, fr, r, ctx);
+    if iterative {
+        st.iter = Some(plane_k::IterK::default());
+        st.rho
+            .iter_mut()
+            .flatten()
+            .for_each(|r| *r *= plane_k::RHO_ITERATIVE);
+    }
     st.hold_free_bodies();
     if let Some(d) = dual {
         st.inner += d.solves;
@@ -116,7 +146,17 @@ pub(super) fn solve(qp: &QpProblem, fr: &Friction, ctx: &mut Context) -> Result<
     }
     let mut step = PlaneTresca { st, ctx, steps: 0 };
     let proven = coulomb::certificate(qp);
-    coulomb::solve(fr, &mut step, "ssn", &proven, ctx.settings.kkt_target)
+    let out = coulomb::solve(fr, &mut step, "ssn", &proven, ctx.settings.kkt_target);
+    if let Some(it) = &step.st.iter {
+        log::debug!(
+            "ssn: discs: {} multigrid hierarchies ({} updates, {:.3} s), {} CG steps",
+            it.builds,
+            it.updates,
+            it.t_setup,
+            it.cg_steps
+        );
+    }
+    out
 }
 
 struct PlaneTresca<'c, 'a> {
@@ -279,6 +319,8 @@ struct State<'a> {
     error: Option<QpError>,
     /// The dual-space solves (None: the sparse path, K = C + ρBᵀB).
     dual: Option<Dual>,
+    /// K solved by multigrid-preconditioned CG (ssn_path = "iterative").
+    iter: Option<plane_k::IterK>,
     /// The multipliers on B = [A; T] and α of the last dual-space solve.
     mu: Vec<f64>,
     alpha: Vec<f64>,
@@ -337,6 +379,7 @@ impl<'a> State<'a> {
             error: None,
             x_floor: crate::qp::kkt::length_floor(qp),
             dual: None,
+            iter: None,
             mu: vec![],
             alpha: vec![],
             x_stale: false,
@@ -646,7 +689,7 @@ impl<'a> State<'a> {
     /// it ends the solve (unbounded, or a breakdown).
     fn solve_set(&mut self) -> Result<Option<Status>, QpError> {
         let qp = self.qp;
-        let (n, m) = (qp.n(), qp.m());
+        let m = qp.m();
         let rows = self.brows(&self.in_n, &self.tang);
         // d' = d − Σ_slip sᵢ T_iᵀ eᵢ.
         let mut dp = qp.d.clone();
@@ -679,9 +722,7 @@ impl<'a> State<'a> {
         if free.is_empty() && self.solve_set_dual(&rows, &known) {
             return Ok(None);
         }
-        let kmat = self.k_matrix(&rows);
-        let fac = self.ws.cholesky(&kmat, &free)?;
-        let mut mu: Vec<f64> = rows
+        let mu0: Vec<f64> = rows
             .iter()
             .map(|b| match b.of {
                 _ if b.spring.is_some() => 0.0,
@@ -690,45 +731,7 @@ impl<'a> State<'a> {
                 Of::Across(_) => 0.0,
             })
             .collect();
-        let bscale = rows.iter().fold(0.0f64, |a, b| a.max(b.rhs.abs()));
-        let mut x = vec![0.0; n];
-        let (mut last, mut stalled) = (f64::INFINITY, 0);
-        for _ in 0..AL_MAX {
-            let mut rhs = dp.clone();
-            for (b, mk) in rows.iter().zip(&mu) {
-                let w = match b.spring {
-                    Some(k_s) => k_s * b.rhs,
-                    None => b.rho * b.rhs - mk,
-                };
-                for (&j, &a) in b.cols.iter().zip(&b.vals) {
-                    rhs[j] += w * a;
-                }
-            }
-            x = fac.solve(&rhs);
-            self.inner += 1;
-            let mut res = 0.0f64;
-            for (b, mk) in rows.iter().zip(mu.iter_mut()) {
-                let bx: f64 = b.cols.iter().zip(&b.vals).map(|(&j, &a)| a * x[j]).sum();
-                match b.spring {
-                    // The spring's force λ⊥ = (w x − r)/κ.
-                    Some(k_s) => *mk = k_s * (bx - b.rhs),
-                    None => {
-                        *mk += b.rho * (bx - b.rhs);
-                        res = res.max((bx - b.rhs).abs());
-                    }
-                }
-            }
-            let xs = norm_inf(&x).max(bscale).max(f64::MIN_POSITIVE);
-            stalled = if res > 0.5 * last * xs {
-                stalled + 1
-            } else {
-                0
-            };
-            last = res / xs;
-            if res <= 1e-14 * xs || stalled >= AL_STALL {
-                break;
-            }
-        }
+        let (x, mu) = self.al_solve(&rows, &dp, &free, mu0)?;
         if !x.iter().all(|v| v.is_finite()) {
             return Ok(Some(Status::Failed(Failure::Breakdown(
                 "the KKT solve of a working set gave a non-finite iterate".into(),
@@ -982,6 +985,8 @@ impl Iterative for State<'_> {
 
 #[path = "plane_dual.rs"]
 mod dual_space;
+#[path = "plane_k.rs"]
+mod plane_k;
 
 #[cfg(test)]
 #[path = "plane_tests.rs"]
