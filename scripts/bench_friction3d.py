@@ -12,11 +12,13 @@ Families (meshed with Gmsh, `-3 -order 1 -format msh22`, cached in --work):
   * cattaneo: the Cattaneo–Mindlin sphere on a block of verification/cattaneo3d (its .geo
     and .toml: pressed by a prescribed displacement, then sheared, mu = 0.5, mortar-free
     node-to-surface rows), at hc = 0.03, 0.015 (the verification's coarse mesh) and 0.0075
-    (its fine one);
+    (its fine one), and 0.005 (size xl, 163 k DOFs: past ITERATIVE_3D_FROM, where ssn_path
+    = "auto" solves on AMG-PCG);
   * stack: the quarter model of two cubes of tests/data/solid_contact/stack.geo (the upper
     one held by the contact alone, 1e8 Pa on its top, aluminium on steel, so the Poisson
     expansions differ and the interface has stick and slip zones), Coulomb mu = 0.3, at
-    h = 0.11, 0.07, 0.05.
+    h = 0.11, 0.07, 0.05 (and 0.035, size xl, 119 k DOFs; 0.025, size xxl, 301 k DOFs).
+A size a family does not define is skipped with a message.
 Each model runs `signorini solve -q` twice, under /usr/bin/time -f %M: with its friction
 and with the friction key removed (the same mesh and loads). Wall times are medians of
 --repeats (runs longer than --long once). The ratio is the two medians' ratio, measured in
@@ -37,8 +39,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_solid import ROOT, TOML, fmt, log, repeated, timed  # noqa: E402
 
 SIZES = {
-    "cattaneo": {"s": 0.03, "m": 0.015, "l": 0.0075},
-    "stack": {"s": 0.11, "m": 0.07, "l": 0.05},
+    "cattaneo": {"s": 0.03, "m": 0.015, "l": 0.0075, "xl": 0.005},
+    "stack": {"s": 0.11, "m": 0.07, "l": 0.05, "xl": 0.035, "xxl": 0.025},
 }
 GEO = {
     "cattaneo": (ROOT / "verification" / "cattaneo3d" / "cattaneo3d.geo", "hc"),
@@ -143,6 +145,9 @@ def main(argv=None) -> int:
     rows = []
     for fam in [f for f in args.families.split(",") if f]:
         for size in [s for s in args.sizes.split(",") if s]:
+            if size not in SIZES[fam]:
+                log(f"{fam}: no size {size} (sizes {', '.join(SIZES[fam])})")
+                continue
             rows.append(run_size(args, fam, size, work))
             Path(args.out).write_text(table(rows, cmdline))
             Path(args.out).with_suffix(".json").write_text(json.dumps(rows, indent=1))

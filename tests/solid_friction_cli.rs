@@ -116,6 +116,24 @@ fn a_soft_cube_held_by_friction_carries_a_tangential_load_below_mu_n() {
     }
     assert!(f[0].hypot(f[1]) <= 0.3 * f[2] * (1.0 + 1e-9));
 
+    // The multigrid path (docs/methods.md §12.3), on the body that friction
+    // alone holds: certified, the same interface force.
+    let multigrid = dir.path().join("multigrid");
+    std::fs::create_dir(&multigrid).unwrap();
+    let (code, text) = run(&multigrid, &cube(pt), &["--ssn-path", "iterative"]);
+    assert_eq!(code, 0, "{text}");
+    assert!(text.contains("certified"), "{text}");
+    let json: Value =
+        serde_json::from_str(&std::fs::read_to_string(multigrid.join("out/cube.json")).unwrap())
+            .unwrap();
+    let g = &json["contact"]["upper_bottom/lower_top"]["force"];
+    for k in 0..3 {
+        assert!(
+            (g[k].as_f64().unwrap() - f[k]).abs() <= 1e-6 * 1.0e6,
+            "component {k}: {g} vs {f:?}"
+        );
+    }
+
     // The footprint names the stick/slip border only where both zones
     // exist (with every row slipping it would trace the open zone's edge).
     let svg = dir.path().join("fp.svg");

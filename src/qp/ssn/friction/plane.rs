@@ -100,37 +100,45 @@ pub(super) fn solve(qp: &QpProblem, fr: &Friction, ctx: &mut Context) -> Result<
             qp.m()
         )));
     }
-    let by_size = ctx.settings.ssn.path == SsnPath::Auto && super::super::iterative_by_size(qp);
-    if ctx.settings.ssn.path == SsnPath::Iterative || by_size {
-        match run(qp, fr, ctx, true) {
+    let r = crate::linalg::kernel::orthonormal_kernel(&qp.c, &qp.kernel)?;
+    let path = ctx.settings.ssn.path;
+    // `auto` takes the multigrid on a solid model of ITERATIVE_3D_FROM
+    // unknowns or more, as without friction (docs/methods.md §12.3).
+    let by_size = path == SsnPath::Auto && super::super::iterative_by_size(qp);
+    if path == SsnPath::Iterative || by_size {
+        match run(qp, fr, r.clone(), None, ctx, true) {
             Err(QpError::Unsupported(why)) if by_size => {
                 log::info!(
-                    "ssn: discs: the multigrid path gave up ({why}); the sparse factor takes over"
+                    "ssn: discs: the multigrid path gave up ({why}); the direct paths take over"
                 );
             }
             out => return out,
         }
     }
-    run(qp, fr, ctx, false)
+    let dual = match path {
+        SsnPath::Auto | SsnPath::Schur => Dual::new(qp, fr, &r, ctx.ws)?,
+        _ => None,
+    };
+    run(qp, fr, r, dual, ctx, false)
 }
 
-/// One run of the fixed point on the discs: on the sparse factor (and the
-/// dual path where it applies) or, `iterative`, on AMG-PCG
-/// (docs/methods.md §12.3, "The iterative path").
+/// One run of the fixed point on the discs: on the dual path (`dual`),
+/// the sparse factor or, `iterative`, AMG-PCG (docs/methods.md §12.3,
+/// "The iterative path").
 fn run(
     qp: &QpProblem,
     fr: &Friction,
+    r: Vec<Vec<f64>>,
+    dual: Option<Dual>,
     ctx: &mut Context,
     iterative: bool,
 ) -> Result<Output, QpError> {
-    let r = crate::linalg::kernel::orthonormal_kernel(&qp.c, &qp.kernel)?;
-    let dual = match ctx.settings.ssn.path {
-        SsnPath::Auto | SsnPath::Schur if !iterative => Dual::new(qp, fr, &r, ctx.ws)?,
-        path => {
-            log::debug!("ssn: discs: the sparse path (ssn_path = {path:?}, multigrid {iterative})");
-            None
-        }
-    };
+    if dual.is_none() {
+        log::debug!(
+            "ssn: discs: the sparse path (ssn_path = {:?}, multigrid {iterative})",
+            ctx.settings.ssn.path
+        );
+    }
     let mut st = State::new(qp, fr, r, ctx);
     if iterative {
         st.iter = Some(plane_k::IterK::default());
@@ -182,6 +190,7 @@ impl TrescaStep for PlaneTresca<'_, '_> {
                 }
             }
             Bound::Given(s) => {
+                st.tresca_tol = st.tresca_tol_for(s);
                 st.s = s.to_vec();
                 st.glued = false;
             }
@@ -287,6 +296,10 @@ struct State<'a> {
     /// ρ of a normal and of a tangential row of B, per contact row.
     rho: Vec<[f64; 2]>,
     tol: f64,
+    /// The residual that ends this Tresca problem: `tol`, or on the
+    /// iterative path a fraction of the bound's last change
+    /// (`State::tresca_tol_for`).
+    tresca_tol: f64,
     x: Vec<f64>,
     ln: Vec<f64>,
     /// (λ_t1, λ_t2) per contact row.
@@ -358,6 +371,7 @@ impl<'a> State<'a> {
             ct,
             rho,
             tol: ctx.settings.tol,
+            tresca_tol: ctx.settings.tol,
             x,
             ln: vec![0.0; m],
             lt: vec![0.0; 2 * m],
@@ -964,7 +978,11 @@ impl Iterative for State<'_> {
                 // The glued start ends when its sets repeat: it is a start,
                 // and the same sets give the same solve (the stack at
                 // h = 0.05 spent 3 more steps proving its floor).
-                if same && (rec.residual <= self.tol || self.floor.1 >= FLOOR_STEPS || self.glued) {
+                if same
+                    && (rec.residual <= self.tresca_tol
+                        || self.floor.1 >= FLOOR_STEPS
+                        || self.glued)
+                {
                     Step::Done(Status::Converged, rec)
                 } else {
                     Step::Continue(rec)
