@@ -1,6 +1,7 @@
 """The 3D friction cases of scripts/verify (issue 46; docs/verification_3d.md
-§7g-7i): Cattaneo-Mindlin for a sphere on a block, a block sliding on a
-plane under an oblique push, a shrink fit pushed out axially and turned.
+§7g-7i): Cattaneo-Mindlin for a sphere on a block (also on ssn's iterative
+path, case cattaneo3d_multigrid), a block sliding on a plane under an
+oblique push, a shrink fit pushed out axially and turned.
 
 Imported by scripts/verify.py, which adds `cases(V)` to its CASES; V is
 verify.py's module (its mesh, row, Failure, numpy and h5py, imported by
