@@ -568,6 +568,17 @@ fn summary(
         preconditioner: preconditioner_label(method, opts),
         ordering: match opts.settings.factor_free(method) {
             Some(why) => format!("none ({why})"),
+            // ssn_path = "auto" solves a large solid model on the multigrid
+            // (docs/methods.md §7.2, §12.3).
+            None if method == MethodId::Ssn
+                && opts.settings.ssn.path == crate::qp::settings::SsnPath::Auto
+                && crate::qp::ssn::iterative_by_size(&m.qp) =>
+            {
+                format!(
+                    "none (ssn_path = auto: the multigrid path from {} unknowns)",
+                    crate::qp::ssn::ITERATIVE_3D_FROM
+                )
+            }
             None => opts.settings.ordering.name().to_string(),
         },
         converged: res.status.converged(),
