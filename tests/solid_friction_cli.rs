@@ -339,3 +339,47 @@ fn at_zero_load_every_row_is_open_whatever_the_method() {
         }
     }
 }
+
+/// Tresca on the multigrid path (docs/methods.md §12.3): its one problem is
+/// the answer, so it is solved to `tol`, not to the Coulomb loop's inexact
+/// δ² (which ended it at a friction residual of 6·10⁻³, not certified,
+/// before). The soft cube under s = 2·10⁵ Pa slips everywhere; both paths
+/// certify it with the same interface force.
+#[test]
+fn tresca_on_the_multigrid_path_is_solved_to_tol() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = cube([1.5e5, 1.0e5]).replace("friction = 0.3", "tresca = 2.0e5");
+    assert!(text.contains("tresca = 2.0e5"), "{text}");
+    let mut forces = vec![];
+    for path in ["auto", "iterative"] {
+        let sub = dir.path().join(path);
+        std::fs::create_dir(&sub).unwrap();
+        let (code, out) = run(&sub, &text, &["--ssn-path", path]);
+        assert_eq!(code, 0, "{path}: {out}");
+        assert!(
+            out.contains("certified") && !out.contains("NOT certified"),
+            "{path}: {out}"
+        );
+        let json: Value =
+            serde_json::from_str(&std::fs::read_to_string(sub.join("out/cube.json")).unwrap())
+                .unwrap();
+        assert!(
+            json["kkt"]["friction"].as_f64().unwrap() < 1e-9,
+            "{path}: {}",
+            json["kkt"]
+        );
+        let f: Vec<f64> = json["contact"]["upper_bottom/lower_top"]["force"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        forces.push(f);
+    }
+    for k in 0..3 {
+        assert!(
+            (forces[0][k] - forces[1][k]).abs() <= 1e-6 * 1.0e6,
+            "{forces:?}"
+        );
+    }
+}

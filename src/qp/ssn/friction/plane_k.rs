@@ -69,7 +69,7 @@ const OUTER_LOOSEST: f64 = 1e-2;
 
 impl State<'_> {
     /// The residual that ends the Tresca problem at bound `s`: `tol` on a
-    /// factor; on the iterative path the square of the bound's relative
+    /// factor and for Tresca friction; in the Coulomb loop on the iterative path the square of the bound's relative
     /// change δ = ‖s − s_last‖∞/‖s‖∞ (at most OUTER_LOOSEST), never below
     /// `tol`: an inexact fixed point whose error, O(δ²), stays below the
     /// next change (the fixed point gains a factor of 2–10 a step), so the
@@ -77,7 +77,8 @@ impl State<'_> {
     /// the tail stalled and Cattaneo at 163 k ended on the certificate's
     /// target (a friction residual of 9·10⁻⁷, 26 rows classed otherwise).
     pub(super) fn tresca_tol_for(&self, s: &[f64]) -> f64 {
-        if self.iter.is_none() {
+        // Tresca's one problem is the answer: no loop tightens it.
+        if self.iter.is_none() || matches!(self.fr.bound, crate::qp::SlipBound::Tresca(_)) {
             return self.tol;
         }
         let change = if self.glued || self.s.len() != s.len() {
