@@ -301,34 +301,42 @@ fn a_frictional_3d_run_continues_from_its_checkpoint_bit_for_bit() {
     // Aluminium's ν = 0.33 on steel: both stick and slip zones.
     let toml = common::solid_stack_toml(&msh, contact, -P, STEPS).replace("nu = 0.25", "nu = 0.33");
     let dir = |d: &str| tmp.path().join(d).to_str().unwrap().to_string();
-    let (full, part) = (dir("full"), dir("part"));
-    let solve = |args: &[&str]| solve_ok(tmp.path(), &toml, args);
-    let text = solve(&["--out", &full]);
-    assert!(text.contains("slip;"), "{text}");
-    solve(&["--out", &part, "--max-steps", "1"]);
-    solve(&["--out", &part, "--restart", &format!("{part}/stack.h5")]);
-    let f = hdf5::File::open(format!("{full}/stack.h5")).unwrap();
-    let g = hdf5::File::open(format!("{part}/stack.h5")).unwrap();
-    let state = |h: &hdf5::File, name: &str| -> Vec<u8> {
-        h.dataset(name).unwrap().read_raw::<u8>().unwrap()
-    };
-    for s in ["0002", "0003"] {
-        for ds in [
-            "displacement",
-            "multipliers",
-            "multipliers_t",
-            "multipliers_t_frame",
-        ] {
-            let name = format!("steps/{s}/{ds}");
-            let (a, b) = (read(&f, &name), read(&g, &name));
-            assert_eq!(a.len(), b.len(), "{name}");
-            assert!(
-                a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
-                "{name}"
-            );
+    // The direct paths, and the multigrid one (docs/methods.md §12.3): its
+    // CG starts from the step's own iterate, never from the last step's x.
+    for path in ["auto", "iterative"] {
+        let (full, part) = (dir(&format!("full_{path}")), dir(&format!("part_{path}")));
+        let solve = |args: &[&str]| {
+            let mut all = args.to_vec();
+            all.extend(["--ssn-path", path]);
+            solve_ok(tmp.path(), &toml, &all)
+        };
+        let text = solve(&["--out", &full]);
+        assert!(text.contains("slip;"), "{text}");
+        solve(&["--out", &part, "--max-steps", "1"]);
+        solve(&["--out", &part, "--restart", &format!("{part}/stack.h5")]);
+        let f = hdf5::File::open(format!("{full}/stack.h5")).unwrap();
+        let g = hdf5::File::open(format!("{part}/stack.h5")).unwrap();
+        let state = |h: &hdf5::File, name: &str| -> Vec<u8> {
+            h.dataset(name).unwrap().read_raw::<u8>().unwrap()
+        };
+        for s in ["0002", "0003"] {
+            for ds in [
+                "displacement",
+                "multipliers",
+                "multipliers_t",
+                "multipliers_t_frame",
+            ] {
+                let name = format!("steps/{s}/{ds}");
+                let (a, b) = (read(&f, &name), read(&g, &name));
+                assert_eq!(a.len(), b.len(), "{name}");
+                assert!(
+                    a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                    "{path}: {name}"
+                );
+            }
+            let name = format!("steps/{s}/state");
+            assert_eq!(state(&f, &name), state(&g, &name), "{path}: {name}");
         }
-        let name = format!("steps/{s}/state");
-        assert_eq!(state(&f, &name), state(&g, &name), "{name}");
     }
 }
 
