@@ -38,6 +38,21 @@ fn solve(path: &Path, method: &str) -> (Prepared, Option<Model>, QpResult) {
     (prep, last.model, last.result)
 }
 
+/// Every load step of `prep` by `method` on `ssn_path` (None: the default).
+fn run_path(
+    prep: &Prepared,
+    method: &str,
+    path: Option<&str>,
+) -> Result<run::Outcome, run::RunError> {
+    let flags = SolverSection {
+        method: Some(method.parse().unwrap()),
+        ssn_path: path.map(|p| p.parse().unwrap()),
+        ..Default::default()
+    };
+    let (m, opts) = run::options(&prep.problem, &flags).unwrap();
+    run::Run::new(prep, m, &opts).solve(&mut [], None)
+}
+
 /// The floating block of meshes/floating_block.msh (no support but the
 /// contact) on its foundation, under gravity g = 9.81 turned by θ: the
 /// inclined plane. Both bodies plane strain, the foundation held.
@@ -672,15 +687,8 @@ fn a_punch_held_by_friction_alone_is_solved_on_one_factor() {
     let prep = run::prepare(&p, false).unwrap_or_else(|e| panic!("{e}"));
     let mut results = vec![];
     for (method, path) in [("ssn", None), ("ssn", Some("augmented")), ("mprgp", None)] {
-        let flags = SolverSection {
-            method: Some(method.parse().unwrap()),
-            ssn_path: path.map(|p| p.parse().unwrap()),
-            ..Default::default()
-        };
-        let (m, opts) = run::options(&prep.problem, &flags).unwrap();
-        let out = run::Run::new(&prep, m, &opts)
-            .solve(&mut [], None)
-            .unwrap_or_else(|e| panic!("{method} {path:?}: {e}"));
+        let out =
+            run_path(&prep, method, path).unwrap_or_else(|e| panic!("{method} {path:?}: {e}"));
         assert!(out.certified, "{method} {path:?}: not certified");
         let r = out.last.unwrap().result;
         let s = &r.solution;
@@ -742,15 +750,8 @@ fn the_punchs_newton_count_does_not_grow_with_the_mesh() {
         let prep = run::prepare(&p, false).unwrap_or_else(|e| panic!("{e}"));
         let mut results = vec![];
         for path in [None, Some("augmented")] {
-            let flags = SolverSection {
-                method: Some("ssn".parse().unwrap()),
-                ssn_path: path.map(|p| p.parse().unwrap()),
-                ..Default::default()
-            };
-            let (m, opts) = run::options(&prep.problem, &flags).unwrap();
-            let out = run::Run::new(&prep, m, &opts)
-                .solve(&mut [], None)
-                .unwrap_or_else(|e| panic!("h = {h} {path:?}: {e}"));
+            let out =
+                run_path(&prep, "ssn", path).unwrap_or_else(|e| panic!("h = {h} {path:?}: {e}"));
             assert!(out.certified, "h = {h} {path:?}: not certified");
             results.push(out.last.unwrap().result);
         }
@@ -857,16 +858,7 @@ fn plane_friction_on_the_iterative_path_is_refused_by_name() {
     let msh = punch_mesh(d.path(), 0.1);
     let p = model_file(d.path(), "punch", &msh, PUNCH);
     let prep = run::prepare(&p, false).unwrap_or_else(|e| panic!("{e}"));
-    let attempt = |path: &str| {
-        let flags = SolverSection {
-            method: Some("ssn".parse().unwrap()),
-            ssn_path: Some(path.parse().unwrap()),
-            ..Default::default()
-        };
-        let (m, opts) = run::options(&prep.problem, &flags).unwrap();
-        run::Run::new(&prep, m, &opts).solve(&mut [], None)
-    };
-    match attempt("iterative") {
+    match run_path(&prep, "ssn", Some("iterative")) {
         Ok(out) => panic!("solved on the iterative path: certified {}", out.certified),
         Err(e) => {
             let text = format!("{e:#}");
@@ -876,6 +868,6 @@ fn plane_friction_on_the_iterative_path_is_refused_by_name() {
             );
         }
     }
-    let out = attempt("auto").unwrap_or_else(|e| panic!("{e}"));
+    let out = run_path(&prep, "ssn", Some("auto")).unwrap_or_else(|e| panic!("{e}"));
     assert!(out.certified);
 }

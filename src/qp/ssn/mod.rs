@@ -106,7 +106,8 @@ impl Method for SsnMethod {
         if qp.friction.is_some() {
             return friction::solve(qp, ctx);
         }
-        if ctx.settings.ssn.path == SsnPath::Iterative || iterative_by_default(qp, ctx) {
+        let path = ctx.settings.ssn.path;
+        if path == SsnPath::Iterative || iterative_by_default(qp, path) {
             return iterative::solve(qp, ctx);
         }
         solve(qp, ctx)
@@ -119,20 +120,13 @@ impl Method for SsnMethod {
 /// against 1.54 GB), at 163 k the iterative path is 1.7× faster.
 pub const ITERATIVE_3D_FROM: usize = 100_000;
 
-/// `ssn_path = "auto"` on a frictionless model whose near-null space holds
-/// the six rigid motions of 3D elasticity and that has at least
-/// [`ITERATIVE_3D_FROM`] unknowns: in 3D the multigrid solve beats the
-/// sparse factor from there on (docs/methods.md §7.2). Plane models (three
-/// motions) never take it.
-fn iterative_by_default(qp: &QpProblem, ctx: &Context) -> bool {
-    ctx.settings.ssn.path == SsnPath::Auto && qp.friction.is_none() && iterative_by_size(qp)
-}
-
-/// A solid (3D) model of at least [`ITERATIVE_3D_FROM`] unknowns, where
-/// `ssn_path = "auto"` tries the multigrid path first, with or without
-/// friction (docs/methods.md §7.2, §12.3).
-pub(crate) fn iterative_by_size(qp: &QpProblem) -> bool {
-    qp.has_solid_modes() && qp.n() >= ITERATIVE_3D_FROM
+/// `path` is `"auto"` and the model is solid (its near-null space holds the
+/// six rigid motions of 3D elasticity) with at least [`ITERATIVE_3D_FROM`]
+/// unknowns: the multigrid solve beats the sparse factor from there on,
+/// with or without friction (docs/methods.md §7.2, §12.3). Plane models
+/// (three motions) never take it.
+pub(crate) fn iterative_by_default(qp: &QpProblem, path: SsnPath) -> bool {
+    path == SsnPath::Auto && qp.has_solid_modes() && qp.n() >= ITERATIVE_3D_FROM
 }
 
 /// Solve `qp` by the semismooth Newton (primal–dual active set) method.

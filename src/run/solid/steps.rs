@@ -571,8 +571,7 @@ fn summary(
             // ssn_path = "auto" solves a large solid model on the multigrid
             // (docs/methods.md §7.2, §12.3).
             None if method == MethodId::Ssn
-                && opts.settings.ssn.path == crate::qp::settings::SsnPath::Auto
-                && crate::qp::ssn::iterative_by_size(&m.qp) =>
+                && crate::qp::ssn::iterative_by_default(&m.qp, opts.settings.ssn.path) =>
             {
                 format!(
                     "none (ssn_path = auto: the multigrid path from {} unknowns)",

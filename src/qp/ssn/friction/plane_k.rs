@@ -174,22 +174,11 @@ impl State<'_> {
         Ok(())
     }
 
-    /// ‖C x − d + Aᵀλ_n + Tᵀλ_t‖ over max(‖d‖, ‖C x‖) at the last iterate
-    /// (the certificate's stationarity, docs/methods.md §8.4).
+    /// ‖C x − d + Aᵀλ_n + Tᵀλ_t‖ over max(‖d‖, ‖C x‖) at the last iterate:
+    /// the certificate's stationarity (docs/methods.md §8.4; ∞ for a
+    /// non-finite iterate).
     fn balance(&self) -> f64 {
-        let qp = self.qp;
-        let cx = qp.c.mul(&self.x);
-        let mut r = qp.a.mul_t(&self.ln);
-        self.fr.t.mul_t_add(&self.lt, &mut r);
-        for ((ri, c), d) in r.iter_mut().zip(&cx).zip(&qp.d) {
-            *ri += c - d;
-        }
-        let scale = norm(&qp.d).max(norm(&cx));
-        if scale > 0.0 {
-            norm(&r) / scale
-        } else {
-            0.0
-        }
+        crate::qp::kkt::residuals_with_friction(self.qp, &self.x, &self.ln, &self.lt).stationarity
     }
 
     /// (x, μ) of the working set whose rows of B are `rows` under the
