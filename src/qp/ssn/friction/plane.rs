@@ -192,6 +192,12 @@ impl TrescaStep for PlaneTresca<'_, '_> {
                 st.tresca_tol = st.tresca_tol_for(s);
                 st.s = s.to_vec();
                 st.glued = false;
+                // A Tresca problem's first solve starts from the coarse
+                // levels' kinds (docs/methods.md §12.3).
+                if !st.solved {
+                    st.normal_start();
+                    st.coarse_start(None);
+                }
             }
         }
         st.coulomb = None;
@@ -203,7 +209,9 @@ impl TrescaStep for PlaneTresca<'_, '_> {
     fn coulomb_first(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
         let st = &mut self.st;
         st.dual.as_ref()?;
-        let l = st.warm.clone()?;
+        let Some(l) = st.warm.clone() else {
+            return self.coarse_first(mu);
+        };
         let saved = (st.x.clone(), st.ax.clone(), st.tx.clone(), st.tang.clone());
         st.in_n = l.normal.iter().map(|&v| v > 0.0).collect();
         st.ln = l.normal;
@@ -253,6 +261,41 @@ impl TrescaStep for PlaneTresca<'_, '_> {
 }
 
 impl PlaneTresca<'_, '_> {
+    /// The first solve's start on the dual path: the direct iteration from
+    /// the coarse levels' kinds (docs/methods.md §12.3), before any glued
+    /// solve; not settled, the state is put back and the glued start
+    /// follows as without it.
+    fn coarse_first(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
+        let st = &mut self.st;
+        if st.solved {
+            return None;
+        }
+        let saved = (st.x.clone(), st.ax.clone(), st.tx.clone(), st.in_n.clone());
+        st.normal_start();
+        st.coulomb = Some(mu.to_vec());
+        st.s = vec![0.0; mu.len()];
+        st.glued = false;
+        if !st.coarse_start(Some(mu)) {
+            st.coulomb = None;
+            st.glued = true;
+            st.in_n = saved.3;
+            return None;
+        }
+        let r = self.run();
+        let st = &mut self.st;
+        st.coulomb = None;
+        if !matches!(&r, Ok(t) if t.status.converged()) {
+            (st.x, st.ax, st.tx, st.in_n) = saved;
+            let m = st.qp.m();
+            (st.ln, st.lt) = (vec![0.0; m], vec![0.0; 2 * m]);
+            st.tang = vec![Disc::Stick; m];
+            st.x_stale = false;
+            st.solved = false;
+            st.glued = true;
+        }
+        Some(r)
+    }
+
     /// Newton steps from the current state until the sets settle.
     fn run(&mut self) -> Result<Tresca, QpError> {
         let st = &mut self.st;
@@ -315,6 +358,9 @@ struct State<'a> {
     /// A step of the current solve has been taken (the first takes the
     /// sets as they stand).
     started: bool,
+    /// The sets are set for the next solve's first step (the coarse
+    /// start's): it neither predicts nor starts them afresh.
+    preset: bool,
     /// The patterns (N, each row's kind) of this solve's steps.
     visited: std::collections::HashSet<(Vec<bool>, Vec<u8>)>,
     /// A solve has ended before (the next starts from its answer).
@@ -381,6 +427,7 @@ impl<'a> State<'a> {
             in_n,
             tang: vec![Disc::Stick; m],
             started: false,
+            preset: false,
             visited: std::collections::HashSet::new(),
             solved: false,
             outer: 0,
@@ -416,26 +463,8 @@ impl<'a> State<'a> {
             .collect();
         let tang = (0..m)
             .map(|i| {
-                if self.glued {
-                    return if in_n[i] { Disc::Stick } else { Disc::Free };
-                }
-                if !(self.s[i] > 0.0) {
-                    return Disc::Free;
-                }
-                let v = self.v(i);
-                let xi = [
-                    self.lt[2 * i] + self.ct[i] * v[0],
-                    self.lt[2 * i + 1] + self.ct[i] * v[1],
-                ];
-                let nx = tangential_norm(&xi);
-                if nx <= self.s[i] {
-                    Disc::Stick
-                } else {
-                    // Newton on λ_t = s ξ/‖ξ‖ at ξ: along ê the force is s;
-                    // across, λ⊥ = (s/‖ξ‖)(λ⊥ + c_t v⊥), so v⊥ = κλ⊥.
-                    let kappa = (nx - self.s[i]) / (self.s[i] * self.ct[i]);
-                    Disc::Slip([xi[0] / nx, xi[1] / nx], kappa)
-                }
+                let lt = [self.lt[2 * i], self.lt[2 * i + 1]];
+                predict_disc(in_n[i], self.glued, self.s[i], lt, self.v(i), self.ct[i])
             })
             .collect();
         (in_n, tang)
@@ -485,55 +514,55 @@ impl<'a> State<'a> {
 
     /// The rows of B for the sets (`in_n`, `tang`).
     fn brows(&self, in_n: &[bool], tang: &[Disc]) -> Vec<BRow> {
-        let qp = self.qp;
-        let t = &self.fr.t;
-        let mut rows = vec![];
-        for (i, _) in in_n.iter().enumerate().filter(|(_, n)| **n) {
-            let (c, v) = qp.a.row(i);
-            rows.push(BRow {
-                cols: c.to_vec(),
-                vals: v.to_vec(),
-                rhs: qp.g[i],
-                rho: self.rho[i][0],
-                spring: None,
-                of: Of::Normal(i),
-            });
-        }
-        for (i, d) in tang.iter().enumerate() {
-            match *d {
-                Disc::Stick => {
-                    for k in 0..2 {
-                        let (c, v) = t.row(2 * i + k);
-                        rows.push(BRow {
+        let (a, t) = (&self.qp.a, &self.fr.t);
+        set_rows(in_n, tang)
+            .into_iter()
+            .map(|of| {
+                let rhs = of_rhs(of, tang, &self.qp.g, &self.fr.t0);
+                match of {
+                    Of::Normal(i) => {
+                        let (c, v) = a.row(i);
+                        BRow {
                             cols: c.to_vec(),
                             vals: v.to_vec(),
-                            rhs: self.fr.t0[2 * i + k],
+                            rhs,
+                            rho: self.rho[i][0],
+                            spring: None,
+                            of,
+                        }
+                    }
+                    Of::Tangential(i, k) => {
+                        let (c, v) = t.row(2 * i + k);
+                        BRow {
+                            cols: c.to_vec(),
+                            vals: v.to_vec(),
+                            rhs,
                             rho: self.rho[i][1],
                             spring: None,
-                            of: Of::Tangential(i, k),
-                        });
+                            of,
+                        }
+                    }
+                    Of::Across(i) => {
+                        let Disc::Slip(e, kappa) = tang[i] else {
+                            unreachable!("set_rows: Across only for a slipping row")
+                        };
+                        let (cols, vals) = combine(t, i, [-e[1], e[0]]);
+                        // A spring 1/κ softer than the row's ρ goes into K as
+                        // it is; a stiffer one is held as a constraint (the
+                        // step is then Newton's to κ/ρ⁻¹, no worse conditioned).
+                        let k_s = 1.0 / kappa;
+                        BRow {
+                            cols,
+                            vals,
+                            rhs,
+                            rho: self.rho[i][1],
+                            spring: (k_s <= self.rho[i][1]).then_some(k_s),
+                            of,
+                        }
                     }
                 }
-                Disc::Slip(e, kappa) => {
-                    let w = [-e[1], e[0]];
-                    let (cols, vals) = combine(t, i, w);
-                    // A spring 1/κ softer than the row's ρ goes into K as
-                    // it is; a stiffer one is held as a constraint (the
-                    // step is then Newton's to κ/ρ⁻¹, no worse conditioned).
-                    let k_s = 1.0 / kappa;
-                    rows.push(BRow {
-                        cols,
-                        vals,
-                        rhs: w[0] * self.fr.t0[2 * i] + w[1] * self.fr.t0[2 * i + 1],
-                        rho: self.rho[i][1],
-                        spring: (k_s <= self.rho[i][1]).then_some(k_s),
-                        of: Of::Across(i),
-                    });
-                }
-                Disc::Free => {}
-            }
-        }
-        rows
+            })
+            .collect()
     }
 
     /// Solve the working set's equality-constrained problem; Ok(Some) when
@@ -689,6 +718,54 @@ impl<'a> State<'a> {
     }
 }
 
+/// The tangential kind a row is predicted to take (Hüeber, Stadler &
+/// Wohlmuth in 3D, docs/methods.md §12.3) from its force λ_t, slip v, bound
+/// s and c_t: glued, a row sticks exactly when it is in N (`in_n`).
+fn predict_disc(in_n: bool, glued: bool, s: f64, lt: [f64; 2], v: [f64; 2], ct: f64) -> Disc {
+    if glued {
+        return if in_n { Disc::Stick } else { Disc::Free };
+    }
+    if !(s > 0.0) {
+        return Disc::Free;
+    }
+    let xi = [lt[0] + ct * v[0], lt[1] + ct * v[1]];
+    let nx = tangential_norm(&xi);
+    if nx <= s {
+        Disc::Stick
+    } else {
+        // Newton on λ_t = s ξ/‖ξ‖ at ξ: along ê the force is s; across,
+        // λ⊥ = (s/‖ξ‖)(λ⊥ + c_t v⊥), so v⊥ = κλ⊥.
+        let kappa = (nx - s) / (s * ct);
+        Disc::Slip([xi[0] / nx, xi[1] / nx], kappa)
+    }
+}
+
+/// What the multipliers of the working set (`in_n`, `tang`) are: the
+/// normal rows in N, a sticking row's tangential pair, a slipping row's
+/// force across its direction (in this order).
+fn set_rows(in_n: &[bool], tang: &[Disc]) -> Vec<Of> {
+    let normal = (0..in_n.len()).filter(|&i| in_n[i]).map(Of::Normal);
+    let tangential = tang.iter().enumerate().flat_map(|(i, d)| match d {
+        Disc::Stick => vec![Of::Tangential(i, 0), Of::Tangential(i, 1)],
+        Disc::Slip(..) => vec![Of::Across(i)],
+        Disc::Free => vec![],
+    });
+    normal.chain(tangential).collect()
+}
+
+/// The right-hand side of the working-set row `of` with gaps `g` and
+/// tangential offsets `t0` (2 per row): g, t0, or e⊥·t0 across a slip.
+fn of_rhs(of: Of, tang: &[Disc], g: &[f64], t0: &[f64]) -> f64 {
+    match of {
+        Of::Normal(i) => g[i],
+        Of::Tangential(i, k) => t0[2 * i + k],
+        Of::Across(i) => match tang[i] {
+            Disc::Slip(e, _) => -e[1] * t0[2 * i] + e[0] * t0[2 * i + 1],
+            _ => 0.0,
+        },
+    }
+}
+
 /// A working set's pattern: N and each row's kind (directions left out).
 fn pattern(in_n: &[bool], tang: &[Disc]) -> (Vec<bool>, Vec<u8>) {
     (in_n.to_vec(), tang.iter().map(|d| d.kind()).collect())
@@ -700,7 +777,9 @@ impl Iterative for State<'_> {
     /// bound), their solve, and the end when they repeat at a residual of
     /// `tol`.
     fn step(&mut self) -> Step {
-        if self.started || self.solved && !self.glued {
+        if std::mem::take(&mut self.preset) {
+            // The coarse start's sets, as they stand.
+        } else if self.started || self.solved && !self.glued {
             let (n_set, tang) = self.predict();
             let key = pattern(&n_set, &tang);
             let seen = key != pattern(&self.in_n, &self.tang) && self.visited.contains(&key);
@@ -839,6 +918,8 @@ mod dual_space;
 mod plane_free;
 #[path = "plane_k.rs"]
 mod plane_k;
+#[path = "plane_nested.rs"]
+mod plane_nested;
 
 #[cfg(test)]
 #[path = "plane_tests.rs"]

@@ -29,75 +29,31 @@ impl State<'_> {
         let m = self.qp.m();
         let mut known = known.to_vec();
         let mut drows = Vec::with_capacity(rows.len());
+        let coulomb = self.coulomb.as_deref().filter(|_| !self.glued);
         for b in rows {
-            let (terms, kappa) = match b.of {
-                Of::Normal(i) => (vec![(i, 1.0)], 0.0),
-                Of::Tangential(i, k) => (vec![(m + 2 * i + k, 1.0)], 0.0),
-                Of::Across(i) => {
-                    let Disc::Slip(e, kappa) = self.tang[i] else {
-                        continue;
-                    };
-                    (vec![(m + 2 * i, -e[1]), (m + 2 * i + 1, e[0])], kappa)
-                }
-            };
-            // A row of B that holds nothing (H_jj = 0) is left out, its
-            // multiplier 0, as in 2D; one that moves nothing K⁻¹ reaches
-            // but holds a rigid motion (it touches only a floating body's
-            // fixing unknowns: a single point) has no place in H_JJ.
-            if terms
+            // A row of B that moves nothing K⁻¹ reaches but holds a rigid
+            // motion (it touches only a floating body's fixing unknowns: a
+            // single point) has no place in H_JJ.
+            if let Some(&(j, _)) = of_terms(b.of, &self.tang, m)
+                .0
                 .iter()
-                .any(|&(j, w)| w != 0.0 && d.null[j] && holds_motion(d, j))
+                .find(|&&(j, w)| w != 0.0 && d.null[j] && holds_motion(d, j))
             {
                 log::debug!(
-                    "ssn: discs: row {j} holds a rigid motion K⁻¹ does not reach: the sparse path",
-                    j = terms[0].0
+                    "ssn: discs: row {j} holds a rigid motion K⁻¹ does not reach: the sparse path"
                 );
                 return false;
             }
-            let terms: Vec<(usize, f64)> = terms
-                .into_iter()
-                .filter(|&(j, w)| !d.null[j] && w != 0.0)
-                .collect();
-            if terms.is_empty() {
-                continue;
+            if let Some(r) = dual_row(b.of, b.rhs, &self.tang, coulomb, &d.null, &mut known) {
+                drows.push(r);
             }
-            // The direct Coulomb iteration holds the slip bound inside the
-            // step: a slipping row's force along ê is μλ_n of the step's
-            // own λ_n, a force its normal row's multiplier sets, not the
-            // last iterate's s (Newton's step on s = μλ_n; before, a fixed
-            // point inside the step, by about 10× an update).
-            let mut force = vec![];
-            if let (Of::Normal(i), Some(mu_c)) = (b.of, self.coulomb.as_ref()) {
-                if let (Disc::Slip(e, _), false) = (self.tang[i], self.glued) {
-                    force = (0..2)
-                        .map(|k| (m + 2 * i + k, mu_c[i] * e[k]))
-                        .filter(|&(j, w)| !d.null[j] && w != 0.0)
-                        .collect();
-                    known[2 * i] = 0.0;
-                    known[2 * i + 1] = 0.0;
-                }
-            }
-            drows.push(DualRow {
-                terms,
-                c: b.rhs,
-                kappa,
-                force,
-            });
         }
-        let mut f = vec![0.0; 3 * m];
-        for (fj, k) in f[m..].iter_mut().zip(&known) {
-            *fj = -k;
-        }
+        let f = known_forces(&known, m);
         let Some((w, alpha)) = d.solve_rows(&drows, &f) else {
             log::debug!("ssn: discs: the working set's dual system is singular: the sparse path");
             return false;
         };
-        let mut mu = f;
-        for (r, wj) in drows.iter().zip(&w) {
-            for &(j, c) in r.terms.iter().chain(&r.force) {
-                mu[j] += c * wj;
-            }
-        }
+        let mu = set_multipliers(&drows, &w, f);
         let bx = d.bx(&mu, &alpha);
         self.ax = bx[..m].to_vec();
         self.tx = bx[m..].to_vec();
@@ -175,6 +131,90 @@ impl State<'_> {
         self.x_stale = false;
         Ok(())
     }
+}
+
+/// The rows of B a working-set row `of` combines, with their weights, and
+/// its compliance κ (a slipping row's force across its direction).
+fn of_terms(of: Of, tang: &[Disc], m: usize) -> (Vec<(usize, f64)>, f64) {
+    match of {
+        Of::Normal(i) => (vec![(i, 1.0)], 0.0),
+        Of::Tangential(i, k) => (vec![(m + 2 * i + k, 1.0)], 0.0),
+        Of::Across(i) => match tang[i] {
+            Disc::Slip(e, kappa) => (vec![(m + 2 * i, -e[1]), (m + 2 * i + 1, e[0])], kappa),
+            _ => (vec![], 0.0),
+        },
+    }
+}
+
+/// The dual-space row of the working-set row `of` (right-hand side `c`),
+/// None when it holds nothing: a row of B with H_jj = 0 (`null`) is left
+/// out, its multiplier 0, as in 2D. With Coulomb's coefficients
+/// (`coulomb`: the direct iteration), a slipping row's force along ê is
+/// μλ_n of the step's own λ_n, a force its normal row's multiplier sets on
+/// the tangential pair, not the last iterate's s in `known` (Newton's step
+/// on s = μλ_n; before, a fixed point inside the step, by about 10× an
+/// update; docs/methods.md §12.3).
+pub(super) fn dual_row(
+    of: Of,
+    c: f64,
+    tang: &[Disc],
+    coulomb: Option<&[f64]>,
+    null: &[bool],
+    known: &mut [f64],
+) -> Option<DualRow> {
+    let m = tang.len();
+    let (terms, kappa) = of_terms(of, tang, m);
+    let terms: Vec<(usize, f64)> = terms
+        .into_iter()
+        .filter(|&(j, w)| !null[j] && w != 0.0)
+        .collect();
+    if terms.is_empty() {
+        return None;
+    }
+    let mut force = vec![];
+    if let (Of::Normal(i), Some(mu_c), Disc::Slip(e, _)) = (of, coulomb, tang[of_row(of)]) {
+        force = (0..2)
+            .map(|k| (m + 2 * i + k, mu_c[i] * e[k]))
+            .filter(|&(j, w)| !null[j] && w != 0.0)
+            .collect();
+        known[2 * i] = 0.0;
+        known[2 * i + 1] = 0.0;
+    }
+    Some(DualRow {
+        terms,
+        c,
+        kappa,
+        force,
+    })
+}
+
+/// The contact row a working-set row belongs to.
+fn of_row(of: Of) -> usize {
+    match of {
+        Of::Normal(i) | Of::Tangential(i, _) | Of::Across(i) => i,
+    }
+}
+
+/// The known forces on B's rows: −`known` on T's rows (2 per contact row).
+pub(super) fn known_forces(known: &[f64], m: usize) -> Vec<f64> {
+    let mut f = vec![0.0; 3 * m];
+    for (fj, k) in f[m..].iter_mut().zip(known) {
+        *fj = -k;
+    }
+    f
+}
+
+/// The multipliers on B's rows of a dual-space set solve: the known forces
+/// `f` plus each row's multiplier `w` on the rows it combines and the
+/// forces it sets.
+pub(super) fn set_multipliers(rows: &[DualRow], w: &[f64], f: Vec<f64>) -> Vec<f64> {
+    let mut mu = f;
+    for (r, wj) in rows.iter().zip(w) {
+        for &(j, c) in r.terms.iter().chain(&r.force) {
+            mu[j] += c * wj;
+        }
+    }
+    mu
 }
 
 /// Whether row j of B moves a rigid motion: |(B R)_j| beyond round-off of

@@ -218,3 +218,88 @@ fn a_line_pressed_on_a_curved_floor_starts_from_the_frictionless_set() {
         assert!((u - v).abs() < 1e-6 * scale, "ssn {u}, mprgp {v}");
     }
 }
+
+/// A chain of points pressed onto a flat floor and pulled at one end,
+/// obliquely: the slip zone runs in from the pulled end, its points
+/// carrying s = μN each along the pull, the first sticking point the rest,
+/// the spring between points j and j+1 stretched by the pull less the
+/// friction of points 0..=j (exact: the chain is tied in the plane only at
+/// its far end, which sticks). From the glued start the front moved a row
+/// or two a Newton step; the coarse start (`plane_nested`, docs/methods.md
+/// §12.3) places it, so the steps stay bounded as the chain grows.
+#[test]
+fn a_chain_pulled_at_one_end_slips_in_a_bounded_number_of_steps() {
+    use crate::qp::{Csr, Friction, QpProblem};
+    let (kc, mu) = (10.0, 0.3);
+    let dir = [30f64.to_radians().cos(), 30f64.to_radians().sin()];
+    let mut counts = vec![];
+    for p in [40usize, 80, 160] {
+        let k = p / 2;
+        let pull = mu * (k as f64 + 0.5);
+        let mut trip = vec![];
+        let mut d = vec![0.0; 3 * p];
+        let (mut a, mut t) = (vec![], vec![]);
+        for i in 0..p {
+            let own = if i + 1 == p { 1.0 } else { 0.0 };
+            for c in 0..3 {
+                trip.push((3 * i + c, 3 * i + c, if c == 2 { 1.0 } else { own }));
+            }
+            if i + 1 < p {
+                for c in 0..2 {
+                    let (u, v) = (3 * i + c, 3 * i + 3 + c);
+                    trip.extend([(u, u, kc), (v, v, kc), (u, v, -kc), (v, u, -kc)]);
+                }
+            }
+            d[3 * i + 2] = -1.0;
+            a.push((i, 3 * i + 2, -1.0));
+            t.push((2 * i, 3 * i, 1.0));
+            t.push((2 * i + 1, 3 * i + 1, 1.0));
+        }
+        d[0] = pull * dir[0];
+        d[1] = pull * dir[1];
+        let q = QpProblem {
+            c: Csr::from_triplets(3 * p, 3 * p, &trip),
+            d,
+            a: Csr::from_triplets(p, 3 * p, &a),
+            g: vec![0.0; p],
+            kernel: vec![],
+            friction: Some(Friction {
+                t: Csr::from_triplets(2 * p, 3 * p, &t),
+                t0: vec![0.0; 2 * p],
+                bound: SlipBound::Coulomb(vec![mu; p]),
+                frame: crate::qp::Frame::Plane,
+            }),
+            near: None,
+        };
+        let r = solve(&q);
+        assert!(r.status.converged(), "{p}: {:?}", r.status);
+        let mut u = 0.0;
+        for i in (0..p).rev() {
+            // λ_t along the pull: s on 0..k, the rest at k, 0 beyond.
+            let lt = match i {
+                _ if i < k => mu,
+                _ if i == k => pull - mu * k as f64,
+                _ => 0.0,
+            };
+            if i < k {
+                u += (pull - mu * (i + 1) as f64) / kc;
+            }
+            for c in 0..2 {
+                let (got, want) = (r.lambda_t[2 * i + c], lt * dir[c]);
+                assert!(
+                    (got - want).abs() < 1e-9,
+                    "{p}: point {i}: λ_t {got}, want {want}"
+                );
+                let (got, want) = (r.x[3 * i + c], u * dir[c]);
+                assert!(
+                    (got - want).abs() < 1e-9 * (1.0 + u),
+                    "{p}: point {i}: u {got}, want {want}"
+                );
+            }
+        }
+        counts.push(r.iterations);
+    }
+    // Bounded under refinement.
+    assert!(counts.iter().all(|&c| c <= 12), "Newton steps {counts:?}");
+    eprintln!("Newton steps {counts:?}");
+}
