@@ -82,6 +82,20 @@ struct BRow {
     of: Of,
 }
 
+impl BRow {
+    /// The slip direction of the contact row this normal row belongs to,
+    /// if that row slips.
+    fn of_slip(&self, tang: &[Disc]) -> Option<[f64; 2]> {
+        match (self.of, self.spring) {
+            (Of::Normal(i), None) => match tang[i] {
+                Disc::Slip(e, _) => Some(e),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+}
+
 #[derive(Clone, Copy)]
 enum Of {
     Normal(usize),
@@ -208,7 +222,11 @@ impl TrescaStep for PlaneTresca<'_, '_> {
     /// last step's multipliers (docs/methods.md §12.3).
     fn coulomb_first(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
         let st = &mut self.st;
-        st.dual.as_ref()?;
+        // The dual path, or the multigrid's with the bound inside the
+        // augmented-Lagrangian sweeps; not the factor's sparse path.
+        if st.dual.is_none() && st.iter.is_none() {
+            return None;
+        }
         let Some(l) = st.warm.clone() else {
             return self.coarse_first(mu);
         };
@@ -220,6 +238,8 @@ impl TrescaStep for PlaneTresca<'_, '_> {
         st.glued = false;
         st.coulomb = Some(mu.to_vec());
         st.s = crate::qp::coulomb_bound(mu, &st.ln);
+        // Coulomb's own problem: solved to tol, not a fixed point's step.
+        st.tresca_tol = st.tol;
         let r = self.run();
         let st = &mut self.st;
         st.coulomb = None;
@@ -254,6 +274,7 @@ impl TrescaStep for PlaneTresca<'_, '_> {
         st.coulomb = Some(mu.to_vec());
         st.s = crate::qp::coulomb_bound(mu, &st.ln);
         st.glued = false;
+        st.tresca_tol = st.tol;
         let r = self.run();
         self.st.coulomb = None;
         Some(r)
@@ -571,8 +592,6 @@ impl<'a> State<'a> {
         let qp = self.qp;
         let m = qp.m();
         let rows = self.brows(&self.in_n, &self.tang);
-        // d' = d − Σ_slip sᵢ T_iᵀ eᵢ.
-        let mut dp = qp.d.clone();
         let mut known = vec![0.0; 2 * m];
         for (i, d) in self.tang.iter().enumerate() {
             if let (Disc::Slip(e, _), false) = (d, self.glued) {
@@ -580,7 +599,6 @@ impl<'a> State<'a> {
                 known[2 * i + 1] = -self.s[i] * e[1];
             }
         }
-        self.fr.t.mul_t_add(&known, &mut dp);
         let free = self.free_motions(&rows);
         if !free.is_empty() {
             if let Some(z) = self.unbounded_along(&free) {
@@ -602,6 +620,33 @@ impl<'a> State<'a> {
         if free.is_empty() && self.solve_set_dual(&rows, &known) {
             return Ok(None);
         }
+        // On the iterative path the direct Coulomb iteration holds the
+        // bound inside the step as the dual path does: a slipping row's
+        // force μᵢλ_nᵢêᵢ follows its normal row's multiplier, sweep by
+        // sweep (docs/methods.md §12.3), and leaves the known loads.
+        let coupled: Vec<plane_k::Coupled> = match (&self.coulomb, &self.iter) {
+            (Some(mu_c), Some(_)) if !self.glued => rows
+                .iter()
+                .enumerate()
+                .filter_map(|(p, b)| match (b.of, b.of_slip(&self.tang)) {
+                    (Of::Normal(i), Some(e)) => Some(plane_k::Coupled {
+                        row: p,
+                        mu: mu_c[i],
+                        e,
+                        i,
+                    }),
+                    _ => None,
+                })
+                .collect(),
+            _ => vec![],
+        };
+        for c in &coupled {
+            known[2 * c.i] = 0.0;
+            known[2 * c.i + 1] = 0.0;
+        }
+        // d' = d − Σ_slip sᵢ T_iᵀ eᵢ.
+        let mut dp = qp.d.clone();
+        self.fr.t.mul_t_add(&known, &mut dp);
         let mu0: Vec<f64> = rows
             .iter()
             .map(|b| match b.of {
@@ -611,7 +656,7 @@ impl<'a> State<'a> {
                 Of::Across(_) => 0.0,
             })
             .collect();
-        let (x, mu) = self.al_solve(&rows, &dp, &free, mu0)?;
+        let (x, mu) = self.al_solve(&rows, &dp, &free, mu0, &coupled)?;
         if !x.iter().all(|v| v.is_finite()) {
             return Ok(Some(Status::Failed(Failure::Breakdown(
                 "the KKT solve of a working set gave a non-finite iterate".into(),
@@ -634,6 +679,11 @@ impl<'a> State<'a> {
                     }
                 }
             }
+        }
+        for c in &coupled {
+            let f = c.mu * mu[c.row];
+            self.lt[2 * c.i] += f * c.e[0];
+            self.lt[2 * c.i + 1] += f * c.e[1];
         }
         Ok(None)
     }

@@ -47,6 +47,17 @@ fn held(b: &BRow) -> Held {
     )
 }
 
+/// A slipping row whose force along its direction is μλ_n of its normal
+/// row's multiplier inside the step (the direct Coulomb iteration,
+/// docs/methods.md §12.3): the row of B of the normal row, μ, ê, the
+/// contact row.
+pub(super) struct Coupled {
+    pub(super) row: usize,
+    pub(super) mu: f64,
+    pub(super) e: [f64; 2],
+    pub(super) i: usize,
+}
+
 /// The iterative path's counters (ssn_path = "iterative").
 #[derive(Default)]
 pub(super) struct IterK {
@@ -192,6 +203,7 @@ impl State<'_> {
         dp: &[f64],
         free: &[Vec<f64>],
         mut mu: Vec<f64>,
+        coupled: &[Coupled],
     ) -> Result<(Vec<f64>, Vec<f64>), QpError> {
         let kmat = self.k_matrix(rows);
         let bscale = rows.iter().fold(0.0f64, |a, b| a.max(b.rhs.abs()));
@@ -244,6 +256,17 @@ impl State<'_> {
                     rhs[j] += w * a;
                     if b.spring.is_none() {
                         force[j] += mk * a;
+                    }
+                }
+            }
+            // The coupled slip forces at this sweep's normal multipliers.
+            for c in coupled {
+                let f = c.mu * mu[c.row];
+                for k in 0..2 {
+                    let (cols, vals) = self.fr.t.row(2 * c.i + k);
+                    for (&j, &a) in cols.iter().zip(vals) {
+                        rhs[j] -= f * c.e[k] * a;
+                        force[j] += f * c.e[k] * a;
                     }
                 }
             }

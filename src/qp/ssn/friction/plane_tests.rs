@@ -303,3 +303,64 @@ fn a_chain_pulled_at_one_end_slips_in_a_bounded_number_of_steps() {
     assert!(counts.iter().all(|&c| c <= 12), "Newton steps {counts:?}");
     eprintln!("Newton steps {counts:?}");
 }
+
+/// Points pressed onto a floor through a stiffness that couples the slip
+/// along x with the normal force (C_xz ≠ 0: λ_n = 2 + c·u_x, so each slip
+/// changes its own bound μλ_n), under tangential loads from below to well
+/// above μN at several angles. On the multigrid path
+/// (`ssn_path = "iterative"`) the direct Coulomb iteration holds the bound
+/// inside the augmented-Lagrangian sweeps (docs/methods.md §12.3), so it
+/// ends in a few Newton steps where the Coulomb fixed point gained about
+/// a factor μc a bound update; the answer is the dual path's.
+#[test]
+fn the_multigrid_path_holds_the_coulomb_bound_inside_its_steps() {
+    use crate::qp::{Csr, Friction, QpProblem};
+    let (p, c, mu) = (8usize, 0.6, 0.5);
+    let mut trip = vec![];
+    let mut d = vec![0.0; 3 * p];
+    let (mut a, mut t) = (vec![], vec![]);
+    for i in 0..p {
+        let (x, y, z) = (3 * i, 3 * i + 1, 3 * i + 2);
+        trip.extend([(x, x, 1.0), (y, y, 1.0), (z, z, 1.0), (x, z, c), (z, x, c)]);
+        let (q, ang) = (0.2 + 0.2 * i as f64, (40.0 * i as f64).to_radians());
+        d[x] = q * ang.cos();
+        d[y] = q * ang.sin();
+        d[z] = -2.0;
+        a.push((i, z, -1.0));
+        t.push((2 * i, x, 1.0));
+        t.push((2 * i + 1, y, 1.0));
+    }
+    let q = QpProblem {
+        c: Csr::from_triplets(3 * p, 3 * p, &trip),
+        d,
+        a: Csr::from_triplets(p, 3 * p, &a),
+        g: vec![0.0; p],
+        kernel: vec![],
+        friction: Some(Friction {
+            t: Csr::from_triplets(2 * p, 3 * p, &t),
+            t0: vec![0.0; 2 * p],
+            bound: SlipBound::Coulomb(vec![mu; p]),
+            frame: crate::qp::Frame::Plane,
+        }),
+        near: None,
+    };
+    let dual = solve(&q);
+    assert!(dual.status.converged(), "{:?}", dual.status);
+    let mut o = SolveOptions::default();
+    o.settings.ssn.path = crate::qp::settings::SsnPath::Iterative;
+    let r = registry::solve("ssn", &q, &o).unwrap();
+    assert!(r.status.converged(), "{:?}", r.status);
+    assert!(r.kkt.within(1e-10), "{:?}", r.kkt);
+    let slipping = (0..p)
+        .filter(|&i| {
+            let lt = r.lambda_t[2 * i].hypot(r.lambda_t[2 * i + 1]);
+            lt > mu * r.lambda[i] * (1.0 - 1e-9)
+        })
+        .count();
+    assert!(slipping > 1 && slipping < p, "{slipping} of {p} slip");
+    for (u, v) in r.x.iter().zip(&dual.x) {
+        assert!((u - v).abs() < 1e-8, "multigrid {u}, dual {v}");
+    }
+    // 5 Newton steps; 40 with the bound of the last iterate.
+    assert!(r.iterations <= 8, "{} Newton steps", r.iterations);
+}
