@@ -252,11 +252,8 @@ fn stick_reversals(solved: &[Tangential], next: &mut [Tangential]) {
     }
 }
 
-/// Pairs of rows that couple most (greedy heavy-edge matching on the
-/// correlation of H's normal plus tangential blocks; rows taken in the
-/// order of their strongest coupling, ties by index: the same pairs for
-/// the same H). A row left without a partner close enough
-/// ([`PAIR_FRACTION`]) is a group of its own.
+/// Pairs of rows that couple most ([`heavy_edge_pairs`] on the
+/// correlation of H's normal plus tangential blocks).
 fn pair_rows(d: &DenseDual) -> Vec<Vec<usize>> {
     let m = d.m();
     let h = &d.h;
@@ -269,6 +266,16 @@ fn pair_rows(d: &DenseDual) -> Vec<Vec<usize>> {
             0.0
         }
     };
+    heavy_edge_pairs(m, corr)
+}
+
+/// Greedy heavy-edge matching of `m` rows (or points) on the coupling
+/// `corr` (module head): taken in the order of their strongest coupling,
+/// ties by index, each paired with its strongest free partner if that is
+/// at least [`PAIR_FRACTION`] of its strongest, else a group of its own.
+/// The same pairs for the same couplings. Shared by 2D's rows and the
+/// discs' points (`plane_nested.rs`).
+pub(super) fn heavy_edge_pairs(m: usize, corr: impl Fn(usize, usize) -> f64) -> Vec<Vec<usize>> {
     let best: Vec<f64> = (0..m)
         .map(|i| {
             (0..m)
@@ -300,6 +307,23 @@ fn pair_rows(d: &DenseDual) -> Vec<Vec<usize>> {
         }
     }
     groups
+}
+
+/// Per group, the harmonic sum 1/Σ 1/vᵢ of its members' values (the
+/// stiffness a summed row meets).
+pub(super) fn harmonic_sums(groups: &[Vec<usize>], v: &[f64]) -> Vec<f64> {
+    groups
+        .iter()
+        .map(|g| 1.0 / g.iter().map(|&i| 1.0 / v[i]).sum::<f64>())
+        .collect()
+}
+
+/// Per group, the mean of its members' values.
+pub(super) fn means(groups: &[Vec<usize>], v: &[f64]) -> Vec<f64> {
+    groups
+        .iter()
+        .map(|g| g.iter().map(|&i| v[i]).sum::<f64>() / g.len() as f64)
+        .collect()
 }
 
 /// The level whose rows sum the `groups` of `rows` (module head).
@@ -351,18 +375,8 @@ fn aggregate(d: &DenseDual, rows: &Rows, groups: Vec<Vec<usize>>) -> Level {
             .map(|g| g.iter().map(|&i| v[i]).sum())
             .collect()
     };
-    let harmonic = |v: &[f64]| -> Vec<f64> {
-        groups
-            .iter()
-            .map(|g| 1.0 / g.iter().map(|&i| 1.0 / v[i]).sum::<f64>())
-            .collect()
-    };
-    let mean = |v: &[f64]| -> Vec<f64> {
-        groups
-            .iter()
-            .map(|g| g.iter().map(|&i| v[i]).sum::<f64>() / g.len() as f64)
-            .collect()
-    };
+    let harmonic = |v: &[f64]| harmonic_sums(&groups, v);
+    let mean = |v: &[f64]| means(&groups, v);
     let rows_c = Rows {
         g: sum(&rows.g),
         t0: sum(&rows.t0),

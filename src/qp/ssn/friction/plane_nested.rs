@@ -22,6 +22,7 @@
 //! is spent.
 
 use super::super::dual::DenseDual;
+use super::super::nested::{harmonic_sums, heavy_edge_pairs, means};
 use super::dual_space::{dual_row, known_forces, set_multipliers};
 use super::{cycle_budget, of_rhs, pattern, predict_disc, set_rows, Disc};
 use crate::qp::coulomb_bound;
@@ -30,10 +31,6 @@ use std::collections::HashSet;
 
 /// A level with at most this many points is not coarsened further.
 const MIN_ROWS: usize = 12;
-
-/// A point is paired only with one it couples with at least this fraction
-/// of its strongest coupling (as in 2D).
-const PAIR_FRACTION: f64 = 0.5;
 
 impl super::State<'_> {
     /// Start the next Newton steps from the kinds of the coarse levels on
@@ -303,11 +300,8 @@ fn stick_reversals(solved: &[Disc], next: &mut [Disc]) {
     }
 }
 
-/// Pairs of points that couple most (greedy heavy-edge matching on the
-/// correlation of H's three blocks; points taken in the order of their
-/// strongest coupling, ties by index: the same pairs for the same H). A
-/// point left without a partner close enough ([`PAIR_FRACTION`]) is a
-/// group of its own.
+/// Pairs of points that couple most: 2D's heavy-edge matching
+/// ([`heavy_edge_pairs`]) on the correlation of H's three blocks.
 fn pair_points(d: &DenseDual, m: usize) -> Vec<Vec<usize>> {
     let h = &d.h;
     let idx = |i: usize| [i, m + 2 * i, m + 2 * i + 1];
@@ -327,37 +321,7 @@ fn pair_points(d: &DenseDual, m: usize) -> Vec<Vec<usize>> {
             0.0
         }
     };
-    let best: Vec<f64> = (0..m)
-        .map(|i| {
-            (0..m)
-                .filter(|&j| j != i)
-                .map(|j| corr(i, j))
-                .fold(0.0, f64::max)
-        })
-        .collect();
-    let mut order: Vec<usize> = (0..m).collect();
-    order.sort_by(|&a, &b| best[b].total_cmp(&best[a]).then(a.cmp(&b)));
-    let mut taken = vec![false; m];
-    let mut groups = vec![];
-    for i in order {
-        if taken[i] {
-            continue;
-        }
-        taken[i] = true;
-        let partner = (0..m)
-            .filter(|&j| !taken[j])
-            .map(|j| (corr(i, j), j))
-            .filter(|(c, _)| *c > 0.0 && *c >= PAIR_FRACTION * best[i])
-            .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
-        match partner {
-            Some((_, j)) => {
-                taken[j] = true;
-                groups.push(vec![i, j]);
-            }
-            None => groups.push(vec![i]),
-        }
-    }
-    groups
+    heavy_edge_pairs(m, corr)
 }
 
 /// The level whose points sum the `groups` of `rows` (module head).
@@ -405,25 +369,13 @@ fn aggregate(d: &DenseDual, rows: &Rows, groups: Vec<Vec<usize>>) -> Level {
             .map(|g| g.iter().map(|&i| v[stride * i + k]).sum())
             .collect()
     };
-    let harmonic = |v: &[f64]| -> Vec<f64> {
-        groups
-            .iter()
-            .map(|g| 1.0 / g.iter().map(|&i| 1.0 / v[i]).sum::<f64>())
-            .collect()
-    };
-    let mean = |v: &[f64]| -> Vec<f64> {
-        groups
-            .iter()
-            .map(|g| g.iter().map(|&i| v[i]).sum::<f64>() / g.len() as f64)
-            .collect()
-    };
     let (t1, t2) = (sum(&rows.t0, 2, 0), sum(&rows.t0, 2, 1));
     let rows_c = Rows {
         g: sum(&rows.g, 1, 0),
         t0: t1.iter().zip(&t2).flat_map(|(a, b)| [*a, *b]).collect(),
-        cn: harmonic(&rows.cn),
-        ct: harmonic(&rows.ct),
-        bound: mean(&rows.bound),
+        cn: harmonic_sums(&groups, &rows.cn),
+        ct: harmonic_sums(&groups, &rows.ct),
+        bound: means(&groups, &rows.bound),
         in_n: groups
             .iter()
             .map(|g| g.iter().any(|&i| rows.in_n[i]))
