@@ -45,6 +45,22 @@ const DIRECT_STALL: usize = 8;
 /// after which a solve ends at its rounding floor (docs/methods.md §12.3).
 const FLOOR_STEPS: usize = 3;
 
+/// A residual above this is no rounding floor: the default certificate's
+/// target. Newton's steps on the slip directions can gain only ×0.7 a
+/// step (a Tresca problem started from the coarse kinds: 3.4·10⁻² →
+/// 3.3·10⁻³ in four steps); ended there as at a floor, the answer was
+/// not certified (friction residual 2·10⁻³).
+const FLOOR_MAX: f64 = 1e-6;
+
+/// Newton steps a solve started from the coarse kinds is given to reach
+/// its tolerance before the method's own start takes over (a start, as
+/// the glued start and the direct iteration are): a row the coarse levels
+/// class as slipping where the answer has it on the disc's rim slips by
+/// ever less and Newton's steps on its direction gain only ×0.7–0.9 a step
+/// (a soft cube sheared under Tresca: 83 steps from the coarse kinds, 10
+/// from the method's own start).
+const COARSE_STEPS: usize = 12;
+
 /// How a contact row's tangential pair is held in a working set.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Disc {
@@ -207,10 +223,32 @@ impl TrescaStep for PlaneTresca<'_, '_> {
                 st.s = s.to_vec();
                 st.glued = false;
                 // A Tresca problem's first solve starts from the coarse
-                // levels' kinds (docs/methods.md §12.3).
+                // levels' kinds (docs/methods.md §12.3); if that does not
+                // end at its tolerance, from its own start.
                 if !st.solved {
                     st.normal_start();
-                    st.coarse_start(None);
+                    let saved = (st.x.clone(), st.ax.clone(), st.tx.clone(), st.in_n.clone());
+                    if st.coarse_start(None) {
+                        st.coulomb = None;
+                        st.coarse_run = true;
+                        let r = self.run();
+                        let st = &mut self.st;
+                        st.coarse_run = false;
+                        let r = r?;
+                        if r.status.converged() && st.residual() <= st.tresca_tol.max(FLOOR_MAX) {
+                            return Ok(r);
+                        }
+                        log::debug!(
+                            "ssn: discs: the coarse start ended at a residual of {:.3e}: the method's own start",
+                            st.residual()
+                        );
+                        (st.x, st.ax, st.tx, st.in_n) = saved;
+                        st.reset_multipliers();
+                        let mut own = self.run()?;
+                        own.iterations += r.iterations;
+                        own.inner_iterations += r.inner_iterations;
+                        return Ok(own);
+                    }
                 }
             }
         }
@@ -302,17 +340,27 @@ impl PlaneTresca<'_, '_> {
             st.in_n = saved.3;
             return None;
         }
+        st.coarse_run = true;
         let r = self.run();
         let st = &mut self.st;
         st.coulomb = None;
-        if !matches!(&r, Ok(t) if t.status.converged()) {
+        st.coarse_run = false;
+        let residual = st.residual();
+        if !matches!(&r, Ok(t) if t.status.converged()) || residual > st.tol.max(FLOOR_MAX) {
             (st.x, st.ax, st.tx, st.in_n) = saved;
-            let m = st.qp.m();
-            (st.ln, st.lt) = (vec![0.0; m], vec![0.0; 2 * m]);
-            st.tang = vec![Disc::Stick; m];
-            st.x_stale = false;
-            st.solved = false;
+            st.reset_multipliers();
             st.glued = true;
+            // The shared loop takes a direct iteration that did not
+            // converge for what it is: the glued start follows.
+            return Some(r.map(|mut t| {
+                if t.status.converged() {
+                    t.status = Status::Failed(Failure::Cycling {
+                        best: residual,
+                        steps: t.iterations,
+                    });
+                }
+                t
+            }));
         }
         Some(r)
     }
@@ -321,6 +369,7 @@ impl PlaneTresca<'_, '_> {
     fn run(&mut self) -> Result<Tresca, QpError> {
         let st = &mut self.st;
         st.started = false;
+        st.run_steps = 0;
         st.visited.clear();
         st.best = (f64::INFINITY, 0);
         st.floor = (f64::INFINITY, 0);
@@ -382,6 +431,10 @@ struct State<'a> {
     /// The sets are set for the next solve's first step (the coarse
     /// start's): it neither predicts nor starts them afresh.
     preset: bool,
+    /// The current solve started from the coarse kinds ([`COARSE_STEPS`]).
+    coarse_run: bool,
+    /// Newton steps of the current solve.
+    run_steps: usize,
     /// The patterns (N, each row's kind) of this solve's steps.
     visited: std::collections::HashSet<(Vec<bool>, Vec<u8>)>,
     /// A solve has ended before (the next starts from its answer).
@@ -449,6 +502,8 @@ impl<'a> State<'a> {
             tang: vec![Disc::Stick; m],
             started: false,
             preset: false,
+            coarse_run: false,
+            run_steps: 0,
             visited: std::collections::HashSet::new(),
             solved: false,
             outer: 0,
@@ -465,6 +520,17 @@ impl<'a> State<'a> {
             alpha: vec![],
             x_stale: false,
         }
+    }
+
+    /// Multipliers and sets as before any solve (x, Ax, Tx and N are the
+    /// caller's to put back): the next solve takes the method's own start.
+    fn reset_multipliers(&mut self) {
+        let m = self.qp.m();
+        (self.ln, self.lt) = (vec![0.0; m], vec![0.0; 2 * m]);
+        self.tang = vec![Disc::Stick; m];
+        self.x_stale = false;
+        self.solved = false;
+        self.preset = false;
     }
 
     /// v = T x − t0 of row i.
@@ -879,6 +945,7 @@ impl Iterative for State<'_> {
         self.started = true;
         self.visited.insert(pattern(&self.in_n, &self.tang));
         self.outer += 1;
+        self.run_steps += 1;
         let it = self.outer;
         match self.solve_set() {
             Ok(None) => {
@@ -908,7 +975,7 @@ impl Iterative for State<'_> {
                 } else {
                     cycle_budget(self.qp.m())
                 };
-                if self.best.1 > budget {
+                if self.best.1 > budget || self.coarse_run && self.run_steps > COARSE_STEPS {
                     return Step::Done(
                         Status::Failed(Failure::Cycling {
                             best: self.best.0,
@@ -925,11 +992,12 @@ impl Iterative for State<'_> {
                         .all(|(a, b)| a.kind() == b.kind());
                 // At the rounding floor (docs/methods.md §12.3); the
                 // driver's certificate judges the answer.
-                self.floor = if same && rec.residual > 0.5 * self.floor.0 {
-                    (rec.residual, self.floor.1 + 1)
-                } else {
-                    (rec.residual, 0)
-                };
+                self.floor =
+                    if same && rec.residual > 0.5 * self.floor.0 && rec.residual <= FLOOR_MAX {
+                        (rec.residual, self.floor.1 + 1)
+                    } else {
+                        (rec.residual, 0)
+                    };
                 if same && self.floor.1 >= FLOOR_STEPS && rec.residual > self.tol {
                     log::debug!(
                         "ssn: discs: the sets repeat at a residual of {:.3e} that no longer falls: its rounding floor",
