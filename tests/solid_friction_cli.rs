@@ -65,6 +65,32 @@ fn run(dir: &Path, text: &str, flags: &[&str]) -> (i32, String) {
     common::run(&args)
 }
 
+/// `signorini solve TOML -q --ssn-path PATH --out OUT`, which must exit 0,
+/// and its JSON report.
+fn solve_on_path(toml: &Path, ssn_path: &str, out: &Path) -> Value {
+    let o = common::command()
+        .args([
+            "solve",
+            toml.to_str().unwrap(),
+            "-q",
+            "--ssn-path",
+            ssn_path,
+            "--out",
+        ])
+        .arg(out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{} on {ssn_path}: {o:?}",
+        toml.display()
+    );
+    let stem = toml.file_stem().unwrap().to_str().unwrap();
+    let text = std::fs::read_to_string(out.join(format!("{stem}.json"))).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
 /// The soft cube on the steel one, pushed by `pt` on its top.
 fn cube(pt: [f64; 2]) -> String {
     toml(
@@ -212,23 +238,7 @@ fn the_dual_path_does_not_cycle_on_a_glued_conforming_interface() {
         .replace("nu = 0.25", "nu = 0.33");
     assert!(toml.contains("nu = 0.33"), "{toml}");
     std::fs::write(&path, toml).unwrap();
-    let solve = |path_arg: &str, out: &str| -> Value {
-        let o = common::command()
-            .args([
-                "solve",
-                path.to_str().unwrap(),
-                "-q",
-                "--ssn-path",
-                path_arg,
-                "--out",
-            ])
-            .arg(dir.path().join(out))
-            .output()
-            .unwrap();
-        assert_eq!(o.status.code(), Some(0), "{o:?}");
-        let text = std::fs::read_to_string(dir.path().join(out).join("stack.json")).unwrap();
-        serde_json::from_str(&text).unwrap()
-    };
+    let solve = |path_arg: &str, out: &str| solve_on_path(&path, path_arg, &dir.path().join(out));
     let dual = solve("schur", "dual");
     let sparse = solve("augmented", "sparse");
     let multigrid = solve("iterative", "multigrid");
@@ -407,23 +417,7 @@ fn a_soft_cube_sheared_under_tresca_is_certified_from_the_coarse_start() {
         let path = dir.path().join("soft.toml");
         std::fs::write(&path, toml).unwrap();
         let force = |path_arg: &str| -> Vec<f64> {
-            let out = dir.path().join(path_arg);
-            let o = common::command()
-                .args([
-                    "solve",
-                    path.to_str().unwrap(),
-                    "-q",
-                    "--ssn-path",
-                    path_arg,
-                    "--out",
-                ])
-                .arg(&out)
-                .output()
-                .unwrap();
-            assert_eq!(o.status.code(), Some(0), "{law} on {path_arg}: {o:?}");
-            let j: Value =
-                serde_json::from_str(&std::fs::read_to_string(out.join("soft.json")).unwrap())
-                    .unwrap();
+            let j = solve_on_path(&path, path_arg, &dir.path().join(path_arg));
             assert_eq!(j["kkt"]["certified"], Value::Bool(true), "{law}: {j}");
             j["contact"]["interface"]["force"]
                 .as_array()

@@ -29,13 +29,14 @@
 use super::dual::Dual;
 use super::{cycle_budget, row_stiffness, AL_MAX, AL_STALL, CT_FACTOR, RHO};
 use crate::linalg::sparse::{norm_inf, Csr};
-use crate::qp::coulomb::{self, Bound, Tresca, TrescaStep};
+use crate::qp::coulomb;
 use crate::qp::executor::{Iterative, Step};
 use crate::qp::settings::SsnPath;
 use crate::qp::{
     tangential_norm, Context, Failure, Friction, IterRecord, Output, QpError, QpProblem, Status,
 };
 use dual_space::combine;
+use plane_loop::PlaneTresca;
 
 /// Steps without a better residual after which the direct Coulomb
 /// iteration ([`PlaneTresca::coulomb`]) gives way to the shared loop.
@@ -194,206 +195,6 @@ fn run(
         );
     }
     out
-}
-
-struct PlaneTresca<'c, 'a> {
-    st: State<'a>,
-    ctx: &'c Context<'a>,
-    /// Steps of all solves so far (they share one MAXIT).
-    steps: usize,
-}
-
-impl TrescaStep for PlaneTresca<'_, '_> {
-    fn resolution(&self) -> f64 {
-        self.st.tol
-    }
-
-    fn solve(&mut self, bound: Bound<'_>) -> Result<Tresca, QpError> {
-        let st = &mut self.st;
-        match bound {
-            Bound::Glued => {
-                st.s = vec![0.0; st.qp.m()];
-                st.glued = true;
-                if !st.solved {
-                    st.normal_start();
-                }
-            }
-            Bound::Given(s) => {
-                st.tresca_tol = st.tresca_tol_for(s);
-                st.s = s.to_vec();
-                st.glued = false;
-                // A Tresca problem's first solve starts from the coarse
-                // levels' kinds (docs/methods.md §12.3); if that does not
-                // end at its tolerance, from its own start.
-                if !st.solved {
-                    st.normal_start();
-                    let saved = (st.x.clone(), st.ax.clone(), st.tx.clone(), st.in_n.clone());
-                    if st.coarse_start(None) {
-                        st.coulomb = None;
-                        st.coarse_run = true;
-                        let r = self.run();
-                        let st = &mut self.st;
-                        st.coarse_run = false;
-                        let r = r?;
-                        if r.status.converged() && st.residual() <= st.tresca_tol.max(FLOOR_MAX) {
-                            return Ok(r);
-                        }
-                        log::debug!(
-                            "ssn: discs: the coarse start ended at a residual of {:.3e}: the method's own start",
-                            st.residual()
-                        );
-                        (st.x, st.ax, st.tx, st.in_n) = saved;
-                        st.reset_multipliers();
-                        let mut own = self.run()?;
-                        own.iterations += r.iterations;
-                        own.inner_iterations += r.inner_iterations;
-                        return Ok(own);
-                    }
-                }
-            }
-        }
-        st.coulomb = None;
-        self.run()
-    }
-
-    /// A load step's start on the dual path: the direct iteration from the
-    /// last step's multipliers (docs/methods.md §12.3).
-    fn coulomb_first(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
-        let st = &mut self.st;
-        // The dual path, or the multigrid's with the bound inside the
-        // augmented-Lagrangian sweeps; not the factor's sparse path.
-        if st.dual.is_none() && st.iter.is_none() {
-            return None;
-        }
-        let Some(l) = st.warm.clone() else {
-            return self.coarse_first(mu);
-        };
-        let saved = (st.x.clone(), st.ax.clone(), st.tx.clone(), st.tang.clone());
-        st.in_n = l.normal.iter().map(|&v| v > 0.0).collect();
-        st.ln = l.normal;
-        st.lt = l.tangential;
-        st.solved = true;
-        st.glued = false;
-        st.coulomb = Some(mu.to_vec());
-        st.s = crate::qp::coulomb_bound(mu, &st.ln);
-        // Coulomb's own problem: solved to tol, not a fixed point's step.
-        st.tresca_tol = st.tol;
-        let r = self.run();
-        let st = &mut self.st;
-        st.coulomb = None;
-        if matches!(&r, Ok(t) if t.status.converged()) {
-            st.warm = None;
-        } else {
-            (st.x, st.ax, st.tx, st.tang) = saved;
-            st.x_stale = false;
-        }
-        Some(r)
-    }
-
-    /// A load step's fixed point from the last step's multipliers and
-    /// their bound μλ_n, not the glued start (docs/methods.md §12.3).
-    fn warm_bound(&mut self, mu: &[f64]) -> Option<Vec<f64>> {
-        let st = &mut self.st;
-        let l = st.warm.take()?;
-        log::debug!("ssn: discs: the fixed point starts from the last step's bound μλ_n");
-        st.in_n = l.normal.iter().map(|&v| v > 0.0).collect();
-        st.ln = l.normal;
-        st.lt = l.tangential;
-        st.solved = true;
-        Some(crate::qp::coulomb_bound(mu, &st.ln))
-    }
-
-    /// Coulomb's problem directly: the Newton steps with the bound
-    /// s = μλ_n of the current iterate, from the glued answer
-    /// (docs/methods.md §12.3); not settled, the shared loop goes on
-    /// with Tresca problems from the glued answer.
-    fn coulomb(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
-        let st = &mut self.st;
-        st.coulomb = Some(mu.to_vec());
-        st.s = crate::qp::coulomb_bound(mu, &st.ln);
-        st.glued = false;
-        st.tresca_tol = st.tol;
-        let r = self.run();
-        self.st.coulomb = None;
-        Some(r)
-    }
-}
-
-impl PlaneTresca<'_, '_> {
-    /// The first solve's start on the dual path: the direct iteration from
-    /// the coarse levels' kinds (docs/methods.md §12.3), before any glued
-    /// solve; not settled, the state is put back and the glued start
-    /// follows as without it.
-    fn coarse_first(&mut self, mu: &[f64]) -> Option<Result<Tresca, QpError>> {
-        let st = &mut self.st;
-        if st.solved {
-            return None;
-        }
-        let saved = (st.x.clone(), st.ax.clone(), st.tx.clone(), st.in_n.clone());
-        st.normal_start();
-        st.coulomb = Some(mu.to_vec());
-        st.s = vec![0.0; mu.len()];
-        st.glued = false;
-        if !st.coarse_start(Some(mu)) {
-            st.coulomb = None;
-            st.glued = true;
-            st.in_n = saved.3;
-            return None;
-        }
-        st.coarse_run = true;
-        let r = self.run();
-        let st = &mut self.st;
-        st.coulomb = None;
-        st.coarse_run = false;
-        let residual = st.residual();
-        if !matches!(&r, Ok(t) if t.status.converged()) || residual > st.tol.max(FLOOR_MAX) {
-            (st.x, st.ax, st.tx, st.in_n) = saved;
-            st.reset_multipliers();
-            st.glued = true;
-            // The shared loop takes a direct iteration that did not
-            // converge for what it is: the glued start follows.
-            return Some(r.map(|mut t| {
-                if t.status.converged() {
-                    t.status = Status::Failed(Failure::Cycling {
-                        best: residual,
-                        steps: t.iterations,
-                    });
-                }
-                t
-            }));
-        }
-        Some(r)
-    }
-
-    /// Newton steps from the current state until the sets settle.
-    fn run(&mut self) -> Result<Tresca, QpError> {
-        let st = &mut self.st;
-        st.started = false;
-        st.run_steps = 0;
-        st.visited.clear();
-        st.best = (f64::INFINITY, 0);
-        st.floor = (f64::INFINITY, 0);
-        let mut exec = self.ctx.executor("ssn");
-        exec.max_iter = exec.max_iter.saturating_sub(self.steps);
-        let inner0 = st.inner;
-        let (status, iters) = exec.run(st);
-        st.solved = true;
-        self.steps += iters;
-        if let Some(e) = st.error.take() {
-            return Err(e);
-        }
-        st.ensure_x()?;
-        Ok(Tresca {
-            x: st.x.clone(),
-            lambda_n: st.ln.clone(),
-            lambda_t: st.lt.clone(),
-            active: st.in_n.clone(),
-            status,
-            iterations: iters,
-            inner_iterations: st.inner - inner0,
-            log: exec.log,
-        })
-    }
 }
 
 struct State<'a> {
@@ -1036,6 +837,8 @@ mod dual_space;
 mod plane_free;
 #[path = "plane_k.rs"]
 mod plane_k;
+#[path = "plane_loop.rs"]
+mod plane_loop;
 #[path = "plane_nested.rs"]
 mod plane_nested;
 

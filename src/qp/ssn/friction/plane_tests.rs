@@ -10,6 +10,36 @@ fn solve(q: &crate::qp::QpProblem) -> crate::qp::QpResult {
     r
 }
 
+/// Points i on a floor below (row i: −u_z ≤ gᵢ), their tangential rows
+/// along x and y, stiffness C from `trip` and loads `d` (3 unknowns a point).
+fn points_on_a_floor(
+    trip: &[(usize, usize, f64)],
+    d: Vec<f64>,
+    g: Vec<f64>,
+    bound: SlipBound,
+) -> crate::qp::QpProblem {
+    use crate::qp::{Csr, Friction, QpProblem};
+    let p = g.len();
+    let a: Vec<_> = (0..p).map(|i| (i, 3 * i + 2, -1.0)).collect();
+    let t: Vec<_> = (0..p)
+        .flat_map(|i| [(2 * i, 3 * i, 1.0), (2 * i + 1, 3 * i + 1, 1.0)])
+        .collect();
+    QpProblem {
+        c: Csr::from_triplets(3 * p, 3 * p, trip),
+        d,
+        a: Csr::from_triplets(p, 3 * p, &a),
+        g,
+        kernel: vec![],
+        friction: Some(Friction {
+            t: Csr::from_triplets(2 * p, 3 * p, &t),
+            t0: vec![0.0; 2 * p],
+            bound,
+            frame: crate::qp::Frame::Plane,
+        }),
+        near: None,
+    }
+}
+
 /// A point on a floor under an oblique load, at angles off the frame's
 /// axes: it sticks below μN with λ_t the load, and above it slips along
 /// the load with ‖λ_t‖ = μN exactly (the test a polygonal cone fails).
@@ -157,11 +187,10 @@ fn a_ring_turned_on_a_floor_slips_around_the_circle() {
 /// mprgp's on the same discs.
 #[test]
 fn a_line_pressed_on_a_curved_floor_starts_from_the_frictionless_set() {
-    use crate::qp::{Csr, Friction, QpProblem};
     let (p, h, radius, kc) = (41usize, 0.05, 1.0, 20.0);
     let mut trip = vec![];
     let mut d = vec![0.0; 3 * p];
-    let (mut a, mut t, mut g) = (vec![], vec![], vec![]);
+    let mut g = vec![];
     for i in 0..p {
         let x = (i as f64 - 20.0) * h;
         for c in 0..3 {
@@ -177,25 +206,9 @@ fn a_line_pressed_on_a_curved_floor_starts_from_the_frictionless_set() {
             d[3 * i + 2] = -3.0;
             d[3 * i] = 0.4;
         }
-        a.push((i, 3 * i + 2, -1.0));
         g.push(x * x / (2.0 * radius));
-        t.push((2 * i, 3 * i, 1.0));
-        t.push((2 * i + 1, 3 * i + 1, 1.0));
     }
-    let q = QpProblem {
-        c: Csr::from_triplets(3 * p, 3 * p, &trip),
-        d,
-        a: Csr::from_triplets(p, 3 * p, &a),
-        g,
-        kernel: vec![],
-        friction: Some(Friction {
-            t: Csr::from_triplets(2 * p, 3 * p, &t),
-            t0: vec![0.0; 2 * p],
-            bound: SlipBound::Coulomb(vec![0.3; p]),
-            frame: crate::qp::Frame::Plane,
-        }),
-        near: None,
-    };
+    let q = points_on_a_floor(&trip, d, g, SlipBound::Coulomb(vec![0.3; p]));
     let r = solve(&q);
     assert!(r.status.converged(), "{:?}", r.status);
     let touching = r.lambda.iter().filter(|l| **l > 0.0).count();
@@ -229,7 +242,6 @@ fn a_line_pressed_on_a_curved_floor_starts_from_the_frictionless_set() {
 /// §12.3) places it, so the steps stay bounded as the chain grows.
 #[test]
 fn a_chain_pulled_at_one_end_slips_in_a_bounded_number_of_steps() {
-    use crate::qp::{Csr, Friction, QpProblem};
     let (kc, mu) = (10.0, 0.3);
     let dir = [30f64.to_radians().cos(), 30f64.to_radians().sin()];
     let mut counts = vec![];
@@ -238,7 +250,6 @@ fn a_chain_pulled_at_one_end_slips_in_a_bounded_number_of_steps() {
         let pull = mu * (k as f64 + 0.5);
         let mut trip = vec![];
         let mut d = vec![0.0; 3 * p];
-        let (mut a, mut t) = (vec![], vec![]);
         for i in 0..p {
             let own = if i + 1 == p { 1.0 } else { 0.0 };
             for c in 0..3 {
@@ -251,26 +262,10 @@ fn a_chain_pulled_at_one_end_slips_in_a_bounded_number_of_steps() {
                 }
             }
             d[3 * i + 2] = -1.0;
-            a.push((i, 3 * i + 2, -1.0));
-            t.push((2 * i, 3 * i, 1.0));
-            t.push((2 * i + 1, 3 * i + 1, 1.0));
         }
         d[0] = pull * dir[0];
         d[1] = pull * dir[1];
-        let q = QpProblem {
-            c: Csr::from_triplets(3 * p, 3 * p, &trip),
-            d,
-            a: Csr::from_triplets(p, 3 * p, &a),
-            g: vec![0.0; p],
-            kernel: vec![],
-            friction: Some(Friction {
-                t: Csr::from_triplets(2 * p, 3 * p, &t),
-                t0: vec![0.0; 2 * p],
-                bound: SlipBound::Coulomb(vec![mu; p]),
-                frame: crate::qp::Frame::Plane,
-            }),
-            near: None,
-        };
+        let q = points_on_a_floor(&trip, d, vec![0.0; p], SlipBound::Coulomb(vec![mu; p]));
         let r = solve(&q);
         assert!(r.status.converged(), "{p}: {:?}", r.status);
         let mut u = 0.0;
@@ -314,11 +309,9 @@ fn a_chain_pulled_at_one_end_slips_in_a_bounded_number_of_steps() {
 /// a factor μc a bound update; the answer is the dual path's.
 #[test]
 fn the_multigrid_path_holds_the_coulomb_bound_inside_its_steps() {
-    use crate::qp::{Csr, Friction, QpProblem};
     let (p, c, mu) = (8usize, 0.6, 0.5);
     let mut trip = vec![];
     let mut d = vec![0.0; 3 * p];
-    let (mut a, mut t) = (vec![], vec![]);
     for i in 0..p {
         let (x, y, z) = (3 * i, 3 * i + 1, 3 * i + 2);
         trip.extend([(x, x, 1.0), (y, y, 1.0), (z, z, 1.0), (x, z, c), (z, x, c)]);
@@ -326,24 +319,8 @@ fn the_multigrid_path_holds_the_coulomb_bound_inside_its_steps() {
         d[x] = q * ang.cos();
         d[y] = q * ang.sin();
         d[z] = -2.0;
-        a.push((i, z, -1.0));
-        t.push((2 * i, x, 1.0));
-        t.push((2 * i + 1, y, 1.0));
     }
-    let q = QpProblem {
-        c: Csr::from_triplets(3 * p, 3 * p, &trip),
-        d,
-        a: Csr::from_triplets(p, 3 * p, &a),
-        g: vec![0.0; p],
-        kernel: vec![],
-        friction: Some(Friction {
-            t: Csr::from_triplets(2 * p, 3 * p, &t),
-            t0: vec![0.0; 2 * p],
-            bound: SlipBound::Coulomb(vec![mu; p]),
-            frame: crate::qp::Frame::Plane,
-        }),
-        near: None,
-    };
+    let q = points_on_a_floor(&trip, d, vec![0.0; p], SlipBound::Coulomb(vec![mu; p]));
     let dual = solve(&q);
     assert!(dual.status.converged(), "{:?}", dual.status);
     let mut o = SolveOptions::default();
