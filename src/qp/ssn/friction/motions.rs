@@ -84,21 +84,7 @@ impl State<'_> {
                 }
             }
         }
-        let (vals, vecs) = sym_eigen(&g);
-        let tol = 1e-9 * bnorm.max(1.0) / self.qp.n().max(1) as f64;
-        vals.iter()
-            .zip(&vecs)
-            .filter(|(e, _)| !(**e > tol))
-            .map(|(_, v)| {
-                let mut z = vec![0.0; self.qp.n()];
-                for (c, rl) in v.iter().zip(&self.r) {
-                    for (zj, rj) in z.iter_mut().zip(rl) {
-                        *zj += c * rj;
-                    }
-                }
-                z
-            })
-            .collect()
+        null_motions(&g, &self.r, self.qp.n(), bnorm)
     }
 
     /// A free rigid motion ±z (z in span `free`) along which the loads do
@@ -159,4 +145,26 @@ impl State<'_> {
         let d = &self.qp.d;
         (dot(d, z), d.iter().zip(z).map(|(a, b)| (a * b).abs()).sum())
     }
+}
+
+/// The rigid motions z = R v (R's columns `r`, n unknowns) of the null
+/// space of the rows' Gram matrix `g` = Σ w (B R)ᵀ(B R): those the rows
+/// leave free, to a tolerance relative to the rows' size `bnorm`. Shared
+/// by 2D's rows and the discs' (plane_free.rs).
+pub(super) fn null_motions(g: &[Vec<f64>], r: &[Vec<f64>], n: usize, bnorm: f64) -> Vec<Vec<f64>> {
+    let (vals, vecs) = sym_eigen(g);
+    let tol = 1e-9 * bnorm.max(1.0) / n.max(1) as f64;
+    vals.iter()
+        .zip(&vecs)
+        .filter(|(e, _)| !(**e > tol))
+        .map(|(_, v)| {
+            let mut z = vec![0.0; n];
+            for (c, rl) in v.iter().zip(r) {
+                for (zj, rj) in z.iter_mut().zip(rl) {
+                    *zj += c * rj;
+                }
+            }
+            z
+        })
+        .collect()
 }

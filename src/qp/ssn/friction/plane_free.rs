@@ -4,7 +4,6 @@
 //! that holds a body the loads push across a gap.
 
 use super::{BRow, Disc, State};
-use crate::linalg::dense::sym_eigen;
 use crate::linalg::sparse::{dot, norm_inf};
 use crate::qp::tangential_norm;
 
@@ -60,21 +59,7 @@ impl State<'_> {
                 }
             }
         }
-        let (vals, vecs) = sym_eigen(&g);
-        let tol = 1e-9 * bnorm.max(1.0) / self.qp.n().max(1) as f64;
-        vals.iter()
-            .zip(&vecs)
-            .filter(|(e, _)| !(**e > tol))
-            .map(|(_, v)| {
-                let mut z = vec![0.0; self.qp.n()];
-                for (c, rl) in v.iter().zip(&self.r) {
-                    for (zj, rj) in z.iter_mut().zip(rl) {
-                        *zj += c * rj;
-                    }
-                }
-                z
-            })
-            .collect()
+        super::super::motions::null_motions(&g, &self.r, self.qp.n(), bnorm)
     }
 
     /// A free rigid motion along which the loads do more work than the
