@@ -92,6 +92,16 @@ fn solve_on_path(toml: &Path, ssn_path: &str, out: &Path) -> Value {
 }
 
 /// The soft cube on the steel one, pushed by `pt` on its top.
+/// The resultant of the interface `name` in a run's JSON, as [fx, fy, fz].
+fn interface_force(json: &Value, name: &str) -> Vec<f64> {
+    json["contact"][name]["force"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect()
+}
+
 fn cube(pt: [f64; 2]) -> String {
     toml(
         &common::root().join("tests/data/solid_contact/stack_nm.msh"),
@@ -124,12 +134,7 @@ fn a_soft_cube_held_by_friction_carries_a_tangential_load_below_mu_n() {
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("out/cube.json")).unwrap())
             .unwrap();
     let it = &json["contact"]["upper_bottom/lower_top"];
-    let f: Vec<f64> = it["force"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let f = interface_force(&json, "upper_bottom/lower_top");
     // The slave side's resultant balances the loads on the upper cube.
     let want = [-pt[0], -pt[1], 1.0e6];
     for k in 0..3 {
@@ -251,17 +256,9 @@ fn the_dual_path_does_not_cycle_on_a_glued_conforming_interface() {
     let stick = c["stick"].as_u64().unwrap();
     let slip = c["slip"].as_u64().unwrap();
     assert!(stick > 0 && slip > 0, "{stick} stick, {slip} slip");
-    let force = |j: &Value| -> Vec<f64> {
-        j["contact"]["interface"]["force"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect()
-    };
-    let a = force(&dual);
+    let a = interface_force(&dual, "interface");
     for other in [&sparse, &multigrid] {
-        let b = force(other);
+        let b = interface_force(other, "interface");
         for k in 0..3 {
             assert!((a[k] - b[k]).abs() <= 1e-7 * a[2].abs(), "{a:?} vs {b:?}");
         }
@@ -378,13 +375,7 @@ fn tresca_on_the_multigrid_path_is_solved_to_tol() {
             "{path}: {}",
             json["kkt"]
         );
-        let f: Vec<f64> = json["contact"]["upper_bottom/lower_top"]["force"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
-        forces.push(f);
+        forces.push(interface_force(&json, "upper_bottom/lower_top"));
     }
     for k in 0..3 {
         assert!(
@@ -419,12 +410,7 @@ fn a_soft_cube_sheared_under_tresca_is_certified_from_the_coarse_start() {
         let force = |path_arg: &str| -> Vec<f64> {
             let j = solve_on_path(&path, path_arg, &dir.path().join(path_arg));
             assert_eq!(j["kkt"]["certified"], Value::Bool(true), "{law}: {j}");
-            j["contact"]["interface"]["force"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|v| v.as_f64().unwrap())
-                .collect()
+            interface_force(&j, "interface")
         };
         let (a, b) = (force("auto"), force("augmented"));
         for k in 0..3 {
