@@ -27,6 +27,7 @@
 //! `setup`, the vector kernels whose bits do not depend on the thread
 //! count in `kernels`, and the CG in `pcg`.
 
+mod coarse;
 mod kernels;
 mod pcg;
 mod setup;

@@ -603,3 +603,66 @@ fn amg_update_follows_a_low_rank_change() {
         norm(&z0)
     );
 }
+
+/// The coarse-space API of the coarse start (`coarse.rs`): on every level,
+/// prolongation and restriction are transposes, the level's dense operator
+/// is PᵀKP (K applied to prolonged unit vectors), and a sparse row
+/// restricted is the dense restriction of that row.
+#[test]
+fn amg_level_spaces_are_galerkin() {
+    let (k, bp, modes) = elasticity3d(6, |_| 1.0);
+    let s = AmgSettings {
+        coarse_max: 60,
+        ..AmgSettings::for_modes(6)
+    };
+    let near = NearNull {
+        block_ptr: &bp,
+        modes: &modes,
+    };
+    let amg = Amg::new(&k, Some(near), &s).expect("hierarchy");
+    let sizes = amg.sizes();
+    assert!(sizes.len() >= 3, "{sizes:?}");
+    let n = k.nrows;
+    let r = rhs(n);
+    for (l, &nl) in sizes.iter().enumerate().skip(1) {
+        let dense = amg.level_dense(l);
+        assert_eq!(dense.len(), nl * nl);
+        let rc = amg.restrict_to_level(l, &r);
+        let scale = dense.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        // Column c of PᵀKP against the dense operator; (Pe_c)ᵀr = (Pᵀr)_c.
+        for c in (0..nl).step_by((nl / 7).max(1)) {
+            let mut e = vec![0.0; nl];
+            e[c] = 1.0;
+            let pe = amg.prolong_from_level(l, &e);
+            assert!((dot(&pe, &r) - rc[c]).abs() <= 1e-12 * norm(&pe) * norm(&r));
+            let kpe = k.mul(&pe);
+            let col = amg.restrict_to_level(l, &kpe);
+            for i in 0..nl {
+                assert!(
+                    (col[i] - dense[i * nl + c]).abs() <= 1e-10 * scale,
+                    "level {l} entry ({i}, {c}): {} against {}",
+                    col[i],
+                    dense[i * nl + c]
+                );
+            }
+        }
+        // A sparse row (three unknowns of one point) restricted.
+        let (cols, vals) = ([3usize, 4, 5], [0.3, -1.0, 0.7]);
+        let mut u = vec![0.0; n];
+        for (&c, &v) in cols.iter().zip(&vals) {
+            u[c] = v;
+        }
+        let want = amg.restrict_to_level(l, &u);
+        let got = amg.restrict_row_to_level(l, &cols, &vals);
+        let mut full = vec![0.0; nl];
+        for w in got.windows(2) {
+            assert!(w[0].0 < w[1].0, "columns sorted");
+        }
+        for &(j, v) in &got {
+            full[j] = v;
+        }
+        let d: Vec<f64> = full.iter().zip(&want).map(|(a, b)| a - b).collect();
+        assert!(norm(&d) <= 1e-13 * norm(&want), "level {l}");
+        assert!(norm(&want) > 0.0);
+    }
+}

@@ -7,6 +7,7 @@
 //! u_juⱼᵀ, and the coarse patterns are the structural Galerkin products).
 //! The cycle stays symmetric positive definite, so CG may use it.
 
+use super::coarse::Scratch;
 use super::{inv_diagonal, Amg, AmgError, SeqChol};
 use crate::linalg::sparse::Csr;
 
@@ -25,36 +26,12 @@ impl Amg {
         self.levels[0].a.data.copy_from_slice(&k.data);
         self.levels[0].inv_diag = inv_diagonal(k, 0)?;
         let nl = self.levels.len();
-        let mut acc: Vec<f64> = Vec::new();
-        let mut mark: Vec<bool> = Vec::new();
+        let mut scratch = Scratch::default();
         for &(delta, cols, vals) in changes {
             let mut u: Vec<(usize, f64)> = cols.iter().copied().zip(vals.iter().copied()).collect();
             for l in 0..nl {
-                // v = P_lᵀ u: Σ_k u_k · (row k of P_l), columns sorted.
-                let p = &self.levels[l].p;
-                let nc = self.levels.get(l + 1).map_or(self.coarse_n, |n| n.a.nrows);
-                if acc.len() < nc {
-                    acc.resize(nc, 0.0);
-                    mark.resize(nc, false);
-                }
-                let mut touched: Vec<usize> = Vec::new();
-                for &(kk, uk) in &u {
-                    let (c, v) = p.row(kk);
-                    for (&j, &pj) in c.iter().zip(v) {
-                        let j = j as usize;
-                        if !mark[j] {
-                            mark[j] = true;
-                            acc[j] = 0.0;
-                            touched.push(j);
-                        }
-                        acc[j] += uk * pj;
-                    }
-                }
-                touched.sort_unstable();
-                let v: Vec<(usize, f64)> = touched.iter().map(|&j| (j, acc[j])).collect();
-                for &j in &touched {
-                    mark[j] = false;
-                }
+                // v = P_lᵀ u, columns sorted.
+                let v = self.restrict_row_one(l, &u, &mut scratch);
                 // A_{l+1} += δ v vᵀ.
                 for &(i, vi) in &v {
                     let ok = if let Some(next) = self.levels.get_mut(l + 1) {

@@ -13,6 +13,7 @@
 //! Schur path; a motion free on every row (a rolling body) is not solved
 //! here (the direct paths are).
 
+use super::coarse_start::{self, coarse_start};
 use super::{candidates, free_modes, hold_free_modes, limit_changes, next_set, stiffness_scale};
 use crate::linalg::amg::{pcg_stall, Amg, AmgSettings, NearNull, PCG_STALL};
 use crate::linalg::augmented::AugPattern;
@@ -180,6 +181,12 @@ struct State<'a> {
     /// The most CG steps one loose K_J solve took.
     pcg_max_seen: usize,
     t_setup: f64,
+    /// The coarse start was tried (solid models, before the first step).
+    coarse_tried: bool,
+    /// At most max(GROW_MIN, grow·|J|) rows enter J per step: 1, and
+    /// [`coarse_start::GROW`] from a coarse start (J then grows from a set
+    /// that is short of the answer, not from a point spring).
+    grow: usize,
 }
 
 /// How one KKT solve ended.
@@ -236,6 +243,8 @@ impl<'a> State<'a> {
             builds: 0,
             updates: 0,
             t_setup: 0.0,
+            coarse_tried: false,
+            grow: 1,
         }
     }
 
@@ -265,50 +274,8 @@ impl<'a> State<'a> {
             self.aug.assemble(jset.iter().copied(), &self.rho);
             self.assembled = Some(in_j.to_vec());
         }
-        // The multigrid is rebuilt only when J has moved by more than
-        // `stale_max` rows from the set it was built for: K_J then differs
-        // from that K by a low-rank term, which costs CG a few steps where
-        // a rebuild costs tens of V-cycles (counts only: same bits on every run).
-        // On a solid model (six near-null modes) the hierarchy follows J
-        // instead: its operators are updated by the rows that moved with
-        // the prolongators kept (`Amg::update`, docs/methods.md §7.2), a
-        // fraction of a rebuild (163 k unknowns: 4–5 s a rebuild).
-        if self.solid {
-            self.follow_j(in_j);
-        }
-        let moved = self
-            .amg
-            .as_ref()
-            .map(|(set, _)| set.iter().zip(in_j).filter(|(a, b)| a != b).count());
-        let stale_max = STALE_MIN.max(jset.len() / STALE_DIV);
-        if moved.is_none_or(|c| c > stale_max) {
-            self.amg = None; // free the old hierarchy first
-            let t = Instant::now();
-            let near = qp.near.as_ref().map(|nk| NearNull {
-                block_ptr: &nk.block_ptr,
-                modes: &nk.modes,
-            });
-            let nm = qp.near.as_ref().map_or(1, |nk| nk.modes.len());
-            let amg = match Amg::new(self.aug.matrix(), near, &AmgSettings::for_modes(nm)) {
-                Ok(a) => a,
-                // Not a free motion (that is `holds_kernel`'s verdict
-                // above): say what failed instead of blaming the bodies.
-                Err(e) => {
-                    return Kkt::Stalled(format!(
-                        "ssn iterative: no multigrid of K_J ({e}; at a large stiffness contrast rounding makes it so); ssn_path = \"auto\" factors K_J instead"
-                    ))
-                }
-            };
-            self.t_setup += t.elapsed().as_secs_f64();
-            self.builds += 1;
-            log::debug!(
-                "ssn iterative: multigrid of K_J ({} rows in J): levels {:?}, operator complexity {:.2}, {:.3} s",
-                jset.len(),
-                amg.sizes(),
-                amg.operator_complexity(),
-                t.elapsed().as_secs_f64()
-            );
-            self.amg = Some((in_j.to_vec(), amg));
+        if let Err(msg) = self.ensure_amg(in_j, jset.len()) {
+            return Kkt::Stalled(msg);
         }
         let Some((_, amg)) = self.amg.as_ref() else {
             return Kkt::Singular; // not reached: built above
@@ -416,6 +383,99 @@ impl<'a> State<'a> {
         ))
     }
 
+    /// A multigrid of K_J for J = `in_j` (K_J assembled, |J| = `nj`):
+    /// the hierarchy kept, updated (solid models) or rebuilt.
+    fn ensure_amg(&mut self, in_j: &[bool], nj: usize) -> Result<(), String> {
+        let qp = self.qp;
+        // The multigrid is rebuilt only when J has moved by more than
+        // `stale_max` rows from the set it was built for: K_J then differs
+        // from that K by a low-rank term, which costs CG a few steps where
+        // a rebuild costs tens of V-cycles (counts only: same bits on every run).
+        // On a solid model (six near-null modes) the hierarchy follows J
+        // instead: its operators are updated by the rows that moved with
+        // the prolongators kept (`Amg::update`, docs/methods.md §7.2), a
+        // fraction of a rebuild (163 k unknowns: 4–5 s a rebuild).
+        if self.solid {
+            self.follow_j(in_j);
+        }
+        let moved = self
+            .amg
+            .as_ref()
+            .map(|(set, _)| set.iter().zip(in_j).filter(|(a, b)| a != b).count());
+        let stale_max = STALE_MIN.max(nj / STALE_DIV);
+        if moved.is_none_or(|c| c > stale_max) {
+            self.amg = None; // free the old hierarchy first
+            let t = Instant::now();
+            let near = qp.near.as_ref().map(|nk| NearNull {
+                block_ptr: &nk.block_ptr,
+                modes: &nk.modes,
+            });
+            let nm = qp.near.as_ref().map_or(1, |nk| nk.modes.len());
+            let amg = match Amg::new(self.aug.matrix(), near, &AmgSettings::for_modes(nm)) {
+                Ok(a) => a,
+                // Not a free motion (that is `holds_kernel`'s verdict
+                // above): say what failed instead of blaming the bodies.
+                Err(e) => {
+                    return Err(format!(
+                        "ssn iterative: no multigrid of K_J ({e}; at a large stiffness contrast rounding makes it so); ssn_path = \"auto\" factors K_J instead"
+                    ))
+                }
+            };
+            self.t_setup += t.elapsed().as_secs_f64();
+            self.builds += 1;
+            log::debug!(
+                "ssn iterative: multigrid of K_J ({} rows in J): levels {:?}, operator complexity {:.2}, {:.3} s",
+                nj,
+                amg.sizes(),
+                amg.operator_complexity(),
+                t.elapsed().as_secs_f64()
+            );
+            self.amg = Some((in_j.to_vec(), amg));
+        }
+        Ok(())
+    }
+
+    /// The coarse start (solid models; [`coarse_start`]): J, x and λ from
+    /// the contact problem on the coarsest level of the hierarchy of the
+    /// first K_J. Left as it was when that J leaves a body free or no
+    /// hierarchy is built (the first KKT solve then says why).
+    fn start_coarse(&mut self) {
+        self.coarse_tried = true;
+        let in_j = self.in_j.clone();
+        if !self.holds_kernel(&in_j) {
+            return;
+        }
+        let jset: Vec<usize> = (0..in_j.len()).filter(|&i| in_j[i]).collect();
+        if self.assembled.as_deref() != Some(&in_j) {
+            self.aug.assemble(jset.iter().copied(), &self.rho);
+            self.assembled = Some(in_j.clone());
+        }
+        if self.ensure_amg(&in_j, jset.len()).is_err() {
+            return;
+        }
+        let Some((_, amg)) = self.amg.as_ref() else {
+            return;
+        };
+        let t = Instant::now();
+        match coarse_start(amg, self.qp, &in_j, &self.rho) {
+            Some(cs) => {
+                log::debug!(
+                    "ssn iterative: coarse start on {} unknowns: {} steps, |J| = {}, {:.3} s",
+                    cs.unknowns,
+                    cs.steps,
+                    cs.in_j.iter().filter(|b| **b).count(),
+                    t.elapsed().as_secs_f64()
+                );
+                (self.in_j, self.x, self.lam) = (cs.in_j, cs.x, cs.lam);
+                self.grow = coarse_start::GROW;
+            }
+            None => log::debug!(
+                "ssn iterative: no coarse start (a coarse matrix is not positive definite)"
+            ),
+        }
+        self.t_setup += t.elapsed().as_secs_f64();
+    }
+
     /// Update the hierarchy, if any, from its set to `in_j` (K_J is
     /// assembled for `in_j`); a failed update drops it (a rebuild follows).
     fn follow_j(&mut self, in_j: &[bool]) {
@@ -499,6 +559,9 @@ impl<'a> State<'a> {
 impl Iterative for State<'_> {
     fn step(&mut self) -> Step {
         let m = self.qp.m();
+        if self.solid && !self.coarse_tried {
+            self.start_coarse();
+        }
         let mut solved = None;
         for cand in candidates(&self.in_j, self.last_ok.as_deref()) {
             let rtol = match (self.rough, self.solid) {
@@ -589,7 +652,14 @@ impl Iterative for State<'_> {
         // a solid model the next K_J is solved only ROUGH-ly (counts only).
         let size = self.in_j.iter().filter(|&&b| b).count();
         self.rough = self.solid && changed * ROUGH_MOVE > size;
-        let new_j = limit_changes(&self.in_j, new_j, &fval, &self.history, &mut self.single);
+        let new_j = limit_changes(
+            &self.in_j,
+            new_j,
+            &fval,
+            &self.history,
+            &mut self.single,
+            self.grow,
+        );
         self.in_j = hold_free_modes(new_j, &self.in_j, &self.ar, &self.lam, &ax, &qp.g);
         Step::Continue(self.record(residual))
     }

@@ -21,9 +21,12 @@
 //! Newton loop only confirms it. Counts: `iterations` = KKT solves (the
 //! dual-space steps are not counted), `inner_iterations` = sparse solves.
 //! `ssn_path = "iterative"` runs the same loop in `iterative` with no factor
-//! of C's size: multigrid-preconditioned CG (docs/methods.md §7.2).
+//! of C's size: multigrid-preconditioned CG (docs/methods.md §7.2); on a
+//! solid model it starts from the contact problem solved on a coarse level
+//! of its multigrid (`coarse_start`).
 
 mod augmented;
+mod coarse_start;
 mod friction;
 mod iterative;
 mod lowrank;
@@ -806,7 +809,7 @@ impl Iterative for Ssn<'_> {
             }
             log::debug!("ssn: the refined solution moves J; continuing");
         }
-        let new_j = limit_changes(&self.in_j, new_j, &fval, &self.history, &mut self.single);
+        let new_j = limit_changes(&self.in_j, new_j, &fval, &self.history, &mut self.single, 1);
         let new_j = hold_free_modes(new_j, &self.in_j, &self.ar, &self.lam, &ax, &self.qp.g);
         log::debug!(
             "ssn: step {}: |J| = {}, next |J| = {} ({} enter, {} leave), residual {:.2e}",

@@ -39,7 +39,8 @@ pub(super) fn candidates(in_j: &[bool], last_ok: Option<&[bool]>) -> Vec<Vec<boo
 }
 
 /// From the predicted working set `new_j`, the next one: at most
-/// max(GROW_MIN, |J|) rows enter, the most violated by F = `fval`; once a set
+/// max(GROW_MIN, `grow`·|J|) rows enter (`grow` = 1 but after the iterative
+/// path's coarse start, docs/methods.md §7.2), the most violated by F = `fval`; once a set
 /// repeats (`history`), `single` is set and from then on one row changes per
 /// step — the most negative λ in J or the most violated row outside it
 /// (anti-cycling). Shared by the direct and the iterative paths.
@@ -49,11 +50,12 @@ pub(super) fn limit_changes(
     fval: &[f64],
     history: &HashSet<Vec<bool>>,
     single: &mut bool,
+    grow: usize,
 ) -> Vec<bool> {
     let m = in_j.len();
     let size = in_j.iter().filter(|&&b| b).count();
     let mut entering: Vec<usize> = (0..m).filter(|&i| new_j[i] && !in_j[i]).collect();
-    let cap = GROW_MIN.max(size);
+    let cap = GROW_MIN.max(grow * size);
     if entering.len() > cap {
         entering.sort_unstable_by(|&a, &b| fval[b].total_cmp(&fval[a]).then(a.cmp(&b)));
         for &i in &entering[cap..] {
