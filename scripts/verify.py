@@ -649,6 +649,38 @@ def sneddon3d_rows(args, work, hc, fine):
     return rows
 
 
+def case_cylinder3d(args, work):
+    """A cylinder on a block in 3D under plane strain (docs/verification.md,
+    "Cylinder on a block"): Hertz line contact, on the multigrid path."""
+    d = os.path.join(VDIR, "cylinder3d")
+    hf = 0.001 if args.fine else 0.0015
+    msh = os.path.join(work, "cylinder3d.msh")
+    mesh(args, os.path.join(d, "cylinder3d.geo"), {"hf": hf}, msh, dim=3)
+    summary, h5 = solve(args, d, "cylinder3d.toml", msh, work)
+    E, nu, R, pn = 2.0e11, 0.3, 0.05, 1.726e9
+    Es = E / (2 * (1 - nu**2))
+    P = pn * 2 * R  # load per unit length on the whole cylinder
+    b_ref = math.sqrt(4 * P * R / (math.pi * Es))
+    p0_ref = 2 * P / (math.pi * b_ref)
+    with h5py.File(h5) as f:
+        m, st = f["mesh"], last_step(f)
+        x = np.abs(m["nodes"][:][m["contact_slave"][:]][:, 0])
+        p = st["contact_pressure"][:]
+        act = st["active"][:] > 0
+    # The fit of hertz_fit: p^2 linear in x^2 (p = p0 sqrt(1 - x^2/b^2)),
+    # over every active row along the cylinder.
+    A = np.vstack([np.ones(act.sum()), x[act] ** 2]).T
+    c, *_ = np.linalg.lstsq(A, p[act] ** 2, rcond=None)
+    p0, b = math.sqrt(c[0]), math.sqrt(-c[0] / c[1])
+    tol = 0.01 if args.fine else 0.02
+    force = summary["contact"]["cyl_surf/block_top"]["force"][2]
+    src = "Johnson (1985) §4.3"
+    return [row("cylinder on a block (3D, iterative path)", "b [m] (fit)", b_ref, b, tol, source=src),
+            row("cylinder on a block (3D, iterative path)", "p0 [Pa] (fit)", p0_ref, p0, tol, source=src),
+            row("cylinder on a block (3D, iterative path)", "contact force [N]", pn * R * 0.01,
+                abs(force), 1e-6, source="load pn R L")]
+
+
 def case_patch3d(args, work):
     """The 3D contact patch test through the binary (docs/verification_3d.md
     §7f): stacked cubes with non-matching faces under a uniform pressure;
@@ -684,7 +716,8 @@ CASES = {"nafems1": case_nafems1, "patch": case_patch, "nonmatching": case_nonma
          "hertz": case_hertz,
          "punch": case_punch, "cattaneo": case_cattaneo, "hertz_sphere": case_hertz_sphere,
          "sneddon": case_sneddon, "nafems2": case_nafems2, "shrinkfit": case_shrinkfit,
-         "ssnv104": case_ssnv104, "sneddon3d": case_sneddon3d, "patch3d": case_patch3d}
+         "ssnv104": case_ssnv104, "sneddon3d": case_sneddon3d, "patch3d": case_patch3d,
+         "cylinder3d": case_cylinder3d}
 # the 3D friction cases (issue 46): scripts/verify3d_friction.py
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import verify3d_friction  # noqa: E402
