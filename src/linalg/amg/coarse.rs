@@ -10,7 +10,7 @@
 use super::{kernels::for_rows, Amg};
 
 impl Amg {
-    /// Level l's operator PᵀKP, dense and row-major (sizes()[l]² values).
+    /// Level l's operator PᵀKP, dense and row-major (`sizes()[l]`² values).
     pub fn level_dense(&self, l: usize) -> Vec<f64> {
         let nc = self.sizes()[l];
         let mut dense = vec![0.0; nc * nc];

@@ -436,8 +436,8 @@ impl<'a> State<'a> {
     }
 
     /// The coarse start (solid models; [`coarse_start`]): J, x and λ from
-    /// the contact problem on the coarsest level of the hierarchy of the
-    /// first K_J. Left as it was when that J leaves a body free or no
+    /// the contact problem on a coarse level of the hierarchy of the first
+    /// K_J (the finest with at most 4 000 unknowns). Left as it was when that J leaves a body free or no
     /// hierarchy is built (the first KKT solve then says why).
     fn start_coarse(&mut self) {
         self.coarse_tried = true;
