@@ -1,16 +1,17 @@
 //! The coarse start of the iterative path (docs/methods.md §7.2, "The
 //! coarse start"; solid models): the working set the Newton loop starts
-//! from, found on the multigrid's coarsest level instead of grown from the
-//! rows that touch.
+//! from, found on a coarse level of the multigrid instead of grown from
+//! the rows that touch.
 //!
 //! Grown from the one row that touches, J doubles per step under the growth
 //! limit, so the loop took log₂(|J|/32) steps more on every refinement
 //! (Hertz 45 k / 163 k / 306 k / 946 k unknowns: 6 / 8 / 8 / 11 Newton
 //! steps). Here the contact problem is first solved in the coarse space of
 //! the hierarchy built for the first K_J (P the composite prolongator,
-//! K_c = PᵀK_JP dense, on the finest level of at most 4 000 unknowns): every row restricted,
-//! v_j = Pᵀa_jᵀ, and each row that penetrates held by its own penalty
-//! spring ρ_j (the rows of the first J are already springs in K_J). The
+//! K_c = PᵀK_JP dense, on the finest level of at most 4 000 unknowns):
+//! every row restricted, v_j = Pᵀa_jᵀ, and each row that penetrates held
+//! by its own penalty spring ρ_j (the rows of the first J are already
+//! springs in K_J). The
 //! restricted rows outnumber the coarse unknowns, so they cannot all be
 //! equalities (the gaps of a set of them need not be reachable); a penalty
 //! asks no such thing. Its active-set Newton steps (a row is active iff it
@@ -19,6 +20,7 @@
 //! λ_j = ρ_j·(v_jᵀy − g_j) on them, and decides and certifies as before: no
 //! coarse answer enters the result.
 
+use super::GROW_MIN;
 use crate::linalg::amg::Amg;
 use crate::linalg::dense::SpdFactor;
 use crate::qp::QpProblem;
@@ -37,9 +39,9 @@ const DENSE_MAX: usize = 4000;
 /// reaches it in two steps; the fine rows' first prediction overshoots by
 /// half, and an overshoot shrinks by a ring of rows per step (Hertz 163 k
 /// with no limit: 8 Newton steps and 93 CG steps; doubling 5 and 48;
-/// tripling 5 and 42).
+/// tripling 5 and 42; where the coarse set is over a third of the answer
+/// tripling overshoots, docs/methods.md §7.2).
 pub(super) const GROW: usize = 2;
-use super::GROW_MIN;
 
 /// The start found on the coarse level.
 pub(super) struct CoarseStart {
