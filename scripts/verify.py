@@ -125,11 +125,16 @@ def hertz_fit(f, xcoord=0):
     x = np.abs(m["contact_points"][:, xcoord])
     p = s["contact_pressure"][:]
     act = s["active"][:] > 0
+    a, p0 = hertz_fit_rows(x, p, act)
+    return a, p0, x[act].max(), x[~act].min()
+
+
+def hertz_fit_rows(x, p, act):
+    """The fit of hertz_fit on given distances x, pressures p and active
+    flags: (a, p0)."""
     A = np.vstack([np.ones(act.sum()), x[act] ** 2]).T
     c, *_ = np.linalg.lstsq(A, p[act] ** 2, rcond=None)
-    p0 = math.sqrt(c[0])
-    a = math.sqrt(-c[0] / c[1])
-    return a, p0, x[act].max(), x[~act].min()
+    return math.sqrt(-c[0] / c[1]), math.sqrt(c[0])
 
 
 def row(case, quantity, ref, tool, tol, kind="rel", source=""):
@@ -669,9 +674,7 @@ def case_cylinder3d(args, work):
         act = st["active"][:] > 0
     # The fit of hertz_fit: p^2 linear in x^2 (p = p0 sqrt(1 - x^2/b^2)),
     # over every active row along the cylinder.
-    A = np.vstack([np.ones(act.sum()), x[act] ** 2]).T
-    c, *_ = np.linalg.lstsq(A, p[act] ** 2, rcond=None)
-    p0, b = math.sqrt(c[0]), math.sqrt(-c[0] / c[1])
+    b, p0 = hertz_fit_rows(x, p, act)
     tol = 0.01 if args.fine else 0.02
     force = summary["contact"]["cyl_surf/block_top"]["force"][2]
     src = "Johnson (1985) §4.3"

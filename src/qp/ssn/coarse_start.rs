@@ -20,7 +20,7 @@
 //! λ_j = ρ_j·(v_jᵀy − g_j) on them, and decides and certifies as before: no
 //! coarse answer enters the result.
 
-use super::GROW_MIN;
+use super::limit_changes;
 use crate::linalg::amg::Amg;
 use crate::linalg::dense::SpdFactor;
 use crate::qp::QpProblem;
@@ -33,7 +33,7 @@ const COARSE_STEPS: usize = 40;
 /// factor of it per step).
 const DENSE_MAX: usize = 4000;
 /// Growth of J per step, on the coarse level and in the fine loop after a
-/// coarse start: at most max(GROW_MIN, GROW·|J|) rows enter. The coarse J
+/// coarse start: at most max(32, GROW·|J|) rows enter (`limit_changes`). The coarse J
 /// falls short of the answer (a coarse space is stiffer: Hertz 45 k / 163 k
 /// / 306 k, 38 / 95 / 120 rows of 161 / 388 / 594), and from there tripling
 /// reaches it in two steps; the fine rows' first prediction overshoots by
@@ -86,13 +86,10 @@ pub(super) fn coarse_start(
             amg.restrict_row_to_level(l, c, a)
         })
         .collect();
-    let gap = |y: &[f64], j: usize| -> f64 {
-        v[j].iter().map(|&(k, vk)| vk * y[k]).sum::<f64>() - qp.g[j]
-    };
     let mut in_j = j0.to_vec();
     let mut seen: HashSet<Vec<bool>> = HashSet::new();
     let mut steps = 0;
-    let mut y;
+    let (mut y, mut gaps);
     loop {
         let mut mat = kc.clone();
         let mut rhs = fc.clone();
@@ -108,21 +105,17 @@ pub(super) fn coarse_start(
         SpdFactor::from_row_major(&mat, nc)?.solve_in_place(&mut y);
         steps += 1;
         seen.insert(in_j.clone());
-        // Rows that penetrate enter, at most max(GROW_MIN, GROW·|J|) of
-        // them, the deepest first: from the first J's point springs every
-        // row near the contact penetrates, and the set would then shrink
-        // by a ring of rows per step.
-        let gaps: Vec<f64> = (0..m).map(|j| gap(&y, j)).collect();
-        let mut next: Vec<bool> = (0..m)
-            .map(|j| j0[j] || (in_j[j] && gaps[j] > 0.0))
-            .collect();
-        let mut entering: Vec<usize> = (0..m).filter(|&j| !in_j[j] && gaps[j] > 0.0).collect();
-        let size = in_j.iter().filter(|&&b| b).count();
-        let cap = GROW_MIN.max(GROW * size);
-        entering.sort_unstable_by(|&a, &b| gaps[b].total_cmp(&gaps[a]).then(a.cmp(&b)));
-        for &j in entering.iter().take(cap) {
-            next[j] = true;
-        }
+        gaps = (0..m)
+            .map(|j| v[j].iter().map(|&(k, vk)| vk * y[k]).sum::<f64>() - qp.g[j])
+            .collect::<Vec<f64>>();
+        // Rows that penetrate are active; at most max(GROW_MIN, GROW·|J|)
+        // enter, the deepest first (the fine loop's growth limit,
+        // `limit_changes`, with no anti-cycling: a repeated set ends the
+        // steps): from the first J's point springs every row near the
+        // contact penetrates, and the set would then shrink by a ring of
+        // rows per step.
+        let predicted: Vec<bool> = (0..m).map(|j| j0[j] || gaps[j] > 0.0).collect();
+        let next = limit_changes(&in_j, predicted, &gaps, &HashSet::new(), &mut false, GROW);
         if next == in_j || seen.contains(&next) || steps >= COARSE_STEPS {
             break;
         }
@@ -134,7 +127,7 @@ pub(super) fn coarse_start(
     let lam = (0..m)
         .map(|j| {
             if in_j[j] {
-                rho[j] * gap(&y, j).max(0.0)
+                rho[j] * gaps[j].max(0.0)
             } else {
                 0.0
             }

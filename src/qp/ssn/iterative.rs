@@ -265,18 +265,11 @@ impl<'a> State<'a> {
         } else {
             PCG_MAX
         };
-        if !self.holds_kernel(in_j) {
-            return Kkt::Singular;
-        }
+        let jset = match self.prepare(in_j) {
+            Ok(jset) => jset,
+            Err(k) => return k,
+        };
         let qp = self.qp;
-        let jset: Vec<usize> = (0..qp.m()).filter(|&i| in_j[i]).collect();
-        if self.assembled.as_deref() != Some(in_j) {
-            self.aug.assemble(jset.iter().copied(), &self.rho);
-            self.assembled = Some(in_j.to_vec());
-        }
-        if let Err(msg) = self.ensure_amg(in_j, jset.len()) {
-            return Kkt::Stalled(msg);
-        }
         let Some((_, amg)) = self.amg.as_ref() else {
             return Kkt::Singular; // not reached: built above
         };
@@ -435,22 +428,31 @@ impl<'a> State<'a> {
         Ok(())
     }
 
+    /// K_J assembled for J = `in_j` and its multigrid ready (kept, updated
+    /// or rebuilt); J's rows. Singular when J leaves a rigid motion free,
+    /// Stalled when no multigrid can be built.
+    fn prepare(&mut self, in_j: &[bool]) -> Result<Vec<usize>, Kkt> {
+        if !self.holds_kernel(in_j) {
+            return Err(Kkt::Singular);
+        }
+        let jset: Vec<usize> = (0..in_j.len()).filter(|&i| in_j[i]).collect();
+        if self.assembled.as_deref() != Some(in_j) {
+            self.aug.assemble(jset.iter().copied(), &self.rho);
+            self.assembled = Some(in_j.to_vec());
+        }
+        self.ensure_amg(in_j, jset.len()).map_err(Kkt::Stalled)?;
+        Ok(jset)
+    }
+
     /// The coarse start (solid models; [`coarse_start`]): J, x and λ from
     /// the contact problem on a coarse level of the hierarchy of the first
-    /// K_J (the finest with at most 4 000 unknowns). Left as it was when that J leaves a body free or no
-    /// hierarchy is built (the first KKT solve then says why).
+    /// K_J (the finest with at most 4 000 unknowns). Left as it was when
+    /// that J leaves a body free or no hierarchy is built (the first KKT
+    /// solve then says why).
     fn start_coarse(&mut self) {
         self.coarse_tried = true;
         let in_j = self.in_j.clone();
-        if !self.holds_kernel(&in_j) {
-            return;
-        }
-        let jset: Vec<usize> = (0..in_j.len()).filter(|&i| in_j[i]).collect();
-        if self.assembled.as_deref() != Some(&in_j) {
-            self.aug.assemble(jset.iter().copied(), &self.rho);
-            self.assembled = Some(in_j.clone());
-        }
-        if self.ensure_amg(&in_j, jset.len()).is_err() {
+        if self.prepare(&in_j).is_err() {
             return;
         }
         let Some((_, amg)) = self.amg.as_ref() else {
