@@ -484,23 +484,15 @@ fn iterative_path_agrees() {
     if let ContactPair::NonMatching(p) = &mut mortar.pair {
         p.discretization = Some(Discretization::Mortar);
     }
-    let hertz_mesh = read_msh(&data("hertz.msh")).unwrap();
-    let mut hertz_in = SolidInput::default();
-    hertz_in.materials.insert("ball".into(), mat(2e11, 0.3));
-    hertz_in.materials.insert("block".into(), mat(2e11, 0.3));
-    hertz_in.slip = vec!["x0".into(), "y0".into(), "block_bottom".into()];
-    hertz_in.traction = vec![("ball_top".into(), SolidTraction::Normal(-4.66e7))];
-    let mut c = nts("ball", "block_top");
-    if let ContactPair::NonMatching(p) = &mut c.pair {
-        p.max_gap = Some(0.05);
-    }
-    hertz_in.contact = vec![c];
-    for (name, mesh, inp) in [
-        ("conforming", &stack, stack_input(conforming("interface"))),
-        ("mortar", &stack_nm, stack_input(mortar)),
-        ("hertz", &hertz_mesh, hertz_in),
+    let built = |mesh, inp| build(mesh, Path::new("it.toml"), &inp).unwrap();
+    for (name, m) in [
+        (
+            "conforming",
+            built(&stack, stack_input(conforming("interface"))),
+        ),
+        ("mortar", built(&stack_nm, stack_input(mortar))),
+        ("hertz", hertz_model(2e11)),
     ] {
-        let m = build(mesh, Path::new("it.toml"), &inp).unwrap();
         let near = m.qp.near.as_ref().expect("a near-null space");
         assert_eq!(near.modes.len(), 6);
         let direct = solve(&m);
@@ -549,5 +541,77 @@ fn iterative_path_agrees() {
             "{name}: {} CG steps",
             it.inner_iterations
         );
+    }
+}
+
+/// The Hertz model of `tests/data/hertz.msh` (ball on block between slip
+/// planes, pressed by a traction on the ball's top), both of modulus `e`.
+fn hertz_model(e: f64) -> SolidModel {
+    let mesh = read_msh(&data("hertz.msh")).unwrap();
+    let mut inp = SolidInput::default();
+    inp.materials.insert("ball".into(), mat(e, 0.3));
+    inp.materials.insert("block".into(), mat(e, 0.3));
+    inp.slip = vec!["x0".into(), "y0".into(), "block_bottom".into()];
+    inp.traction = vec![("ball_top".into(), SolidTraction::Normal(-4.66e7))];
+    let mut c = nts("ball", "block_top");
+    if let ContactPair::NonMatching(p) = &mut c.pair {
+        p.max_gap = Some(0.05);
+    }
+    inp.contact = vec![c];
+    build(&mesh, Path::new("it.toml"), &inp).unwrap()
+}
+
+/// Load steps on the iterative path (docs/methods.md §7.2, "Load steps"):
+/// a solve of the same C and A in the same workspace takes the last one's
+/// multigrid, and its answer is that of a fresh solve; a problem with
+/// another C in that workspace is not given it.
+#[test]
+fn iterative_load_steps_keep_the_multigrid() {
+    let m = hertz_model(2e11);
+    let mut opts = SolveOptions::default();
+    opts.settings.ssn.path = signorini::qp::settings::SsnPath::Iterative;
+    let scaled = |qp: &signorini::qp::QpProblem, f: f64| {
+        let mut q = qp.clone();
+        q.d.iter_mut().for_each(|v| *v *= f);
+        q
+    };
+    let fresh = |qp: &signorini::qp::QpProblem| registry::solve("ssn", qp, &opts).expect("solves");
+    let ws = opts.settings.workspace();
+    let half = registry::solve_in("ssn", &scaled(&m.qp, 0.5), &opts, &ws).expect("solves");
+    assert_eq!(ws.kept_found(), 0);
+    let full = registry::solve_in("ssn", &m.qp, &opts, &ws).expect("solves");
+    assert_eq!(
+        ws.kept_found(),
+        1,
+        "the second load step found no multigrid"
+    );
+    let reference = fresh(&m.qp);
+    // A stiffer C (twice E): the same sizes and pattern, other values.
+    let stiff = hertz_model(4e11).qp;
+    let stiff_ws = registry::solve_in("ssn", &stiff, &opts, &ws).expect("solves");
+    let stiff_ref = fresh(&stiff);
+    for (name, r, refr) in [
+        ("half load", &half, &fresh(&scaled(&m.qp, 0.5))),
+        ("full load", &full, &reference),
+        ("stiffer", &stiff_ws, &stiff_ref),
+    ] {
+        assert!(r.status.converged(), "{name}: {:?}", r.status);
+        assert!(
+            r.kkt.within(opts.settings.kkt_target),
+            "{name}: {:?}",
+            r.kkt
+        );
+        assert_eq!(r.active, refr.active, "{name}: another active set");
+        let xmax = refr.x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let dx = refr
+            .x
+            .iter()
+            .zip(&r.x)
+            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+        println!(
+            "{name}: kept against fresh, max |Δx|/max |x| = {:.1e}",
+            dx / xmax
+        );
+        assert!(dx < 1e-9 * xmax, "{name}: {dx:e} of {xmax:e}");
     }
 }

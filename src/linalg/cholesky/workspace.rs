@@ -43,6 +43,8 @@ pub struct Workspace {
     /// those matrices ([`matrix_key`]): the next solve of the same C and A
     /// (a load step) takes it instead of deriving it again.
     kept: RefCell<Option<(u64, Rc<dyn Any>)>>,
+    /// How often [`Workspace::kept`] found data under its key.
+    kept_found: Cell<usize>,
 }
 
 impl Default for Workspace {
@@ -69,6 +71,7 @@ impl Workspace {
             symbolic_reused: Cell::new(0),
             memory_limit: None,
             kept: RefCell::new(None),
+            kept_found: Cell::new(0),
         }
     }
 
@@ -76,9 +79,19 @@ impl Workspace {
     pub fn kept<T: Any>(&self, key: u64) -> Option<Rc<T>> {
         let kept = self.kept.borrow();
         let (k, v) = kept.as_ref()?;
-        (*k == key)
+        let found = (*k == key)
             .then(|| v.clone().downcast::<T>().ok())
-            .flatten()
+            .flatten();
+        if found.is_some() {
+            self.kept_found.set(self.kept_found.get() + 1);
+        }
+        found
+    }
+
+    /// How often [`Workspace::kept`] found data under its key (the caller
+    /// may still find it made from other matrices and drop it).
+    pub fn kept_found(&self) -> usize {
+        self.kept_found.get()
     }
 
     /// Keep `value` under `key` (one slot: what was kept before is dropped).

@@ -25,7 +25,9 @@ use crate::qp::executor::{Iterative, Step};
 use crate::qp::kkt::CONTACT_FLOOR;
 use crate::qp::Failure;
 use crate::qp::{Context, IterRecord, NearKernel, Output, QpError, QpProblem, Status};
+use std::cell::RefCell;
 use std::collections::HashSet;
+use std::rc::Rc;
 use std::time::Instant;
 
 /// Relative residual of the K_J solves while J still moves (the set only
@@ -94,14 +96,36 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
             &unit
         }
     };
-    let perm = block_rcm(&qp.c, blocks);
-    let r: Vec<Vec<f64>> = orthonormal_kernel(&qp.c, &qp.kernel)?
-        .iter()
-        .map(|z| perm.iter().map(|&o| z[o]).collect())
-        .collect();
-    // The permuted C lives only in the pattern of K_J (AugPattern); the
-    // certificate reads the caller's C (one copy of C less: 2 GiB at 5 M nodes).
-    let (qpp, aug) = permuted(qp, &perm);
+    // A load step of the same C and A takes the last solve's order, kernel,
+    // K_J pattern and multigrid from the workspace ([`Kept`]).
+    let kernel_key = crate::linalg::cholesky::matrix_key(&[], &qp.kernel);
+    let kept = ctx
+        .ws
+        .kept::<RefCell<Option<Kept>>>(KEPT_TAG)
+        .and_then(|k| k.borrow_mut().take())
+        .filter(|k| k.kernel_key == kernel_key && k.c.same_as(&qp.c) && k.a.same_as(&qp.a));
+    let (perm, r, qpp, aug, hierarchy) = match kept {
+        Some(k) => {
+            let gather = |v: &[f64]| -> Vec<f64> { k.perm.iter().map(|&o| v[o]).collect() };
+            let qpp = QpProblem {
+                d: gather(&qp.d),
+                g: qp.g.clone(),
+                ..k.qpp
+            };
+            (k.perm, k.r, qpp, k.aug, Some(k.hierarchy))
+        }
+        None => {
+            let perm = block_rcm(&qp.c, blocks);
+            let r: Vec<Vec<f64>> = orthonormal_kernel(&qp.c, &qp.kernel)?
+                .iter()
+                .map(|z| perm.iter().map(|&o| z[o]).collect())
+                .collect();
+            // The permuted C lives only in the pattern of K_J (AugPattern); the
+            // certificate reads the caller's C (one copy of C less: 2 GiB at 5 M nodes).
+            let (qpp, aug) = permuted(qp, &perm);
+            (perm, r, qpp, aug, None)
+        }
+    };
     let x0 = ctx
         .x0
         .map(|x| perm.iter().map(|&o| x[o]).collect::<Vec<f64>>());
@@ -115,6 +139,7 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
         x0.as_deref(),
     );
     st.target = ctx.settings.kkt_target;
+    st.reuse(hierarchy);
     let mut exec = ctx.executor("ssn");
     let (status, iters) = exec.run(&mut st);
     log::debug!(
@@ -125,21 +150,75 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
         st.t_setup
     );
     let t_all = t0.elapsed().as_secs_f64();
+    let x = unpermute(&perm, &st.x);
+    let (lambda, active) = (std::mem::take(&mut st.lam), std::mem::take(&mut st.in_j));
+    let (cg_steps, t_setup) = (st.cg_steps, st.t_setup);
+    let State {
+        aug,
+        amg,
+        assembled,
+        ..
+    } = st;
+    let qpp = QpProblem {
+        d: vec![],
+        g: vec![],
+        ..qpp
+    };
+    ctx.ws.keep(
+        KEPT_TAG,
+        Rc::new(RefCell::new(Some(Kept {
+            c: qp.c.clone(),
+            a: qp.a.clone(),
+            kernel_key,
+            perm,
+            r,
+            qpp,
+            aug,
+            hierarchy: Hierarchy { amg, assembled },
+        }))),
+    );
     Ok(Output {
-        x: unpermute(&perm, &st.x),
-        lambda: std::mem::take(&mut st.lam),
+        x,
+        lambda,
         lambda_t: vec![],
-        active: std::mem::take(&mut st.in_j),
+        active,
         status,
         iterations: iters,
-        inner_iterations: st.cg_steps,
+        inner_iterations: cg_steps,
         log: exec.log,
         timings: vec![
-            ("multigrid setup".into(), st.t_setup),
-            ("iterate".into(), t_all - st.t_setup),
+            ("multigrid setup".into(), t_setup),
+            ("iterate".into(), t_all - t_setup),
         ],
     })
 }
+
+/// What a solve leaves in the workspace for the next solve of the same C
+/// and A (a load step; docs/methods.md §7.2, "Load steps"): the unknowns'
+/// order, the basis of ker C, the permuted A with the near-null space, the
+/// pattern of K_J and the multigrid with the working set it was last
+/// updated for. Taken out of the workspace by the solve that uses it and
+/// put back at its end.
+struct Kept {
+    c: Csr,
+    a: Csr,
+    kernel_key: u64,
+    perm: Vec<usize>,
+    r: Vec<Vec<f64>>,
+    /// The permuted problem without d and g.
+    qpp: QpProblem,
+    aug: AugPattern,
+    hierarchy: Hierarchy,
+}
+
+/// The multigrid of a [`Kept`] and the working set K_J was assembled for.
+struct Hierarchy {
+    amg: Option<(Vec<bool>, Amg)>,
+    assembled: Option<Vec<bool>>,
+}
+
+/// The workspace slot of [`Kept`].
+const KEPT_TAG: u64 = 0x7373_6e5f_6974_6572;
 
 struct State<'a> {
     /// The permuted problem; its C is empty (see `aug`).
@@ -245,6 +324,19 @@ impl<'a> State<'a> {
             t_setup: 0.0,
             coarse_tried: false,
             grow: 1,
+        }
+    }
+
+    /// Start from the last load step's multigrid (`hierarchy`; [`State::prepare`]
+    /// updates or rebuilds it for the first J). The last step's working set
+    /// (`Context::active0`) is not a start here: it falls short of this
+    /// step's, the first prediction from it overshoots, and the overshoot
+    /// shrinks by a ring of rows per step (Hertz 163 k in three load steps:
+    /// 7 and 7 Newton steps on the second and third where the coarse start
+    /// takes 5 and 5; docs/methods.md §7.2, "Load steps").
+    fn reuse(&mut self, hierarchy: Option<Hierarchy>) {
+        if let Some(h) = hierarchy {
+            (self.amg, self.assembled) = (h.amg, h.assembled);
         }
     }
 

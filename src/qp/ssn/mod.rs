@@ -4,7 +4,8 @@
 //! system of the working set J (`Cx + A_Jᵀλ_J = d, A_J x = g_J, λ_{J^c} = 0`),
 //! predicts `J ← {i : λᵢ + c(Ax − g)ᵢ > τ}` and stops when J did not change.
 //! Start: the working-set warm start if given (the last load step's
-//! active rows, `Context::active0`), else the glued set {gᵢ = 0};
+//! active rows, `Context::active0`; not on the iterative path), else the
+//! glued set {gᵢ = 0};
 //! c = mean diag C (a stiffness), and τ = tol·(‖λ‖∞ + c·max(‖x‖∞, ‖g‖∞)).
 //!
 //! The KKT solve takes, per step and from counts only (`path`), the
