@@ -505,12 +505,7 @@ fn iterative_path_agrees() {
             "{name}: {:?}",
             it.kkt
         );
-        let xmax = direct.x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let dx = direct
-            .x
-            .iter()
-            .zip(&it.x)
-            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+        let (dx, xmax) = max_diff(&direct.x, &it.x);
         println!(
             "{name}: iterative against direct, max |Δx|/max |x| = {:.1e}; {} steps, {} CG steps",
             dx / xmax,
@@ -602,16 +597,21 @@ fn iterative_load_steps_keep_the_multigrid() {
             r.kkt
         );
         assert_eq!(r.active, refr.active, "{name}: another active set");
-        let xmax = refr.x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let dx = refr
-            .x
-            .iter()
-            .zip(&r.x)
-            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+        let (dx, xmax) = max_diff(&refr.x, &r.x);
         println!(
             "{name}: kept against fresh, max |Δx|/max |x| = {:.1e}",
             dx / xmax
         );
         assert!(dx < 1e-9 * xmax, "{name}: {dx:e} of {xmax:e}");
     }
+}
+
+/// (max |x − y|, max |x|): the difference of y from the reference x.
+fn max_diff(x: &[f64], y: &[f64]) -> (f64, f64) {
+    let xmax = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let dx = x
+        .iter()
+        .zip(y)
+        .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+    (dx, xmax)
 }
