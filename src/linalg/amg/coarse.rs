@@ -15,24 +15,41 @@ impl Amg {
         let nc = self.sizes()[l];
         let mut dense = vec![0.0; nc * nc];
         for i in 0..nc {
-            let row = match self.levels.get(l) {
-                Some(lev) => {
-                    let (c, v) = lev.a.row(i);
-                    c.iter()
-                        .map(|&j| j as usize)
-                        .zip(v.iter().copied())
-                        .collect::<Vec<_>>()
-                }
-                None => {
-                    let (c, v) = self.coarse_a.row(i);
-                    c.iter().copied().zip(v.iter().copied()).collect()
-                }
-            };
-            for (j, x) in row {
+            for (j, x) in self.level_row(l, i) {
                 dense[i * nc + j] = x;
             }
         }
         dense
+    }
+
+    /// Level l's operator PᵀKP as (row, column, value) triplets, row by
+    /// row (for a sparse factor of a level too large for a dense one).
+    pub fn level_triplets(&self, l: usize) -> Vec<(usize, usize, f64)> {
+        let nc = self.sizes()[l];
+        (0..nc)
+            .flat_map(|i| {
+                self.level_row(l, i)
+                    .into_iter()
+                    .map(move |(j, x)| (i, j, x))
+            })
+            .collect()
+    }
+
+    /// Row i of level l's operator: (column, value), columns sorted.
+    fn level_row(&self, l: usize, i: usize) -> Vec<(usize, f64)> {
+        match self.levels.get(l) {
+            Some(lev) => {
+                let (c, v) = lev.a.row(i);
+                c.iter()
+                    .map(|&j| j as usize)
+                    .zip(v.iter().copied())
+                    .collect()
+            }
+            None => {
+                let (c, v) = self.coarse_a.row(i);
+                c.iter().copied().zip(v.iter().copied()).collect()
+            }
+        }
     }
 
     /// Pᵀr: a fine vector restricted to level l.

@@ -8,30 +8,42 @@
 //! (Hertz 45 k / 163 k / 306 k / 946 k unknowns: 6 / 8 / 8 / 11 Newton
 //! steps). Here the contact problem is first solved in the coarse space of
 //! the hierarchy built for the first K_J (P the composite prolongator,
-//! K_c = PᵀK_JP dense, on the finest level of at most 4 000 unknowns):
+//! K_c = PᵀK_JP, on the coarsest level with at least a thousandth of the
+//! fine unknowns, [`LEVEL_RATIO`]):
 //! every row restricted, v_j = Pᵀa_jᵀ, and each row that penetrates held
 //! by its own penalty spring ρ_j (the rows of the first J are already
 //! springs in K_J). The
 //! restricted rows outnumber the coarse unknowns, so they cannot all be
 //! equalities (the gaps of a set of them need not be reachable); a penalty
 //! asks no such thing. Its active-set Newton steps (a row is active iff it
-//! penetrates) each factor one dense matrix of the coarse size. The fine
+//! penetrates) each factor one matrix of the coarse size (dense up to
+//! [`DENSE_MAX`] unknowns, sparse above). The fine
 //! loop then starts from the rows that penetrate there, with x = Py and
 //! λ_j = ρ_j·(v_jᵀy − g_j) on them, and decides and certifies as before: no
 //! coarse answer enters the result.
 
 use super::limit_changes;
 use crate::linalg::amg::Amg;
+use crate::linalg::cholesky::Cholesky;
 use crate::linalg::dense::SpdFactor;
+use crate::linalg::sparse::Csr;
 use crate::qp::QpProblem;
 use std::collections::HashSet;
 
 /// Active-set steps on the coarse level, at most (a repeated set ends them
 /// earlier).
 const COARSE_STEPS: usize = 40;
-/// The coarse level is the finest with at most this many unknowns (a dense
-/// factor of it per step).
+/// The coarse level is the coarsest with at least 1/LEVEL_RATIO of the
+/// fine unknowns (Hertz 45 k / 163 k / 306 k / 946 k / 2.76 M: 246 / 714 /
+/// 1 272 / 3 390 / 9 174 unknowns, 1/183 to 1/301 of the fine ones; the
+/// coarsest level of 2.76 M, 288 unknowns, gave 10 Newton steps where 946 k
+/// takes 6, and a level 1/10 of the fine one a stiffer start still).
+const LEVEL_RATIO: usize = 1000;
+/// Up to this many unknowns the coarse level is factored dense, above it
+/// sparse (a level of a few thousand aggregates is a sparse 3D operator).
 const DENSE_MAX: usize = 4000;
+/// The coarse level has at most this many unknowns (a coarser one is taken).
+const SPARSE_MAX: usize = 50_000;
 /// Growth of J per step, on the coarse level and in the fine loop after a
 /// coarse start: at most max(32, GROW·|J|) rows enter (`limit_changes`). The coarse J
 /// falls short of the answer (a coarse space is stiffer: Hertz 45 k / 163 k
@@ -42,6 +54,13 @@ const DENSE_MAX: usize = 4000;
 /// tripling 5 and 42; where the coarse set is over a third of the answer
 /// tripling overshoots, docs/methods.md §7.2).
 pub(super) const GROW: usize = 2;
+
+/// The coarse level's operator PᵀK_JP: dense (row-major) up to DENSE_MAX
+/// unknowns, else triplets for a sparse factor.
+enum Level {
+    Dense(Vec<f64>),
+    Sparse(Vec<(usize, usize, f64)>),
+}
 
 /// The start found on the coarse level.
 pub(super) struct CoarseStart {
@@ -57,21 +76,44 @@ pub(super) struct CoarseStart {
 /// The coarse start (module doc) from the hierarchy `amg` of
 /// K_J = C + Σ_{j∈J0} ρ_j a_ja_jᵀ, J0 = `j0`; `qp` supplies d, A and g
 /// (its C is not read). None when the hierarchy has no coarse level of at
-/// most DENSE_MAX unknowns or a coarse matrix is not positive definite.
+/// most SPARSE_MAX unknowns or a coarse matrix is not positive definite.
 pub(super) fn coarse_start(
     amg: &Amg,
     qp: &QpProblem,
     j0: &[bool],
     rho: &[f64],
 ) -> Option<CoarseStart> {
+    coarse_start_at(amg, qp, j0, rho, DENSE_MAX)
+}
+
+/// [`coarse_start`] with a dense factor of the coarse level up to
+/// `dense_max` unknowns (a test compares the two factors).
+fn coarse_start_at(
+    amg: &Amg,
+    qp: &QpProblem,
+    j0: &[bool],
+    rho: &[f64],
+    dense_max: usize,
+) -> Option<CoarseStart> {
     let sizes = amg.sizes();
-    // The finest coarse level a dense factor takes (the coarsest may hold
-    // a few aggregates only: Hertz at 946 k unknowns has levels of 92 892,
-    // 3 390 and 132).
-    let l = (1..sizes.len()).find(|&l| sizes[l] <= DENSE_MAX)?;
-    let nc = sizes[l];
+    // The coarsest level with at least 1/LEVEL_RATIO of the fine unknowns
+    // (the coarsest may hold a few aggregates only: Hertz at 946 k unknowns
+    // has levels of 92 892, 3 390 and 132), else the finest coarse one; a
+    // coarser one while it is above SPARSE_MAX.
+    let mut l = (1..sizes.len())
+        .rev()
+        .find(|&l| sizes[l] * LEVEL_RATIO >= sizes[0])
+        .unwrap_or(1);
+    while l < sizes.len() && sizes[l] > SPARSE_MAX {
+        l += 1;
+    }
+    let nc = *sizes.get(l)?;
     let m = qp.m();
-    let kc = amg.level_dense(l);
+    let kc = if nc <= dense_max {
+        Level::Dense(amg.level_dense(l))
+    } else {
+        Level::Sparse(amg.level_triplets(l))
+    };
     // The right side of K_J x = d + Σ_{J0} ρ_j g_j a_jᵀ, restricted.
     let mut w = vec![0.0; m];
     for j in (0..m).filter(|&j| j0[j]) {
@@ -91,18 +133,38 @@ pub(super) fn coarse_start(
     let mut steps = 0;
     let (mut y, mut gaps);
     loop {
-        let mut mat = kc.clone();
+        let springs = (0..m).filter(|&j| in_j[j] && !j0[j]);
         let mut rhs = fc.clone();
-        for j in (0..m).filter(|&j| in_j[j] && !j0[j]) {
+        for j in springs.clone() {
             for &(a, va) in &v[j] {
                 rhs[a] += rho[j] * qp.g[j] * va;
-                for &(b, vb) in &v[j] {
-                    mat[a * nc + b] += rho[j] * va * vb;
-                }
             }
         }
         y = rhs;
-        SpdFactor::from_row_major(&mat, nc)?.solve_in_place(&mut y);
+        match &kc {
+            Level::Dense(kd) => {
+                let mut mat = kd.clone();
+                for j in springs {
+                    for &(a, va) in &v[j] {
+                        for &(b, vb) in &v[j] {
+                            mat[a * nc + b] += rho[j] * va * vb;
+                        }
+                    }
+                }
+                SpdFactor::from_row_major(&mat, nc)?.solve_in_place(&mut y);
+            }
+            Level::Sparse(trip) => {
+                let mut t = trip.clone();
+                for j in springs {
+                    for &(a, va) in &v[j] {
+                        t.extend(v[j].iter().map(|&(b, vb)| (a, b, rho[j] * va * vb)));
+                    }
+                }
+                Cholesky::new(&Csr::from_triplets(nc, nc, &t), &[])
+                    .ok()?
+                    .solve_in_place(&mut y);
+            }
+        }
         steps += 1;
         seen.insert(in_j.clone());
         gaps = (0..m)
@@ -140,4 +202,71 @@ pub(super) fn coarse_start(
         lam,
         steps,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fem::solid::{build, SolidInput, SolidTraction};
+    use crate::linalg::amg::{AmgSettings, NearNull};
+    use crate::linalg::augmented::AugPattern;
+    use crate::linalg::sparse::norm_inf;
+    use crate::problem::{
+        Contact, ContactPair, Discretization, FrictionLaw, Material, NonMatchingPair,
+    };
+    use std::path::Path;
+
+    /// The coarse start with a sparse factor of the coarse level (levels
+    /// above DENSE_MAX) finds the dense factor's set and x (Hertz, the
+    /// test mesh: ball on block between slip planes).
+    #[test]
+    fn sparse_and_dense_coarse_levels_agree() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/solid_contact");
+        let mesh = crate::mesh::read_msh(&dir.join("hertz.msh")).unwrap();
+        let mut inp = SolidInput::default();
+        for body in ["ball", "block"] {
+            let steel = Material {
+                e: 2e11,
+                nu: 0.3,
+                rho: 7800.0,
+            };
+            inp.materials.insert(body.into(), steel);
+        }
+        inp.slip = vec!["x0".into(), "y0".into(), "block_bottom".into()];
+        inp.traction = vec![("ball_top".into(), SolidTraction::Normal(-4.66e7))];
+        inp.contact = vec![Contact {
+            pair: ContactPair::NonMatching(NonMatchingPair {
+                slave: "ball".into(),
+                master: "block_top".into(),
+                max_gap: Some(0.05),
+                discretization: Some(Discretization::Nts),
+                interference: false,
+            }),
+            friction: FrictionLaw::Frictionless,
+        }];
+        let qp = build(&mesh, Path::new("t.toml"), &inp).unwrap().qp;
+        let diag = qp.c.diag();
+        let rho = super::super::iterative::rho_rows(&qp, &diag, norm_inf(&diag), 10.0);
+        let j0: Vec<bool> = qp.g.iter().map(|&g| g <= 0.0).collect();
+        let mut aug = AugPattern::new(&qp.c, &qp.a);
+        aug.assemble((0..qp.m()).filter(|&j| j0[j]), &rho);
+        let nk = qp.near.as_ref().unwrap();
+        let near = NearNull {
+            block_ptr: &nk.block_ptr,
+            modes: &nk.modes,
+        };
+        let amg = Amg::new(aug.matrix(), Some(near), &AmgSettings::for_modes(6)).unwrap();
+        let dense = coarse_start_at(&amg, &qp, &j0, &rho, usize::MAX).unwrap();
+        let sparse = coarse_start_at(&amg, &qp, &j0, &rho, 0).unwrap();
+        let rows = dense.in_j.iter().filter(|b| **b).count();
+        assert!(rows > 1, "the coarse start found {rows} rows");
+        assert_eq!(dense.in_j, sparse.in_j);
+        assert_eq!(dense.steps, sparse.steps);
+        let dx = dense
+            .x
+            .iter()
+            .zip(&sparse.x)
+            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+        assert!(dx <= 1e-10 * norm_inf(&dense.x), "{dx:e}");
+    }
 }

@@ -538,7 +538,7 @@ impl<'a> State<'a> {
 
     /// The coarse start (solid models; [`coarse_start`]): J, x and λ from
     /// the contact problem on a coarse level of the hierarchy of the first
-    /// K_J (the finest with at most 4 000 unknowns). Left as it was when
+    /// K_J (the coarsest with at least a thousandth of the unknowns). Left as it was when
     /// that J leaves a body free or no hierarchy is built (the first KKT
     /// solve then says why).
     fn start_coarse(&mut self) {
