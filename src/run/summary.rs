@@ -115,8 +115,9 @@ pub struct Probe {
     pub u: [f64; 2],
 }
 
-/// Wall time (s) of the run's phases (the last step's assemble, solve and
-/// write) and of the method's own phases.
+/// Wall time (s) of the run's phases (assemble, solve and write: the last
+/// step's on plane and axisymmetric models, summed over the steps on solid
+/// ones) and of the method's own phases.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct Timings {
     pub read: f64,
