@@ -42,24 +42,26 @@ const MIN_ROWS: usize = 12;
 /// rather than being summed with a distant one.
 const PAIR_FRACTION: f64 = 0.5;
 
-/// The rows' data of one level (the problem's own, or a coarse one).
-struct Rows {
-    g: Vec<f64>,
-    t0: Vec<f64>,
-    cn: Vec<f64>,
-    ct: Vec<f64>,
-    /// μ (Coulomb) or s (Tresca) per row.
-    bound: Vec<f64>,
-    /// The rows in normal contact at the start.
-    in_n: Vec<bool>,
+/// The rows' data of one level (the problem's own, or a coarse one), per
+/// contact point: `t0` holds the point's tangential rows (one in 2D, two on
+/// discs, `plane_nested.rs`).
+pub(super) struct Rows {
+    pub(super) g: Vec<f64>,
+    pub(super) t0: Vec<f64>,
+    pub(super) cn: Vec<f64>,
+    pub(super) ct: Vec<f64>,
+    /// μ (Coulomb) or s (Tresca) per point.
+    pub(super) bound: Vec<f64>,
+    /// The points in normal contact at the start.
+    pub(super) in_n: Vec<bool>,
 }
 
-/// One coarse level: its dual form, its rows, and the rows of the level
-/// above (finer) that each of its rows sums.
-struct Level {
-    dense: DenseDual,
-    rows: Rows,
-    groups: Vec<Vec<usize>>,
+/// One coarse level: its dual form, its rows, and the points of the level
+/// above (finer) that each of its points sums.
+pub(super) struct Level {
+    pub(super) dense: DenseDual,
+    pub(super) rows: Rows,
+    pub(super) groups: Vec<Vec<usize>>,
 }
 
 /// What the coarse start reads of the problem's own rows.
@@ -75,19 +77,20 @@ pub(super) struct Fine<'a> {
     pub(super) in_n: &'a [bool],
 }
 
-/// The sets the coarse levels predict for the problem's rows, and the
+/// The sets the coarse levels predict for the problem's points (`T`: a
+/// point's tangential kind, [`Tangential`] in 2D, `Disc` on discs), and the
 /// Newton steps each level took (finest coarse level first).
-pub(super) struct CoarseStart {
+pub(super) struct CoarseStart<T> {
     pub(super) in_n: Vec<bool>,
-    pub(super) tang: Vec<Tangential>,
-    /// (rows, Newton steps) per coarse level.
+    pub(super) tang: Vec<T>,
+    /// (points, Newton steps) per coarse level.
     pub(super) levels: Vec<(usize, usize)>,
 }
 
 /// The coarse start of `fine`, or None when it has too few rows to
 /// coarsen or a coarse system is singular (the problem then starts as
 /// without it).
-pub(super) fn coarse_start(fine: &Fine<'_>) -> Option<CoarseStart> {
+pub(super) fn coarse_start(fine: &Fine<'_>) -> Option<CoarseStart<Tangential>> {
     let top = Rows {
         g: fine.g.to_vec(),
         t0: fine.t0.to_vec(),
@@ -96,35 +99,61 @@ pub(super) fn coarse_start(fine: &Fine<'_>) -> Option<CoarseStart> {
         bound: fine.bound.to_vec(),
         in_n: fine.in_n.to_vec(),
     };
+    let levels = levels(fine.dense, &top, 1);
+    descend(&levels, |dense, rows, start| {
+        settle(dense, rows, fine.coulomb, start)
+    })
+}
+
+/// The coarse levels of the dual form `fine` and its rows `top`, `tdim`
+/// tangential rows per point (B = [A; T]: m normal rows, then `tdim` per
+/// point), finest first: pairs are summed until [`MIN_ROWS`] points remain
+/// or pairing no longer removes a quarter of them.
+pub(super) fn levels(fine: &DenseDual, top: &Rows, tdim: usize) -> Vec<Level> {
     let mut levels: Vec<Level> = vec![];
     loop {
-        let (dense, rows) = levels
-            .last()
-            .map_or((fine.dense, &top), |l| (&l.dense, &l.rows));
+        let (dense, rows) = levels.last().map_or((fine, top), |l| (&l.dense, &l.rows));
         let m = rows.g.len();
         if m <= MIN_ROWS {
             break;
         }
-        let groups = pair_rows(dense);
+        let groups = pair(dense, m, tdim);
         if 4 * groups.len() > 3 * m {
             break;
         }
-        let level = aggregate(dense, rows, groups);
+        let level = aggregate(dense, rows, groups, tdim);
         levels.push(level);
     }
+    levels
+}
+
+/// Nested iteration down the `levels` (module head): the coarsest settles
+/// from the problem's own start, each finer one from the sets of the one
+/// below (from its own start if those are singular there), and the
+/// problem's points take the finest coarse level's sets. `settle` runs one
+/// level's working-set steps from a start (None: the problem's own) and
+/// returns its sets and steps, None when that start is singular.
+pub(super) fn descend<T: Copy>(
+    levels: &[Level],
+    settle: impl Fn(
+        &DenseDual,
+        &Rows,
+        Option<(Vec<bool>, Vec<T>)>,
+    ) -> Option<(Vec<bool>, Vec<T>, usize)>,
+) -> Option<CoarseStart<T>> {
     let coarsest = levels.last()?;
     let mut counts = vec![0; levels.len()];
-    let (mut in_n, mut tang, steps) = settle(&coarsest.dense, &coarsest.rows, fine.coulomb, None)?;
+    let (mut in_n, mut tang, steps) = settle(&coarsest.dense, &coarsest.rows, None)?;
     counts[levels.len() - 1] = steps;
     for l in (0..levels.len() - 1).rev() {
-        let (n0, t0) = prolong(&levels[l + 1].groups, &in_n, &tang);
+        let start = prolong(&levels[l + 1].groups, &in_n, &tang);
         let (dense, rows) = (&levels[l].dense, &levels[l].rows);
-        let (mut n1, mut t1, mut steps) = settle(dense, rows, fine.coulomb, Some((n0, t0)))?;
+        let (mut n1, mut t1, mut steps) = settle(dense, rows, Some(start))?;
         if steps == 0 {
             // The sets from below are singular here (the level below was
             // too coarse to hold a body: one row under a disc leaves its
             // rotation free): this level starts as the coarsest does.
-            (n1, t1, steps) = settle(dense, rows, fine.coulomb, None)?;
+            (n1, t1, steps) = settle(dense, rows, None)?;
         }
         counts[l] = steps;
         (in_n, tang) = (n1, t1);
@@ -141,22 +170,23 @@ pub(super) fn coarse_start(fine: &Fine<'_>) -> Option<CoarseStart> {
     })
 }
 
-/// The sets of a level's rows taken by the rows of the level above.
-fn prolong(
-    groups: &[Vec<usize>],
-    in_n: &[bool],
-    tang: &[Tangential],
-) -> (Vec<bool>, Vec<Tangential>) {
+/// The sets of a level's points taken by the points of the level above.
+fn prolong<T: Copy>(groups: &[Vec<usize>], in_n: &[bool], tang: &[T]) -> (Vec<bool>, Vec<T>) {
     let m: usize = groups.iter().map(Vec::len).sum();
     let mut n = vec![false; m];
-    let mut t = vec![Tangential::Stick; m];
+    let mut t: Vec<Option<T>> = vec![None; m];
     for (a, g) in groups.iter().enumerate() {
         for &i in g {
             n[i] = in_n[a];
-            t[i] = tang[a];
+            t[i] = Some(tang[a]);
         }
     }
-    (n, t)
+    (
+        n,
+        t.into_iter()
+            .map(|v| v.expect("every point is in a group"))
+            .collect(),
+    )
 }
 
 /// Working-set steps on one level from `start` (None: the problem's own
@@ -252,16 +282,22 @@ fn stick_reversals(solved: &[Tangential], next: &mut [Tangential]) {
     }
 }
 
-/// Pairs of rows that couple most ([`heavy_edge_pairs`] on the
-/// correlation of H's normal plus tangential blocks).
-fn pair_rows(d: &DenseDual) -> Vec<Vec<usize>> {
-    let m = d.m();
+/// Pairs of points that couple most: [`heavy_edge_pairs`] on the
+/// correlation (Σ|H_ab|)/√(w_i w_j) over the point's normal row and its
+/// `tdim` tangential rows (B = [A; T]: m normal rows, then `tdim` per
+/// point), w the sums of their diagonal entries.
+pub(super) fn pair(d: &DenseDual, m: usize, tdim: usize) -> Vec<Vec<usize>> {
     let h = &d.h;
-    let w: Vec<f64> = (0..m).map(|i| h[(i, i)] + h[(m + i, m + i)]).collect();
+    let idx = |i: usize| std::iter::once(i).chain((0..tdim).map(move |k| m + tdim * i + k));
+    let w: Vec<f64> = (0..m).map(|i| idx(i).map(|a| h[(a, a)]).sum()).collect();
     let corr = |i: usize, j: usize| -> f64 {
         let den = (w[i] * w[j]).sqrt();
         if den > 0.0 {
-            (h[(i, j)].abs() + h[(m + i, m + j)].abs()) / den
+            idx(i)
+                .zip(idx(j))
+                .map(|(a, b)| h[(a, b)].abs())
+                .sum::<f64>()
+                / den
         } else {
             0.0
         }
@@ -311,7 +347,7 @@ pub(super) fn heavy_edge_pairs(m: usize, corr: impl Fn(usize, usize) -> f64) -> 
 
 /// Per group, the harmonic sum 1/Σ 1/vᵢ of its members' values (the
 /// stiffness a summed row meets).
-pub(super) fn harmonic_sums(groups: &[Vec<usize>], v: &[f64]) -> Vec<f64> {
+fn harmonic_sums(groups: &[Vec<usize>], v: &[f64]) -> Vec<f64> {
     groups
         .iter()
         .map(|g| 1.0 / g.iter().map(|&i| 1.0 / v[i]).sum::<f64>())
@@ -319,70 +355,68 @@ pub(super) fn harmonic_sums(groups: &[Vec<usize>], v: &[f64]) -> Vec<f64> {
 }
 
 /// Per group, the mean of its members' values.
-pub(super) fn means(groups: &[Vec<usize>], v: &[f64]) -> Vec<f64> {
+fn means(groups: &[Vec<usize>], v: &[f64]) -> Vec<f64> {
     groups
         .iter()
         .map(|g| g.iter().map(|&i| v[i]).sum::<f64>() / g.len() as f64)
         .collect()
 }
 
-/// The level whose rows sum the `groups` of `rows` (module head).
-fn aggregate(d: &DenseDual, rows: &Rows, groups: Vec<Vec<usize>>) -> Level {
+/// The level whose points sum the `groups` of `rows` (module head), `tdim`
+/// tangential rows per point: each coarse row sums its members' rows of
+/// the same kind (normal, k-th tangential).
+pub(super) fn aggregate(d: &DenseDual, rows: &Rows, groups: Vec<Vec<usize>>, tdim: usize) -> Level {
     let m = rows.g.len();
     let mc = groups.len();
+    let nb = (1 + tdim) * m;
+    let nc = (1 + tdim) * mc;
     let mut owner = vec![0; m];
     for (a, g) in groups.iter().enumerate() {
         for &i in g {
             owner[i] = a;
         }
     }
+    // Row j of B on the coarse level.
     let to = |j: usize| {
         if j < m {
             owner[j]
         } else {
-            mc + owner[j - m]
+            let (p, k) = ((j - m) / tdim, (j - m) % tdim);
+            mc + tdim * owner[p] + k
         }
     };
-    let mut h = Mat::<f64>::zeros(2 * mc, 2 * mc);
-    for j in 0..2 * m {
+    let mut h = Mat::<f64>::zeros(nc, nc);
+    for j in 0..nb {
         let cj = to(j);
         for (i, v) in d.h.col(j).iter().enumerate() {
             h[(to(i), cj)] += v;
         }
     }
     let k = d.e.len();
-    let mut bk0 = vec![0.0; 2 * mc];
-    let mut br = vec![vec![0.0; k]; 2 * mc];
-    for j in 0..2 * m {
-        bk0[to(j)] += d.bk0[j];
-        for (o, v) in br[to(j)].iter_mut().zip(&d.br[j]) {
+    let mut bk0 = vec![0.0; nc];
+    let mut br = vec![vec![0.0; k]; nc];
+    let mut null = vec![true; nc];
+    for j in 0..nb {
+        let c = to(j);
+        bk0[c] += d.bk0[j];
+        for (o, v) in br[c].iter_mut().zip(&d.br[j]) {
             *o += v;
         }
+        null[c] &= d.null[j];
     }
-    let null = (0..2 * mc)
-        .map(|a| {
-            let (off, g) = if a < mc {
-                (0, &groups[a])
-            } else {
-                (m, &groups[a - mc])
-            };
-            g.iter().all(|&i| d.null[off + i])
-        })
-        .collect();
-    let sum = |v: &[f64]| -> Vec<f64> {
+    let sum = |v: &[f64], stride: usize, k: usize| -> Vec<f64> {
         groups
             .iter()
-            .map(|g| g.iter().map(|&i| v[i]).sum())
+            .map(|g| g.iter().map(|&i| v[stride * i + k]).sum())
             .collect()
     };
-    let harmonic = |v: &[f64]| harmonic_sums(&groups, v);
-    let mean = |v: &[f64]| means(&groups, v);
+    let t0: Vec<Vec<f64>> = (0..tdim).map(|k| sum(&rows.t0, tdim, k)).collect();
     let rows_c = Rows {
-        g: sum(&rows.g),
-        t0: sum(&rows.t0),
-        cn: harmonic(&rows.cn),
-        ct: harmonic(&rows.ct),
-        bound: mean(&rows.bound),
+        g: sum(&rows.g, 1, 0),
+        t0: (0..tdim * mc).map(|j| t0[j % tdim][j / tdim]).collect(),
+        cn: harmonic_sums(&groups, &rows.cn),
+        ct: harmonic_sums(&groups, &rows.ct),
+        bound: means(&groups, &rows.bound),
         in_n: groups
             .iter()
             .map(|g| g.iter().any(|&i| rows.in_n[i]))
@@ -430,7 +464,7 @@ mod tests {
         };
         // Greedy: 5–6, 0–1, 2–3; then 7 and 4, whose neighbours are
         // taken, stay alone instead of being summed with each other.
-        let groups = pair_rows(&d);
+        let groups = pair(&d, m, 1);
         assert_eq!(groups.len(), 5, "{groups:?}");
         for g in groups.iter().filter(|g| g.len() == 2) {
             assert!((xs[g[0]] - xs[g[1]]).abs() == 1.0, "{groups:?}");
@@ -445,7 +479,7 @@ mod tests {
             bound: (0..m).map(|i| i as f64).collect(),
             in_n: (0..m).map(|i| i == 3).collect(),
         };
-        let l = aggregate(&d, &rows, groups.clone());
+        let l = aggregate(&d, &rows, groups.clone(), 1);
         let (a, b) = (&groups[0], &groups[1]);
         let mut want = 0.0;
         for &i in a {

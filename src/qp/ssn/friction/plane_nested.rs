@@ -22,15 +22,11 @@
 //! is spent.
 
 use super::super::dual::DenseDual;
-use super::super::nested::{harmonic_sums, heavy_edge_pairs, means};
+use super::super::nested::{descend, levels, Rows};
 use super::dual_space::{dual_row, known_forces, set_multipliers};
 use super::{cycle_budget, of_rhs, pattern, predict_disc, set_rows, Disc};
 use crate::qp::coulomb_bound;
-use faer::Mat;
 use std::collections::HashSet;
-
-/// A level with at most this many points is not coarsened further.
-const MIN_ROWS: usize = 12;
 
 impl super::State<'_> {
     /// Start the next Newton steps from the kinds of the coarse levels on
@@ -50,7 +46,11 @@ impl super::State<'_> {
             in_n: self.in_n.clone(),
         };
         let t = std::time::Instant::now();
-        let Some(cs) = coarse_start(&d.dense, rows, mu.is_some()) else {
+        let coulomb = mu.is_some();
+        let levels = levels(&d.dense, &rows, 2);
+        let Some(cs) = descend(&levels, |dense, rows, start| {
+            settle(dense, rows, coulomb, start)
+        }) else {
             log::debug!("ssn: discs: no coarse start (too few rows to coarsen, or a coarse system is singular): the method's own start");
             return false;
         };
@@ -79,95 +79,6 @@ impl super::State<'_> {
         self.preset = true;
         true
     }
-}
-
-/// The rows' data of one level, per contact point (t0: 2 per point).
-pub(super) struct Rows {
-    pub(super) g: Vec<f64>,
-    pub(super) t0: Vec<f64>,
-    pub(super) cn: Vec<f64>,
-    pub(super) ct: Vec<f64>,
-    /// μ (Coulomb) or s (Tresca) per point.
-    pub(super) bound: Vec<f64>,
-    /// The points in normal contact at the start.
-    pub(super) in_n: Vec<bool>,
-}
-
-/// One coarse level: its dual form, its rows, and the points of the level
-/// above (finer) that each of its points sums.
-struct Level {
-    dense: DenseDual,
-    rows: Rows,
-    groups: Vec<Vec<usize>>,
-}
-
-/// The kinds the coarse levels predict for the problem's points, and the
-/// Newton steps each level took (finest coarse level first).
-pub(super) struct CoarseStart {
-    pub(super) in_n: Vec<bool>,
-    pub(super) tang: Vec<Disc>,
-    /// (points, Newton steps) per coarse level.
-    pub(super) levels: Vec<(usize, usize)>,
-}
-
-/// The coarse start of the problem's dual form `fine` and rows, Coulomb's
-/// (`coulomb`: bound = μ) or a Tresca problem's; None when there are too
-/// few points to coarsen or the coarsest glued system is singular.
-pub(super) fn coarse_start(fine: &DenseDual, top: Rows, coulomb: bool) -> Option<CoarseStart> {
-    let mut levels: Vec<Level> = vec![];
-    loop {
-        let (dense, rows) = levels.last().map_or((fine, &top), |l| (&l.dense, &l.rows));
-        let m = rows.g.len();
-        if m <= MIN_ROWS {
-            break;
-        }
-        let groups = pair_points(dense, m);
-        if 4 * groups.len() > 3 * m {
-            break;
-        }
-        let level = aggregate(dense, rows, groups);
-        levels.push(level);
-    }
-    let coarsest = levels.last()?;
-    let mut counts = vec![0; levels.len()];
-    let (mut in_n, mut tang, steps) = settle(&coarsest.dense, &coarsest.rows, coulomb, None)?;
-    counts[levels.len() - 1] = steps;
-    for l in (0..levels.len() - 1).rev() {
-        let start = prolong(&levels[l + 1].groups, &in_n, &tang);
-        let (dense, rows) = (&levels[l].dense, &levels[l].rows);
-        let (mut n1, mut t1, mut steps) = settle(dense, rows, coulomb, Some(start))?;
-        if steps == 0 {
-            // The kinds from below are singular here (a level too coarse
-            // to hold a body): this level starts as the coarsest does.
-            (n1, t1, steps) = settle(dense, rows, coulomb, None)?;
-        }
-        counts[l] = steps;
-        (in_n, tang) = (n1, t1);
-    }
-    let (in_n, tang) = prolong(&levels[0].groups, &in_n, &tang);
-    Some(CoarseStart {
-        in_n,
-        tang,
-        levels: levels
-            .iter()
-            .zip(counts)
-            .map(|(l, c)| (l.groups.len(), c))
-            .collect(),
-    })
-}
-
-/// The sets of a level's points taken by the points of the level above.
-fn prolong(groups: &[Vec<usize>], in_n: &[bool], tang: &[Disc]) -> (Vec<bool>, Vec<Disc>) {
-    let m: usize = groups.iter().map(Vec::len).sum();
-    let mut n = vec![false; m];
-    let mut t = vec![Disc::Free; m];
-    for (a, g) in groups.iter().enumerate() {
-        for &i in g {
-            n[i] = in_n[a];
-            t[i] = tang[a];
-        }
-    }
-    (n, t)
 }
 
 /// One working set of a level solved in the dual space: the multipliers
@@ -300,104 +211,10 @@ fn stick_reversals(solved: &[Disc], next: &mut [Disc]) {
     }
 }
 
-/// Pairs of points that couple most: 2D's heavy-edge matching
-/// ([`heavy_edge_pairs`]) on the correlation of H's three blocks.
-fn pair_points(d: &DenseDual, m: usize) -> Vec<Vec<usize>> {
-    let h = &d.h;
-    let idx = |i: usize| [i, m + 2 * i, m + 2 * i + 1];
-    let w: Vec<f64> = (0..m)
-        .map(|i| idx(i).iter().map(|&a| h[(a, a)]).sum())
-        .collect();
-    let corr = |i: usize, j: usize| -> f64 {
-        let den = (w[i] * w[j]).sqrt();
-        if den > 0.0 {
-            idx(i)
-                .iter()
-                .zip(idx(j))
-                .map(|(&a, b)| h[(a, b)].abs())
-                .sum::<f64>()
-                / den
-        } else {
-            0.0
-        }
-    };
-    heavy_edge_pairs(m, corr)
-}
-
-/// The level whose points sum the `groups` of `rows` (module head).
-fn aggregate(d: &DenseDual, rows: &Rows, groups: Vec<Vec<usize>>) -> Level {
-    let m = rows.g.len();
-    let mc = groups.len();
-    let mut owner = vec![0; m];
-    for (a, g) in groups.iter().enumerate() {
-        for &i in g {
-            owner[i] = a;
-        }
-    }
-    // Row j of B = [A; T] (m normal rows, then a pair per point) on the
-    // coarse level.
-    let to = |j: usize| {
-        if j < m {
-            owner[j]
-        } else {
-            let (p, k) = ((j - m) / 2, (j - m) % 2);
-            mc + 2 * owner[p] + k
-        }
-    };
-    let mut h = Mat::<f64>::zeros(3 * mc, 3 * mc);
-    for j in 0..3 * m {
-        let cj = to(j);
-        for (i, v) in d.h.col(j).iter().enumerate() {
-            h[(to(i), cj)] += v;
-        }
-    }
-    let k = d.e.len();
-    let mut bk0 = vec![0.0; 3 * mc];
-    let mut br = vec![vec![0.0; k]; 3 * mc];
-    let mut null = vec![true; 3 * mc];
-    for j in 0..3 * m {
-        let c = to(j);
-        bk0[c] += d.bk0[j];
-        for (o, v) in br[c].iter_mut().zip(&d.br[j]) {
-            *o += v;
-        }
-        null[c] &= d.null[j];
-    }
-    let sum = |v: &[f64], stride: usize, k: usize| -> Vec<f64> {
-        groups
-            .iter()
-            .map(|g| g.iter().map(|&i| v[stride * i + k]).sum())
-            .collect()
-    };
-    let (t1, t2) = (sum(&rows.t0, 2, 0), sum(&rows.t0, 2, 1));
-    let rows_c = Rows {
-        g: sum(&rows.g, 1, 0),
-        t0: t1.iter().zip(&t2).flat_map(|(a, b)| [*a, *b]).collect(),
-        cn: harmonic_sums(&groups, &rows.cn),
-        ct: harmonic_sums(&groups, &rows.ct),
-        bound: means(&groups, &rows.bound),
-        in_n: groups
-            .iter()
-            .map(|g| g.iter().any(|&i| rows.in_n[i]))
-            .collect(),
-    };
-    Level {
-        dense: DenseDual {
-            h: std::rc::Rc::new(h),
-            bk0,
-            br,
-            e: d.e.clone(),
-            null,
-            last_lu: Default::default(),
-        },
-        rows: rows_c,
-        groups,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use faer::Mat;
 
     /// Points on a line listed out of order, H decaying with distance in
     /// each of the three blocks: every pair is two neighbours, and the
@@ -430,7 +247,7 @@ mod tests {
             null: (0..3 * m).map(|j| j == m + 2 * 3 + 1).collect(),
             last_lu: Default::default(),
         };
-        let groups = pair_points(&d, m);
+        let groups = super::super::super::nested::pair(&d, m, 2);
         assert_eq!(groups.len(), 5, "{groups:?}");
         for g in groups.iter().filter(|g| g.len() == 2) {
             assert!((xs[g[0]] - xs[g[1]]).abs() == 1.0, "{groups:?}");
@@ -443,7 +260,7 @@ mod tests {
             bound: (0..m).map(|i| i as f64).collect(),
             in_n: (0..m).map(|i| i == 3).collect(),
         };
-        let l = aggregate(&d, &rows, groups.clone());
+        let l = super::super::super::nested::aggregate(&d, &rows, groups.clone(), 2);
         let mc = groups.len();
         let pair = groups.iter().position(|g| g.len() == 2).unwrap();
         let g = &groups[pair];
