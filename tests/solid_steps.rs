@@ -235,6 +235,22 @@ fn a_3d_load_pulling_a_body_off_is_refused_as_unbounded() {
     );
     assert!(text.contains("stack.toml"), "{text}");
     assert!(!out.join("stack.h5").exists(), "an output was written");
+
+    // In load steps, the step that pulls it off is named (as in 2D,
+    // tests/cli.rs): pressing (factor 1 of −P), less, then pulling.
+    let steps =
+        "\n[[steps]]\nfactor = 1.0\n\n[[steps]]\nfactor = 0.5\n\n[[steps]]\nfactor = -1.0\n";
+    let (code, text, _) = run(
+        tmp.path(),
+        &stack_toml(steps, -P),
+        &["solve", "--out", out.to_str().unwrap()],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("unbounded"), "{text}");
+    assert!(
+        text.contains("step 3 of 3 (t = 3)"),
+        "the step is not named: {text}"
+    );
 }
 
 /// `--restart` in 3D: a run stopped after two of three steps and continued

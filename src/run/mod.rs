@@ -89,6 +89,24 @@ impl RunError {
             _ => EXIT_BAD_INPUT,
         }
     }
+
+    /// A solver's refusal in load step `s` (0-based) of `file`'s steps,
+    /// named by the step when there are several (an unbounded load): plane,
+    /// axisymmetric and solid runs alike.
+    pub(crate) fn in_step(self, file: &crate::problem::ProblemFile, s: usize) -> RunError {
+        match self {
+            RunError::Solver { path, msg } if !file.steps.is_empty() => RunError::Solver {
+                path,
+                msg: format!(
+                    "step {} of {} (t = {}): {msg}",
+                    s + 1,
+                    file.nsteps(),
+                    file.step_time(s)
+                ),
+            },
+            e => e,
+        }
+    }
 }
 
 /// Exit code: bad input, an unbounded problem, an unwritable output.

@@ -363,18 +363,7 @@ impl<'a> Run<'a> {
         // the problem.
         check_interrupt()?;
         // A refused step of several (an unbounded load) names the step.
-        let res = res.map_err(|e| match e {
-            RunError::Solver { path, msg } if multi => RunError::Solver {
-                path,
-                msg: format!(
-                    "step {} of {} (t = {}): {msg}",
-                    s + 1,
-                    file.nsteps(),
-                    file.step_time(s)
-                ),
-            },
-            e => e,
-        })?;
+        let res = res.map_err(|e| e.in_step(file, s))?;
         let t_solve = t_solve0.elapsed().as_secs_f64();
         log::debug!(
             "step {}: assembly {t_assemble:.3} s, solve {t_solve:.3} s",

@@ -115,18 +115,7 @@ pub fn solve_solid(
         // An interrupted solve is no result to write, nor an error of the
         // problem.
         check_interrupt()?;
-        let res = res.map_err(|e| match e {
-            RunError::Solver { path, msg } if multi => RunError::Solver {
-                path,
-                msg: format!(
-                    "step {} of {} (t = {}): {msg}",
-                    s + 1,
-                    file.nsteps(),
-                    file.step_time(s)
-                ),
-            },
-            e => e,
-        })?;
+        let res = res.map_err(|e| e.in_step(file, s))?;
         let time_solve = t0.elapsed().as_secs_f64();
         let verdict = Verdict::of(method, &res, target, strict);
         let certified = verdict.certified() && res.status.converged();
