@@ -232,20 +232,53 @@ mod tests {
     use std::path::Path;
 
     /// The coarse start with a sparse factor of the coarse level (levels
-    /// above DENSE_MAX) finds the dense factor's set and x (Hertz, the
-    /// test mesh: ball on block between slip planes).
+    /// above DENSE_MAX: the springs added in place in the level's pattern)
+    /// finds the dense factor's set, steps and x. `coarse_max`: the
+    /// hierarchy's coarsest size (below the path's on a test mesh, so that
+    /// there is a coarse level).
+    fn agree(qp: &QpProblem, coarse_max: usize) {
+        let diag = qp.c.diag();
+        let rho = super::super::iterative::rho_rows(qp, &diag, norm_inf(&diag), 10.0);
+        let j0: Vec<bool> = qp.g.iter().map(|&g| g <= 0.0).collect();
+        let mut aug = AugPattern::new(&qp.c, &qp.a);
+        aug.assemble((0..qp.m()).filter(|&j| j0[j]), &rho);
+        let nk = qp.near.as_ref().unwrap();
+        let near = NearNull {
+            block_ptr: &nk.block_ptr,
+            modes: &nk.modes,
+        };
+        let settings = AmgSettings {
+            coarse_max,
+            ..AmgSettings::for_modes(6)
+        };
+        let amg = Amg::new(aug.matrix(), Some(near), &settings).unwrap();
+        assert!(amg.sizes().len() > 1, "one level: {:?}", amg.sizes());
+        let dense = coarse_start_at(&amg, qp, &j0, &rho, usize::MAX).unwrap();
+        let sparse = coarse_start_at(&amg, qp, &j0, &rho, 0).unwrap();
+        let rows = dense.in_j.iter().filter(|b| **b).count();
+        assert!(rows > 1, "the coarse start found {rows} rows");
+        assert_eq!(dense.in_j, sparse.in_j);
+        assert_eq!(dense.steps, sparse.steps);
+        let dx = dense
+            .x
+            .iter()
+            .zip(&sparse.x)
+            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+        assert!(dx <= 1e-10 * norm_inf(&dense.x), "{dx:e}");
+    }
+
+    fn material(e: f64, nu: f64) -> Material {
+        Material { e, nu, rho: 7800.0 }
+    }
+
+    /// Hertz, the test mesh: ball on block between slip planes, NTS rows.
     #[test]
     fn sparse_and_dense_coarse_levels_agree() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/solid_contact");
         let mesh = crate::mesh::read_msh(&dir.join("hertz.msh")).unwrap();
         let mut inp = SolidInput::default();
         for body in ["ball", "block"] {
-            let steel = Material {
-                e: 2e11,
-                nu: 0.3,
-                rho: 7800.0,
-            };
-            inp.materials.insert(body.into(), steel);
+            inp.materials.insert(body.into(), material(2e11, 0.3));
         }
         inp.slip = vec!["x0".into(), "y0".into(), "block_bottom".into()];
         inp.traction = vec![("ball_top".into(), SolidTraction::Normal(-4.66e7))];
@@ -259,29 +292,34 @@ mod tests {
             }),
             friction: FrictionLaw::Frictionless,
         }];
-        let qp = build(&mesh, Path::new("t.toml"), &inp).unwrap().qp;
-        let diag = qp.c.diag();
-        let rho = super::super::iterative::rho_rows(&qp, &diag, norm_inf(&diag), 10.0);
-        let j0: Vec<bool> = qp.g.iter().map(|&g| g <= 0.0).collect();
-        let mut aug = AugPattern::new(&qp.c, &qp.a);
-        aug.assemble((0..qp.m()).filter(|&j| j0[j]), &rho);
-        let nk = qp.near.as_ref().unwrap();
-        let near = NearNull {
-            block_ptr: &nk.block_ptr,
-            modes: &nk.modes,
-        };
-        let amg = Amg::new(aug.matrix(), Some(near), &AmgSettings::for_modes(6)).unwrap();
-        let dense = coarse_start_at(&amg, &qp, &j0, &rho, usize::MAX).unwrap();
-        let sparse = coarse_start_at(&amg, &qp, &j0, &rho, 0).unwrap();
-        let rows = dense.in_j.iter().filter(|b| **b).count();
-        assert!(rows > 1, "the coarse start found {rows} rows");
-        assert_eq!(dense.in_j, sparse.in_j);
-        assert_eq!(dense.steps, sparse.steps);
-        let dx = dense
-            .x
-            .iter()
-            .zip(&sparse.x)
-            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
-        assert!(dx <= 1e-10 * norm_inf(&dense.x), "{dx:e}");
+        agree(
+            &build(&mesh, Path::new("t.toml"), &inp).unwrap().qp,
+            AmgSettings::for_modes(6).coarse_max,
+        );
+    }
+
+    /// The stacked cubes meshed apart: aluminium held along z by the
+    /// contact alone on steel, mortar rows (each touches the unknowns of
+    /// several master triangles).
+    #[test]
+    fn sparse_and_dense_coarse_levels_agree_on_mortar_rows_of_a_floating_body() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/solid_contact");
+        let mesh = crate::mesh::read_msh(&dir.join("stack_nm.msh")).unwrap();
+        let mut inp = SolidInput::default();
+        inp.materials.insert("lower".into(), material(2e11, 0.3));
+        inp.materials.insert("upper".into(), material(7e10, 0.33));
+        inp.slip = vec!["x0".into(), "y0".into(), "bottom".into()];
+        inp.traction = vec![("top".into(), SolidTraction::Normal(-1e8))];
+        inp.contact = vec![Contact {
+            pair: ContactPair::NonMatching(NonMatchingPair {
+                slave: "upper_bottom".into(),
+                master: "lower_top".into(),
+                max_gap: None,
+                discretization: Some(Discretization::Mortar),
+                interference: false,
+            }),
+            friction: FrictionLaw::Frictionless,
+        }];
+        agree(&build(&mesh, Path::new("t.toml"), &inp).unwrap().qp, 200);
     }
 }

@@ -564,7 +564,7 @@ impl<'a> State<'a> {
                 self.grow = coarse_start::GROW;
             }
             None => log::debug!(
-                "ssn iterative: no coarse start (a coarse matrix is not positive definite)"
+                "ssn iterative: no coarse start (a coarse matrix is not positive definite, or a row falls outside the sparse level's pattern)"
             ),
         }
         self.t_setup += t.elapsed().as_secs_f64();

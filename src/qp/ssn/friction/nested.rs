@@ -173,19 +173,15 @@ pub(super) fn descend<T: Copy>(
 /// The sets of a level's points taken by the points of the level above.
 fn prolong<T: Copy>(groups: &[Vec<usize>], in_n: &[bool], tang: &[T]) -> (Vec<bool>, Vec<T>) {
     let m: usize = groups.iter().map(Vec::len).sum();
-    let mut n = vec![false; m];
-    let mut t: Vec<Option<T>> = vec![None; m];
+    let mut owner = vec![0; m];
     for (a, g) in groups.iter().enumerate() {
         for &i in g {
-            n[i] = in_n[a];
-            t[i] = Some(tang[a]);
+            owner[i] = a;
         }
     }
     (
-        n,
-        t.into_iter()
-            .map(|v| v.expect("every point is in a group"))
-            .collect(),
+        owner.iter().map(|&a| in_n[a]).collect(),
+        owner.iter().map(|&a| tang[a]).collect(),
     )
 }
 

@@ -214,6 +214,7 @@ fn stick_reversals(solved: &[Disc], next: &mut [Disc]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::qp::ssn::friction::nested::{aggregate, pair};
     use faer::Mat;
 
     /// Points on a line listed out of order, H decaying with distance in
@@ -247,7 +248,7 @@ mod tests {
             null: (0..3 * m).map(|j| j == m + 2 * 3 + 1).collect(),
             last_lu: Default::default(),
         };
-        let groups = super::super::super::nested::pair(&d, m, 2);
+        let groups = pair(&d, m, 2);
         assert_eq!(groups.len(), 5, "{groups:?}");
         for g in groups.iter().filter(|g| g.len() == 2) {
             assert!((xs[g[0]] - xs[g[1]]).abs() == 1.0, "{groups:?}");
@@ -260,7 +261,7 @@ mod tests {
             bound: (0..m).map(|i| i as f64).collect(),
             in_n: (0..m).map(|i| i == 3).collect(),
         };
-        let l = super::super::super::nested::aggregate(&d, &rows, groups.clone(), 2);
+        let l = aggregate(&d, &rows, groups.clone(), 2);
         let mc = groups.len();
         let pair = groups.iter().position(|g| g.len() == 2).unwrap();
         let g = &groups[pair];
