@@ -309,6 +309,45 @@ for t in cattaneo3:both:friction:1e-8 bumps:b:friction:1e-8 bumps_tresca:b:tresc
     record "crosscheck $name" $?
 done
 
+# The exported QP with friction against an independent conic solver
+# (scripts/peer_friction.py: Clarabel on the second-order cone program of
+# the Tresca problem, for Coulomb at s = mu lambda of signorini's answer;
+# docs/verification_3d.md §7k): the 3D soft cube on a steel one (two
+# tangential rows per contact row, tangents held on the planes of
+# symmetry) with Coulomb and with Tresca, Cattaneo-Mindlin's sphere on a
+# block (coarse, hc = 0.03) sheared in one step, and the 2D pad on two
+# bumps (one row per contact row). About 5 s.
+peer_dir=$OUT/peer
+mkdir -p "$peer_dir"
+cp tests/data/solid/xcheck/soft_cube_coulomb.toml "$peer_dir/"
+sed -i "s#^file = .*#file = \"$ROOT/tests/data/solid_contact/stack_nm.msh\"#" "$peer_dir/soft_cube_coulomb.toml"
+sed 's/^friction = 0.3$/tresca = 1.5e4/' "$peer_dir/soft_cube_coulomb.toml" > "$peer_dir/soft_cube_tresca.toml"
+gmsh -3 -format msh22 -v 1 -setnumber hc 0.03 verification/cattaneo3d/cattaneo3d.geo -o "$peer_dir/cattaneo3d.msh" >/dev/null \
+    || { echo "FAIL gmsh could not mesh cattaneo3d" >&2; record "gmsh cattaneo3d" 1; }
+sed '/^\[\[steps\]\]/,$d; s#^file = .*#file = "cattaneo3d.msh"#; s#^u = \[0.0, 0.0, 0.0\]#u = [1.0e-3, 0.5e-3, 0.0]#' \
+    verification/cattaneo3d/cattaneo3d.toml > "$peer_dir/cattaneo3d_sheared.toml"
+cp "$fric_dir/bumps.toml" "$peer_dir/bumps.toml"
+peer_dirs=()
+for t in soft_cube_coulomb:friction soft_cube_tresca:tresca cattaneo3d_sheared:1.0e-3 bumps:friction; do
+    IFS=: read -r name key <<< "$t"
+    if ! grep -q "$key" "$peer_dir/$name.toml"; then
+        echo "FAIL $name: the variant was not written (sed did not match)" >&2
+        record "peer $name" 1
+        continue
+    fi
+    if "$EXE" export --qp "$peer_dir/$name" "$peer_dir/$name.toml" --solution -q; then
+        peer_dirs+=("$peer_dir/$name")
+    else
+        echo "FAIL signorini export $name" >&2
+        record "peer $name" 1
+    fi
+done
+if [ ${#peer_dirs[@]} -gt 0 ]; then
+    stamp "peer_friction.py (Clarabel on the exported frictional QPs)"
+    PYTHONPATH="$PYDEPS" /usr/bin/python3 scripts/peer_friction.py "${peer_dirs[@]}"
+    record "peer friction" $?
+fi
+
 stamp "finished"
 [ $failed -eq 0 ] || echo "python_checks: failed: ${failed_names[*]}" >&2
 [ $unchecked -eq 0 ] || echo "python_checks: not checked (the reference cannot check them): ${unchecked_names[*]}" >&2

@@ -14,45 +14,6 @@ mod common;
 use serde_json::Value;
 use std::path::Path;
 
-fn toml(msh: &Path, pt: [f64; 2]) -> String {
-    format!(
-        r#"[mesh]
-file = "{}"
-
-[materials.lower]
-E = 2.0e11
-nu = 0.3
-
-[materials.upper]
-E = 2.0e7
-nu = 0.45
-
-[[dirichlet]]
-on = "bottom"
-u = [0.0, 0.0, 0.0]
-
-[[slip]]
-on = "lower_x0"
-
-[[slip]]
-on = "lower_y0"
-
-[[traction]]
-on = "top"
-p = [{:e}, {:e}, -1.0e6]
-
-[[contact]]
-slave = "upper_bottom"
-master = "lower_top"
-discretization = "mortar"
-friction = 0.3
-"#,
-        msh.display(),
-        pt[0],
-        pt[1]
-    )
-}
-
 /// `signorini solve` of the problem `text` written in `dir`, with `flags`,
 /// to dir/out: (exit code, stdout + stderr).
 fn run(dir: &Path, text: &str, flags: &[&str]) -> (i32, String) {
@@ -103,10 +64,7 @@ fn interface_force(json: &Value, name: &str) -> Vec<f64> {
 }
 
 fn cube(pt: [f64; 2]) -> String {
-    toml(
-        &common::root().join("tests/data/solid_contact/stack_nm.msh"),
-        pt,
-    )
+    common::soft_cube_toml(["lower_x0", "lower_y0"], pt, "")
 }
 
 /// A run refused as unbounded: exit 2, the sliding body and friction

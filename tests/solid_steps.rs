@@ -496,22 +496,3 @@ fn a_3d_step_that_does_not_converge_exits_3_with_its_outputs() {
         assert!(out.join(f).is_file(), "no {f}");
     }
 }
-
-/// `export` does not run 3D models yet: exit 2, one line saying which
-/// commands do, no directory written.
-#[test]
-fn export_of_a_3d_model_is_refused_naming_the_commands_that_run_it() {
-    let tmp = tempfile::tempdir().unwrap();
-    let qp = tmp.path().join("qp");
-    let (code, text, _) = run(
-        tmp.path(),
-        &stack_toml("", -P),
-        &["export", "--qp", qp.to_str().unwrap()],
-    );
-    assert_eq!(code, 2, "{text}");
-    assert!(
-        text.contains("3D mesh") && text.contains("compare"),
-        "{text}"
-    );
-    assert!(!qp.exists());
-}

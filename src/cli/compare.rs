@@ -6,8 +6,8 @@ use super::progress::progress;
 use super::solve::{bad_input, EXIT_BAD_INPUT};
 use super::SolverFlags;
 use crate::problem::Problem;
-use crate::run::compare::{compare, label, Comparable, CompareSpec, Event, Table};
-use crate::run::{self, Loaded};
+use crate::run;
+use crate::run::compare::{compare, label, CompareSpec, Event, Table};
 use clap::Args;
 use std::path::{Path, PathBuf};
 
@@ -67,11 +67,7 @@ pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i3
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };
-    // The one branch on the dimension: everything below asks the model.
-    let prep: &dyn Comparable = match &loaded {
-        Loaded::Plane(p) => p.as_ref(),
-        Loaded::Solid(s) => s.as_ref(),
-    };
+    let prep = loaded.comparable();
     if let Some(t) = a.time_limit {
         if !(t > 0.0 && t.is_finite()) {
             crate::errln!(
@@ -158,6 +154,16 @@ pub fn run(a: &CompareArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i3
             crate::errln!("error: {e}");
             return EXIT_BAD_INPUT;
         }
+    }
+    // A table without one certified row holds no answer: every variant
+    // failed, timed out or was not certified, and there is nothing the
+    // others were measured against (exit 3, as an uncertified solve).
+    if !table.rows.iter().any(|r| r.certified) {
+        crate::errln!(
+            "warning: {}: no variant gave a certified answer; the table has no reference (docs/methods.md §8)",
+            a.problem.display()
+        );
+        return crate::run::EXIT_NOT_CONVERGED;
     }
     0
 }

@@ -34,7 +34,7 @@ pub struct ExportArgs {
 
 pub fn run(a: &ExportArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 {
     let t0 = Instant::now();
-    let prep = match run::prepare_with(&a.problem, a.no_contact, build) {
+    let prep = match run::load(&a.problem, a.no_contact, build) {
         Ok(p) => p,
         Err(e) => return bad_input(&e),
     };
@@ -43,7 +43,7 @@ pub fn run(a: &ExportArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32
         solution: a.solution,
         solver: a.solver.section(),
     };
-    let r = match run::export(&prep, &spec) {
+    let r = match run::export(prep.comparable(), &spec) {
         Ok(r) => r,
         Err(e) => return bad_input(&e),
     };

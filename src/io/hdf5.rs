@@ -83,8 +83,8 @@ pub use solid::{
 };
 pub use solid_read::{is_solid_checkpoint, read_solid_checkpoint, SolidSteps};
 pub use split::{
-    checkpoint_files, mesh_file_name, pack, step_file_name, write_index, write_mesh_file,
-    write_step_file, CheckpointFiles, Packed,
+    checkpoint_files, mesh_file_name, pack, step_file_name, unpack_part, write_index,
+    write_mesh_file, write_step_file, CheckpointFiles, Packed,
 };
 
 /// Root attributes that are not user strings.
@@ -793,7 +793,7 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
         .is_ok_and(|m| m.as_str() == crate::fem::ElementKind::Solid.model_name());
     if solid {
         return Err(ctx.format(
-            "a 3D (solid) checkpoint: `signorini plot`, a 3D problem's --restart and h5py read it (docs/problem-format.md §6), pack does not yet (issue 45)",
+            "a 3D (solid) checkpoint: `signorini plot`, `pack`, a 3D problem's --restart and h5py read it (docs/problem-format.md §6), not this command",
         ));
     }
 

@@ -533,6 +533,7 @@ fn certify(
     mut notes: Vec<Note>,
 ) -> QpResult {
     let target = settings.kkt_target;
+    zero_on_empty_rows(qp, &r.x, &mut r.lambda_t);
     let (mut kkt, mut cx) = kkt::residuals_and_cx(qp, &r.x, &r.lambda, &r.lambda_t);
     // Motions free on the rows carrying a force (docs/methods.md §1.7): the
     // move keeps Cx, those rows (and their slip) and dᵀx. It is taken only
@@ -587,6 +588,34 @@ fn certify(
         kkt,
         energy,
         notes,
+    }
+}
+
+/// λ_t on a tangential row of T without entries and without offset (a
+/// tangent held by a plane of symmetry, docs/methods.md §12.2, §12.5)
+/// enters no balance and no slip: any value the bound admits is as good,
+/// and a method may leave one there (the dual methods do: nothing moves
+/// it). Its one representative is 0, which also leaves the row's partner
+/// the whole disc; so every method reports the same λ_t, and the
+/// certificate is taken of that. An empty row with an offset has the slip
+/// −t0 prescribed, and its λ_t is the slip rule's: it is left alone. An
+/// offset below 10⁻¹² of the length scale X of the certificate (§9.4) is
+/// rounding (a point held on a plane whose normal is a computed one keeps
+/// displacements of 10⁻²³ m across it), not a slip: the slip rule weighs
+/// it by |t0|/X, so either λ_t passes, and 0 is taken.
+fn zero_on_empty_rows(qp: &QpProblem, x: &[f64], lambda_t: &mut [f64]) {
+    let Some(f) = &qp.friction else {
+        return;
+    };
+    let xmax = crate::linalg::sparse::norm_inf(x).max(kkt::length_floor(qp));
+    for (i, l) in lambda_t.iter_mut().enumerate().take(f.t.nrows) {
+        // A zero stays as it is (its sign too: the same bits as before).
+        if *l != 0.0
+            && f.t0.get(i).is_some_and(|t0| t0.abs() <= 1e-12 * xmax)
+            && f.t.row(i).1.iter().all(|&v| v == 0.0)
+        {
+            *l = 0.0;
+        }
     }
 }
 

@@ -189,6 +189,9 @@ fn fallback_of(notes: &[Note]) -> Option<String> {
 /// docs/methods.md §9.1). The plane `Prepared` and the solid
 /// `SolidPrepared` each give one; `compare` asks nothing else of them.
 pub trait Comparable: super::limit::Assembled {
+    /// The problem as written (its loads at factor 1, no step applied):
+    /// what `export` writes and solves.
+    fn written(&self) -> Result<Box<dyn ComparedStep + '_>, RunError>;
     /// The model of the compared step (with `[[steps]]`, the last one's
     /// loads and prescribed displacements).
     fn compared_step(&self) -> Result<Box<dyn ComparedStep + '_>, RunError>;
@@ -214,6 +217,14 @@ pub trait ComparedStep {
 }
 
 impl Comparable for Prepared {
+    fn written(&self) -> Result<Box<dyn ComparedStep + '_>, RunError> {
+        // The prepared plane model is the problem as written.
+        Ok(Box::new(PlaneStep {
+            prep: self,
+            model: None,
+        }))
+    }
+
     fn compared_step(&self) -> Result<Box<dyn ComparedStep + '_>, RunError> {
         let file = &self.problem.file;
         // The last step's model (with [[steps]], its loads and prescribed
@@ -232,13 +243,7 @@ impl Comparable for Prepared {
         opts: &SolveOptions,
         t: Instant,
     ) -> Result<VariantResult, String> {
-        let mut work = PathWork {
-            nsteps: self.problem.file.nsteps(),
-            iterations: 0,
-            inner_iterations: 0,
-            phases: BTreeMap::new(),
-            failed: vec![],
-        };
+        let mut work = PathWork::new(self.problem.file.nsteps());
         let out = Run::new(self, m, opts)
             .started(t)
             .solve(&mut [&mut work], None)
@@ -247,20 +252,7 @@ impl Comparable for Prepared {
             .last
             .ok_or_else(|| "no load step was solved".to_string())?;
         let probes = plane_probes(self, &last.output.displacement);
-        let fallback = fallback_of(&last.result.notes);
-        let mut notes: Vec<String> = last.result.notes.iter().map(ToString::to_string).collect();
-        notes.extend(work.failed.iter().cloned());
-        Ok(VariantResult {
-            probes,
-            time_s: t.elapsed().as_secs_f64(),
-            iterations: work.iterations,
-            inner_iterations: work.inner_iterations,
-            phases: work.phases,
-            path_certified: work.failed.is_empty(),
-            notes,
-            fallback,
-            result: last.result,
-        })
+        Ok(work.finish(last.result, probes, t))
     }
 }
 
@@ -381,8 +373,8 @@ pub fn deadline(t: Instant, seconds: f64) -> Option<Instant> {
 }
 
 /// Sums the work of every step of a path and notes the steps before the
-/// last that did not converge or certify.
-struct PathWork {
+/// last that did not converge or certify (plane and solid paths alike).
+pub(crate) struct PathWork {
     nsteps: usize,
     iterations: usize,
     inner_iterations: usize,
@@ -390,17 +382,27 @@ struct PathWork {
     failed: Vec<String>,
 }
 
-impl StepObserver for PathWork {
-    fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
-        let r = step.result;
+impl PathWork {
+    pub(crate) fn new(nsteps: usize) -> Self {
+        PathWork {
+            nsteps,
+            iterations: 0,
+            inner_iterations: 0,
+            phases: BTreeMap::new(),
+            failed: vec![],
+        }
+    }
+
+    /// Add step `index` (0-based), solved to `r` with `verdict`.
+    pub(crate) fn add(&mut self, index: usize, r: &QpResult, verdict: Verdict) {
         self.iterations += r.iterations;
         self.inner_iterations += r.inner_iterations;
         for (k, v) in &r.timings {
             *self.phases.entry(k.clone()).or_default() += v;
         }
-        if step.index + 1 < self.nsteps {
-            let s = step.index + 1;
-            match step.verdict {
+        if index + 1 < self.nsteps {
+            let s = index + 1;
+            match verdict {
                 Verdict::Certified | Verdict::Penalised => {}
                 Verdict::NotConverged => self.failed.push(format!(
                     "step {s}/{}: not converged: {}",
@@ -414,6 +416,36 @@ impl StepObserver for PathWork {
                 )),
             }
         }
+    }
+
+    /// The row of a path whose last step answered `result` with the probe
+    /// displacements `probes`, begun at `t`.
+    pub(crate) fn finish(
+        self,
+        result: QpResult,
+        probes: BTreeMap<String, Vec<f64>>,
+        t: Instant,
+    ) -> VariantResult {
+        let fallback = fallback_of(&result.notes);
+        let mut notes: Vec<String> = result.notes.iter().map(ToString::to_string).collect();
+        notes.extend(self.failed.iter().cloned());
+        VariantResult {
+            probes,
+            time_s: t.elapsed().as_secs_f64(),
+            iterations: self.iterations,
+            inner_iterations: self.inner_iterations,
+            phases: self.phases,
+            path_certified: self.failed.is_empty(),
+            notes,
+            fallback,
+            result,
+        }
+    }
+}
+
+impl StepObserver for PathWork {
+    fn on_step(&mut self, step: &Step<'_>) -> Result<Vec<String>, RunError> {
+        self.add(step.index, step.result, step.verdict);
         Ok(vec![])
     }
 }

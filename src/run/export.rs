@@ -6,11 +6,13 @@
 //! README ("Exported QP"). `signorini export --qp DIR` is this API plus flag
 //! parsing and printing.
 
-use super::prepare::{options, solve, Prepared};
+use super::compare::Comparable;
+use super::prepare::options;
 use super::steps::Verdict;
+use super::summary::Cells;
 use super::RunError;
 use crate::io::{atomic, mtx};
-use crate::qp::{kkt, Friction, Kkt, QpResult, SlipBound, SolverSection};
+use crate::qp::{kkt, Frame, Friction, Kkt, QpProblem, QpResult, SlipBound, SolverSection};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -97,13 +99,24 @@ impl Files<'_> {
     }
 }
 
-/// The objective line of `meta.json` for the friction law (None: none).
-fn objective(law: Option<&str>) -> &'static str {
+/// The objective line of `meta.json` for the friction law (None: none)
+/// and its frame: one tangential row per contact row (plane and
+/// axisymmetric models, |·| of the slip), or two (solid models, the
+/// Euclidean norm of the pair, docs/methods.md §12).
+fn objective(law: Option<(&str, Frame)>) -> &'static str {
     match law {
         None => "min 1/2 x'Cx - d'x subject to Ax <= g",
-        Some("tresca") => "min 1/2 x'Cx - d'x + sum_i s_i |(Tx - t0)_i| subject to Ax <= g",
-        Some(_) => {
+        Some(("tresca", Frame::Line)) => {
+            "min 1/2 x'Cx - d'x + sum_i s_i |(Tx - t0)_i| subject to Ax <= g"
+        }
+        Some((_, Frame::Line)) => {
             "min 1/2 x'Cx - d'x + sum_i s_i |(Tx - t0)_i| subject to Ax <= g, with s_i = mu_i lambda_i (Coulomb: a fixed point)"
+        }
+        Some(("tresca", Frame::Plane)) => {
+            "min 1/2 x'Cx - d'x + sum_i s_i ||((Tx - t0)_2i, (Tx - t0)_2i+1)||_2 subject to Ax <= g (rows 2i, 2i+1 of T: the two tangents of contact row i, from 0)"
+        }
+        Some((_, Frame::Plane)) => {
+            "min 1/2 x'Cx - d'x + sum_i s_i ||((Tx - t0)_2i, (Tx - t0)_2i+1)||_2 subject to Ax <= g (rows 2i, 2i+1 of T: the two tangents of contact row i, from 0), with s_i = mu_i lambda_i (Coulomb: a fixed point)"
         }
     }
 }
@@ -138,16 +151,22 @@ fn write_qp(files: &mut Files, qp: &crate::qp::QpProblem) -> Result<(), RunError
     })
 }
 
-/// Friction (docs/methods.md §9): one tangential row per contact row, in
-/// the order of A, the offsets t0 of the slip v = Tx − t0, and the bound
-/// (s for Tresca, μ for Coulomb); returns the bound's file name.
+/// Friction (docs/methods.md §9, §12): one tangential row per contact row
+/// (two in 3D), in the order of A, the offsets t0 of the slip v = Tx − t0,
+/// and the bound per contact row (s for Tresca, μ for Coulomb); returns
+/// the bound's file name.
 fn write_friction(files: &mut Files, f: &Friction) -> Result<&'static str, RunError> {
-    files.sparse(
-        "T.mtx",
-        &f.t,
-        false,
-        "T: one tangential row per contact row (the order of A)",
-    )?;
+    let (t_what, bound_norm) = match f.frame {
+        Frame::Line => (
+            "T: one tangential row per contact row (the order of A)",
+            "|lambda_t|",
+        ),
+        Frame::Plane => (
+            "T: two tangential rows per contact row, 2i and 2i+1 for row i of A (from 0)",
+            "||(lambda_t_2i, lambda_t_2i+1)||_2",
+        ),
+    };
+    files.sparse("T.mtx", &f.t, false, t_what)?;
     files.vector(
         "t0.mtx",
         &f.t0,
@@ -157,15 +176,15 @@ fn write_friction(files: &mut Files, f: &Friction) -> Result<&'static str, RunEr
         SlipBound::Tresca(s) => (
             "s.mtx",
             s,
-            "s: Tresca slip bound per row (N), |lambda_t| <= s",
+            format!("s: Tresca slip bound per contact row (N), {bound_norm} <= s"),
         ),
         SlipBound::Coulomb(mu) => (
             "mu.mtx",
             mu,
-            "mu: Coulomb coefficient per row, |lambda_t| <= mu lambda",
+            format!("mu: Coulomb coefficient per contact row, {bound_norm} <= mu lambda"),
         ),
     };
-    files.vector(name, values, what)?;
+    files.vector(name, values, &what)?;
     Ok(name)
 }
 
@@ -185,7 +204,7 @@ fn write_solution(
         files.vector(
             "lambda_t.mtx",
             &res.lambda_t,
-            "lambda_t: tangential forces, one per contact row",
+            "lambda_t: tangential forces, one per row of T",
         )?;
         &res.lambda_t
     } else {
@@ -203,11 +222,14 @@ fn write_solution(
 /// Write the QP of `prep` (and with `spec.solution` signorini's answer)
 /// into `spec.dir`. Every file is written atomically, meta.json last; an
 /// error names the file.
-pub fn export(prep: &Prepared, spec: &ExportSpec) -> Result<ExportReport, RunError> {
-    let qp = &prep.model.qp;
+pub fn export(prep: &dyn Comparable, spec: &ExportSpec) -> Result<ExportReport, RunError> {
+    // The problem as written: with `[[steps]]`, its loads at factor 1 and
+    // no step applied (t0 = 0), plane and solid alike.
+    let written = prep.written()?;
+    let qp = written.qp();
     let solved: Option<(String, QpResult, Verdict)> = if spec.solution {
-        let (method, opts) = options(&prep.problem, &spec.solver)?;
-        let r = solve(prep, method, &opts)?;
+        let (method, opts) = options(prep.problem(), &spec.solver)?;
+        let r = written.solve(method, &opts)?;
         let verdict = Verdict::of(method, &r, opts.settings.kkt_target, false);
         Some((method.name().to_string(), r, verdict))
     } else {
@@ -221,16 +243,20 @@ pub fn export(prep: &Prepared, spec: &ExportSpec) -> Result<ExportReport, RunErr
     })?;
     let t_write = Instant::now();
     let friction = qp.friction.as_ref();
-    let law = friction.map(|f| match f.bound {
-        SlipBound::Tresca(_) => "tresca",
-        SlipBound::Coulomb(_) => "coulomb",
+    let framed = friction.map(|f| {
+        let law = match f.bound {
+            SlipBound::Tresca(_) => "tresca",
+            SlipBound::Coulomb(_) => "coulomb",
+        };
+        (law, f.frame)
     });
+    let law = framed.map(|(l, _)| l);
     let mut files = Files {
         dir: &spec.dir,
         src: format!(
             "signorini export of {} ({})",
-            prep.problem.path.display(),
-            objective(law)
+            prep.problem().path.display(),
+            objective(framed)
         ),
         names: vec![],
     };
@@ -242,7 +268,7 @@ pub fn export(prep: &Prepared, spec: &ExportSpec) -> Result<ExportReport, RunErr
         .as_ref()
         .map(|(method, res, verdict)| write_solution(&mut files, qp, method, res, *verdict))
         .transpose()?;
-    let mut meta = meta_json(prep, law, solution.as_ref());
+    let mut meta = meta_json(prep, qp, framed, solution.as_ref());
     // Friction's keys only with friction: a frictionless export is as before.
     if let (Some(f), Some(law), Some(bound)) = (friction, law, bound_file) {
         let has = solution.is_some();
@@ -253,6 +279,7 @@ pub fn export(prep: &Prepared, spec: &ExportSpec) -> Result<ExportReport, RunErr
         names["lambda_t"] = json!(has.then_some("lambda_t.mtx"));
         meta["friction"] = json!(law);
         meta["nnz_T"] = json!(f.t.nnz());
+        meta["tangential_rows"] = json!(f.frame.rows());
     }
     let text = serde_json::to_string_pretty(&meta).unwrap_or_default();
     files.put("meta.json", |p| {
@@ -275,33 +302,42 @@ pub fn export(prep: &Prepared, spec: &ExportSpec) -> Result<ExportReport, RunErr
 /// solution, its energy, method and every KKT residual (the one [`Kkt`]
 /// type, as in the run's JSON).
 fn meta_json(
-    prep: &Prepared,
-    law: Option<&str>,
+    prep: &dyn Comparable,
+    qp: &QpProblem,
+    law: Option<(&str, Frame)>,
     solution: Option<&ExportedSolution>,
 ) -> serde_json::Value {
-    let qp = &prep.model.qp;
+    let problem = prep.problem();
     let has = solution.is_some();
-    json!({
+    let (nodes, cells) = prep.mesh_size();
+    let (t_read, t_assemble) = prep.times();
+    let mut meta = json!({
         "format": "signorini-qp",
         "version": 1,
         "objective": objective(law),
         "files": {"C": "C.mtx", "A": "A.mtx", "d": "d.mtx", "g": "g.mtx", "R": "R.mtx",
                   "x": has.then_some("x.mtx"), "lambda": has.then_some("lambda.mtx")},
-        "problem": prep.problem.path.display().to_string(),
-        "mesh": prep.problem.mesh_path().display().to_string(),
+        "problem": problem.path.display().to_string(),
+        "mesh": problem.mesh_path().display().to_string(),
+        "dim": match cells {
+            Cells::Triangles(_) => 2,
+            Cells::Tetrahedra(_) => 3,
+        },
         "n": qp.n(),
         "m": qp.m(),
         "nnz_C": qp.c.nnz(),
         "nnz_A": qp.a.nnz(),
         "kernel_dim": qp.kernel.len(),
-        "nodes": prep.mesh.nodes.len(),
-        "triangles": prep.model.topo.triangles.len(),
+        "nodes": nodes,
         "energy": solution.map(|s| s.energy),
         "method": solution.map(|s| s.method.clone()),
         "converged": solution.map(|s| s.converged),
         "certified": solution.map(|s| s.verdict.certified()),
         "kkt": solution.map(|s| s.kkt),
-        "t_read": prep.t_read,
-        "t_assemble": prep.t_assemble,
-    })
+        "t_read": t_read,
+        "t_assemble": t_assemble,
+    });
+    // "triangles": n in 2D, "tetrahedra": n in 3D.
+    meta[cells.key()] = json!(cells.count());
+    meta
 }

@@ -14,6 +14,7 @@
 
 use super::prepare::{options, Loaded, Prepared};
 use super::solid::SolidPrepared;
+use super::summary::Cells;
 use super::RunError;
 use crate::linalg::ordering::Ordering;
 use crate::problem::Problem;
@@ -21,12 +22,15 @@ use crate::qp::{ByteSize, QpProblem, SolverSection};
 use serde::Serialize;
 use std::time::Instant;
 
-/// What the yardstick reads of a prepared model, plane or solid.
+/// A prepared model, plane or solid, as `limit` (the yardstick) reads it:
+/// the problem, the QP, the times, the mesh's size.
 pub trait Assembled {
     fn problem(&self) -> &Problem;
     fn qp(&self) -> &QpProblem;
     /// Seconds to read the files and to assemble the model.
     fn times(&self) -> (f64, f64);
+    /// The mesh's nodes and cells (triangles or tetrahedra).
+    fn mesh_size(&self) -> (usize, Cells);
 }
 
 impl Assembled for Prepared {
@@ -38,6 +42,12 @@ impl Assembled for Prepared {
     }
     fn times(&self) -> (f64, f64) {
         (self.t_read, self.t_assemble)
+    }
+    fn mesh_size(&self) -> (usize, Cells) {
+        (
+            self.mesh.nodes.len(),
+            Cells::Triangles(self.model.topo.triangles.len()),
+        )
     }
 }
 
@@ -51,11 +61,25 @@ impl Assembled for SolidPrepared {
     fn times(&self) -> (f64, f64) {
         (self.t_read, self.t_assemble)
     }
+    fn mesh_size(&self) -> (usize, Cells) {
+        (
+            self.mesh.nodes.len(),
+            Cells::Tetrahedra(self.model.tets.len()),
+        )
+    }
 }
 
 impl Loaded {
     /// The loaded model as the yardstick reads it.
     pub fn assembled(&self) -> &dyn Assembled {
+        match self {
+            Loaded::Plane(p) => p.as_ref(),
+            Loaded::Solid(s) => s.as_ref(),
+        }
+    }
+
+    /// The loaded model as `compare` and `export` ask it.
+    pub fn comparable(&self) -> &dyn super::compare::Comparable {
         match self {
             Loaded::Plane(p) => p.as_ref(),
             Loaded::Solid(s) => s.as_ref(),

@@ -146,6 +146,14 @@ impl Cells {
         }
     }
 
+    /// Their key in the JSON files.
+    pub fn key(self) -> &'static str {
+        match self {
+            Cells::Triangles(_) => "triangles",
+            Cells::Tetrahedra(_) => "tetrahedra",
+        }
+    }
+
     /// Their name in a table header.
     pub fn name(self) -> &'static str {
         match self {

@@ -399,3 +399,51 @@ pn = {pn}
         msh.display()
     )
 }
+
+/// A soft cube (E = 2·10⁷ Pa, ν = 0.45) on a steel one: the stacked cubes
+/// meshed apart (tests/data/solid_contact/stack_nm.msh), the steel held at
+/// its bottom, the planes `slip` slip planes, mortar rows with Coulomb
+/// μ = 0.3, a pressure of 10⁶ Pa and the shear `pt` on top; `tail`
+/// follows.
+pub fn soft_cube_toml(slip: [&str; 2], pt: [f64; 2], tail: &str) -> String {
+    format!(
+        r#"[mesh]
+file = "{}"
+
+[materials.lower]
+E = 2.0e11
+nu = 0.3
+
+[materials.upper]
+E = 2.0e7
+nu = 0.45
+
+[[dirichlet]]
+on = "bottom"
+u = [0.0, 0.0, 0.0]
+
+[[slip]]
+on = "{}"
+
+[[slip]]
+on = "{}"
+
+[[traction]]
+on = "top"
+p = [{:e}, {:e}, -1.0e6]
+
+[[contact]]
+slave = "upper_bottom"
+master = "lower_top"
+discretization = "mortar"
+friction = 0.3
+{tail}"#,
+        root()
+            .join("tests/data/solid_contact/stack_nm.msh")
+            .display(),
+        slip[0],
+        slip[1],
+        pt[0],
+        pt[1]
+    )
+}

@@ -101,17 +101,7 @@ pub fn write_solid_index(
     {
         let root: &Group = &file;
         set_root(&ctx, root, attrs)?;
-        root.link_external(mesh_file, "/mesh", "mesh")
-            .map_err(ctx.h5("/mesh"))?;
-        let g = file.create_group("steps").map_err(ctx.h5("/steps"))?;
-        for (index, f) in steps {
-            let name = step_name(*index);
-            g.link_external(f, &format!("/steps/{name}"), &name)
-                .map_err(ctx.h5(format!("/steps/{name}")))?;
-        }
-        if let Some(last) = steps.iter().map(|s| s.0).max() {
-            set_attr_scalar(&ctx, root, "last_step", &(last as u64))?;
-        }
+        super::split::write_links(&ctx, &file, mesh_file, steps)?;
     }
     file.close().map_err(ctx.h5("/"))
 }
@@ -191,7 +181,7 @@ fn check_sizes(
 }
 
 /// The root attributes: `attrs`, `model` = "solid", `dim` = 3.
-fn set_root(ctx: &Ctx, root: &Group, attrs: &[(&str, String)]) -> Result<(), IoError> {
+pub(super) fn set_root(ctx: &Ctx, root: &Group, attrs: &[(&str, String)]) -> Result<(), IoError> {
     for (k, v) in attrs {
         set_attr_str(ctx, root, k, v)?;
     }

@@ -95,19 +95,33 @@ pub fn write_index(
             set_attr_str(&ctx, root, k, v)?;
         }
         super::set_kind_attrs(&ctx, root, mesh.kind, true)?;
-        root.link_external(mesh_file, "/mesh", "mesh")
-            .map_err(ctx.h5("/mesh"))?;
-        let g = file.create_group("steps").map_err(ctx.h5("/steps"))?;
-        for (index, f) in steps {
-            let name = step_name(*index);
-            g.link_external(f, &format!("/steps/{name}"), &name)
-                .map_err(ctx.h5(format!("/steps/{name}")))?;
-        }
-        if let Some(last) = steps.iter().map(|s| s.0).max() {
-            set_attr_scalar(&ctx, root, "last_step", &(last as u64))?;
-        }
+        write_links(&ctx, &file, mesh_file, steps)?;
     }
     file.close().map_err(ctx.h5("/"))
+}
+
+/// The links of a split checkpoint's index, plane or solid: `/mesh` →
+/// `/mesh` of `mesh_file`, `/steps/NNNN` → `/steps/NNNN` of each `(index,
+/// file)` of `steps`, and the root's `last_step`.
+pub(super) fn write_links(
+    ctx: &Ctx,
+    file: &File,
+    mesh_file: &str,
+    steps: &[(usize, String)],
+) -> Result<(), IoError> {
+    let root: &Group = file;
+    root.link_external(mesh_file, "/mesh", "mesh")
+        .map_err(ctx.h5("/mesh"))?;
+    let g = file.create_group("steps").map_err(ctx.h5("/steps"))?;
+    for (index, f) in steps {
+        let name = step_name(*index);
+        g.link_external(f, &format!("/steps/{name}"), &name)
+            .map_err(ctx.h5(format!("/steps/{name}")))?;
+    }
+    if let Some(last) = steps.iter().map(|s| s.0).max() {
+        set_attr_scalar(ctx, root, "last_step", &(last as u64))?;
+    }
+    Ok(())
 }
 
 /// Where the parts of a checkpoint are stored: the file holding `/mesh`
@@ -144,6 +158,41 @@ pub fn checkpoint_files(path: &Path) -> Result<CheckpointFiles, IoError> {
     Ok(out)
 }
 
+/// The root attributes of a checkpoint as [`pack`] writes them again: the
+/// user's strings and the kind's flags (plane, axisymmetric) or `model` =
+/// "solid" and `dim` = 3.
+enum Root {
+    Plane(Vec<(String, String)>, crate::fem::ElementKind),
+    Solid(Vec<(String, String)>),
+}
+
+/// The inverse of [`pack`] for one part: a new file `dst` (in a staging
+/// directory) holding the group `/mesh` (`step` None) or `/steps/NNNN` of
+/// the checkpoint `src`, copied as an HDF5 object (bit for bit). A restart
+/// that continues a packed checkpoint of a run with steps writes the split
+/// layout's mesh and step files this way.
+pub fn unpack_part(src: &Path, step: Option<usize>, dst: &Path) -> Result<(), IoError> {
+    let rctx = Ctx::writing(src);
+    let wctx = Ctx::writing(dst);
+    let from = File::open(src).map_err(rctx.h5("/"))?;
+    let to = File::create(dst).map_err(wctx.h5("/"))?;
+    match step {
+        None => {
+            let g = from.group("mesh").map_err(|e| linked(&rctx, "/mesh", e))?;
+            let root: &Group = &to;
+            g.copy_to(root, "mesh").map_err(wctx.h5("/mesh"))?;
+        }
+        Some(i) => {
+            let name = step_name(i);
+            let loc = format!("/steps/{name}");
+            let g = from.group(&loc).map_err(|e| linked(&rctx, &loc, e))?;
+            let steps = to.create_group("steps").map_err(wctx.h5("/steps"))?;
+            g.copy_to(&steps, &name).map_err(wctx.h5(loc))?;
+        }
+    }
+    to.close().map_err(wctx.h5("/"))
+}
+
 /// What [`pack`] wrote.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Packed {
@@ -162,8 +211,16 @@ pub struct Packed {
 /// ([`read_checkpoint`]): a missing or damaged step file is refused, named,
 /// before anything is written.
 pub fn pack(src: &Path, dst: &Path) -> Result<Packed, IoError> {
-    // Every dataset checked (sizes, indices, finiteness of nothing more).
-    let ck = read_checkpoint(src)?;
+    // Every dataset checked (sizes, indices, finiteness of nothing more),
+    // by the reader of the checkpoint's kind.
+    let (root, step_groups) = if super::solid_read::is_solid_checkpoint(src) {
+        let ck = super::solid_read::read_solid_checkpoint(src, super::solid_read::SolidSteps::All)?;
+        let steps = ck.step_indices.iter().map(|&i| step_name(i)).collect();
+        (Root::Solid(ck.attrs), steps)
+    } else {
+        let ck = read_checkpoint(src)?;
+        (Root::Plane(ck.attrs, ck.mesh.kind), ck.step_groups)
+    };
     let files = checkpoint_files(src)?;
     let mut sources = vec![src.to_path_buf()];
     for f in std::iter::once(&files.mesh).chain(files.steps.iter().map(|s| &s.2)) {
@@ -201,11 +258,21 @@ pub fn pack(src: &Path, dst: &Path) -> Result<Packed, IoError> {
         let from = File::open(src).map_err(rctx.h5("/"))?;
         let to = File::create(tmp).map_err(wctx.h5("/"))?;
         {
-            let root: &Group = &to;
-            for (k, v) in &ck.attrs {
-                set_attr_str(&wctx, root, k, v)?;
+            let g: &Group = &to;
+            match &root {
+                Root::Plane(attrs, kind) => {
+                    for (k, v) in attrs {
+                        set_attr_str(&wctx, g, k, v)?;
+                    }
+                    super::set_kind_attrs(&wctx, g, *kind, false)?;
+                }
+                Root::Solid(attrs) => {
+                    let attrs: Vec<(&str, String)> =
+                        attrs.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
+                    super::solid::set_root(&wctx, g, &attrs)?;
+                }
             }
-            super::set_kind_attrs(&wctx, root, ck.mesh.kind, false)?;
+            let root = g;
             let mesh = from.group("mesh").map_err(|e| linked(&rctx, "/mesh", e))?;
             mesh.copy_to(root, "mesh").map_err(wctx.h5("/mesh"))?;
             if let Some((sg, names)) = step_names(&rctx, &from)? {
@@ -223,7 +290,7 @@ pub fn pack(src: &Path, dst: &Path) -> Result<Packed, IoError> {
         to.close().map_err(wctx.h5("/"))
     })?;
     Ok(Packed {
-        steps: ck.step_groups,
+        steps: step_groups,
         sources,
     })
 }

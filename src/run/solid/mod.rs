@@ -85,11 +85,32 @@ impl SolidPrepared {
 /// of every step (a workspace's factor serves them all, docs/methods.md
 /// §8.5).
 fn build_step(problem: &Problem, mesh: &Mesh, s: usize) -> Result<SolidModel, RunError> {
-    let file = problem.file.at_step(s);
-    let input = solid_input(&file);
+    build_file(problem, mesh, &problem.file.at_step(s))
+}
+
+/// The model of `file`: the problem's own, or one of its load steps'.
+fn build_file(
+    problem: &Problem,
+    mesh: &Mesh,
+    file: &crate::problem::ProblemFile,
+) -> Result<SolidModel, RunError> {
+    let input = solid_input(file);
     let mut model = crate::fem::solid::build(mesh, &problem.path, &input)?;
     add_point_forces(&mut model, mesh, &problem.path, &file.force)?;
     Ok(model)
+}
+
+/// The model of the problem as written, its loads at factor 1 and no step
+/// applied (what `export` writes, as in 2D): the prepared one without
+/// `[[steps]]`.
+pub(super) fn written_model(
+    prep: &SolidPrepared,
+) -> Result<std::borrow::Cow<'_, SolidModel>, RunError> {
+    if prep.problem.file.steps.is_empty() {
+        return Ok(std::borrow::Cow::Borrowed(&prep.model));
+    }
+    let m = build_file(&prep.problem, &prep.mesh, &prep.problem.file)?;
+    Ok(std::borrow::Cow::Owned(m))
 }
 
 /// The model of step `s`: the prepared one for the first (or only) step.

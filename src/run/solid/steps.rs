@@ -22,6 +22,7 @@ use crate::run::output::{check_interrupt, output_paths, Transaction, SIGNAL};
 use crate::run::steps::{preconditioner_label, Verdict};
 use crate::run::summary::{Cells, KktSummary, StepRow, Timings};
 use crate::run::RunError;
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -67,67 +68,40 @@ pub fn solve_solid(
         carried = files.start_from(r)?;
     }
     tx.plan(multi, files.kept, true);
-    let ws = opts.settings.workspace();
     let target = opts.settings.kkt_target;
     let mut rows: Vec<StepRow> = vec![];
     let mut failed: Vec<usize> = vec![];
-    // The last answer: point displacements and the QP rows' active flags.
-    let mut prev: Option<(Vec<Vector3>, Vec<bool>)> = run.restart.map(|r| {
-        let active = prep.model.qp_rows.iter().map(|&k| r.active[k]).collect();
-        (r.displacement.clone(), active)
-    });
-    // The last answer's λ_n and λ_t per contact row (frictional steps).
-    let mut lambda_prev: Option<RowMultipliers> = run
-        .restart
-        .and_then(|r| r.multipliers.clone())
-        .map(|(normal, tangential)| RowMultipliers { normal, tangential });
-    let mut last = None;
+    // The last answer: point displacements and the QP rows' active flags,
+    // and λ_n, λ_t per contact row (frictional steps).
+    let carry = Carry {
+        prev: run.restart.map(|r| {
+            let active = prep.model.qp_rows.iter().map(|&k| r.active[k]).collect();
+            (r.displacement.clone(), active)
+        }),
+        lambda: run
+            .restart
+            .and_then(|r| r.multipliers.clone())
+            .map(|(normal, tangential)| RowMultipliers { normal, tangential }),
+    };
     // The fields of `[output] reference_step` once it is solved (or read
     // from the checkpoint a restart continues).
     let mut reference = run.restart.and_then(|r| r.reference.clone());
+    let mut posted = None;
     let (mut t_assemble_all, mut t_solve_all, mut t_write_all) = (0.0, 0.0, 0.0);
-    for s in first..nsteps {
-        check_interrupt()?;
-        let ts = Instant::now();
-        let mut model = step_model(prep, s)?;
-        // Friction: the slip of this step is measured from the last step's
-        // displacements (docs/methods.md §12.2).
-        if let (Some(_), Some((u, _))) = (&model.qp.friction, &prev) {
-            crate::fem::contact3d::friction::start_step(model.to_mut(), Some(u));
-        }
-        let t_assemble = if s == 0 {
-            prep.t_assemble
-        } else {
-            ts.elapsed().as_secs_f64()
-        };
-        let mut o = opts.clone();
-        if let Some((u, active)) = &prev {
-            o.x0 = Some(reduce(&model, u));
-            o.active0 = (active.len() == model.qp.m()).then(|| active.clone());
-        }
-        o.lambda0 = lambda_prev
-            .as_ref()
-            .filter(|_| model.qp.friction.is_some())
-            .map(|l| l.reduce(&model));
-        o.stop = Some(&SIGNAL);
-        let t0 = Instant::now();
-        let res = solve_in(prep, &model, method, &o, &ws);
-        // An interrupted solve is no result to write, nor an error of the
-        // problem.
-        check_interrupt()?;
-        let res = res.map_err(|e| e.in_step(file, s))?;
-        let time_solve = t0.elapsed().as_secs_f64();
-        let verdict = Verdict::of(method, &res, target, strict);
+    let last = march(prep, method, opts, first..nsteps, carry, |st, was| {
+        let (s, model, res) = (st.index, &*st.model, &st.result);
+        let time_solve = st.time_solve;
+        let verdict = Verdict::of(method, res, target, strict);
         let certified = verdict.certified() && res.status.converged();
         if !certified {
             failed.push(s + 1);
         }
-        let mut out = crate::post::solid_output(&model, &file.materials, &res.x);
-        let mut contact = contact_output(prep, &model, &out.displacement, &res.lambda, &res.active);
+        let mut out = crate::post::solid_output(model, &file.materials, &res.x);
+        let mut contact = contact_output(prep, model, &out.displacement, &res.lambda, &res.active);
         let stick_slip =
-            crate::post::solid_friction::solid_friction_output(&model, &res, &mut contact);
-        let mut f3 = forces(prep, &model, &out.displacement, &contact);
-        super::forces::add_stick_slip(&model, &mut f3, &stick_slip);
+            crate::post::solid_friction::solid_friction_output(model, res, &mut contact);
+        let mut f3 = forces(prep, model, &out.displacement, &contact);
+        super::forces::add_stick_slip(model, &mut f3, &stick_slip);
         out.reaction = f3.reaction.clone();
         // [output] reference_step: from step K on, the change since K.
         if let Some(k) = file.output.reference_step {
@@ -151,7 +125,7 @@ pub fn solve_solid(
             iterations: res.iterations,
             energy: res.energy,
             kkt: res.kkt,
-            time_assemble: t_assemble,
+            time_assemble: st.t_assemble,
             time_solve,
             time_total: started.elapsed().as_secs_f64(),
         };
@@ -162,8 +136,8 @@ pub fn solve_solid(
         tx.commit(&names)?;
         t_write_all += tw.elapsed().as_secs_f64();
         let active = contact.active.iter().filter(|&&a| a).count();
-        let (opened, closed) = match &prev {
-            Some((_, was)) if was.len() == res.active.len() => (
+        let (opened, closed) = match was {
+            Some(was) if was.len() == res.active.len() => (
                 Some(
                     was.iter()
                         .zip(&res.active)
@@ -196,28 +170,27 @@ pub fn solve_solid(
             opened,
             closed,
             time_solve,
-            time_step: ts.elapsed().as_secs_f64(),
+            time_step: st.started.elapsed().as_secs_f64(),
         });
         log::debug!(
-            "step {}: assembly {t_assemble:.3} s, solve {time_solve:.3} s",
-            s + 1
+            "step {}: assembly {:.3} s, solve {time_solve:.3} s",
+            s + 1,
+            st.t_assemble
         );
-        t_assemble_all += t_assemble;
+        t_assemble_all += st.t_assemble;
         t_solve_all += time_solve;
-        prev = Some((out.displacement.clone(), res.active.clone()));
-        lambda_prev = RowMultipliers::of(&model, &res);
-        last = Some((model.into_owned(), res, out, contact, verdict, f3));
-    }
-    let Some((model, res, out, contact, verdict, f3)) = last else {
+        posted = Some((out, contact, verdict, f3));
+        Ok(())
+    })?;
+    let (Some(last), Some((out, contact, verdict, f3))) = (last, posted) else {
         return Err(RunError::Settings(format!(
             "{}: no load step to solve",
             prep.problem.path.display()
         )));
     };
+    let (model, res) = (&*last.model, &last.result);
     let t_write = Instant::now();
-    let mut summary = summary(
-        prep, &model, method, opts, &res, &out, &contact, verdict, f3,
-    );
+    let mut summary = summary(prep, model, method, opts, res, &out, &contact, verdict, f3);
     summary.reference_step = file.output.reference_step;
     summary.failed_steps = failed;
     if multi {
@@ -248,6 +221,99 @@ pub fn solve_solid(
         files: written,
         contact,
     }))
+}
+
+/// What one load step hands on to the next (docs/methods.md §8.3): the
+/// point displacements and the QP rows' active flags of its answer, and
+/// with friction its λ_n, λ_t per contact row.
+#[derive(Default)]
+pub(super) struct Carry {
+    prev: Option<(Vec<Vector3>, Vec<bool>)>,
+    lambda: Option<RowMultipliers>,
+}
+
+/// One solved load step of a 3D model.
+pub(super) struct Marched<'p> {
+    /// The step (0-based).
+    pub index: usize,
+    pub model: Cow<'p, SolidModel>,
+    pub result: QpResult,
+    /// Seconds to build the step's model (the prepared one's for step 1).
+    pub t_assemble: f64,
+    pub time_solve: f64,
+    /// When the step began.
+    pub started: Instant,
+}
+
+/// Solve the load steps `steps` of `prep` in order, each warm-started
+/// from the last (its x, active set and, with friction, its multipliers
+/// and the slip measured from its displacements, docs/methods.md §8.3,
+/// §12.2), with one workspace for all (§8.5). `each` sees every solved
+/// step and the active flags of the step before (None for the first);
+/// the last step is returned. This is the loop of `solve` (which writes
+/// the files in `each`) and of `compare` along a frictional load path
+/// (which sums the work); a refused step's error names it.
+pub(super) fn march<'p>(
+    prep: &'p SolidPrepared,
+    method: MethodId,
+    opts: &SolveOptions,
+    steps: std::ops::Range<usize>,
+    mut carry: Carry,
+    mut each: impl FnMut(&Marched<'p>, Option<&[bool]>) -> Result<(), RunError>,
+) -> Result<Option<Marched<'p>>, RunError> {
+    let file = &prep.problem.file;
+    let ws = opts.settings.workspace();
+    let mut last = None;
+    for s in steps {
+        check_interrupt()?;
+        let started = Instant::now();
+        let mut model = step_model(prep, s)?;
+        // Friction: the slip of this step is measured from the last step's
+        // displacements (docs/methods.md §12.2).
+        if let (Some(_), Some((u, _))) = (&model.qp.friction, &carry.prev) {
+            crate::fem::contact3d::friction::start_step(model.to_mut(), Some(u));
+        }
+        let t_assemble = if s == 0 {
+            prep.t_assemble
+        } else {
+            started.elapsed().as_secs_f64()
+        };
+        let mut o = opts.clone();
+        if let Some((u, active)) = &carry.prev {
+            o.x0 = Some(reduce(&model, u));
+            o.active0 = (active.len() == model.qp.m()).then(|| active.clone());
+        }
+        o.lambda0 = carry
+            .lambda
+            .as_ref()
+            .filter(|_| model.qp.friction.is_some())
+            .map(|l| l.reduce(&model));
+        o.stop = Some(&SIGNAL);
+        let t0 = Instant::now();
+        let res = solve_in(prep, &model, method, &o, &ws);
+        // An interrupted solve is no result to hand on, nor an error of the
+        // problem.
+        check_interrupt()?;
+        let result = res.map_err(|e| e.in_step(file, s))?;
+        let step = Marched {
+            index: s,
+            model,
+            result,
+            t_assemble,
+            time_solve: t0.elapsed().as_secs_f64(),
+            started,
+        };
+        each(&step, carry.prev.as_ref().map(|(_, a)| a.as_slice()))?;
+        carry = Carry {
+            prev: Some((
+                step.model.displacements(&step.result.x),
+                step.result.active.clone(),
+            )),
+            lambda: RowMultipliers::of(&step.model, &step.result),
+        };
+        last = Some(step);
+    }
+    Ok(last)
 }
 
 /// λ_n (one) and λ_t (two, in the row's friction frame) per contact row
@@ -376,15 +442,21 @@ impl<'a> Files<'a> {
             let w = dir.join(want);
             matches!((f.canonicalize(), w.canonicalize()), (Ok(a), Ok(b)) if a == b)
         };
-        if !self.multi || found.mesh.canonicalize().ok() == single {
+        if !self.multi {
             return Err(RunError::Restart(format!(
-                "--restart: {}: a single solve's checkpoint; a 3D run with [[steps]] continues the split checkpoint of a run with the same steps (docs/problem-format.md §6)",
+                "--restart: {}: a single solve's checkpoint; a 3D run with [[steps]] continues the checkpoint of a run with the same steps (docs/problem-format.md §6)",
                 r.path.display()
             )));
         }
+        // A packed checkpoint (`signorini pack`: one file, every step):
+        // its parts are written out again as the split layout's files.
+        let packed = found.mesh.canonicalize().ok() == single;
         let mut staged = vec![];
         let mesh_file = io::hdf5::mesh_file_name(&name);
-        if !here(&found.mesh, &mesh_file) {
+        if packed {
+            io::hdf5::unpack_part(&r.path, None, &self.stage.join(&mesh_file))?;
+            staged.push(mesh_file.clone());
+        } else if !here(&found.mesh, &mesh_file) {
             copy(&found.mesh, &self.stage.join(&mesh_file))?;
             staged.push(mesh_file.clone());
         }
@@ -393,7 +465,11 @@ impl<'a> Files<'a> {
         let mut kept = true;
         for (i, _, f) in found.steps.iter().take(r.steps_done) {
             let want = io::hdf5::step_file_name(&name, *i);
-            if here(f, &want) {
+            if packed {
+                kept = false;
+                io::hdf5::unpack_part(&r.path, Some(*i), &self.stage.join(&want))?;
+                staged.push(want.clone());
+            } else if here(f, &want) {
                 self.kept += usize::from(kept);
             } else {
                 kept = false;
