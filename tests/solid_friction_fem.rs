@@ -6,9 +6,10 @@
 
 mod common;
 
-use signorini::fem::contact3d::friction::{friction_frame, offset, tangential_displacement};
+use signorini::fem::contact3d::friction::{friction_frame, tangential_displacement};
 use signorini::fem::element::Vector3;
 use signorini::fem::solid::{build, SolidInput, SolidModel, SolidTraction};
+use signorini::fem::Discrete;
 use signorini::mesh::read_msh;
 use signorini::problem::{
     Contact, ContactPair, Discretization, FrictionLaw, Material, NonMatchingPair, NormalKind,
@@ -77,17 +78,6 @@ fn models(law: FrictionLaw) -> Vec<(&'static str, SolidModel)> {
     ]
 }
 
-/// The reduced unknowns of point displacements u: ξ_p = T_pᵀ(u_p − u0_p).
-fn reduce(m: &SolidModel, u: &[Vector3]) -> Vec<f64> {
-    let mut x = vec![0.0; m.qp.n()];
-    for (p, pd) in m.dofs.iter().enumerate() {
-        for k in 0..pd.ndof {
-            x[pd.start + k] = (0..3).map(|c| pd.t[k][c] * (u[p][c] - pd.u0[c])).sum();
-        }
-    }
-    x
-}
-
 fn dot(a: Vector3, b: Vector3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
@@ -113,7 +103,7 @@ fn t_of_a_translation_is_its_tangential_components() {
                 }
             })
             .collect();
-        let x = reduce(&m, &u);
+        let x = m.reduce(&u);
         let tx = f.t.mul(&x);
         let allowed = m.displacements(&x);
         let td = tangential_displacement(&m, &allowed);
@@ -214,15 +204,15 @@ fn the_offset_makes_the_slip_an_increment() {
                 .collect()
         };
         // The previous step's answer satisfies the conditions.
-        let u_prev = m.displacements(&reduce(&m, &field(1e-3)));
-        let t0 = offset(&m, Some(&u_prev));
+        let u_prev = m.displacements(&m.reduce(&field(1e-3)));
+        let t0 = m.slip_offset(Some(&u_prev));
         let prev = tangential_displacement(&m, &u_prev);
         assert_eq!(t0, prev, "{name}");
         assert!(
             prev.iter().any(|v| v.abs() > 1e-6),
             "{name}: a motion along the rows"
         );
-        let x = reduce(&m, &field(-2e-3));
+        let x = m.reduce(&field(-2e-3));
         let mut tx = f.t.mul(&x);
         for (v, o) in tx.iter_mut().zip(&t0) {
             *v -= o;

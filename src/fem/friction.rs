@@ -236,31 +236,3 @@ pub fn tangential_displacement(model: &Model, u: &[Vector]) -> Vec<f64> {
         })
         .collect()
 }
-
-/// The offset t0 that makes the slip T x − t0 the increment from the point
-/// displacements `u_prev` (the previous load step's; None: the reference
-/// configuration): the tangential displacement of `u_prev` less the part
-/// the prescribed displacements u0 of this model contribute.
-pub fn offset(model: &Model, u_prev: Option<&[Vector]>) -> Vec<f64> {
-    let u0: Vec<Vector> = model.dofs.iter().map(|p| p.u0).collect();
-    let from_u0 = tangential_displacement(model, &u0);
-    match u_prev {
-        None => from_u0.iter().map(|v| -v).collect(),
-        Some(u) => tangential_displacement(model, u)
-            .iter()
-            .zip(&from_u0)
-            .map(|(a, b)| a - b)
-            .collect(),
-    }
-}
-
-/// Set the slip offset of `model`'s friction from the previous step's point
-/// displacements (no-op without friction).
-pub fn start_step(model: &mut Model, u_prev: Option<&[Vector]>) {
-    if model.qp.friction.is_some() {
-        let t0 = offset(model, u_prev);
-        if let Some(f) = model.qp.friction.as_mut() {
-            f.t0 = t0;
-        }
-    }
-}

@@ -14,6 +14,7 @@
 mod conditions;
 mod contact;
 pub mod contact3d;
+pub mod discrete;
 mod edges;
 pub mod element;
 pub mod friction;
@@ -29,6 +30,7 @@ mod stiffness;
 pub mod topology;
 
 pub use conditions::PointDofs;
+pub use discrete::Discrete;
 pub use topology::Topology;
 
 use crate::mesh::Mesh;
@@ -111,23 +113,27 @@ impl Model {
 
     /// Full point displacements from the QP unknowns.
     pub fn displacements(&self, x: &[f64]) -> Vec<Vector> {
-        self.dofs
-            .iter()
-            .map(|p| {
-                let mut u = p.u0;
-                for k in 0..p.ndof {
-                    let xi = x[p.start + k];
-                    u[0] += p.t[k][0] * xi;
-                    u[1] += p.t[k][1] * xi;
-                }
-                u
-            })
-            .collect()
+        discrete::point_displacements(&self.dofs, x)
     }
 
     /// The effective thickness for forces → pressures (1 in plane strain).
     pub fn t_eff(&self) -> f64 {
         self.kind.thickness()
+    }
+}
+
+impl Discrete<2> for Model {
+    fn dofs(&self) -> &[PointDofs] {
+        &self.dofs
+    }
+    fn qp(&self) -> &QpProblem {
+        &self.qp
+    }
+    fn qp_mut(&mut self) -> &mut QpProblem {
+        &mut self.qp
+    }
+    fn tangential_displacement(&self, u: &[Vector]) -> Vec<f64> {
+        friction::tangential_displacement(self, u)
     }
 }
 
@@ -213,7 +219,7 @@ pub fn build_with(mesh: &Mesh, problem: &Problem, opts: &BuildOptions) -> Result
         symmetry_rows,
     };
     let mut model = model;
-    friction::start_step(&mut model, None);
+    model.start_step(None);
     lap.lap("rigid modes");
     rigid::check_semicoercive(&model, path)?;
     lap.lap("semicoercivity check");
@@ -269,7 +275,7 @@ pub fn step_model_reusing(
     model.qp.d = s.d;
     model.qp.g = s.g;
     model.loads = s.loads;
-    friction::start_step(&mut model, None);
+    model.start_step(None);
     rigid::check_semicoercive(&model, path)?;
     lap.lap("copy and checks");
     Ok(model)

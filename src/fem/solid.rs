@@ -90,21 +90,25 @@ pub struct SolidModel {
     pub kernel_body: Vec<u32>,
 }
 
+impl super::Discrete<3> for SolidModel {
+    fn dofs(&self) -> &[PointDofs<3>] {
+        &self.dofs
+    }
+    fn qp(&self) -> &QpProblem {
+        &self.qp
+    }
+    fn qp_mut(&mut self) -> &mut QpProblem {
+        &mut self.qp
+    }
+    fn tangential_displacement(&self, u: &[Vector3]) -> Vec<f64> {
+        super::contact3d::friction::tangential_displacement(self, u)
+    }
+}
+
 impl SolidModel {
     /// Full nodal displacements from the QP unknowns.
     pub fn displacements(&self, x: &[f64]) -> Vec<Vector3> {
-        self.dofs
-            .iter()
-            .map(|p| {
-                let mut u = p.u0;
-                for k in 0..p.ndof {
-                    for (c, uc) in u.iter_mut().enumerate() {
-                        *uc += p.t[k][c] * x[p.start + k];
-                    }
-                }
-                u
-            })
-            .collect()
+        super::discrete::point_displacements(&self.dofs, x)
     }
 
     /// The contact pressure of each QP row from its multipliers λ: the
@@ -778,7 +782,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         kernel_body,
     };
     // The slip of a single solve or first step: from the reference (§12.2).
-    super::contact3d::friction::start_step(&mut model, None);
+    super::Discrete::start_step(&mut model, None);
     Ok(model)
 }
 

@@ -369,16 +369,10 @@ pub fn step_model_reusing(
     )?)
 }
 
-/// Reduced unknowns ξ = Tᵀ(u − u0) of point displacements `u` (a warm start).
+/// Reduced unknowns ξ = Tᵀ(u − u0) of point displacements `u` (a warm
+/// start; [`crate::fem::Discrete::reduce`]).
 pub fn reduce(model: &Model, u: &[[f64; 2]]) -> Vec<f64> {
-    let mut x = vec![0.0; model.qp.n()];
-    for (p, pd) in model.dofs.iter().enumerate() {
-        let du = [u[p][0] - pd.u0[0], u[p][1] - pd.u0[1]];
-        for k in 0..pd.ndof {
-            x[pd.start + k] = pd.t[k][0] * du[0] + pd.t[k][1] * du[1];
-        }
-    }
-    x
+    crate::fem::Discrete::reduce(model, u)
 }
 
 /// The QP rows' flags of per-contact-row `active` flags (a working-set

@@ -333,7 +333,7 @@ impl<'a> Run<'a> {
         // Friction: the slip of this step is measured from the last
         // step's displacements (docs/methods.md §9.5).
         if let (Some(m), Some(u)) = (model.as_mut(), carry.u_prev.as_deref()) {
-            crate::fem::friction::start_step(m, Some(u));
+            crate::fem::Discrete::start_step(m, Some(u));
         }
         let model_ref = model.as_ref().unwrap_or(&prep.model);
         let t_assemble = match model {

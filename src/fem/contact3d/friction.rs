@@ -182,36 +182,6 @@ pub fn tangential_displacement(model: &SolidModel, u: &[Vector3]) -> Vec<f64> {
     out
 }
 
-/// The offset t0 that makes the slip T x − t0 the increment from the point
-/// displacements `u_prev` (the previous load step's; None: the reference
-/// configuration): their tangential displacement less the part the
-/// prescribed displacements u0 of this model contribute (2D's
-/// `friction::offset`).
-pub fn offset(model: &SolidModel, u_prev: Option<&[Vector3]>) -> Vec<f64> {
-    let u0: Vec<Vector3> = model.dofs.iter().map(|p| p.u0).collect();
-    let from_u0 = tangential_displacement(model, &u0);
-    match u_prev {
-        None => from_u0.iter().map(|v| -v).collect(),
-        Some(u) => tangential_displacement(model, u)
-            .iter()
-            .zip(&from_u0)
-            .map(|(a, b)| a - b)
-            .collect(),
-    }
-}
-
-/// Set the slip offset of `model`'s friction from the previous step's point
-/// displacements (None: the reference configuration; no-op without
-/// friction).
-pub fn start_step(model: &mut SolidModel, u_prev: Option<&[Vector3]>) {
-    if model.qp.friction.is_some() {
-        let t0 = offset(model, u_prev);
-        if let Some(f) = model.qp.friction.as_mut() {
-            f.t0 = t0;
-        }
-    }
-}
-
 /// The friction frame of each contact row of `model` (its §11.4 frame for
 /// rows left out of the QP), and whether its second tangent is held.
 pub fn frames(model: &SolidModel) -> Vec<([Vector3; 2], bool)> {

@@ -271,7 +271,7 @@ pub(super) fn march<'p>(
         // Friction: the slip of this step is measured from the last step's
         // displacements (docs/methods.md §12.2).
         if let (Some(_), Some((u, _))) = (&model.qp.friction, &carry.prev) {
-            crate::fem::contact3d::friction::start_step(model.to_mut(), Some(u));
+            crate::fem::Discrete::start_step(model.to_mut(), Some(u));
         }
         let t_assemble = if s == 0 {
             prep.t_assemble
@@ -280,7 +280,7 @@ pub(super) fn march<'p>(
         };
         let mut o = opts.clone();
         if let Some((u, active)) = &carry.prev {
-            o.x0 = Some(reduce(&model, u));
+            o.x0 = Some(crate::fem::Discrete::reduce(&*model, u));
             o.active0 = (active.len() == model.qp.m()).then(|| active.clone());
         }
         o.lambda0 = carry
@@ -354,20 +354,6 @@ impl RowMultipliers {
             tangential: model.qp_rows.iter().flat_map(|&k| get_t(k)).collect(),
         }
     }
-}
-
-/// ξ_p = T_pᵀ(u_p − u0_p): the QP unknowns of point displacements `u` in
-/// `model`'s DOFs (the warm start of the next step; T_p's rows are
-/// orthonormal, `conditions::eliminate`).
-fn reduce(model: &SolidModel, u: &[Vector3]) -> Vec<f64> {
-    let mut x = vec![0.0; model.qp.n()];
-    for (p, pd) in model.dofs.iter().enumerate() {
-        let du = [0, 1, 2].map(|k| u[p][k] - pd.u0[k]);
-        for k in 0..pd.ndof {
-            x[pd.start + k] = pd.t[k][0] * du[0] + pd.t[k][1] * du[1] + pd.t[k][2] * du[2];
-        }
-    }
-    x
 }
 
 fn copy(from: &Path, to: &Path) -> Result<(), RunError> {
