@@ -301,3 +301,35 @@ fn a_3d_export_with_steps_is_the_problem_as_written() {
     assert_eq!(bits(&d_steps), bits(&d_one));
     assert_eq!(bits(&x_steps), bits(&x_one));
 }
+
+/// A frictional body pulled off its support is refused as unbounded and
+/// named as pulled away, not as sliding: friction holds nothing on an open
+/// row (before, every frictional refusal said "slides … its friction
+/// cannot hold the loads").
+#[test]
+fn a_frictional_cube_pulled_off_is_named_as_pulled_away() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text =
+        common::soft_cube_toml(["x0", "y0"], [2.0e5, 1.0e5], "").replace("-1.0e6]", "1.0e6]");
+    assert!(
+        text.contains(", 1.0e6]") && !text.contains("-1.0e6"),
+        "{text}"
+    );
+    let toml = tmp.path().join("pull.toml");
+    std::fs::write(&toml, text).unwrap();
+    let out = tmp.path().join("out");
+    let (code, said) = signorini(&[
+        "solve",
+        toml.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{said}");
+    assert!(
+        said.contains("unbounded") && said.contains("\"upper\""),
+        "{said}"
+    );
+    assert!(said.contains("pulled away"), "{said}");
+    assert!(!said.contains("slides"), "{said}");
+    assert!(!out.exists() || std::fs::read_dir(&out).unwrap().next().is_none());
+}

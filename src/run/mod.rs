@@ -118,12 +118,35 @@ pub const EXIT_NOT_CONVERGED: i32 = 3;
 /// lost, the files it wrote are complete and committed.
 pub const EXIT_STDOUT: i32 = 4;
 
-/// The error text of an unbounded problem (a certified recession direction,
-/// docs/methods.md §1.7): `who` moves as a rigid body, the loads doing
-/// `work` on a motion of 1 m; with friction, the slide friction cannot
-/// hold (`section`: the methods section of the dimension's test).
-pub(crate) fn unbounded_message(who: &str, work: f64, friction: bool, section: &str) -> String {
-    if friction {
+/// Whether the recession direction `r` (Ar ≤ 0) opens a contact row: a
+/// lift-off, not a slide. Measured per row against the row's own scale,
+/// |a_i|·|r| (max norms), so that neither the mesh's units nor a stiff
+/// row's weights decide it: a slide along the interface keeps (Ar)_i at
+/// rounding, a lift of the body opens its rows by the motion itself.
+pub(crate) fn opens_contact(qp: &crate::qp::QpProblem, r: &[f64]) -> bool {
+    let rmax = crate::linalg::sparse::norm_inf(r);
+    let ar = qp.a.mul(r);
+    ar.iter().enumerate().any(|(i, v)| {
+        let amax = qp.a.row(i).1.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        *v < -1e-6 * amax * rmax
+    })
+}
+
+/// The error text of an unbounded problem (a certified recession direction
+/// `r`, docs/methods.md §1.7): `who` moves as a rigid body, the loads doing
+/// `work` on a motion of 1 m; with friction and a motion that keeps every
+/// contact row closed, the slide friction cannot hold (`section`: the
+/// methods section of the dimension's test). A motion that opens a row is
+/// a body pulled away from its support, friction or not: friction holds
+/// nothing on an open row.
+pub(crate) fn unbounded_message(
+    qp: &crate::qp::QpProblem,
+    r: &[f64],
+    who: &str,
+    work: f64,
+    section: &str,
+) -> String {
+    if qp.friction.is_some() && !opens_contact(qp, r) {
         format!(
             "the problem is unbounded: {who} slides as a rigid body, its friction cannot hold the loads (dᵀr = {work:.4e} J for a motion of 1 m exceeds what friction dissipates, methods.md {section})"
         )

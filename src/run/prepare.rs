@@ -464,9 +464,10 @@ pub fn solve_model_in(
         let u = model.motions(direction);
         let work = crate::linalg::sparse::dot(&model.qp.d, direction);
         return Err(bad(crate::run::unbounded_message(
+            &model.qp,
+            direction,
             &model.describe_rigid_motion(&u),
             work,
-            model.qp.friction.is_some(),
             "§9.3",
         )));
     }

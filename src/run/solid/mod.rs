@@ -145,9 +145,10 @@ pub(super) fn solve_in(
         let u = model.displacements(direction);
         let work = crate::linalg::sparse::dot(&model.qp.d, direction);
         return Err(bad(crate::run::unbounded_message(
+            &model.qp,
+            direction,
             &moving_bodies(model, &u),
             work,
-            model.qp.friction.is_some(),
             "§12.3",
         )));
     }
