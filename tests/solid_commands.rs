@@ -333,3 +333,53 @@ fn a_frictional_cube_pulled_off_is_named_as_pulled_away() {
     assert!(!said.contains("slides"), "{said}");
     assert!(!out.exists() || std::fs::read_dir(&out).unwrap().next().is_none());
 }
+
+/// A 3D restart from a split checkpoint in another directory brings the
+/// VTU pairs that run left beside it, as 2D does, and its `.pvd` lists
+/// every step's pair (before, it listed only the steps it solved).
+#[test]
+fn a_3d_restart_into_another_directory_brings_the_pairs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = stack(tmp.path(), STEPS);
+    let toml = toml.to_str().unwrap();
+    let (first, second) = (tmp.path().join("first"), tmp.path().join("second"));
+    let (code, text) = signorini(&[
+        "solve",
+        toml,
+        "-q",
+        "--max-steps",
+        "2",
+        "--out",
+        first.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{text}");
+    let h5 = first.join("stack.h5");
+    let (code, text) = signorini(&[
+        "solve",
+        toml,
+        "-q",
+        "--restart",
+        h5.to_str().unwrap(),
+        "--out",
+        second.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{text}");
+    for k in 1..=2 {
+        for f in [
+            format!("stack_{k:04}.vtu"),
+            format!("stack_{k:04}_contact.vtu"),
+        ] {
+            let a = std::fs::read(first.join(&f)).unwrap();
+            let b = std::fs::read(second.join(&f)).unwrap_or_default();
+            assert!(a == b, "{f}: not copied as it was");
+        }
+    }
+    let pvd = std::fs::read_to_string(second.join("stack.pvd")).unwrap();
+    for k in 1..=3 {
+        assert!(pvd.contains(&format!("file=\"stack_{k:04}.vtu\"")), "{pvd}");
+        assert!(
+            pvd.contains(&format!("file=\"stack_{k:04}_contact.vtu\"")),
+            "{pvd}"
+        );
+    }
+}

@@ -18,7 +18,7 @@ use crate::fem::solid::SolidModel;
 use crate::io;
 use crate::output::{SolidChange, SolidContactOutput, SolidOutput, StepInfo};
 use crate::qp::{MethodId, QpResult, SolveOptions};
-use crate::run::output::{check_interrupt, output_paths, Transaction, SIGNAL};
+use crate::run::output::{check_interrupt, output_paths, same_dir, Transaction, SIGNAL};
 use crate::run::steps::{preconditioner_label, Verdict};
 use crate::run::summary::{Cells, KktSummary, StepRow, Timings};
 use crate::run::RunError;
@@ -466,9 +466,25 @@ impl<'a> Files<'a> {
             self.steps.push((*i, want));
             let t = self.prep.problem.file.step_time(i - 1);
             let pair = output_paths(&self.dir, &name, Some(*i));
+            // The VTU pair the run that wrote the checkpoint left beside it
+            // (a restart into another directory): copied as it is, as in
+            // 2D. A packed checkpoint's steps have none, and the 3D run
+            // does not write them again from the checkpoint (2D does).
+            let src = output_paths(r.path.parent().unwrap_or(Path::new(".")), &name, Some(*i));
+            if !same_dir(&r.path, &self.dir) {
+                for (from, to) in [(&src.vtu, &pair.vtu), (&src.contact_vtu, &pair.contact_vtu)] {
+                    if from.is_file() {
+                        let f = file_name(to);
+                        copy(from, &self.stage.join(&f))?;
+                        staged.push(f);
+                        self.keep(to);
+                    }
+                }
+            }
             for v in [&pair.vtu, &pair.contact_vtu] {
-                if v.is_file() {
-                    self.series.push((t, file_name(v)));
+                let f = file_name(v);
+                if v.is_file() || staged.contains(&f) {
+                    self.series.push((t, f));
                 }
             }
         }
