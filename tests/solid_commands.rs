@@ -148,7 +148,8 @@ fn a_3d_frictional_export_proves_itself() {
 }
 
 /// A packed 3D checkpoint, moved alone, is continued by `--restart` in a
-/// new directory to the uninterrupted run's answer bit for bit.
+/// new directory to the uninterrupted run's answer bit for bit, and the
+/// packed steps' VTU pairs are written again from it.
 #[test]
 fn a_packed_3d_checkpoint_is_continued_bit_for_bit() {
     let tmp = tempfile::tempdir().unwrap();
@@ -218,6 +219,21 @@ fn a_packed_3d_checkpoint_is_continued_bit_for_bit() {
         let bits = |u: &[[f64; 3]]| u.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&a.displacement), bits(&b.displacement));
     }
+    // The packed steps' VTU pairs are written again from the checkpoint:
+    // the displacements and contact pressures of the uninterrupted run's.
+    for k in 1..=2 {
+        for (f, field) in [
+            (format!("stack_{k:04}.vtu"), "displacement"),
+            (format!("stack_{k:04}_contact.vtu"), "contact_pressure"),
+        ] {
+            let a = signorini::io::vtu::read_vtu_arrays(&full.join(&f)).unwrap();
+            let b = signorini::io::vtu::read_vtu_arrays(&again.join(&f)).unwrap();
+            let (ua, ub) = (a.point_array(field), b.point_array(field));
+            assert!(ua.is_some() && ua == ub, "{f}: {field} differs");
+        }
+    }
+    let pvd = std::fs::read_to_string(again.join("stack.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 6, "{pvd}");
 }
 
 /// `compare` on the frictional steps: each variant follows the path, and

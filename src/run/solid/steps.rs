@@ -468,18 +468,25 @@ impl<'a> Files<'a> {
             let pair = output_paths(&self.dir, &name, Some(*i));
             // The VTU pair the run that wrote the checkpoint left beside it
             // (a restart into another directory): copied as it is, as in
-            // 2D. A packed checkpoint's steps have none, and the 3D run
-            // does not write them again from the checkpoint (2D does).
+            // 2D; a pair found nowhere (a packed checkpoint moved alone) is
+            // written again from the checkpoint's step, every field but the
+            // reactions and the change fields, which it does not keep.
             let src = output_paths(r.path.parent().unwrap_or(Path::new(".")), &name, Some(*i));
-            if !same_dir(&r.path, &self.dir) {
-                for (from, to) in [(&src.vtu, &pair.vtu), (&src.contact_vtu, &pair.contact_vtu)] {
-                    if from.is_file() {
-                        let f = file_name(to);
-                        copy(from, &self.stage.join(&f))?;
-                        staged.push(f);
-                        self.keep(to);
-                    }
+            let has_contact = !self.prep.problem.file.contact.is_empty();
+            let in_place = same_dir(&r.path, &self.dir);
+            let files = 1 + usize::from(has_contact);
+            let pairs = [(&src.vtu, &pair.vtu), (&src.contact_vtu, &pair.contact_vtu)];
+            if in_place && pairs.iter().take(files).all(|(_, to)| to.is_file()) {
+                // A restart in place: the pair is there.
+            } else if !in_place && pairs.iter().take(files).all(|(from, _)| from.is_file()) {
+                for (from, to) in pairs.iter().take(files) {
+                    let f = file_name(to);
+                    copy(from, &self.stage.join(&f))?;
+                    staged.push(f);
+                    self.keep(to);
                 }
+            } else {
+                staged.extend(self.pair_from_checkpoint(&r.path, *i, &pair, has_contact)?);
             }
             for v in [&pair.vtu, &pair.contact_vtu] {
                 let f = file_name(v);
@@ -575,6 +582,63 @@ impl<'a> Files<'a> {
         )?;
         self.keep(&index);
         names.push(file_name(&index));
+        Ok(names)
+    }
+
+    /// Stage step `i`'s VTU pair (the bulk file, and the contact file
+    /// when the problem has contact) written from the checkpoint at
+    /// `path`, to be committed as `pair`; their names.
+    fn pair_from_checkpoint(
+        &mut self,
+        path: &Path,
+        i: usize,
+        pair: &crate::run::output::Outputs,
+        has_contact: bool,
+    ) -> Result<Vec<String>, RunError> {
+        let ck = io::hdf5::read_solid_checkpoint(path, io::hdf5::SolidSteps::One(i))?;
+        let Some(st) = ck.steps.into_iter().next() else {
+            return Ok(vec![]);
+        };
+        let out = SolidOutput {
+            points: ck.points.clone(),
+            point_body: ck.point_body,
+            tets: ck.tets,
+            material: ck.material,
+            material_names: ck.material_names,
+            displacement: st.displacement,
+            stress: st.stress,
+            von_mises: st.von_mises,
+            principal: st.principal,
+            reaction: vec![],
+            change: None,
+        };
+        let mut names = vec![file_name(&pair.vtu)];
+        io::vtu::write_solid_vtu(&self.stage.join(&names[0]), &out, self.compress)?;
+        self.keep(&pair.vtu);
+        if has_contact {
+            let c = ck.contact;
+            let contact = SolidContactOutput {
+                points: c.slave.iter().map(|&p| ck.points[p]).collect(),
+                slave: c.slave,
+                triangles: c.triangles,
+                normal: c.normal,
+                interface: c.interface,
+                gap0: c.gap0,
+                gap: st.gap,
+                multiplier: st.multipliers,
+                pressure: st.contact_pressure,
+                active: st.active.iter().map(|&a| a != 0).collect(),
+                tangential_force: st.tangential_force,
+                tangential_traction: st.tangential_traction,
+                slip: st.slip,
+                friction_state: st.friction_state,
+                ..Default::default()
+            };
+            let f = file_name(&pair.contact_vtu);
+            io::vtu::write_solid_contact_vtu(&self.stage.join(&f), &contact, self.compress)?;
+            self.keep(&pair.contact_vtu);
+            names.push(f);
+        }
         Ok(names)
     }
 
