@@ -102,6 +102,18 @@ fn export_bad_input_writes_nothing() {
     assert_eq!(code, 2);
     assert!(err.starts_with("error:"), "{err}");
     assert!(!d.exists());
+    // --qp naming a file: refused before the solve, the file left as it was.
+    std::fs::write(&d, "mine").unwrap();
+    let (code, _, err) = signorini(&[
+        "export",
+        "--qp",
+        d.to_str().unwrap(),
+        "meshes/column.toml",
+        "--solution",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("is not a directory"), "{err}");
+    assert_eq!(std::fs::read_to_string(&d).unwrap(), "mine");
 }
 
 #[test]

@@ -223,6 +223,13 @@ fn write_solution(
 /// into `spec.dir`. Every file is written atomically, meta.json last; an
 /// error names the file.
 pub fn export(prep: &dyn Comparable, spec: &ExportSpec) -> Result<ExportReport, RunError> {
+    // Before any solve: a path that is a file cannot take the files.
+    if spec.dir.exists() && !spec.dir.is_dir() {
+        return Err(RunError::Output(format!(
+            "{}: exists and is not a directory: --qp names the directory of the files",
+            spec.dir.display()
+        )));
+    }
     // The problem as written: with `[[steps]]`, its loads at factor 1 and
     // no step applied (t0 = 0), plane and solid alike.
     let written = prep.written()?;
