@@ -47,6 +47,15 @@ fn signorini(args: &[&str]) -> (i32, String) {
     common::run(args)
 }
 
+/// `signorini solve TOML -q FLAGS… --out OUT`, which must exit 0.
+fn solve_ok(toml: &str, out: &Path, flags: &[&str]) {
+    let mut args = vec!["solve", toml, "-q"];
+    args.extend_from_slice(flags);
+    args.extend(["--out", out.to_str().unwrap()]);
+    let (code, text) = signorini(&args);
+    assert_eq!(code, 0, "{text}");
+}
+
 #[test]
 fn a_3d_frictional_export_proves_itself() {
     let tmp = tempfile::tempdir().unwrap();
@@ -157,19 +166,9 @@ fn a_packed_3d_checkpoint_is_continued_bit_for_bit() {
     let toml = toml.to_str().unwrap();
     let dir = |n: &str| tmp.path().join(n);
     let full = dir("full");
-    let (code, text) = signorini(&["solve", toml, "-q", "--out", full.to_str().unwrap()]);
-    assert_eq!(code, 0, "{text}");
+    solve_ok(toml, &full, &[]);
     let part = dir("part");
-    let (code, text) = signorini(&[
-        "solve",
-        toml,
-        "-q",
-        "--max-steps",
-        "2",
-        "--out",
-        part.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{text}");
+    solve_ok(toml, &part, &["--max-steps", "2"]);
     let alone = dir("alone");
     std::fs::create_dir(&alone).unwrap();
     let packed = alone.join("packed.h5");
@@ -188,16 +187,7 @@ fn a_packed_3d_checkpoint_is_continued_bit_for_bit() {
             .unwrap();
     assert_eq!(ck.step_indices, vec![1, 2]);
     let again = dir("again");
-    let (code, text) = signorini(&[
-        "solve",
-        toml,
-        "-q",
-        "--restart",
-        packed.to_str().unwrap(),
-        "--out",
-        again.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{text}");
+    solve_ok(toml, &again, &["--restart", packed.to_str().unwrap()]);
     for f in [
         "stack_mesh.h5",
         "stack_0001.h5",
@@ -359,27 +349,9 @@ fn a_3d_restart_into_another_directory_brings_the_pairs() {
     let toml = stack(tmp.path(), STEPS);
     let toml = toml.to_str().unwrap();
     let (first, second) = (tmp.path().join("first"), tmp.path().join("second"));
-    let (code, text) = signorini(&[
-        "solve",
-        toml,
-        "-q",
-        "--max-steps",
-        "2",
-        "--out",
-        first.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{text}");
+    solve_ok(toml, &first, &["--max-steps", "2"]);
     let h5 = first.join("stack.h5");
-    let (code, text) = signorini(&[
-        "solve",
-        toml,
-        "-q",
-        "--restart",
-        h5.to_str().unwrap(),
-        "--out",
-        second.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{text}");
+    solve_ok(toml, &second, &["--restart", h5.to_str().unwrap()]);
     for k in 1..=2 {
         for f in [
             format!("stack_{k:04}.vtu"),
