@@ -371,3 +371,24 @@ fn a_3d_restart_into_another_directory_brings_the_pairs() {
         );
     }
 }
+
+/// `pack` of a 3D split checkpoint missing a step file: exit 2 naming the
+/// file, nothing written (every step is read and checked before the copy).
+#[test]
+fn a_3d_pack_with_a_missing_step_file_names_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = stack(tmp.path(), STEPS);
+    let part = tmp.path().join("part");
+    solve_ok(toml.to_str().unwrap(), &part, &["--max-steps", "2"]);
+    std::fs::remove_file(part.join("stack_0002.h5")).unwrap();
+    let packed = tmp.path().join("packed.h5");
+    let (code, text) = signorini(&[
+        "pack",
+        part.join("stack.h5").to_str().unwrap(),
+        "-o",
+        packed.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("stack_0002.h5"), "{text}");
+    assert!(!packed.exists());
+}

@@ -214,7 +214,8 @@ pub fn pack(src: &Path, dst: &Path) -> Result<Packed, IoError> {
     // Every dataset checked (sizes, indices, finiteness of nothing more),
     // by the reader of the checkpoint's kind.
     let (root, step_groups) = if super::solid_read::is_solid_checkpoint(src) {
-        let ck = super::solid_read::read_solid_checkpoint(src, super::solid_read::SolidSteps::All)?;
+        let ck =
+            super::solid_read::read_solid_checkpoint(src, super::solid_read::SolidSteps::Checked)?;
         let steps = ck.step_indices.iter().map(|&i| step_name(i)).collect();
         (Root::Solid(ck.attrs), steps)
     } else {
