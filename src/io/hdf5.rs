@@ -766,6 +766,17 @@ fn get_attr_str_list(ctx: &Ctx, loc: &Location, name: &str) -> Result<Vec<String
 /// root attributes. A file without `/steps` gives zero steps; a file without
 /// `/mesh` or with a missing dataset is rejected, naming the missing path.
 pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
+    read_checkpoint_keeping(path, true)
+}
+
+/// [`read_checkpoint`] that checks every step, one at a time, and keeps
+/// none (`steps` and `friction` empty, `step_groups` every group): the
+/// whole file verified without holding its steps (`pack`).
+pub fn check_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
+    read_checkpoint_keeping(path, false)
+}
+
+fn read_checkpoint_keeping(path: &Path, keep: bool) -> Result<Checkpoint, IoError> {
     let meta =
         std::fs::metadata(path).map_err(|e| IoError::io(path, "cannot open checkpoint", e))?;
     if !meta.is_file() {
@@ -831,8 +842,12 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
                 .group(&name)
                 .map_err(|e| linked(&ctx, &format!("/steps/{name}"), e))?;
             let gctx = ctx.of_file(&g);
-            steps.push(read_step(&gctx, &g, &mesh)?);
-            friction.push(read_step_friction(&gctx, &g, mesh.contact.points.len())?);
+            let step = read_step(&gctx, &g, &mesh)?;
+            let fr = read_step_friction(&gctx, &g, mesh.contact.points.len())?;
+            if keep {
+                steps.push(step);
+                friction.push(fr);
+            }
             step_groups.push(name);
         }
     }

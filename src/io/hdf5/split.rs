@@ -208,7 +208,7 @@ pub struct Packed {
 /// links of a split checkpoint), atomically. The result is the single-file
 /// layout, read by everything that reads a checkpoint. `dst` may not be one
 /// of the files `src` reads. The source is read whole first
-/// ([`read_checkpoint`]): a missing or damaged step file is refused, named,
+/// ([`check_checkpoint`], one step at a time): a missing or damaged step file is refused, named,
 /// before anything is written.
 pub fn pack(src: &Path, dst: &Path) -> Result<Packed, IoError> {
     // Every dataset checked (sizes, indices, finiteness of nothing more),
@@ -219,7 +219,7 @@ pub fn pack(src: &Path, dst: &Path) -> Result<Packed, IoError> {
         let steps = ck.step_indices.iter().map(|&i| step_name(i)).collect();
         (Root::Solid(ck.attrs), steps)
     } else {
-        let ck = read_checkpoint(src)?;
+        let ck = super::check_checkpoint(src)?;
         (Root::Plane(ck.attrs, ck.mesh.kind), ck.step_groups)
     };
     let files = checkpoint_files(src)?;
