@@ -84,7 +84,7 @@ pub use solid::{
     read_solid_restart, write_solid_checkpoint, write_solid_index, write_solid_mesh_file,
     write_solid_step_file, SolidRestartData,
 };
-pub use solid_read::{is_solid_checkpoint, read_solid_checkpoint, SolidSteps};
+pub use solid_read::{is_solid_checkpoint, read_solid_checkpoint, read_solid_step, SolidSteps};
 pub use split::{
     checkpoint_files, mesh_file_name, pack, step_file_name, unpack_part, write_index,
     write_mesh_file, write_step_file, CheckpointFiles, Packed,

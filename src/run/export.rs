@@ -103,22 +103,23 @@ impl Files<'_> {
 /// and its frame: one tangential row per contact row (plane and
 /// axisymmetric models, |·| of the slip), or two (solid models, the
 /// Euclidean norm of the pair, docs/methods.md §12).
-fn objective(law: Option<(&str, Frame)>) -> &'static str {
-    match law {
-        None => "min 1/2 x'Cx - d'x subject to Ax <= g",
-        Some(("tresca", Frame::Line)) => {
-            "min 1/2 x'Cx - d'x + sum_i s_i |(Tx - t0)_i| subject to Ax <= g"
-        }
-        Some((_, Frame::Line)) => {
-            "min 1/2 x'Cx - d'x + sum_i s_i |(Tx - t0)_i| subject to Ax <= g, with s_i = mu_i lambda_i (Coulomb: a fixed point)"
-        }
-        Some(("tresca", Frame::Plane)) => {
-            "min 1/2 x'Cx - d'x + sum_i s_i ||((Tx - t0)_2i, (Tx - t0)_2i+1)||_2 subject to Ax <= g (rows 2i, 2i+1 of T: the two tangents of contact row i, from 0)"
-        }
-        Some((_, Frame::Plane)) => {
-            "min 1/2 x'Cx - d'x + sum_i s_i ||((Tx - t0)_2i, (Tx - t0)_2i+1)||_2 subject to Ax <= g (rows 2i, 2i+1 of T: the two tangents of contact row i, from 0), with s_i = mu_i lambda_i (Coulomb: a fixed point)"
-        }
-    }
+fn objective(law: Option<(&str, Frame)>) -> String {
+    let Some((law, frame)) = law else {
+        return "min 1/2 x'Cx - d'x subject to Ax <= g".to_string();
+    };
+    let (term, rows) = match frame {
+        Frame::Line => ("|(Tx - t0)_i|", ""),
+        Frame::Plane => (
+            "||((Tx - t0)_2i, (Tx - t0)_2i+1)||_2",
+            " (rows 2i, 2i+1 of T: the two tangents of contact row i, from 0)",
+        ),
+    };
+    let coulomb = if law == "tresca" {
+        ""
+    } else {
+        ", with s_i = mu_i lambda_i (Coulomb: a fixed point)"
+    };
+    format!("min 1/2 x'Cx - d'x + sum_i s_i {term} subject to Ax <= g{rows}{coulomb}")
 }
 
 /// C, A, d, g and the kernel basis R (one column per rigid mode).

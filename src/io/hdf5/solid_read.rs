@@ -27,6 +27,9 @@ pub enum SolidSteps {
     /// Every step read and checked, one at a time, and none kept: the
     /// whole file verified without holding its steps (`pack`).
     Checked,
+    /// No step read: the mesh, the contact rows and the root attributes
+    /// (then [`read_solid_step`] one step at a time).
+    MeshOnly,
 }
 
 /// Whether `path` is a checkpoint file whose root says `model = "solid"`
@@ -80,6 +83,7 @@ pub fn read_solid_checkpoint(path: &Path, which: SolidSteps) -> Result<SolidChec
     ck.step_indices = names.iter().map(|(i, _)| *i).collect();
     let pick: Vec<&(usize, String)> = match which {
         SolidSteps::All | SolidSteps::Checked => names.iter().collect(),
+        SolidSteps::MeshOnly => vec![],
         SolidSteps::Last => {
             let last = if has_attr(&ctx, &file, "last_step")? {
                 let k = get_attr::<u64>(&ctx, &file, "last_step")?;
@@ -109,6 +113,25 @@ pub fn read_solid_checkpoint(path: &Path, which: SolidSteps) -> Result<SolidChec
         }
     }
     Ok(ck)
+}
+
+/// Reads step `index` of the 3D checkpoint at `path` whose mesh `ck` was
+/// read before ([`SolidSteps::MeshOnly`]), without reading the mesh again.
+pub fn read_solid_step(
+    path: &Path,
+    ck: &SolidCheckpoint,
+    index: usize,
+) -> Result<SolidStep, IoError> {
+    let meta =
+        std::fs::metadata(path).map_err(|e| IoError::io(path, "cannot open checkpoint", e))?;
+    let ctx = Ctx {
+        path,
+        limit: meta.len(),
+    };
+    let file = File::open(path).map_err(ctx.h5("/"))?;
+    let loc = format!("/steps/{}", super::step_name(index));
+    let g = file.group(&loc).map_err(|e| linked(&ctx, &loc, e))?;
+    read_step(&ctx.of_file(&g), &g, ck, index)
 }
 
 /// "1 step (1)", "3 steps (1 to 3)", "no step".

@@ -449,6 +449,8 @@ impl<'a> Files<'a> {
         self.keep(&self.dir.join(&mesh_file));
         self.has_mesh = true;
         let mut kept = true;
+        // The checkpoint's mesh, read once if a pair must be written again.
+        let mut mesh = None;
         for (i, _, f) in found.steps.iter().take(r.steps_done) {
             let want = io::hdf5::step_file_name(&name, *i);
             if packed {
@@ -486,7 +488,9 @@ impl<'a> Files<'a> {
                     self.keep(to);
                 }
             } else {
-                staged.extend(self.pair_from_checkpoint(&r.path, *i, &pair, has_contact)?);
+                let names =
+                    self.pair_from_checkpoint(&r.path, &mut mesh, *i, &pair, has_contact)?;
+                staged.extend(names);
             }
             for v in [&pair.vtu, &pair.contact_vtu] {
                 let f = file_name(v);
@@ -587,24 +591,32 @@ impl<'a> Files<'a> {
 
     /// Stage step `i`'s VTU pair (the bulk file, and the contact file
     /// when the problem has contact) written from the checkpoint at
-    /// `path`, to be committed as `pair`; their names.
+    /// `path`, to be committed as `pair`; their names. `mesh` holds the
+    /// checkpoint's mesh once read (it is read on the first call only).
     fn pair_from_checkpoint(
         &mut self,
         path: &Path,
+        mesh: &mut Option<crate::output::SolidCheckpoint>,
         i: usize,
         pair: &crate::run::output::Outputs,
         has_contact: bool,
     ) -> Result<Vec<String>, RunError> {
-        let ck = io::hdf5::read_solid_checkpoint(path, io::hdf5::SolidSteps::One(i))?;
-        let Some(st) = ck.steps.into_iter().next() else {
+        if mesh.is_none() {
+            *mesh = Some(io::hdf5::read_solid_checkpoint(
+                path,
+                io::hdf5::SolidSteps::MeshOnly,
+            )?);
+        }
+        let Some(ck) = mesh.as_ref() else {
             return Ok(vec![]);
         };
+        let st = io::hdf5::read_solid_step(path, ck, i)?;
         let out = SolidOutput {
             points: ck.points.clone(),
-            point_body: ck.point_body,
-            tets: ck.tets,
-            material: ck.material,
-            material_names: ck.material_names,
+            point_body: ck.point_body.clone(),
+            tets: ck.tets.clone(),
+            material: ck.material.clone(),
+            material_names: ck.material_names.clone(),
             displacement: st.displacement,
             stress: st.stress,
             von_mises: st.von_mises,
@@ -616,14 +628,14 @@ impl<'a> Files<'a> {
         io::vtu::write_solid_vtu(&self.stage.join(&names[0]), &out, self.compress)?;
         self.keep(&pair.vtu);
         if has_contact {
-            let c = ck.contact;
+            let c = &ck.contact;
             let contact = SolidContactOutput {
                 points: c.slave.iter().map(|&p| ck.points[p]).collect(),
-                slave: c.slave,
-                triangles: c.triangles,
-                normal: c.normal,
-                interface: c.interface,
-                gap0: c.gap0,
+                slave: c.slave.clone(),
+                triangles: c.triangles.clone(),
+                normal: c.normal.clone(),
+                interface: c.interface.clone(),
+                gap0: c.gap0.clone(),
                 gap: st.gap,
                 multiplier: st.multipliers,
                 pressure: st.contact_pressure,
