@@ -56,19 +56,24 @@ fn solve_ok(toml: &str, out: &Path, flags: &[&str]) {
     assert_eq!(code, 0, "{text}");
 }
 
+/// `signorini export --qp QP TOML --solution`, which must exit 0.
+fn export_ok(toml: &Path, qp: &Path) {
+    let (code, text) = signorini(&[
+        "export",
+        "--qp",
+        qp.to_str().unwrap(),
+        toml.to_str().unwrap(),
+        "--solution",
+    ]);
+    assert_eq!(code, 0, "{text}");
+}
+
 #[test]
 fn a_3d_frictional_export_proves_itself() {
     let tmp = tempfile::tempdir().unwrap();
     let toml = stack(tmp.path(), "");
     let d = tmp.path().join("qp");
-    let (code, text) = signorini(&[
-        "export",
-        "--qp",
-        d.to_str().unwrap(),
-        toml.to_str().unwrap(),
-        "--solution",
-    ]);
-    assert_eq!(code, 0, "{text}");
+    export_ok(&toml, &d);
     let meta: Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("meta.json")).unwrap()).unwrap();
     assert_eq!(meta["dim"], 3);
@@ -290,14 +295,7 @@ fn a_3d_export_with_steps_is_the_problem_as_written() {
         std::fs::create_dir(&dir).unwrap();
         let toml = stack(&dir, steps);
         let qp = dir.join("qp");
-        let (code, text) = signorini(&[
-            "export",
-            "--qp",
-            qp.to_str().unwrap(),
-            toml.to_str().unwrap(),
-            "--solution",
-        ]);
-        assert_eq!(code, 0, "{text}");
+        export_ok(&toml, &qp);
         let read = |f: &str| mtx::read_vector(&qp.join(f)).unwrap();
         (read("d.mtx"), read("x.mtx"))
     };
