@@ -323,6 +323,22 @@ def mortar_rows(x, st, s_out, mt, m_out, L):
     return out
 
 
+def mirrored(n, planes):
+    """The normal of a row whose slave node lies on slip planes of unit
+    normals `planes` (docs/methods.md §11.7): its part in the planes,
+    normalised, unless that keeps less than half of it (a wall met at an
+    angle) or all of it (already in the planes). Returns (n', n·n')."""
+    if not planes:
+        return n, 1.0
+    q, _ = np.linalg.qr(np.array(planes, dtype=float).T)
+    m = n - q @ (q.T @ n)
+    ln = np.linalg.norm(m)
+    if ln < 0.5 or ln >= 1.0:
+        return n, 1.0
+    m = m / ln
+    return m, float(n @ m)
+
+
 def check(toml: Path, exe: Path, tol: float, tmp: Path, gmsh) -> int:
     """The cross-check of a 3D model; the exit code."""
     import dolfinx.fem.petsc  # noqa: F401
@@ -505,6 +521,7 @@ def check(toml: Path, exe: Path, tol: float, tmp: Path, gmsh) -> int:
                 for c, val in enumerate(comps):
                     if val is not None:
                         fixed.setdefault(pnt, []).append((np.eye(3)[c], val))
+    slip_normals: dict[int, list[np.ndarray]] = {}
     for sl in cfg.get("slip", []):
         d, tag = names.get(sl["on"], dim=2)
         if d != 2:
@@ -513,6 +530,7 @@ def check(toml: Path, exe: Path, tol: float, tmp: Path, gmsh) -> int:
         nsum = sum(np.cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]) for t in tris)
         nsum = nsum / np.linalg.norm(nsum)
         for vv in np.unique(tris):
+            slip_normals.setdefault(int(vv), []).append(nsum)
             for pnt in node_points.get(int(vv), []):
                 fixed.setdefault(pnt, []).append((nsum, 0.0))
 
@@ -576,7 +594,7 @@ def check(toml: Path, exe: Path, tol: float, tmp: Path, gmsh) -> int:
                     trib[int(vv)] = trib.get(int(vv), 0.0) + area / 3
             bk, bl = bodies
             for vv, s_ in acc.items():
-                nrm_ = s_ / np.linalg.norm(s_)
+                nrm_, _ = mirrored(s_ / np.linalg.norm(s_), slip_normals.get(vv, []))
                 rows.append((point_of[(vv, bl)], [(point_of[(vv, bk)], nrm_), (point_of[(vv, bl)], -nrm_)],
                              0.0, trib[vv]))
         else:
@@ -596,6 +614,7 @@ def check(toml: Path, exe: Path, tol: float, tmp: Path, gmsh) -> int:
                 scell = [body_of_face(t)[0] for t in st]
                 sn = np.array([outward(t, ci)[0] for t, ci in zip(st, scell)])
                 for vv, (nj, wts, gap, dj) in sorted(mortar_rows(x, st, sn, mt, mn, L).items()):
+                    nj, _ = mirrored(nj, slip_normals.get(vv, []))
                     coef = [(point_of[(mnode, mb)], -w * nj) for mnode, w in sorted(wts.items()) if w != 0.0]
                     coef.append((point_of[(vv, sb)], nj))
                     rows.append((point_of[(vv, sb)], coef, gap, dj))
@@ -626,10 +645,10 @@ def check(toml: Path, exe: Path, tol: float, tmp: Path, gmsh) -> int:
                     continue
                 cand = np.where(inside)[0]
                 j = cand[np.argmin(np.abs(d_[cand]))]
-                nrm_ = mn[j]
+                nrm_, cos_ = mirrored(mn[j], slip_normals.get(vv, []))
                 coef = [(point_of[(int(mt[j][q]), mb)], w * nrm_) for q, w in enumerate((w0[j], w1[j], w2[j]))]
                 coef.append((point_of[(vv, sb)], -nrm_))
-                rows.append((point_of[(vv, sb)], coef, float(d_[j]), trib[vv]))
+                rows.append((point_of[(vv, sb)], coef, float(d_[j]) * cos_, trib[vv]))
     m = len(rows)
     if m:
         Ar_, Ac_, Av_ = [], [], []

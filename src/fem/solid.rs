@@ -11,7 +11,9 @@
 //! §"Adding a kind: solid 3D".
 
 use super::conditions::{number, Cond, PointDofs};
-use super::contact3d::{conforming_rows, mortar_rows, nts_rows, reduced_rows, Row3};
+use super::contact3d::{
+    conforming_rows, mirror_into_slip_planes, mortar_rows, nts_rows, reduced_rows, Row3,
+};
 use super::element::{ElementKind, MaterialMatrix, Point3, RigidMode, Vector3, SOLID_MODES};
 use super::pairs::STIFF_SLAVE;
 use super::stiffness::{assemble, Cells, Materials};
@@ -536,6 +538,8 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
             }
         }
     }
+    // The slip planes' normals through each point, for the contact rows.
+    let mut slip_planes: Vec<Vec<Vector3>> = vec![vec![]; np];
     for (i, on) in input.slip.iter().enumerate() {
         let what = format!("[[slip]] #{} (on = \"{on}\")", i + 1);
         let tris = surf(on, &what)?;
@@ -576,6 +580,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         ps.dedup();
         for p in ps {
             conds[p].push(cond(n0, 0.0));
+            slip_planes[p].push(n0);
         }
     }
     // The elimination of the plane, by Gram–Schmidt in 3D.
@@ -710,6 +715,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
             }
         }
     }
+    mirror_into_slip_planes(&mut contact, &slip_planes);
     let (a, g, qp_rows) = reduced_rows(&contact, &dofs, n, |row| {
         err(format!(
             "contact row at node {} of \"{}\" is violated by the prescribed displacements alone",

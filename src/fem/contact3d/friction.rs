@@ -19,36 +19,65 @@ use std::path::Path;
 /// tangent plane makes the row's frame a symmetry frame ([`friction_frame`]).
 const ACROSS: f64 = 1e-9;
 
+/// Which of a row's two tangential rows a plane of symmetry holds
+/// ([`friction_frame`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Held {
+    /// Neither: the slave point slides freely in its tangent plane.
+    None,
+    /// The second (t2, across one plane of symmetry).
+    Second,
+    /// Both (a point on a symmetry edge, two planes through n).
+    Both,
+}
+
 /// The friction frame of `row` whose slave point has the unknowns `slave`
 /// (docs/methods.md §12.2): the row's own (t1, t2) of §11.4, unless the slave
-/// point is held at zero along one direction e lying in the tangent plane
-/// (a `[[slip]]` plane of symmetry, or a zero Dirichlet component): then
-/// t2 = e and t1 = t2 × n, and the second tangential row is held (true):
-/// it is left empty, as 2D's mortar rows on a line of symmetry, since the
-/// mirrored half cancels any force across the plane. An empty row still
-/// shares the disc with t1, so without this rotation an arbitrary λ_t2 on
-/// it could take capacity from λ_t1.
-pub fn friction_frame(row: &Row3, slave: &PointDofs<3>) -> ([Vector3; 2], bool) {
+/// point is held at zero along directions lying in the tangent plane (a
+/// `[[slip]]` plane of symmetry, or a zero Dirichlet component):
+/// - along one direction e: t2 = e and t1 = t2 × n, and the second
+///   tangential row is held ([`Held::Second`]);
+/// - along two (a symmetry edge, n along the free direction): t1 the first
+///   held direction, t2 = n × t1, both rows held ([`Held::Both`]).
+///
+/// A held row is left empty, as 2D's mortar rows on a line of symmetry,
+/// since the mirrored half cancels any force across the plane. An empty
+/// row still shares the disc with t1, so without this rotation an arbitrary
+/// λ_t2 on it could take capacity from λ_t1.
+pub fn friction_frame(row: &Row3, slave: &PointDofs<3>) -> ([Vector3; 2], Held) {
     let n = row.normal;
-    if slave.ndof == 2 && slave.u0 == [0.0; 3] {
-        let [a, b] = [slave.t[0], slave.t[1]];
-        let e = [
+    if slave.u0 != [0.0; 3] {
+        return (row.tangents, Held::None);
+    }
+    let cross = |a: Vector3, b: Vector3| {
+        [
             a[1] * b[2] - a[2] * b[1],
             a[2] * b[0] - a[0] * b[2],
             a[0] * b[1] - a[1] * b[0],
-        ];
-        let l = dot(e, e).sqrt();
-        if l > 0.5 && (dot(e, n) / l).abs() <= ACROSS {
-            let t2 = e.map(|c| c / l);
-            let t1 = [
-                t2[1] * n[2] - t2[2] * n[1],
-                t2[2] * n[0] - t2[0] * n[2],
-                t2[0] * n[1] - t2[1] * n[0],
-            ];
-            return ([t1, t2], true);
+        ]
+    };
+    match slave.ndof {
+        2 => {
+            let e = cross(slave.t[0], slave.t[1]);
+            let l = dot(e, e).sqrt();
+            if l > 0.5 && (dot(e, n) / l).abs() <= ACROSS {
+                let t2 = e.map(|c| c / l);
+                return ([cross(t2, n), t2], Held::Second);
+            }
         }
+        1 => {
+            // The free direction f along n: the held ones span the tangent
+            // plane.
+            let f = slave.t[0];
+            let l = dot(f, f).sqrt();
+            let across = cross(f, n);
+            if l > 0.5 && dot(across, across).sqrt() / l <= ACROSS {
+                return (row.tangents, Held::Both);
+            }
+        }
+        _ => {}
     }
-    (row.tangents, false)
+    (row.tangents, Held::None)
 }
 
 /// Coefficients c_p of the tangential relative displacement Σ c_p·u_p of
@@ -65,12 +94,11 @@ pub fn tangential_coefficients(row: &Row3, t: Vector3) -> Vec<(usize, Vector3)> 
 /// the frame holds it), and the frame.
 fn rows_of(row: &Row3, dofs: &[PointDofs<3>]) -> ([Vec<(usize, Vector3)>; 2], [Vector3; 2]) {
     let (t, held) = friction_frame(row, &dofs[row.slave]);
-    let second = if held {
-        vec![]
-    } else {
-        tangential_coefficients(row, t[1])
+    let along = |k: usize| match (held, k) {
+        (Held::Both, _) | (Held::Second, 1) => vec![],
+        _ => tangential_coefficients(row, t[k]),
     };
-    ([tangential_coefficients(row, t[0]), second], t)
+    ([along(0), along(1)], t)
 }
 
 /// The friction of the QP rows `qp_rows` of `rows` (None without a friction
@@ -183,8 +211,8 @@ pub fn tangential_displacement(model: &SolidModel, u: &[Vector3]) -> Vec<f64> {
 }
 
 /// The friction frame of each contact row of `model` (its §11.4 frame for
-/// rows left out of the QP), and whether its second tangent is held.
-pub fn frames(model: &SolidModel) -> Vec<([Vector3; 2], bool)> {
+/// rows left out of the QP), and which of its tangents are held.
+pub fn frames(model: &SolidModel) -> Vec<([Vector3; 2], Held)> {
     model
         .contact
         .iter()
@@ -212,7 +240,8 @@ mod tests {
 
     /// A free slave keeps the frame of §11.4; one held at zero across a
     /// plane containing n gets t2 along the held direction, a right-handed
-    /// frame, and its second row held.
+    /// frame, and its second row held; one free along n alone (a symmetry
+    /// edge) both rows.
     #[test]
     fn symmetry_frame() {
         let r = row([0.0, 0.0, 1.0]);
@@ -222,7 +251,7 @@ mod tests {
             t: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             u0: [0.0; 3],
         };
-        assert_eq!(friction_frame(&r, &free), (r.tangents, false));
+        assert_eq!(friction_frame(&r, &free), (r.tangents, Held::None));
         let s = 0.5f64.sqrt();
         // Held along e = (s, s, 0) (a plane x + y = 0 through the normal).
         let held = PointDofs::<3> {
@@ -232,7 +261,7 @@ mod tests {
             u0: [0.0; 3],
         };
         let ([t1, t2], h) = friction_frame(&r, &held);
-        assert!(h);
+        assert_eq!(h, Held::Second);
         assert!((dot(t2, [s, s, 0.0]).abs() - 1.0).abs() < 1e-15);
         let c = [
             t1[1] * t2[2] - t1[2] * t2[1],
@@ -245,13 +274,26 @@ mod tests {
             t: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0; 3]],
             ..held
         };
-        assert!(!friction_frame(&r, &support).1);
+        assert_eq!(friction_frame(&r, &support).1, Held::None);
         // Held at a non-zero value: no symmetry.
         let moved = PointDofs::<3> {
             u0: [0.1, 0.1, 0.0],
             ..held
         };
-        assert!(!friction_frame(&r, &moved).1);
+        assert_eq!(friction_frame(&r, &moved).1, Held::None);
+        // On a symmetry edge (free along n only): both held; free across n
+        // (an edge along the tangent plane): neither.
+        let edge = PointDofs::<3> {
+            ndof: 1,
+            t: [[0.0, 0.0, 1.0], [0.0; 3], [0.0; 3]],
+            ..held
+        };
+        assert_eq!(friction_frame(&r, &edge), (r.tangents, Held::Both));
+        let across = PointDofs::<3> {
+            t: [[1.0, 0.0, 0.0], [0.0; 3], [0.0; 3]],
+            ..edge
+        };
+        assert_eq!(friction_frame(&r, &across).1, Held::None);
     }
 
     /// A row without a normal (a degenerate facet) is refused naming the

@@ -142,6 +142,59 @@ pub(super) fn conforming_rows(
     Ok(rows)
 }
 
+/// A slave point on a `[[slip]]` plane is on a plane of symmetry (or a
+/// frictionless wall): the model's mirror image has the same point, and its
+/// row's normal there is the mean of the two sides', the normal with its
+/// component across the plane removed (docs/methods.md §11.7). The averaged
+/// normal of a mortar or conforming row, or an NTS row's master facet, sees
+/// one side only and tilts out of the plane by about half a facet angle;
+/// the tilted row then couples the masters' motion across the plane, and
+/// the friction frame misses the plane's held tangent (§12.2), leaving a
+/// tangential row too weak to fix its multiplier. `planes[p]` are the unit
+/// normals of the slip planes through point p. A normal more than 60° from
+/// the plane (|n·e| > cos 30°) is a surface that meets a wall at an angle,
+/// not a mirrored one, and is kept. An NTS row keeps its projected point:
+/// its gap along the new normal n' is g (n·n'); a mortar row's gap is an
+/// integral over its facets and a conforming row's is 0, both kept.
+pub(super) fn mirror_into_slip_planes(rows: &mut [Row3], planes: &[Vec<Vector3>]) {
+    for row in rows.iter_mut() {
+        let es = &planes[row.slave];
+        if es.is_empty() {
+            continue;
+        }
+        // An orthonormal basis of the planes' normals (two planes meet on
+        // a symmetry edge; a third would fix the point).
+        let mut basis: Vec<Vector3> = vec![];
+        for &e in es {
+            let mut v = e;
+            for b in &basis {
+                let c = dot(v, *b);
+                v = [0, 1, 2].map(|k| v[k] - c * b[k]);
+            }
+            let l = dot(v, v).sqrt();
+            if l > 1e-6 {
+                basis.push(v.map(|c| c / l));
+            }
+        }
+        let n = row.normal;
+        let mut m = n;
+        for b in &basis {
+            let c = dot(m, *b);
+            m = [0, 1, 2].map(|k| m[k] - c * b[k]);
+        }
+        let l = dot(m, m).sqrt();
+        if !(0.5..1.0).contains(&l) {
+            continue;
+        }
+        let m = m.map(|c| c / l);
+        if row.kind == RowKind::NonMatching {
+            row.gap0 *= dot(n, m);
+        }
+        row.normal = m;
+        row.tangents = tangent_frame(m);
+    }
+}
+
 /// The rows in the reduced unknowns: A = rows · T and g = gap0 − rows · u0
 /// (docs/methods.md §2.7–2.8), and the row of each QP row. A row whose
 /// points are all fixed is left out, and refused (by `violated(row)`) if
@@ -207,6 +260,59 @@ mod tests {
             }
             let c = cross(t1, t2);
             assert!((0..3).all(|k| (c[k] - n[k]).abs() < 1e-15), "{n:?}");
+        }
+    }
+
+    fn row(kind: RowKind, slave: usize, n: Vector3, gap0: f64) -> Row3 {
+        Row3 {
+            kind,
+            slave,
+            masters: vec![(1, 1.0)],
+            normal: n,
+            tangents: tangent_frame(n),
+            gap0,
+            area: 1.0,
+            interface: 0,
+        }
+    }
+
+    /// A row on a slip plane gets the normal of the mirrored model, in the
+    /// plane; on a symmetry edge, along the edge's normal plane; a normal
+    /// far from the plane, one already in it and one off every plane keep
+    /// their bits.
+    #[test]
+    fn rows_on_slip_planes_take_the_mirrored_normal() {
+        let ex = [1.0, 0.0, 0.0];
+        let ey = [0.0, 1.0, 0.0];
+        let tilted = unit([0.1, 0.05, -1.0]);
+        let steep = unit([1.0, 0.0, -0.5]);
+        let flat = [0.0, 0.0, -1.0];
+        let planes = vec![vec![ex], vec![ex, ey], vec![], vec![ex], vec![ex]];
+        let mut rows = vec![
+            row(RowKind::NonMatching, 0, tilted, 0.2),
+            row(RowKind::Mortar, 1, tilted, 0.2),
+            row(RowKind::Mortar, 2, tilted, 0.2),
+            row(RowKind::Mortar, 3, steep, 0.2),
+            row(RowKind::Conforming, 4, flat, 0.0),
+        ];
+        let before = rows.clone();
+        mirror_into_slip_planes(&mut rows, &planes);
+        let want = unit([0.0, 0.05, -1.0]);
+        for k in 0..3 {
+            assert!((rows[0].normal[k] - want[k]).abs() < 1e-15, "{:?}", rows[0]);
+        }
+        assert!((rows[0].gap0 - 0.2 * dot(tilted, want)).abs() < 1e-15);
+        assert!(rows[0].gap0 < 0.2);
+        // Mortar gaps are kept; the edge leaves n = −e_z.
+        assert_eq!(rows[1].normal, [0.0, 0.0, -1.0]);
+        assert_eq!(rows[1].gap0, 0.2);
+        assert_eq!(rows[1].tangents, tangent_frame([0.0, 0.0, -1.0]));
+        for r in [2, 3, 4] {
+            assert_eq!(rows[r], before[r], "row {r}");
+        }
+        // The frame is rebuilt: orthonormal to the new normal.
+        for t in rows[0].tangents {
+            assert!(dot(t, rows[0].normal).abs() < 1e-15);
         }
     }
 }
