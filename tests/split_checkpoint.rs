@@ -640,3 +640,47 @@ fn a_finished_restart_in_place_rewrites_a_deleted_pair_and_keeps_its_summary() {
     assert_eq!(pvd_entries_exist(d.path()).len(), 8);
     assert!(std::fs::read(d.path().join(format!("{NAME}.json"))).unwrap() == json);
 }
+
+/// A part of the set given where a checkpoint is expected (`plot`, `pack`,
+/// `--restart`) is refused naming the index to give instead, exit 2, and
+/// nothing is written. Before, the reader failed on the first root
+/// attribute it needed ("missing attribute /@plane_strain").
+#[test]
+fn a_part_of_the_set_is_refused_naming_its_index() {
+    let d = tempfile::tempdir().unwrap();
+    solve(d.path(), &[]);
+    let index = d.path().join(format!("{NAME}.h5"));
+    for (part, what) in [
+        (format!("{NAME}_0002.h5"), "step 2 of"),
+        (format!("{NAME}_mesh.h5"), "the mesh of"),
+    ] {
+        let p = d.path().join(&part);
+        let ps = p.to_str().unwrap();
+        let png = d.path().join("x.png");
+        let packed = d.path().join("packed.h5");
+        let again = d.path().join("again");
+        let e = example();
+        for args in [
+            vec!["plot", ps, "-o", png.to_str().unwrap()],
+            vec!["pack", ps, "-o", packed.to_str().unwrap()],
+            vec![
+                "solve",
+                e.as_str(),
+                "--restart",
+                ps,
+                "--out",
+                again.to_str().unwrap(),
+            ],
+        ] {
+            let (code, log) = run(&args);
+            assert_eq!(code, 2, "{args:?}: {log}");
+            assert!(
+                log.contains("one part of a split checkpoint")
+                    && log.contains(&format!("{what} {}", index.display()))
+                    && log.contains(&part),
+                "{args:?}: {log}"
+            );
+        }
+        assert!(!png.exists() && !packed.exists() && !again.exists());
+    }
+}

@@ -129,6 +129,22 @@ pub struct Transaction {
     /// The files of the name this run keeps, until the first commit
     /// removes the others ([`Transaction::plan`]); None once done.
     sweep: Option<Sweep>,
+    /// Last, so that it drops after the stage and the lock.
+    _created: CreatedDir,
+}
+
+/// The output directory when this run created it: removed again if the run
+/// leaves it empty (a run refused before its first commit, e.g. a bad
+/// `--restart`), so that a failed run leaves nothing behind.
+struct CreatedDir(Option<PathBuf>);
+
+impl Drop for CreatedDir {
+    fn drop(&mut self) {
+        if let Some(dir) = self.0.take() {
+            // Fails, as it should, when anything is in it.
+            let _ = std::fs::remove_dir(dir);
+        }
+    }
 }
 
 /// What a run leaves of its output name (docs/problem-format.md §6): with
@@ -184,6 +200,7 @@ impl Transaction {
     /// (one run per name at a time), removes the staging directories a
     /// killed run left, and opens a new one.
     pub fn open(dir: &Path, name: &str) -> Result<Transaction, RunError> {
+        let created = CreatedDir((!dir.exists()).then(|| dir.to_path_buf()));
         std::fs::create_dir_all(dir).map_err(|e| {
             RunError::Output(format!(
                 "{}: cannot create output directory: {e}",
@@ -200,6 +217,7 @@ impl Transaction {
             dir: dir.to_path_buf(),
             name: name.to_string(),
             sweep: None,
+            _created: created,
         })
     }
 

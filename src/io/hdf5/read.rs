@@ -52,6 +52,9 @@ fn read_checkpoint_keeping(path: &Path, keep: bool) -> Result<Checkpoint, IoErro
         ));
     }
 
+    if let Some(msg) = super::split::part_of_split(path, &file) {
+        return Err(ctx.format(msg));
+    }
     let mut attrs = Vec::new();
     for name in file.attr_names().map_err(ctx.h5("/"))? {
         if RESERVED_ROOT_ATTRS.contains(&name.as_str()) {

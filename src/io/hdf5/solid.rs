@@ -367,6 +367,9 @@ pub fn read_solid_restart(
     // Every dataset read has its shape checked against n and r first.
     let ctx = Ctx::writing(path);
     let file = File::open(path).map_err(ctx.h5("/"))?;
+    if let Some(msg) = super::split::part_of_split(path, &file) {
+        return Err(ctx.format(msg));
+    }
     let root: &Group = &file;
     let text = |name: &str| -> Result<Option<String>, IoError> {
         Ok(if super::has_attr(&ctx, root, name)? {

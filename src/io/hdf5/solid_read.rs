@@ -55,6 +55,9 @@ pub fn read_solid_checkpoint(path: &Path, which: SolidSteps) -> Result<SolidChec
         limit: meta.len(),
     };
     let file = File::open(path).map_err(ctx.h5("/"))?;
+    if let Some(msg) = super::split::part_of_split(path, &file) {
+        return Err(ctx.format(msg));
+    }
     let mut attrs = Vec::new();
     for name in file.attr_names().map_err(ctx.h5("/"))? {
         if RESERVED_ROOT_ATTRS.contains(&name.as_str()) || name == "dim" {

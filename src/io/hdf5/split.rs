@@ -15,6 +15,43 @@ pub fn step_file_name(name: &str, index: usize) -> String {
     format!("{name}_{}.h5", step_name(index))
 }
 
+/// When `file` (at `path`) is one part of a split checkpoint, not its
+/// index — no root attributes, only `/mesh` or only `/steps` — the message
+/// that names the index to open instead (`NAME.h5` for `NAME_mesh.h5` or
+/// `NAME_NNNN.h5`) and the step; None for any other file. Every reader
+/// would otherwise fail on the first root attribute it needs, naming it.
+pub fn part_of_split(path: &Path, file: &File) -> Option<String> {
+    if !file.attr_names().ok()?.is_empty() {
+        return None;
+    }
+    let groups = file.member_names().ok()?;
+    let stem = path.file_stem()?.to_str()?;
+    let (index, what) = match groups.as_slice() {
+        [g] if g == "mesh" => (
+            stem.strip_suffix("_mesh")?.to_string(),
+            "the mesh".to_string(),
+        ),
+        [g] if g == "steps" => {
+            let (name, step) = stem.rsplit_once('_')?;
+            if step.len() != 4 || !step.bytes().all(|b| b.is_ascii_digit()) {
+                return None;
+            }
+            (
+                name.to_string(),
+                format!("step {}", step.trim_start_matches('0')),
+            )
+        }
+        _ => return None,
+    };
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let index = dir.join(format!("{index}.h5"));
+    Some(format!(
+        "one part of a split checkpoint ({what} of {}), not a checkpoint of its own: give its index {} (`plot --step K` draws one step; docs/problem-format.md §6)",
+        index.display(),
+        index.display()
+    ))
+}
+
 /// Writes the mesh file of a split checkpoint at `path` (a new file of a
 /// staging directory: the stage fsyncs and renames it): `/mesh` as in the
 /// single-file layout.
