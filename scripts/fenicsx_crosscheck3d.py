@@ -326,14 +326,14 @@ def mortar_rows(x, st, s_out, mt, m_out, L):
 def mirrored(n, planes):
     """The normal of a row whose slave node lies on slip planes of unit
     normals `planes` (docs/methods.md §11.7): its part in the planes,
-    normalised, unless that keeps less than half of it (a wall met at an
+    normalised, unless that is shorter than cos 30° (a wall met at an
     angle) or all of it (already in the planes). Returns (n', n·n')."""
     if not planes:
         return n, 1.0
     q, _ = np.linalg.qr(np.array(planes, dtype=float).T)
     m = n - q @ (q.T @ n)
     ln = np.linalg.norm(m)
-    if ln < 0.5 or ln >= 1.0:
+    if ln < 0.8660254037844386 or ln >= 1.0:  # cos 30°, as signorini
         return n, 1.0
     m = m / ln
     return m, float(n @ m)

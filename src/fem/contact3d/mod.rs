@@ -151,11 +151,17 @@ pub(super) fn conforming_rows(
 /// the tilted row then couples the masters' motion across the plane, and
 /// the friction frame misses the plane's held tangent (§12.2), leaving a
 /// tangential row too weak to fix its multiplier. `planes[p]` are the unit
-/// normals of the slip planes through point p. A normal more than 60° from
-/// the plane (|n·e| > cos 30°) is a surface that meets a wall at an angle,
-/// not a mirrored one, and is kept. An NTS row keeps its projected point:
+/// normals of the slip planes through point p. A normal more than 30° out
+/// of the planes (|n·e| > 1/2, a part in them shorter than cos 30°) is a
+/// surface that meets a wall at an angle, not a mirrored one (a one-sided
+/// average tilts by half a facet angle, and a mesh with facets of 60° is
+/// no model of a curved surface), and is kept. An NTS row keeps its projected point:
 /// its gap along the new normal n' is g (n·n'); a mortar row's gap is an
 /// integral over its facets and a conforming row's is 0, both kept.
+/// cos 30°: the least part of a row's normal in the slip planes for it to
+/// be taken as a mirrored row ([`mirror_into_slip_planes`]).
+const MIRROR_LEAST: f64 = 0.866_025_403_784_438_6;
+
 pub(super) fn mirror_into_slip_planes(rows: &mut [Row3], planes: &[Vec<Vector3>]) {
     for row in rows.iter_mut() {
         let es = &planes[row.slave];
@@ -183,7 +189,7 @@ pub(super) fn mirror_into_slip_planes(rows: &mut [Row3], planes: &[Vec<Vector3>]
             m = [0, 1, 2].map(|k| m[k] - c * b[k]);
         }
         let l = dot(m, m).sqrt();
-        if !(0.5..1.0).contains(&l) {
+        if !(MIRROR_LEAST..1.0).contains(&l) {
             continue;
         }
         let m = m.map(|c| c / l);
@@ -285,7 +291,8 @@ mod tests {
         let ex = [1.0, 0.0, 0.0];
         let ey = [0.0, 1.0, 0.0];
         let tilted = unit([0.1, 0.05, -1.0]);
-        let steep = unit([1.0, 0.0, -0.5]);
+        // 45° out of the plane: a chamfer meeting a wall, kept.
+        let steep = unit([1.0, 0.0, -1.0]);
         let flat = [0.0, 0.0, -1.0];
         let planes = vec![vec![ex], vec![ex, ey], vec![], vec![ex], vec![ex]];
         let mut rows = vec![
