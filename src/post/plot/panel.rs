@@ -103,11 +103,20 @@ fn draw_panel<DB: DrawingBackend>(
     let area = if p.title.is_empty() {
         area.clone()
     } else {
-        area.titled(
-            &p.title,
-            ("sans-serif", fs * 1.05).into_font().color(&BLACK),
-        )
-        .map_err(de)?
+        // A title wider than its panel (a 3D footprint's counts and plane
+        // normal) is set smaller rather than clipped at both sides.
+        let size = fs * 1.05;
+        let width = area.dim_in_pixel().0 as f64;
+        let wide = area
+            .estimate_text_size(&p.title, &("sans-serif", size).into_font().into())
+            .map_or(0.0, |(w, _)| w as f64);
+        let size = if wide > 0.98 * width {
+            size * 0.98 * width / wide
+        } else {
+            size
+        };
+        area.titled(&p.title, ("sans-serif", size).into_font().color(&BLACK))
+            .map_err(de)?
     };
     let (lo, hi) = bbox(p.pts.iter().map(|&(x, y)| [x, y]));
     let margin = (fs * 0.8) as u32;
