@@ -435,6 +435,37 @@ fn step_names(ctx: &Ctx, file: &File) -> Result<Option<StepNames>, IoError> {
 /// An HDF5 error opening `loc`, with a hint when it is an external link of
 /// a split checkpoint whose file is missing: the file is named (as HDF5
 /// looked for it, next to the index), and so is what makes a checkpoint.
+/// Opens the checkpoint at `path` for reading, for every reader (2D, 3D,
+/// restart, one step): a regular file (a directory or a device is refused
+/// naming it), its size the bound of every dataset's claimed shape
+/// (`Ctx::limit`), and a part of a split checkpoint refused naming the
+/// index to give instead ([`split::part_of_split`]).
+fn open_checkpoint(path: &Path) -> Result<(Ctx<'_>, File), IoError> {
+    let meta =
+        std::fs::metadata(path).map_err(|e| IoError::io(path, "cannot open checkpoint", e))?;
+    if !meta.is_file() {
+        let what = if meta.is_dir() {
+            "is a directory, not a checkpoint file"
+        } else {
+            "is not a regular file (a FIFO, socket or device)"
+        };
+        return Err(IoError::io(
+            path,
+            "cannot open checkpoint",
+            std::io::Error::new(std::io::ErrorKind::InvalidInput, what),
+        ));
+    }
+    let ctx = Ctx {
+        path,
+        limit: meta.len(),
+    };
+    let file = File::open(path).map_err(ctx.h5("/"))?;
+    if let Some(msg) = split::part_of_split(path, &file) {
+        return Err(ctx.format(msg));
+    }
+    Ok((ctx, file))
+}
+
 fn linked(ctx: &Ctx, loc: &str, cause: ::hdf5::Error) -> IoError {
     let text = cause.to_string();
     if text.contains("external") {

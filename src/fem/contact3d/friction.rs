@@ -10,7 +10,7 @@ use super::super::conditions::PointDofs;
 use super::super::element::Vector3;
 use super::super::solid::SolidModel;
 use super::super::FemError;
-use super::{dot, Row3};
+use super::{cross, dot, Row3};
 use crate::problem::{Contact, FrictionLaw};
 use crate::qp::{Csr, Frame, Friction, SlipBound};
 use std::path::Path;
@@ -49,13 +49,6 @@ pub fn friction_frame(row: &Row3, slave: &PointDofs<3>) -> ([Vector3; 2], Held) 
     if slave.u0 != [0.0; 3] {
         return (row.tangents, Held::None);
     }
-    let cross = |a: Vector3, b: Vector3| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
     match slave.ndof {
         2 => {
             let e = cross(slave.t[0], slave.t[1]);

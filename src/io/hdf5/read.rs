@@ -21,25 +21,7 @@ pub fn check_checkpoint(path: &Path) -> Result<Checkpoint, IoError> {
 }
 
 fn read_checkpoint_keeping(path: &Path, keep: bool) -> Result<Checkpoint, IoError> {
-    let meta =
-        std::fs::metadata(path).map_err(|e| IoError::io(path, "cannot open checkpoint", e))?;
-    if !meta.is_file() {
-        let what = if meta.is_dir() {
-            "is a directory, not a checkpoint file"
-        } else {
-            "is not a regular file (a FIFO, socket or device)"
-        };
-        return Err(IoError::io(
-            path,
-            "cannot open checkpoint",
-            std::io::Error::new(std::io::ErrorKind::InvalidInput, what),
-        ));
-    }
-    let ctx = Ctx {
-        path,
-        limit: meta.len(),
-    };
-    let file = File::open(path).map_err(ctx.h5("/"))?;
+    let (ctx, file) = open_checkpoint(path)?;
     // A 3D checkpoint (write_solid_checkpoint) has another layout, read
     // by `read_solid_checkpoint` (issue 45).
     let solid = file
@@ -52,9 +34,6 @@ fn read_checkpoint_keeping(path: &Path, keep: bool) -> Result<Checkpoint, IoErro
         ));
     }
 
-    if let Some(msg) = super::split::part_of_split(path, &file) {
-        return Err(ctx.format(msg));
-    }
     let mut attrs = Vec::new();
     for name in file.attr_names().map_err(ctx.h5("/"))? {
         if RESERVED_ROOT_ATTRS.contains(&name.as_str()) {

@@ -357,19 +357,10 @@ pub fn read_solid_restart(
     r: usize,
     reference: Option<usize>,
 ) -> Result<SolidRestartData, IoError> {
-    if !path.is_file() {
-        return Err(IoError::io(
-            path,
-            "cannot open checkpoint",
-            std::io::Error::new(std::io::ErrorKind::NotFound, "no such checkpoint file"),
-        ));
-    }
-    // Every dataset read has its shape checked against n and r first.
+    let (_, file) = super::open_checkpoint(path)?;
+    // Every dataset read has its shape checked against n and r first (the
+    // index's size bounds nothing of the files it links to).
     let ctx = Ctx::writing(path);
-    let file = File::open(path).map_err(ctx.h5("/"))?;
-    if let Some(msg) = super::split::part_of_split(path, &file) {
-        return Err(ctx.format(msg));
-    }
     let root: &Group = &file;
     let text = |name: &str| -> Result<Option<String>, IoError> {
         Ok(if super::has_attr(&ctx, root, name)? {

@@ -48,16 +48,7 @@ pub fn is_solid_checkpoint(path: &Path) -> bool {
 /// the string root attributes. A step asked for that the file lacks is
 /// refused naming the steps it has.
 pub fn read_solid_checkpoint(path: &Path, which: SolidSteps) -> Result<SolidCheckpoint, IoError> {
-    let meta =
-        std::fs::metadata(path).map_err(|e| IoError::io(path, "cannot open checkpoint", e))?;
-    let ctx = Ctx {
-        path,
-        limit: meta.len(),
-    };
-    let file = File::open(path).map_err(ctx.h5("/"))?;
-    if let Some(msg) = super::split::part_of_split(path, &file) {
-        return Err(ctx.format(msg));
-    }
+    let (ctx, file) = super::open_checkpoint(path)?;
     let mut attrs = Vec::new();
     for name in file.attr_names().map_err(ctx.h5("/"))? {
         if RESERVED_ROOT_ATTRS.contains(&name.as_str()) || name == "dim" {
@@ -125,13 +116,7 @@ pub fn read_solid_step(
     ck: &SolidCheckpoint,
     index: usize,
 ) -> Result<SolidStep, IoError> {
-    let meta =
-        std::fs::metadata(path).map_err(|e| IoError::io(path, "cannot open checkpoint", e))?;
-    let ctx = Ctx {
-        path,
-        limit: meta.len(),
-    };
-    let file = File::open(path).map_err(ctx.h5("/"))?;
+    let (ctx, file) = super::open_checkpoint(path)?;
     let loc = format!("/steps/{}", super::step_name(index));
     let g = file.group(&loc).map_err(|e| linked(&ctx, &loc, e))?;
     read_step(&ctx.of_file(&g), &g, ck, index)
