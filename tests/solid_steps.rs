@@ -271,8 +271,34 @@ fn a_3d_run_continues_from_its_checkpoint_bit_for_bit() {
     solve(&["--out", &part, "--restart", &h5]);
     let text = solve(&["--out", &part, "--restart", &h5]);
     assert!(text.contains("nothing to do"), "{text}");
+    // Nothing to do into another directory: the finished run's files are
+    // copied there (as 2D), its summary byte for byte, and the copy is a
+    // checkpoint that restarts (nothing to do again).
+    let done = dir("done");
+    let text = solve(&["--out", &done, "--restart", &format!("{full}/stack.h5")]);
+    assert!(text.contains("nothing to do"), "{text}");
+    let listing = |d: &str| {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(listing(&done), listing(&full));
+    assert_eq!(
+        std::fs::read(format!("{done}/stack.json")).unwrap(),
+        std::fs::read(format!("{full}/stack.json")).unwrap()
+    );
+    let text = solve(&[
+        "--out",
+        &dir("again"),
+        "--restart",
+        &format!("{done}/stack.h5"),
+    ]);
+    assert!(text.contains("nothing to do"), "{text}");
     let f = hdf5::File::open(format!("{full}/stack.h5")).unwrap();
-    for d in [&part, &other] {
+    for d in [&part, &other, &done] {
         let g = hdf5::File::open(format!("{d}/stack.h5")).unwrap();
         assert_eq!(
             g.attr("last_step").unwrap().read_scalar::<u64>().unwrap(),
@@ -286,9 +312,10 @@ fn a_3d_run_continues_from_its_checkpoint_bit_for_bit() {
                 "{d} {s}"
             );
         }
-        // This run's summary has the step it solved.
+        // This run's summary has the step it solved (the copy: all three).
         let j = json(&Path::new(d).join("stack.json"));
-        assert_eq!(j["steps"].as_array().unwrap().len(), 1, "{d}");
+        let solved = if *d == done { 3 } else { 1 };
+        assert_eq!(j["steps"].as_array().unwrap().len(), solved, "{d}");
     }
     // Another load: refused, naming the part; nothing written.
     let (code, text, _) = run(

@@ -44,7 +44,9 @@ pub struct SolidRun<'a> {
 /// Solve the load steps of a 3D model and write the outputs in `dir`, one
 /// commit per step and the JSON summary last (the transaction of 2D: an
 /// error or a signal leaves the directory as it was). None: a restart
-/// whose checkpoint holds every step asked for (nothing is written).
+/// whose checkpoint holds every step asked for; nothing is solved, and a
+/// checkpoint in another directory is copied into `dir` with its files
+/// (docs/problem-format.md §6).
 pub fn solve_solid(
     prep: &SolidPrepared,
     run: &SolidRun<'_>,
@@ -58,6 +60,9 @@ pub fn solve_solid(
     let nsteps = file.nsteps().min(run.max_steps.unwrap_or(usize::MAX));
     let first = run.restart.map_or(0, |r| r.steps_done);
     if first >= nsteps {
+        if let Some(r) = run.restart.filter(|r| !same_dir(&r.path, dir)) {
+            copy_finished(prep, r, dir, multi, compress)?;
+        }
         return Ok(None);
     }
     let name = &prep.problem.name;
@@ -221,6 +226,52 @@ pub fn solve_solid(
         files: written,
         contact,
     }))
+}
+
+/// A restart with nothing left to solve whose checkpoint lies in another
+/// directory: `dir` gets what a run that solved those steps there would
+/// have left (as 2D, docs/problem-format.md §6), in one commit: with load
+/// steps the mesh and step files, their VTU pairs, the index and the time
+/// series; a single solve's checkpoint; and the summary beside the
+/// checkpoint, if there is one.
+fn copy_finished(
+    prep: &SolidPrepared,
+    r: &SolidRestart,
+    dir: &Path,
+    multi: bool,
+    compress: bool,
+) -> Result<(), RunError> {
+    let name = &prep.problem.name;
+    let mut tx = Transaction::open(dir, name)?;
+    let mut files = Files::new(prep, tx.stage_dir(), dir, multi, compress);
+    let index = output_paths(dir, name, None).h5;
+    let mut names = if multi {
+        let mut names = files.start_from(r)?;
+        names.extend(files.series_and_index()?);
+        names
+    } else {
+        let f = file_name(&index);
+        copy(&r.path, &files.stage.join(&f))?;
+        vec![f]
+    };
+    let json = output_paths(dir, name, None).json;
+    let src = r.path.with_file_name(file_name(&json));
+    let summary = src.is_file();
+    if summary {
+        let f = file_name(&json);
+        std::fs::copy(&src, files.stage.join(&f)).map_err(|e| {
+            RunError::Output(format!(
+                "{}: cannot copy the restart's summary: {e}",
+                src.display()
+            ))
+        })?;
+        names.push(f);
+    }
+    check_interrupt()?;
+    tx.plan(multi, files.kept, summary);
+    tx.commit(&names)?;
+    tx.finish();
+    Ok(())
 }
 
 /// What one load step hands on to the next (docs/methods.md §8.3): the
@@ -573,20 +624,29 @@ impl<'a> Files<'a> {
         if has_contact {
             self.series.push((time, file_name(&paths.contact_vtu)));
         }
+        names.extend(self.series_and_index()?);
+        Ok(names)
+    }
+
+    /// Stage the time series and the split layout's index over the steps
+    /// so far; their names, the index last (committed after the files it
+    /// links to).
+    fn series_and_index(&mut self) -> Result<Vec<String>, RunError> {
+        let name = self.prep.problem.name.clone();
+        let attrs = self.attrs();
+        let attrs: Vec<(&str, String)> = attrs.iter().map(|(k, v)| (*k, v.clone())).collect();
         let pvd = format!("{name}.pvd");
         io::vtu::write_pvd(&self.stage.join(&pvd), &self.series)?;
         self.keep(&self.dir.join(&pvd));
-        names.push(pvd);
         let index = output_paths(&self.dir, &name, None).h5;
         io::hdf5::write_solid_index(
             &self.stage.join(file_name(&index)),
             &attrs,
-            &mesh_file,
+            &io::hdf5::mesh_file_name(&name),
             &self.steps,
         )?;
         self.keep(&index);
-        names.push(file_name(&index));
-        Ok(names)
+        Ok(vec![pvd, file_name(&index)])
     }
 
     /// Stage step `i`'s VTU pair (the bulk file, and the contact file
