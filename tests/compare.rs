@@ -2,7 +2,7 @@
 
 use signorini::qp::{precond::PrecondKind, MethodId, SolverSection};
 use signorini::run::compare::{
-    deadline, table, variants, SolvedRow, Table, Variant, VariantResult,
+    deadline, table, variants, Disagreement, SolvedRow, Table, Variant, VariantResult,
 };
 use signorini::run::{self, CompareSpec, Prepared};
 use std::collections::BTreeMap;
@@ -426,18 +426,42 @@ fn tangential_forces_enter_the_agreement() {
         },
         preconditioner: p,
     };
+    // The same answer with one row's active flag turned.
+    let mut turned = good.clone();
+    turned.result.active[0] = !turned.result.active[0];
     let runs = vec![
         (v(None), Ok(good)),
         (v(Some(PrecondKind::Cholesky)), Ok(off)),
+        (v(Some(PrecondKind::Jacobi)), Ok(turned)),
     ];
     let t = table(&prep.problem.name, &last.qp, &runs, 1e-6, None);
     let (a, b) = (&t.rows[0], &t.rows[1]);
     assert!(a.agrees);
+    assert_eq!(a.solved.as_ref().unwrap().disagrees, None);
     let s = b.solved.as_ref().unwrap();
     assert_eq!((s.rel_diff, s.rel_diff_lambda), (0.0, 0.0));
     let rt = s.rel_diff_lambda_t.unwrap();
     assert!((rt - 1e-3).abs() < 1e-9, "{rt}");
     assert!(!b.agrees, "λ_t 1e-3 off agrees");
+    // The row says which check it fails (the table prints it after `no`).
+    match s.disagrees {
+        Some(Disagreement::LambdaT { diff, tol }) => {
+            assert_eq!(diff, rt);
+            assert_eq!(tol, s.agree_tol_lambda);
+        }
+        other => panic!("{other:?}"),
+    }
+    let c = &t.rows[2];
+    assert!(!c.agrees);
+    assert_eq!(
+        c.solved.as_ref().unwrap().disagrees,
+        Some(Disagreement::ActiveSet { rows: 1 })
+    );
+    let j = t.to_json();
+    assert!(
+        j.contains("\"on\": \"lambda_t\"") && j.contains("\"on\": \"active_set\""),
+        "{j}"
+    );
 }
 
 /// Issue 34: `--time-limit` of any finite positive size runs (a budget no
@@ -527,6 +551,8 @@ fn the_command_names_the_load_path() {
     let t: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(t["steps"]["path"], true, "{}", t["steps"]);
+    // The printed table has the tangential forces' column too.
+    assert!(stdout.contains("diff(λ_t)"), "{stdout}");
     assert!(
         t["rows"][0]["rel_diff_lambda_t"].is_number(),
         "{}",

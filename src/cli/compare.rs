@@ -196,10 +196,20 @@ fn print_table(problem: &Problem, t: &Table) {
             head += &format!(" {:>12}", format!("u{k}({n})"));
         }
     }
+    // With friction, the tangential forces' difference too.
+    let friction = t
+        .rows
+        .iter()
+        .filter_map(|r| r.solved.as_ref())
+        .any(|s| s.rel_diff_lambda_t.is_some());
     head += &format!(
-        " {:>7} {:>8} {:>9} {:>9} {:>15} {:>9} {:>9}  agrees",
+        " {:>7} {:>8} {:>9} {:>9} {:>15} {:>9} {:>9}",
         "outer", "inner", "time[s]", "KKT", "energy", "diff(x)", "diff(λ)"
     );
+    if friction {
+        head += &format!(" {:>9}", "diff(λ_t)");
+    }
+    head += "  agrees";
     crate::outln!("{head}");
     for r in &t.rows {
         let mut line = format!("{:<8} {:<9}", r.method, r.preconditioner);
@@ -223,7 +233,7 @@ fn print_table(problem: &Problem, t: &Table) {
             }
         }
         line += &format!(
-            " {:>7} {:>8} {:>9.4} {:>9.2e} {:>15.8e} {:>9.2e} {:>9.2e}  {}",
+            " {:>7} {:>8} {:>9.4} {:>9.2e} {:>15.8e} {:>9.2e} {:>9.2e}",
             s.iterations,
             s.inner_iterations,
             s.time_s,
@@ -231,17 +241,24 @@ fn print_table(problem: &Problem, t: &Table) {
             s.energy,
             s.rel_diff,
             s.rel_diff_lambda,
-            if !r.certified {
-                "NOT CERTIFIED"
-            } else if r.agrees && penalised_row(&r.method) {
-                // A penalised answer agrees to its O(ε_p), as the guide's table says.
-                "yes (O(ε))"
-            } else if r.agrees {
-                "yes"
-            } else {
-                "no"
-            }
         );
+        if friction {
+            line += &format!(" {:>9.2e}", s.rel_diff_lambda_t.unwrap_or(f64::NAN));
+        }
+        let verdict = if !r.certified {
+            "NOT CERTIFIED".to_string()
+        } else if r.agrees && penalised_row(&r.method) {
+            // A penalised answer agrees to its O(ε_p), as the guide's table says.
+            "yes (O(ε))".to_string()
+        } else if r.agrees {
+            "yes".to_string()
+        } else if let Some(why) = &s.disagrees {
+            // The check it fails, so that a certified `no` is read right.
+            format!("no ({why})")
+        } else {
+            "no".to_string()
+        };
+        line += &format!("  {verdict}");
         crate::outln!("{line}");
         // A row solved by another method (a fallback) says so under it:
         // its numbers are that method's.

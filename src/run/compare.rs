@@ -587,7 +587,7 @@ pub fn table(
                     (base, base)
                 };
                 let cert = certified(v, s);
-                let (rel, rel_l, rel_t, agrees) = match reference {
+                let (rel, rel_l, rel_t, disagrees) = match reference {
                     Some(rf) => {
                         let rel = rel_diff(&q.x, &rf.x);
                         let rel_l = rel_diff(&q.lambda, &rf.lambda);
@@ -596,18 +596,41 @@ pub fn table(
                         } else {
                             f64::INFINITY
                         };
-                        (
-                            rel,
-                            rel_l,
-                            rel_t,
-                            cert && rel <= agree_tol
-                                && rel_l <= agree_tol_lambda
-                                && rel_t <= agree_tol_lambda
-                                && q.active == rf.active,
-                        )
+                        let rows = if q.active.len() == rf.active.len() {
+                            q.active
+                                .iter()
+                                .zip(&rf.active)
+                                .filter(|(a, b)| a != b)
+                                .count()
+                        } else {
+                            q.active.len().max(rf.active.len())
+                        };
+                        let over = |diff: f64, tol: f64| !(diff <= tol);
+                        let why = if over(rel, agree_tol) {
+                            Some(Disagreement::X {
+                                diff: rel,
+                                tol: agree_tol,
+                            })
+                        } else if over(rel_l, agree_tol_lambda) {
+                            Some(Disagreement::Lambda {
+                                diff: rel_l,
+                                tol: agree_tol_lambda,
+                            })
+                        } else if over(rel_t, agree_tol_lambda) {
+                            Some(Disagreement::LambdaT {
+                                diff: rel_t,
+                                tol: agree_tol_lambda,
+                            })
+                        } else if rows > 0 {
+                            Some(Disagreement::ActiveSet { rows })
+                        } else {
+                            None
+                        };
+                        (rel, rel_l, rel_t, why)
                     }
-                    None => (f64::NAN, f64::NAN, f64::NAN, false),
+                    None => (f64::NAN, f64::NAN, f64::NAN, None),
                 };
+                let agrees = cert && reference.is_some() && disagrees.is_none();
                 TableRow {
                     method: v.method.name().to_string(),
                     preconditioner: v.preconditioner_label(),
@@ -631,6 +654,7 @@ pub fn table(
                         rel_diff_lambda_t: friction.then_some(rel_t),
                         agree_tol,
                         agree_tol_lambda,
+                        disagrees: disagrees.filter(|_| cert),
                         notes: s.notes.clone(),
                         fallback: s.fallback.clone(),
                     }),
@@ -712,11 +736,42 @@ pub struct SolvedRow {
     pub rel_diff_lambda_t: Option<f64>,
     pub agree_tol: f64,
     pub agree_tol_lambda: f64,
+    /// A certified row that does not agree: the first check it fails.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub disagrees: Option<Disagreement>,
     pub notes: Vec<String>,
     /// The driver's note when another method solved the row (its
     /// numbers are that method's).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fallback: Option<String>,
+}
+
+/// Why a certified row does not agree with the reference ([`table`]): the
+/// first check it fails, in the order x, λ, λ_t, active set; in the JSON
+/// `{"on": "x" | "lambda" | "lambda_t", "diff", "tol"}` or
+/// `{"on": "active_set", "rows"}`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "on")]
+pub enum Disagreement {
+    /// ‖x − x_ref‖/‖x_ref‖ above its tolerance.
+    X { diff: f64, tol: f64 },
+    /// ‖λ − λ_ref‖/‖λ_ref‖ above its tolerance.
+    Lambda { diff: f64, tol: f64 },
+    /// ‖λ_t − λ_t,ref‖/‖λ_t,ref‖ above its tolerance (friction).
+    LambdaT { diff: f64, tol: f64 },
+    /// The active sets differ in this many rows.
+    ActiveSet { rows: usize },
+}
+
+impl std::fmt::Display for Disagreement {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Disagreement::X { diff, tol } => write!(f, "x {diff:.2e} > {tol:.0e}"),
+            Disagreement::Lambda { diff, tol } => write!(f, "λ {diff:.2e} > {tol:.0e}"),
+            Disagreement::LambdaT { diff, tol } => write!(f, "λ_t {diff:.2e} > {tol:.0e}"),
+            Disagreement::ActiveSet { rows } => write!(f, "active set: {rows} rows differ"),
+        }
+    }
 }
 
 impl Table {
