@@ -306,6 +306,11 @@ fn wrong_facing_and_boundary_surfaces_are_refused() {
         .unwrap()
         .to_string();
     assert!(e.contains("both lie on body"), "{e}");
+    // The body is named by its Physical Volume, with the master's share on it.
+    assert!(
+        e.contains("Physical Volume(s) \"") && e.contains("of the master's"),
+        "{e}"
+    );
 }
 
 /// Hertz's sphere on a block (K. L. Johnson, Contact Mechanics, 1985,

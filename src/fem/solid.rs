@@ -197,6 +197,39 @@ pub(super) struct Facet {
     pub(super) tag: u64,
 }
 
+/// A non-matching pair whose slave and master surfaces share a body is
+/// refused, naming the body's Physical Volumes and how many of the master's
+/// triangles lie on it (a master selected by a bounding box that also
+/// takes the slave body's coplanar faces, say).
+fn check_bodies(
+    slave: &[Facet],
+    master: &[Facet],
+    what: &str,
+    pair: &crate::problem::NonMatchingPair,
+    body_volumes: &[Vec<&str>],
+    path: &Path,
+) -> Result<(), FemError> {
+    let sb: std::collections::BTreeSet<u32> = slave.iter().map(|f| f.body).collect();
+    let Some(b) = master.iter().map(|f| f.body).find(|b| sb.contains(b)) else {
+        return Ok(());
+    };
+    let on = master.iter().filter(|f| f.body == b).count();
+    let volumes = body_volumes
+        .get(b as usize)
+        .map(|v| v.join("\", \""))
+        .unwrap_or_default();
+    Err(FemError::new(
+        path,
+        format!(
+            "{what}: slave \"{}\" and master \"{}\" both lie on body {} (Physical Volume(s) \"{volumes}\"; {on} of the master's {} triangles): a non-matching pair must join two bodies",
+            pair.slave,
+            pair.master,
+            b + 1,
+            master.len()
+        ),
+    ))
+}
+
 /// The points of the nodes: one per node and body of its tetrahedra, node
 /// after node, bodies in increasing order (one per node without a contact
 /// cut, in node order: the points are then the nodes).
@@ -661,6 +694,14 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
         let b = &mut body_e[tet_body[t] as usize];
         *b = (b.0.min(e), b.1.max(e));
     }
+    // The Physical Volumes of each body, for messages.
+    let mut body_volumes: Vec<Vec<&str>> = vec![vec![]; nbodies];
+    for (t, &m) in tet_material.iter().enumerate() {
+        let (b, name) = (tet_body[t] as usize, material_names[m as usize].as_str());
+        if !body_volumes[b].contains(&name) {
+            body_volumes[b].push(name);
+        }
+    }
     for (i, c) in input.contact.iter().enumerate() {
         let what = contact_what(i, c);
         match &c.pair {
@@ -695,6 +736,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
                 let role = |r: &str| format!("{what}: {r} surface");
                 let slave = surf(&pair.slave, &role("slave"))?;
                 let master = surf(&pair.master, &role("master"))?;
+                check_bodies(&slave, &master, &what, pair, &body_volumes, path)?;
                 let disc = pair.discretization.unwrap_or_else(|| {
                     default_discretization(
                         &slave,

@@ -115,7 +115,6 @@ pub(in crate::fem) fn mortar_rows(
 ) -> Result<Vec<Row3>, FemError> {
     let err = |msg: String| FemError::new(path, msg);
     let (sname, mname) = (c.slave.as_str(), c.master.as_str());
-    super::nts::check_bodies(slave, master, what, sname, mname, path)?;
     // The slave nodes' averaged normals (area-weighted).
     let mut nsum: BTreeMap<usize, Vector3> = BTreeMap::new();
     for f in slave {

@@ -17,28 +17,6 @@ use std::path::Path;
 /// triangle's size is refused (the 2D rows' tolerance).
 const TOL_PEN: f64 = 1e-6;
 
-/// A pair whose two surfaces share a body is refused.
-pub(super) fn check_bodies(
-    slave: &[Facet],
-    master: &[Facet],
-    what: &str,
-    sname: &str,
-    mname: &str,
-    path: &Path,
-) -> Result<(), FemError> {
-    let sb: std::collections::BTreeSet<u32> = slave.iter().map(|f| f.body).collect();
-    if let Some(b) = master.iter().map(|f| f.body).find(|b| sb.contains(b)) {
-        return Err(FemError::new(
-            path,
-            format!(
-                "{what}: slave \"{sname}\" and master \"{mname}\" both lie on body {}: a non-matching pair must join two bodies",
-                b + 1
-            ),
-        ));
-    }
-    Ok(())
-}
-
 /// The rows of the pair `c` (interface `id`, `what` its TOML entry in
 /// messages): one per slave point that projects on a master triangle of
 /// another body within `max_gap`, in point order.
@@ -55,7 +33,6 @@ pub(in crate::fem) fn nts_rows(
 ) -> Result<Vec<Row3>, FemError> {
     let err = |msg: String| FemError::new(path, msg);
     let (sname, mname) = (c.slave.as_str(), c.master.as_str());
-    check_bodies(slave, master, what, sname, mname, path)?;
     let tris: Vec<[Point3; 3]> = master.iter().map(|f| f.points.map(|p| points[p])).collect();
     let normals: Vec<Vector3> = master.iter().map(|f| f.normal).collect();
     let size = |t: usize| {
