@@ -171,6 +171,15 @@ impl ElementKind {
         }
     }
 
+    /// Whether linear elements of this kind lock as ν → 0.5: every kind
+    /// whose strain has a constrained volume (plane strain, axisymmetric,
+    /// solid); plane stress lets the thickness change, and its modulus
+    /// E/(1 − ν²) stays finite (docs/guide.md, "Nearly incompressible
+    /// materials").
+    pub fn locks_near_incompressible(self) -> bool {
+        !matches!(self, ElementKind::PlaneStress { .. })
+    }
+
     /// The thickness that turns a force per unit length into a pressure
     /// (and multiplies every stiffness and load): t_h in plane stress, 1
     /// in plane strain and per radian (methods.md §2.2, §10).
