@@ -25,6 +25,7 @@ mod pairs;
 mod rigid;
 pub mod solid;
 pub mod solid_input;
+mod solid_modes;
 mod sort;
 mod stiffness;
 pub mod topology;

@@ -1,7 +1,7 @@
 //! 3D models of P1 tetrahedra (issue 45), from a 3D mesh to the QP
 //! min ½xᵀCx − xᵀd s.t. Ax ≤ g, on the
 //! shared pieces — [`ElementKind::Solid`], [`PointDofs`]`<3>`, the
-//! [`RigidMode`]s, the body detection (`topology::cell_bodies`), the
+//! [`RigidMode`](super::element::RigidMode)s (`solid_modes`), the body detection (`topology::cell_bodies`), the
 //! ordered parallel assembly (`stiffness::assemble`), the elimination of
 //! the conditions (`conditions::eliminate`), the QP layer. Dirichlet
 //! components, slip on plane surfaces, tractions (`pn` or `p`) on boundary
@@ -12,10 +12,11 @@
 
 use super::conditions::{number, Cond, PointDofs};
 use super::contact3d::{
-    conforming_rows, mirror_into_slip_planes, mortar_rows, nts_rows, reduced_rows, Row3,
+    conforming_rows, dot, mirror_into_slip_planes, mortar_rows, nts_rows, reduced_rows, Row3,
 };
-use super::element::{ElementKind, MaterialMatrix, Point3, RigidMode, Vector3, SOLID_MODES};
+use super::element::{ElementKind, MaterialMatrix, Point3, Vector3};
 use super::pairs::STIFF_SLAVE;
+use super::solid_modes::{near_kernel, rigid_kernel};
 use super::stiffness::{assemble, Cells, Materials};
 use super::topology::cell_bodies;
 use super::FemError;
@@ -146,15 +147,11 @@ impl SolidModel {
 }
 
 /// A condition r·u = v at a point (r need not be unit).
-type Cond3 = Cond<3>;
+pub(super) type Cond3 = Cond<3>;
 
 /// The condition r·u = v.
 fn cond(r: Vector3, v: f64) -> Cond3 {
     Cond { r, v, src: 0 }
-}
-
-fn dot(a: Vector3, b: Vector3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// A face of the tetrahedra: the vertex opposite it in its first
@@ -832,156 +829,6 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
     // The slip of a single solve or first step: from the reference (§12.2).
     super::Discrete::start_step(&mut model, None);
     Ok(model)
-}
-
-/// Each body's box centre and size, the frame of its rigid motions.
-fn body_frames(points: &[Point3], point_body: &[u32], nbodies: usize) -> Vec<(Point3, f64)> {
-    let mut lo = vec![[f64::MAX; 3]; nbodies];
-    let mut hi = vec![[f64::MIN; 3]; nbodies];
-    for (p, x) in points.iter().enumerate() {
-        let b = point_body[p] as usize;
-        for k in 0..3 {
-            lo[b][k] = lo[b][k].min(x[k]);
-            hi[b][k] = hi[b][k].max(x[k]);
-        }
-    }
-    (0..nbodies)
-        .map(|b| {
-            let c = [0, 1, 2].map(|k| (lo[b][k] + hi[b][k]) / 2.0);
-            let l = (0..3)
-                .map(|k| hi[b][k] - lo[b][k])
-                .fold(0.0, f64::max)
-                .max(1e-300);
-            (c, l)
-        })
-        .collect()
-}
-
-/// The near-null space of the iterative ssn path (docs/methods.md §7.2,
-/// the 2D `rigid::near_kernel` in 3D): each point's unknowns as one
-/// block, and the six rigid motions of every body in the reduced unknowns,
-/// whatever the conditions hold. None if the points' unknowns are not
-/// contiguous in point order.
-fn near_kernel(
-    points: &[Point3],
-    point_body: &[u32],
-    nbodies: usize,
-    dofs: &[PointDofs<3>],
-    n: usize,
-) -> Option<crate::qp::NearKernel> {
-    // One frame for every body (the box of all points): where a stiff row
-    // of J glues two bodies an aggregate may take points of both, and its
-    // six columns must then hold the rigid motions of the pair; per-body
-    // frames (other centres and sizes) would give it a rotation by another
-    // angle on each side (docs/methods.md §7.2).
-    let frames = body_frames(points, &vec![0; points.len()], 1);
-    let _ = (point_body, nbodies);
-    let mut modes = vec![vec![0.0; n]; SOLID_MODES.len()];
-    let mut block_ptr = vec![0usize];
-    for (p, pd) in dofs.iter().enumerate() {
-        if pd.ndof == 0 {
-            continue;
-        }
-        if pd.start != *block_ptr.last()? {
-            return None;
-        }
-        let (c, l) = frames[0];
-        for (mode, &m) in modes.iter_mut().zip(SOLID_MODES.iter()) {
-            let u = m.at(points[p], c, l);
-            for j in 0..pd.ndof {
-                mode[pd.start + j] = dot(pd.t[j], u);
-            }
-        }
-        block_ptr.push(pd.start + pd.ndof);
-    }
-    (*block_ptr.last()? == n).then_some(crate::qp::NearKernel { block_ptr, modes })
-}
-
-/// The rigid motions (the six [`SOLID_MODES`]) of each body that satisfy
-/// its homogeneous conditions, in the reduced unknowns, orthonormalised
-/// (docs/methods.md §1.7; the 2D rigid.rs in 3D).
-fn rigid_kernel(
-    points: &[Point3],
-    point_body: &[u32],
-    nbodies: usize,
-    conds: &[Vec<Cond3>],
-    dofs: &[PointDofs<3>],
-    n: usize,
-) -> (Vec<Vec<f64>>, Vec<u32>) {
-    let mut lo = vec![[f64::MAX; 3]; nbodies];
-    let mut hi = vec![[f64::MIN; 3]; nbodies];
-    for (p, x) in points.iter().enumerate() {
-        let b = point_body[p] as usize;
-        for k in 0..3 {
-            lo[b][k] = lo[b][k].min(x[k]);
-            hi[b][k] = hi[b][k].max(x[k]);
-        }
-    }
-    let centre = |b: usize| [0, 1, 2].map(|k| (lo[b][k] + hi[b][k]) / 2.0);
-    let size = |b: usize| {
-        (0..3)
-            .map(|k| hi[b][k] - lo[b][k])
-            .fold(0.0, f64::max)
-            .max(1e-300)
-    };
-    let motion = |m: RigidMode, b: usize, x: Point3| m.at(x, centre(b), size(b));
-    let mut gtg = vec![vec![vec![0.0; 6]; 6]; nbodies];
-    for (p, cs) in conds.iter().enumerate() {
-        let b = point_body[p] as usize;
-        for &Cond { r, .. } in cs {
-            let l = dot(r, r).sqrt();
-            let row: Vec<f64> = SOLID_MODES
-                .iter()
-                .map(|&m| dot(r, motion(m, b, points[p])) / l)
-                .collect();
-            for i in 0..6 {
-                for j in 0..6 {
-                    gtg[b][i][j] += row[i] * row[j];
-                }
-            }
-        }
-    }
-    let mut kernel: Vec<Vec<f64>> = vec![];
-    let mut owner = vec![];
-    for (b, m) in gtg.iter().enumerate() {
-        let (vals, vecs) = crate::linalg::dense::sym_eigen(m);
-        for (k, &val) in vals.iter().enumerate() {
-            if val > 1e-9 {
-                continue;
-            }
-            // sym_eigen returns the eigenvectors as rows (as 2D reads them, rigid.rs).
-            let coef: Vec<f64> = vecs[k].clone();
-            let mut z = vec![0.0; n];
-            for (p, pd) in dofs
-                .iter()
-                .enumerate()
-                .filter(|(p, _)| point_body[*p] as usize == b)
-            {
-                let mut u = [0.0; 3];
-                for (i, &mode) in SOLID_MODES.iter().enumerate() {
-                    let w = motion(mode, b, points[p]);
-                    for c in 0..3 {
-                        u[c] += coef[i] * w[c];
-                    }
-                }
-                for r in 0..pd.ndof {
-                    z[pd.start + r] = dot(pd.t[r], u);
-                }
-            }
-            for q in &kernel {
-                let s: f64 = q.iter().zip(&z).map(|(a, b)| a * b).sum();
-                for (zi, qi) in z.iter_mut().zip(q) {
-                    *zi -= s * qi;
-                }
-            }
-            let nz = z.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if nz > 1e-12 {
-                kernel.push(z.into_iter().map(|v| v / nz).collect());
-                owner.push(b as u32);
-            }
-        }
-    }
-    (kernel, owner)
 }
 
 #[cfg(test)]
