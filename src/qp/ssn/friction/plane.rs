@@ -234,6 +234,10 @@ struct State<'a> {
     preset: bool,
     /// The current solve started from the coarse kinds ([`COARSE_STEPS`]).
     coarse_run: bool,
+    /// The next prediction is a load step's first from the last step's
+    /// multipliers: a row on its disc's rim there keeps slipping
+    /// ([`State::predict`]).
+    rim_slips: bool,
     /// Newton steps of the current solve.
     run_steps: usize,
     /// The patterns (N, each row's kind) of this solve's steps.
@@ -304,6 +308,7 @@ impl<'a> State<'a> {
             started: false,
             preset: false,
             coarse_run: false,
+            rim_slips: false,
             run_steps: 0,
             visited: std::collections::HashSet::new(),
             solved: false,
@@ -352,7 +357,12 @@ impl<'a> State<'a> {
         let tang = (0..m)
             .map(|i| {
                 let lt = [self.lt[2 * i], self.lt[2 * i + 1]];
-                predict_disc(in_n[i], self.glued, self.s[i], lt, self.v(i), self.ct[i])
+                let d = predict_disc(in_n[i], self.glued, self.s[i], lt, self.v(i), self.ct[i]);
+                if self.rim_slips && d == Disc::Stick {
+                    rim_slip(lt, self.s[i]).unwrap_or(d)
+                } else {
+                    d
+                }
             })
             .collect();
         (in_n, tang)
@@ -657,6 +667,22 @@ fn predict_disc(in_n: bool, glued: bool, s: f64, lt: [f64; 2], v: [f64; 2], ct: 
     }
 }
 
+/// A load step's first prediction from the last step's multipliers
+/// (docs/methods.md §12.3, "Load steps"): there the slip increment v is
+/// zero, so ξ = λ_t and a row that slipped sits on its disc's rim, ‖ξ‖ = s
+/// to rounding, which `predict_disc` calls sticking. Under a load that
+/// keeps growing such a row keeps slipping, and from "sticking" the slip
+/// zone walked back out a ring of rows per Newton step (a rubber cube
+/// sheared between steel plates, 1 024 rows: stick 859 → 395 → 278 → … →
+/// 126 over 12 steps). A row within RIM of its rim slips along λ_t, with
+/// κ = 0 (Newton's step at ξ on the rim); a load that turns back makes it
+/// stick at the next prediction.
+fn rim_slip(lt: [f64; 2], s: f64) -> Option<Disc> {
+    const RIM: f64 = 1e-6;
+    let nl = tangential_norm(&lt);
+    (s > 0.0 && nl >= (1.0 - RIM) * s).then(|| Disc::Slip([lt[0] / nl, lt[1] / nl], 0.0))
+}
+
 /// What the multipliers of the working set (`in_n`, `tang`) are: the
 /// normal rows in N, a sticking row's tangential pair, a slipping row's
 /// force across its direction (in this order).
@@ -698,6 +724,7 @@ impl Iterative for State<'_> {
             // The coarse start's sets, as they stand.
         } else if self.started || self.solved && !self.glued {
             let (n_set, tang) = self.predict();
+            self.rim_slips = false;
             let key = pattern(&n_set, &tang);
             let seen = key != pattern(&self.in_n, &self.tang) && self.visited.contains(&key);
             // The glued solve is a start: a pattern met again ends it,

@@ -73,6 +73,10 @@ impl TrescaStep for PlaneTresca<'_, '_> {
         st.lt = l.tangential;
         st.solved = true;
         st.glued = false;
+        // The dual path's exact steps only: the multigrid's direct
+        // iteration, its bound held inside inexact sweeps, stalled from the
+        // rim start (docs/methods.md §12.3).
+        st.rim_slips = st.dual.is_some();
         st.coulomb = Some(mu.to_vec());
         st.s = crate::qp::coulomb_bound(mu, &st.ln);
         // Coulomb's own problem: solved to tol, not a fixed point's step.
@@ -80,6 +84,7 @@ impl TrescaStep for PlaneTresca<'_, '_> {
         let r = self.run();
         let st = &mut self.st;
         st.coulomb = None;
+        st.rim_slips = false;
         if matches!(&r, Ok(t) if t.status.converged()) {
             st.warm = None;
         } else {

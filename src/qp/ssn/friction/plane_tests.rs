@@ -232,6 +232,31 @@ fn a_line_pressed_on_a_curved_floor_starts_from_the_frictionless_set() {
     }
 }
 
+/// A chain of `p` points on a floor (unit normal stiffness, a unit load
+/// pressing each), neighbours tied by springs `kc` in x and y, the last
+/// point held by a unit spring, the first pulled by `pull` along `dir`:
+/// (the triplets of C, d).
+fn chain(p: usize, kc: f64, pull: f64, dir: [f64; 2]) -> (Vec<(usize, usize, f64)>, Vec<f64>) {
+    let mut trip = vec![];
+    let mut d = vec![0.0; 3 * p];
+    for i in 0..p {
+        let own = if i + 1 == p { 1.0 } else { 0.0 };
+        for c in 0..3 {
+            trip.push((3 * i + c, 3 * i + c, if c == 2 { 1.0 } else { own }));
+        }
+        if i + 1 < p {
+            for c in 0..2 {
+                let (u, v) = (3 * i + c, 3 * i + 3 + c);
+                trip.extend([(u, u, kc), (v, v, kc), (u, v, -kc), (v, u, -kc)]);
+            }
+        }
+        d[3 * i + 2] = -1.0;
+    }
+    d[0] = pull * dir[0];
+    d[1] = pull * dir[1];
+    (trip, d)
+}
+
 /// A chain of points pressed onto a flat floor and pulled at one end,
 /// obliquely: the slip zone runs in from the pulled end, its points
 /// carrying s = μN each along the pull, the first sticking point the rest,
@@ -248,23 +273,7 @@ fn a_chain_pulled_at_one_end_slips_in_a_bounded_number_of_steps() {
     for p in [40usize, 80, 160] {
         let k = p / 2;
         let pull = mu * (k as f64 + 0.5);
-        let mut trip = vec![];
-        let mut d = vec![0.0; 3 * p];
-        for i in 0..p {
-            let own = if i + 1 == p { 1.0 } else { 0.0 };
-            for c in 0..3 {
-                trip.push((3 * i + c, 3 * i + c, if c == 2 { 1.0 } else { own }));
-            }
-            if i + 1 < p {
-                for c in 0..2 {
-                    let (u, v) = (3 * i + c, 3 * i + 3 + c);
-                    trip.extend([(u, u, kc), (v, v, kc), (u, v, -kc), (v, u, -kc)]);
-                }
-            }
-            d[3 * i + 2] = -1.0;
-        }
-        d[0] = pull * dir[0];
-        d[1] = pull * dir[1];
+        let (trip, d) = chain(p, kc, pull, dir);
         let q = points_on_a_floor(&trip, d, vec![0.0; p], SlipBound::Coulomb(vec![mu; p]));
         let r = solve(&q);
         assert!(r.status.converged(), "{p}: {:?}", r.status);
@@ -340,4 +349,65 @@ fn the_multigrid_path_holds_the_coulomb_bound_inside_its_steps() {
     }
     // 5 Newton steps; 40 with the bound of the last iterate.
     assert!(r.iterations <= 8, "{} Newton steps", r.iterations);
+}
+
+/// A proportional load step: the chain above at twice its loads (normal
+/// and tangential), started as a run's second step is (x0, the last
+/// step's multipliers, t₀ = T x of the first step). Its answer is twice the
+/// first (the slip increment is along the first step's slip, where
+/// λ_t = s ê), and the rows that slipped sit on their discs' rims at the
+/// start: they keep slipping ([`super::rim_slip`]), so the step ends in
+/// two Newton steps. Predicted as sticking there, the slip zone walked back
+/// out a row or two per step (160 points: 81 Newton steps).
+#[test]
+fn a_proportional_load_step_keeps_the_rows_that_slipped_slipping() {
+    let (p, kc, mu) = (160usize, 10.0, 0.3);
+    let k = p / 2;
+    let pull = mu * (k as f64 + 0.5);
+    let dir = [30f64.to_radians().cos(), 30f64.to_radians().sin()];
+    let (trip, d) = chain(p, kc, pull, dir);
+    let q1 = points_on_a_floor(
+        &trip,
+        d.clone(),
+        vec![0.0; p],
+        SlipBound::Coulomb(vec![mu; p]),
+    );
+    let r1 = solve(&q1);
+    assert!(r1.status.converged(), "{:?}", r1.status);
+    let mut q2 = points_on_a_floor(
+        &trip,
+        d.iter().map(|v| 2.0 * v).collect(),
+        vec![0.0; p],
+        SlipBound::Coulomb(vec![mu; p]),
+    );
+    let fr = q2.friction.as_mut().unwrap();
+    fr.t0 = fr.t.mul(&r1.x);
+    let o = SolveOptions {
+        x0: Some(r1.x.clone()),
+        lambda0: Some(crate::qp::Multipliers {
+            normal: r1.lambda.clone(),
+            tangential: r1.lambda_t.clone(),
+        }),
+        ..Default::default()
+    };
+    let r2 = registry::solve("ssn", &q2, &o).unwrap();
+    assert!(r2.status.converged(), "{:?}", r2.status);
+    assert!(r2.kkt.within(1e-10), "{:?}", r2.kkt);
+    let slipping = (0..p)
+        .filter(|&i| {
+            let lt = (r1.lambda_t[2 * i].powi(2) + r1.lambda_t[2 * i + 1].powi(2)).sqrt();
+            lt > (1.0 - 1e-9) * mu * r1.lambda[i]
+        })
+        .count();
+    assert!(slipping >= k - 1, "{slipping} rows slip in step 1");
+    for (a, b) in r2.x.iter().zip(&r1.x) {
+        assert!(
+            (a - 2.0 * b).abs() < 1e-9 * (1.0 + b.abs()),
+            "{a} against 2·{b}"
+        );
+    }
+    for (a, b) in r2.lambda_t.iter().zip(&r1.lambda_t) {
+        assert!((a - 2.0 * b).abs() < 1e-9, "λ_t {a} against 2·{b}");
+    }
+    assert!(r2.iterations <= 2, "{} Newton steps", r2.iterations);
 }
