@@ -789,7 +789,7 @@ pub fn build(mesh: &Mesh, path: &Path, input: &SolidInput) -> Result<SolidModel,
             names.join(", ")
         )));
     }
-    let near = near_kernel(&points, &point_body, nbodies, &dofs, n);
+    let near = near_kernel(&points, &dofs, n);
     // Friction: two tangential rows per QP row (docs/methods.md §12.2).
     let friction = super::contact3d::friction::build(
         &contact,

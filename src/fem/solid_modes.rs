@@ -38,8 +38,6 @@ fn body_frames(points: &[Point3], point_body: &[u32], nbodies: usize) -> Vec<(Po
 /// contiguous in point order.
 pub(super) fn near_kernel(
     points: &[Point3],
-    point_body: &[u32],
-    nbodies: usize,
     dofs: &[PointDofs<3>],
     n: usize,
 ) -> Option<crate::qp::NearKernel> {
@@ -49,7 +47,6 @@ pub(super) fn near_kernel(
     // frames (other centres and sizes) would give it a rotation by another
     // angle on each side (docs/methods.md §7.2).
     let frames = body_frames(points, &vec![0; points.len()], 1);
-    let _ = (point_body, nbodies);
     let mut modes = vec![vec![0.0; n]; SOLID_MODES.len()];
     let mut block_ptr = vec![0usize];
     for (p, pd) in dofs.iter().enumerate() {
@@ -82,22 +79,8 @@ pub(super) fn rigid_kernel(
     dofs: &[PointDofs<3>],
     n: usize,
 ) -> (Vec<Vec<f64>>, Vec<u32>) {
-    let mut lo = vec![[f64::MAX; 3]; nbodies];
-    let mut hi = vec![[f64::MIN; 3]; nbodies];
-    for (p, x) in points.iter().enumerate() {
-        let b = point_body[p] as usize;
-        for k in 0..3 {
-            lo[b][k] = lo[b][k].min(x[k]);
-            hi[b][k] = hi[b][k].max(x[k]);
-        }
-    }
-    let centre = |b: usize| [0, 1, 2].map(|k| (lo[b][k] + hi[b][k]) / 2.0);
-    let size = |b: usize| {
-        (0..3)
-            .map(|k| hi[b][k] - lo[b][k])
-            .fold(0.0, f64::max)
-            .max(1e-300)
-    };
+    let frames = body_frames(points, point_body, nbodies);
+    let (centre, size) = (|b: usize| frames[b].0, |b: usize| frames[b].1);
     let motion = |m: RigidMode, b: usize, x: Point3| m.at(x, centre(b), size(b));
     let mut gtg = vec![vec![vec![0.0; 6]; 6]; nbodies];
     for (p, cs) in conds.iter().enumerate() {

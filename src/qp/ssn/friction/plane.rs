@@ -668,7 +668,7 @@ fn predict_disc(in_n: bool, glued: bool, s: f64, lt: [f64; 2], v: [f64; 2], ct: 
 }
 
 /// A load step's first prediction from the last step's multipliers
-/// (docs/methods.md §12.3, "Load steps"): there the slip increment v is
+/// (docs/methods.md §12.3, "The rows that slipped keep slipping"): there the slip increment v is
 /// zero, so ξ = λ_t and a row that slipped sits on its disc's rim, ‖ξ‖ = s
 /// to rounding, which `predict_disc` calls sticking. Under a load that
 /// keeps growing such a row keeps slipping, and from "sticking" the slip
