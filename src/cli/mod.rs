@@ -100,6 +100,11 @@ pub struct SolveArgs {
     /// Continue after the last complete step of this checkpoint (warm start).
     #[arg(long)]
     pub restart: Option<PathBuf>,
+    /// Start each load step from the answer of the same model on a coarser
+    /// mesh: that solve's checkpoint (NAME.h5), interpolated onto this mesh
+    /// (3D models; nested iteration, docs/methods.md §7.2).
+    #[arg(long, value_name = "COARSE.h5", conflicts_with = "restart")]
+    pub start_from: Option<PathBuf>,
     /// Stop after this load step (1-based); `--restart` continues later.
     #[arg(long)]
     pub max_steps: Option<usize>,

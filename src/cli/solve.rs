@@ -34,6 +34,13 @@ pub fn run(a: &SolveArgs, quiet: bool, build: &crate::fem::BuildOptions) -> i32 
         Ok(Loaded::Solid(s)) => return solid(a, quiet, t0, &s),
         Err(e) => return bad_input(&e),
     };
+    if let Some(p) = &a.start_from {
+        return bad_input(&format!(
+            "--start-from {}: {} is a 2D model; the nested start reads 3D checkpoints only (docs/methods.md §7.2)",
+            p.display(),
+            a.problem.display()
+        ));
+    }
     let (method, mut opts) = match run::options(&prep.problem, &a.solver.section()) {
         Ok(x) => x,
         Err(e) => return bad_input(&e),
@@ -58,6 +65,13 @@ fn solid(a: &SolveArgs, quiet: bool, t0: Instant, prep: &SolidPrepared) -> i32 {
         },
         None => None,
     };
+    let nested = match &a.start_from {
+        Some(p) => match run::solid::NestedStart::read(p, prep) {
+            Ok(n) => Some(n),
+            Err(e) => return bad_input(&e),
+        },
+        None => None,
+    };
     let (method, mut opts) = match run::options(&prep.problem, &a.solver.section()) {
         Ok(x) => x,
         Err(e) => return bad_input(&e),
@@ -76,6 +90,7 @@ fn solid(a: &SolveArgs, quiet: bool, t0: Instant, prep: &SolidPrepared) -> i32 {
         strict: a.solver.strict,
         max_steps: a.max_steps,
         restart: restart.as_ref(),
+        nested: nested.as_ref(),
         compress,
         started: t0,
     };
@@ -103,7 +118,7 @@ fn solid(a: &SolveArgs, quiet: bool, t0: Instant, prep: &SolidPrepared) -> i32 {
         }
     };
     if !quiet {
-        print_solid_report(prep, &outcome);
+        print_solid_report(prep, &outcome, nested.as_ref());
     }
     if outcome.certified {
         0
@@ -113,7 +128,11 @@ fn solid(a: &SolveArgs, quiet: bool, t0: Instant, prep: &SolidPrepared) -> i32 {
 }
 
 /// The report of a 3D run: as 2D's, with 3-vectors.
-fn print_solid_report(prep: &SolidPrepared, o: &run::SolidOutcome) {
+fn print_solid_report(
+    prep: &SolidPrepared,
+    o: &run::SolidOutcome,
+    nested: Option<&run::solid::NestedStart>,
+) {
     let s = &o.summary;
     crate::outln!(
         "signorini {} — {} ({})",
@@ -138,6 +157,14 @@ fn print_solid_report(prep: &SolidPrepared, o: &run::SolidOutcome) {
         s.preconditioner,
         s.ordering
     );
+    if let Some(n) = nested {
+        crate::outln!(
+            "start       {} interpolated onto this mesh ({} step(s), {:.3} s; nested start, docs/methods.md §7.2)",
+            n.path.display(),
+            n.len(),
+            n.seconds
+        );
+    }
     crate::outln!(
         "status      {} after {} iterations ({} inner)",
         s.status,

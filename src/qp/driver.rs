@@ -56,6 +56,9 @@ pub struct Context<'a> {
     /// The multiplier warm start (checked by the driver: one finite pair
     /// per row, the problem frictional).
     pub lambda0: Option<&'a crate::qp::Multipliers>,
+    /// λ_n of a nested start, one finite value per row, with `x0`
+    /// ([`SolveOptions::nested_lambda`]; checked by the driver).
+    pub nested_lambda: Option<&'a [f64]>,
     opts: &'a SolveOptions,
     timings: Vec<(String, f64)>,
 }
@@ -68,6 +71,7 @@ impl<'a> Context<'a> {
             x0: opts.x0.as_deref(),
             active0: opts.active0.as_deref(),
             lambda0: opts.lambda0.as_ref(),
+            nested_lambda: opts.nested_lambda.as_deref(),
             opts,
             timings: vec![],
         }
@@ -82,6 +86,7 @@ impl<'a> Context<'a> {
             x0: None,
             active0: None,
             lambda0: None,
+            nested_lambda: None,
             opts: self.opts,
             timings: vec![],
         }
@@ -347,7 +352,22 @@ fn checked_start<'a>(
             None
         }
     });
-    if bad_x0.is_none() && bad_active0.is_none() && bad_lambda0.is_none() {
+    let bad_nested = opts.nested_lambda.as_ref().and_then(|l| {
+        if opts.x0.is_none() || bad_x0.is_some() {
+            Some("a nested start's multipliers without its displacements".to_string())
+        } else if l.len() != qp.m() {
+            Some(format!(
+                "{} nested-start multipliers for {} contact rows",
+                l.len(),
+                qp.m()
+            ))
+        } else if !l.iter().all(|v| v.is_finite()) {
+            Some("a multiplier of the nested start is not finite".to_string())
+        } else {
+            None
+        }
+    });
+    if bad_x0.is_none() && bad_active0.is_none() && bad_lambda0.is_none() && bad_nested.is_none() {
         return Cow::Borrowed(opts);
     }
     let mut o = opts.clone();
@@ -366,6 +386,10 @@ fn checked_start<'a>(
     }
     if let Some(why) = bad_lambda0 {
         o.lambda0 = None;
+        refuse(why);
+    }
+    if let Some(why) = bad_nested {
+        o.nested_lambda = None;
         refuse(why);
     }
     Cow::Owned(o)

@@ -445,6 +445,12 @@ pub struct SolveOptions {
     /// stick / slip / open sets and the first slip bound μλ_n of its
     /// Coulomb loop (docs/methods.md §9.5).
     pub lambda0: Option<Multipliers>,
+    /// λ_n per contact row of an answer on a coarser mesh of the same
+    /// model, interpolated onto this one together with `x0` (nested
+    /// iteration, `--start-from`; docs/methods.md §7.2, "The nested
+    /// start"). Methods that start from a working set take it from the
+    /// pair, J0 = {i : λ̂ᵢ + c(Ax0 − g)ᵢ > 0}, in place of their own start.
+    pub nested_lambda: Option<Vec<f64>>,
     /// Observers of every iteration record, besides the progress display.
     pub observers: Vec<SharedObserver>,
 }
@@ -460,6 +466,7 @@ impl std::fmt::Debug for SolveOptions {
             .field("x0", &self.x0.as_ref().map(|x| x.len()))
             .field("active0", &self.active0.as_ref().map(|a| a.len()))
             .field("lambda0", &self.lambda0.as_ref().map(|l| l.normal.len()))
+            .field("nested_lambda", &self.nested_lambda.as_ref().map(Vec::len))
             .field("observers", &self.observers.len())
             .finish()
     }

@@ -14,7 +14,9 @@
 //! here (the direct paths are).
 
 use super::coarse_start::{self, coarse_start};
-use super::{candidates, free_modes, hold_free_modes, limit_changes, next_set, stiffness_scale};
+use super::{
+    candidates, free_modes, hold_free_modes, limit_changes, nested_set, next_set, stiffness_scale,
+};
 use crate::linalg::amg::{pcg_stall, Amg, AmgSettings, NearNull, PCG_STALL};
 use crate::linalg::augmented::AugPattern;
 use crate::linalg::kernel::orthonormal_kernel;
@@ -140,6 +142,9 @@ pub(super) fn solve(qp: &QpProblem, ctx: &mut Context) -> Result<Output, QpError
     );
     st.target = ctx.settings.kkt_target;
     st.reuse(hierarchy);
+    if let (Some(lam), Some(_)) = (ctx.nested_lambda, ctx.x0) {
+        st.start_nested(lam);
+    }
     let mut exec = ctx.executor("ssn");
     let (status, iters) = exec.run(&mut st);
     log::debug!(
@@ -338,6 +343,27 @@ impl<'a> State<'a> {
         if let Some(h) = hierarchy {
             (self.amg, self.assembled) = (h.amg, h.assembled);
         }
+    }
+
+    /// The nested start (docs/methods.md §7.2, "The nested start"): x0 and
+    /// λ̂ interpolated from the answer on a coarser mesh of the same model.
+    /// J0 is the set the loop's own rule predicts from that pair,
+    /// F = λ̂ + c(Ax0 − g) > 0, and replaces the coarse start; since J0 is
+    /// near the answer, its first K_J is solved at the loop's loose
+    /// tolerance, not ROUGH-ly (a rough solve that settles is solved again).
+    fn start_nested(&mut self, lam: &[f64]) {
+        let qp = self.qp;
+        self.in_j = nested_set(qp, &self.x, lam, self.cpar);
+        self.lam = (0..qp.m())
+            .map(|i| if self.in_j[i] { lam[i].max(0.0) } else { 0.0 })
+            .collect();
+        self.coarse_tried = true;
+        self.rough = false;
+        self.grow = coarse_start::GROW;
+        log::debug!(
+            "ssn iterative: nested start, |J0| = {}",
+            self.in_j.iter().filter(|b| **b).count()
+        );
     }
 
     /// True when the rows of J restrain every rigid motion of ker C

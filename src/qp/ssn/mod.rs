@@ -75,7 +75,9 @@ pub(crate) const BORDER_RATIO: f64 = 12.0;
 /// 1 step: 109 s with AMD (BENCHMARKS.md, Notes).
 const BORDER_MAX: usize = 16384;
 /// Dual-space steps at most in [`Ssn::dense_start`].
-use sets::{candidates, free_modes, hold_free_modes, limit_changes, next_set, stiffness_scale};
+use sets::{
+    candidates, free_modes, hold_free_modes, limit_changes, nested_set, next_set, stiffness_scale,
+};
 
 const DENSE_STEPS_MAX: usize = 100;
 /// Semismooth Newton / primal–dual active set (docs/methods.md §7).
@@ -196,6 +198,10 @@ pub(crate) fn solve_traced(
     // the glued start: the dense start then confirms it in one step.
     if let Some(a) = ctx.active0.filter(|a| a.len() == qp.m()) {
         st.in_j = a.to_vec();
+    } else if let (Some(lam), Some(x0)) = (ctx.nested_lambda, ctx.x0) {
+        // A nested start (docs/methods.md §7.2): the set the rule predicts
+        // from the interpolated pair.
+        st.in_j = nested_set(qp, x0, lam, st.cpar);
     }
     if let Some(kd) = kept.as_ref().and_then(|k| k.dense.as_ref()) {
         log::debug!("ssn: the bordered factor and A K⁻¹Aᵀ of the last solve reused");

@@ -25,6 +25,15 @@ pub(super) fn next_set(in_j: &[bool], lam: &[f64], ax: &[f64], g: &[f64], tol: f
         .collect()
 }
 
+/// The working set a nested start predicts (docs/methods.md §7.2, "The
+/// nested start"): from x0 and λ̂ interpolated from a coarser mesh's
+/// answer, the rows with F = λ̂ + c(Ax0 − g) > 0, c the stiffness scale.
+pub(super) fn nested_set(qp: &QpProblem, x0: &[f64], lam: &[f64], c: f64) -> Vec<bool> {
+    (0..qp.m())
+        .map(|i| lam[i] + c * (qp.a.row_dot(i, x0) - qp.g[i]) > 0.0)
+        .collect()
+}
+
 /// The working sets a step tries, in order: J, J ∪ J_prev (the last set
 /// that was solved), every row; the first whose KKT system is not singular
 /// is taken. Shared by the direct and the iterative paths.

@@ -40,11 +40,19 @@ impl Comparable for SolidPrepared {
         let nsteps = self.problem.file.nsteps();
         let target = opts.settings.kkt_target;
         let mut work = PathWork::new(nsteps);
-        let last = march(self, method, opts, 0..nsteps, Carry::default(), |st, _| {
-            let verdict = Verdict::of(method, &st.result, target, false);
-            work.add(st.index, &st.result, verdict);
-            Ok(())
-        })
+        let last = march(
+            self,
+            method,
+            opts,
+            0..nsteps,
+            Carry::default(),
+            None,
+            |st, _| {
+                let verdict = Verdict::of(method, &st.result, target, false);
+                work.add(st.index, &st.result, verdict);
+                Ok(())
+            },
+        )
         .map_err(|e| e.to_string())?
         .ok_or_else(|| "no load step was solved".to_string())?;
         let probes = probes(self, &last.model.displacements(&last.result.x))

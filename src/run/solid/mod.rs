@@ -10,9 +10,11 @@
 
 mod compare;
 mod forces;
+mod nested;
 mod restart;
 mod steps;
 
+pub use nested::NestedStart;
 pub use restart::SolidRestart;
 pub use steps::{solve_solid, Reference, SolidRun};
 
@@ -355,6 +357,10 @@ pub struct SolidSummary {
     /// `[output] reference_step`: the step the `*_change` fields refer to.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reference_step: Option<usize>,
+    /// `--start-from`: the coarser mesh's checkpoint each step started
+    /// from (docs/methods.md §7.2, "The nested start").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start_from: Option<String>,
     #[serde(rename = "timings_s")]
     pub timings: Timings,
 }

@@ -11,7 +11,8 @@
 
 use super::forces::{contact_output, forces, probes, Forces3};
 use super::{
-    solve_in, step_model, SolidOutcome, SolidPrepared, SolidRestart, SolidSummary, MOMENT_POINT,
+    solve_in, step_model, NestedStart, SolidOutcome, SolidPrepared, SolidRestart, SolidSummary,
+    MOMENT_POINT,
 };
 use crate::fem::element::{ElementKind, Vector3};
 use crate::fem::solid::SolidModel;
@@ -37,6 +38,9 @@ pub struct SolidRun<'a> {
     /// Continue this checkpoint (`--restart`): its steps are kept and the
     /// run starts after them.
     pub restart: Option<&'a SolidRestart>,
+    /// Start each step from the coarser mesh's answer at its pseudo-time
+    /// (`--start-from`, docs/methods.md §7.2 "The nested start").
+    pub nested: Option<&'a NestedStart>,
     pub compress: bool,
     pub started: Instant,
 }
@@ -93,100 +97,109 @@ pub fn solve_solid(
     let mut reference = run.restart.and_then(|r| r.reference.clone());
     let mut posted = None;
     let (mut t_assemble_all, mut t_solve_all, mut t_write_all) = (0.0, 0.0, 0.0);
-    let last = march(prep, method, opts, first..nsteps, carry, |st, was| {
-        let (s, model, res) = (st.index, &*st.model, &st.result);
-        let time_solve = st.time_solve;
-        let verdict = Verdict::of(method, res, target, strict);
-        let certified = verdict.certified() && res.status.converged();
-        if !certified {
-            failed.push(s + 1);
-        }
-        let mut out = crate::post::solid_output(model, &file.materials, &res.x);
-        let mut contact = contact_output(prep, model, &out.displacement, &res.lambda, &res.active);
-        let stick_slip =
-            crate::post::solid_friction::solid_friction_output(model, res, &mut contact);
-        let mut f3 = forces(prep, model, &out.displacement, &contact);
-        super::forces::add_stick_slip(model, &mut f3, &stick_slip);
-        out.reaction = f3.reaction.clone();
-        // [output] reference_step: from step K on, the change since K.
-        if let Some(k) = file.output.reference_step {
-            if s + 1 == k {
-                reference = Some(Reference {
-                    displacement: out.displacement.clone(),
-                    stress: out.stress.clone(),
-                    pressure: contact.pressure.clone(),
-                });
+    let last = march(
+        prep,
+        method,
+        opts,
+        first..nsteps,
+        carry,
+        run.nested,
+        |st, was| {
+            let (s, model, res) = (st.index, &*st.model, &st.result);
+            let time_solve = st.time_solve;
+            let verdict = Verdict::of(method, res, target, strict);
+            let certified = verdict.certified() && res.status.converged();
+            if !certified {
+                failed.push(s + 1);
             }
-            if let Some(r) = reference.as_ref().filter(|_| s + 1 >= k) {
-                let change = r.change(k, &out, &contact);
-                contact.pressure_change = change.contact_pressure.clone();
-                out.change = Some(change);
+            let mut out = crate::post::solid_output(model, &file.materials, &res.x);
+            let mut contact =
+                contact_output(prep, model, &out.displacement, &res.lambda, &res.active);
+            let stick_slip =
+                crate::post::solid_friction::solid_friction_output(model, res, &mut contact);
+            let mut f3 = forces(prep, model, &out.displacement, &contact);
+            super::forces::add_stick_slip(model, &mut f3, &stick_slip);
+            out.reaction = f3.reaction.clone();
+            // [output] reference_step: from step K on, the change since K.
+            if let Some(k) = file.output.reference_step {
+                if s + 1 == k {
+                    reference = Some(Reference {
+                        displacement: out.displacement.clone(),
+                        stress: out.stress.clone(),
+                        pressure: contact.pressure.clone(),
+                    });
+                }
+                if let Some(r) = reference.as_ref().filter(|_| s + 1 >= k) {
+                    let change = r.change(k, &out, &contact);
+                    contact.pressure_change = change.contact_pressure.clone();
+                    out.change = Some(change);
+                }
             }
-        }
-        let info = StepInfo {
-            method: method.name().to_string(),
-            preconditioner: preconditioner_label(method, opts),
-            converged: res.status.converged(),
-            iterations: res.iterations,
-            energy: res.energy,
-            kkt: res.kkt,
-            time_assemble: st.t_assemble,
-            time_solve,
-            time_total: started.elapsed().as_secs_f64(),
-        };
-        let tw = Instant::now();
-        let mut names = files.step(s, file.step_time(s), &out, &contact, &info)?;
-        // A restart's copied files go with its first commit.
-        names.append(&mut carried);
-        tx.commit(&names)?;
-        t_write_all += tw.elapsed().as_secs_f64();
-        let active = contact.active.iter().filter(|&&a| a).count();
-        let (opened, closed) = match was {
-            Some(was) if was.len() == res.active.len() => (
-                Some(
-                    was.iter()
-                        .zip(&res.active)
-                        .filter(|(a, b)| **a && !**b)
-                        .count(),
+            let info = StepInfo {
+                method: method.name().to_string(),
+                preconditioner: preconditioner_label(method, opts),
+                converged: res.status.converged(),
+                iterations: res.iterations,
+                energy: res.energy,
+                kkt: res.kkt,
+                time_assemble: st.t_assemble,
+                time_solve,
+                time_total: started.elapsed().as_secs_f64(),
+            };
+            let tw = Instant::now();
+            let mut names = files.step(s, file.step_time(s), &out, &contact, &info)?;
+            // A restart's copied files go with its first commit.
+            names.append(&mut carried);
+            tx.commit(&names)?;
+            t_write_all += tw.elapsed().as_secs_f64();
+            let active = contact.active.iter().filter(|&&a| a).count();
+            let (opened, closed) = match was {
+                Some(was) if was.len() == res.active.len() => (
+                    Some(
+                        was.iter()
+                            .zip(&res.active)
+                            .filter(|(a, b)| **a && !**b)
+                            .count(),
+                    ),
+                    Some(
+                        was.iter()
+                            .zip(&res.active)
+                            .filter(|(a, b)| !**a && **b)
+                            .count(),
+                    ),
                 ),
-                Some(
-                    was.iter()
-                        .zip(&res.active)
-                        .filter(|(a, b)| !**a && **b)
-                        .count(),
-                ),
-            ),
-            _ => (None, None),
-        };
-        rows.push(StepRow {
-            step: s + 1,
-            t: file.step_time(s),
-            converged: res.status.converged(),
-            certified,
-            iterations: res.iterations,
-            inner_iterations: res.inner_iterations,
-            kkt_max: res.kkt.max(),
-            energy: res.energy,
-            nodes: model.points.len(),
-            cells: Cells::Tetrahedra(model.tets.len()),
-            dofs: model.qp.n(),
-            constraints: model.qp.m(),
-            active,
-            opened,
-            closed,
-            time_solve,
-            time_step: st.started.elapsed().as_secs_f64(),
-        });
-        log::debug!(
-            "step {}: assembly {:.3} s, solve {time_solve:.3} s",
-            s + 1,
-            st.t_assemble
-        );
-        t_assemble_all += st.t_assemble;
-        t_solve_all += time_solve;
-        posted = Some((out, contact, verdict, f3));
-        Ok(())
-    })?;
+                _ => (None, None),
+            };
+            rows.push(StepRow {
+                step: s + 1,
+                t: file.step_time(s),
+                converged: res.status.converged(),
+                certified,
+                iterations: res.iterations,
+                inner_iterations: res.inner_iterations,
+                kkt_max: res.kkt.max(),
+                energy: res.energy,
+                nodes: model.points.len(),
+                cells: Cells::Tetrahedra(model.tets.len()),
+                dofs: model.qp.n(),
+                constraints: model.qp.m(),
+                active,
+                opened,
+                closed,
+                time_solve,
+                time_step: st.started.elapsed().as_secs_f64(),
+            });
+            log::debug!(
+                "step {}: assembly {:.3} s, solve {time_solve:.3} s",
+                s + 1,
+                st.t_assemble
+            );
+            t_assemble_all += st.t_assemble;
+            t_solve_all += time_solve;
+            posted = Some((out, contact, verdict, f3));
+            Ok(())
+        },
+    )?;
     let (Some(last), Some((out, contact, verdict, f3))) = (last, posted) else {
         return Err(RunError::Settings(format!(
             "{}: no load step to solve",
@@ -197,6 +210,7 @@ pub fn solve_solid(
     let t_write = Instant::now();
     let mut summary = summary(prep, model, method, opts, res, &out, &contact, verdict, f3);
     summary.reference_step = file.output.reference_step;
+    summary.start_from = run.nested.map(|n| n.path.display().to_string());
     summary.failed_steps = failed;
     if multi {
         summary.steps = rows;
@@ -310,6 +324,7 @@ pub(super) fn march<'p>(
     opts: &SolveOptions,
     steps: std::ops::Range<usize>,
     mut carry: Carry,
+    nested: Option<&NestedStart>,
     mut each: impl FnMut(&Marched<'p>, Option<&[bool]>) -> Result<(), RunError>,
 ) -> Result<Option<Marched<'p>>, RunError> {
     let file = &prep.problem.file;
@@ -339,6 +354,12 @@ pub(super) fn march<'p>(
             .as_ref()
             .filter(|_| model.qp.friction.is_some())
             .map(|l| l.reduce(&model));
+        // A nested start replaces the last step's x and working set.
+        if let Some((u, lam)) = nested.and_then(|n| n.at(prep.problem.file.step_time(s))) {
+            o.x0 = Some(crate::fem::Discrete::reduce(&*model, u));
+            o.active0 = None;
+            o.nested_lambda = Some(model.qp_rows.iter().map(|&k| lam[k]).collect());
+        }
         o.stop = Some(&SIGNAL);
         let t0 = Instant::now();
         let res = solve_in(prep, &model, method, &o, &ws);
@@ -817,6 +838,7 @@ fn summary(
         probes: probes(prep, &out.displacement),
         steps: vec![],
         reference_step: None,
+        start_from: None,
         timings: Timings {
             read: prep.t_read,
             assemble: 0.0,
