@@ -4,7 +4,8 @@
 // The two bodies are meshed apart (they touch at one point): slave "ball"
 // (the spherical surface), master "block_top" (z = 0). Slip on x = 0 and
 // y = 0 (both bodies) and on the block's bottom; a pressure on "ball_top"
-// (z = 1). The mesh is refined to hc within 0.2 of the origin.
+// (z = 1). The mesh is refined to hc within 0.2 of the origin. hertz.msh is
+// hc = 0.02; hertz_coarse.msh (tests/nested_start.rs) hc = 0.045.
 SetFactory("OpenCASCADE");
 DefineConstant[ hc = 0.02, hf = 0.25 ];
 Sphere(1) = {0, 0, 1, 1};
