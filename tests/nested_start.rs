@@ -9,8 +9,8 @@
 //! same displacements (to 10⁻⁸ of the largest); on the default path the
 //! answer is the same; load steps take the coarse step at their pseudo-time;
 //! a start that is not of this model (another geometry's checkpoint, a 2D
-//! model, a missing file, with `--restart`) exits 2 naming the file, and
-//! the output directory is not created.
+//! model, a missing file, with `--restart`) or a model with friction exits
+//! 2 naming the file, and the output directory is not created.
 
 mod common;
 
@@ -79,6 +79,19 @@ fn solve(dir: &Path, name: &str, toml: &str, args: &[&str]) -> (i32, String) {
     (o.status.code().unwrap_or(-1), text)
 }
 
+/// Hertz on the coarse mesh (`tail` appended to its TOML) solved in
+/// `dir/coarse`: its checkpoint.
+fn solve_coarse(dir: &Path, tail: &str) -> PathBuf {
+    let (code, text) = solve(
+        dir,
+        "coarse",
+        &hertz_toml(&data("hertz_coarse.msh"), tail),
+        &[],
+    );
+    assert_eq!(code, 0, "{text}");
+    dir.join("coarse/coarse.h5")
+}
+
 fn summary(dir: &Path, name: &str) -> Value {
     let s = std::fs::read_to_string(dir.join(name).join(format!("{name}.json"))).unwrap();
     serde_json::from_str(&s).unwrap()
@@ -106,14 +119,7 @@ fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> (f64, f64) {
 fn a_nested_start_gives_the_cold_answer_in_fewer_newton_steps() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let (code, text) = solve(
-        dir,
-        "coarse",
-        &hertz_toml(&data("hertz_coarse.msh"), ""),
-        &[],
-    );
-    assert_eq!(code, 0, "{text}");
-    let coarse = dir.join("coarse/coarse.h5");
+    let coarse = solve_coarse(dir, "");
     let fine = hertz_toml(&data("hertz.msh"), "");
     for path in ["iterative", "auto"] {
         let cold = format!("cold_{path}");
@@ -160,14 +166,7 @@ fn each_load_step_starts_from_the_coarse_step_at_its_time() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     let steps = "\n[[steps]]\nfactor = 0.5\n\n[[steps]]\nfactor = 1.0\n";
-    let (code, text) = solve(
-        dir,
-        "coarse",
-        &hertz_toml(&data("hertz_coarse.msh"), steps),
-        &[],
-    );
-    assert_eq!(code, 0, "{text}");
-    let coarse = dir.join("coarse/coarse.h5");
+    let coarse = solve_coarse(dir, steps);
     let fine = hertz_toml(&data("hertz.msh"), steps);
     let args = ["--ssn-path", "iterative"];
     let (code, text) = solve(dir, "cold", &fine, &args);
@@ -230,6 +229,20 @@ fn a_start_that_is_not_of_this_model_is_refused_naming_the_file() {
             "--restart",
         ),
     ];
+    // A frictional model (its steps start from the last multipliers).
+    let coarse = solve_coarse(dir, "");
+    let (code, text) = solve(
+        dir,
+        "frictional",
+        &format!("{fine}friction = 0.3\n"),
+        &["--start-from", coarse.to_str().unwrap()],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert!(
+        text.contains("coarse.h5") && text.contains("friction"),
+        "{text}"
+    );
+    assert!(!dir.join("frictional").exists());
     for (k, (args, named)) in cases.iter().enumerate() {
         let name = format!("bad{k}");
         let args: Vec<&str> = args.iter().map(String::as_str).collect();

@@ -1,6 +1,6 @@
 //! The contact footprint of a 3D checkpoint: per interface, its slave
 //! triangles laid in the interface's own plane (through the centroid,
-//! normal to the mean row normal), filled by the contact pressure, the
+//! normal to the rows' mean normal weighted by their pressure), filled by the contact pressure, the
 //! boundary of the active set outlined; with friction the boundary of the
 //! slip zone (white) and the tangential traction as arrows (docs/methods.md
 //! §12.6).
@@ -27,7 +27,8 @@ pub struct FootprintSummary {
     /// The area where the active flag, linear on the triangles, is ≥ ½.
     pub active_area: f64,
     pub max_pressure: f64,
-    /// The plane: its unit normal (the rows' mean) and axes.
+    /// The plane: its unit normal (the rows' mean, weighted by their
+    /// pressure) and axes.
     pub normal: [f64; 3],
     pub axes: [String; 2],
     /// With friction: the rows in contact that stick and that slip, the
@@ -63,10 +64,26 @@ pub(super) fn footprints(
             .copied()
             .filter(|t| t.iter().all(|&r| c.interface[r] as usize == k))
             .collect();
+        // The plane of the contact zone: the rows' normals weighted by
+        // their pressure (on a curved slave surface the mean of every
+        // row's normal tilts towards the rows far from the contact: the
+        // quarter cylinder of verification/cylinder3d drew its strip in a
+        // plane 25° off the block), or all rows' mean when none carries
+        // any.
+        let weight = |r: usize| {
+            let p = step.contact_pressure[r];
+            if p.is_finite() && p > 0.0 {
+                p
+            } else {
+                0.0
+            }
+        };
+        let loaded = rows.iter().any(|&r| weight(r) > 0.0);
         let mut n = [0.0; 3];
         for &r in &rows {
+            let w = if loaded { weight(r) } else { 1.0 };
             for d in 0..3 {
-                n[d] += c.normal[r][d];
+                n[d] += w * c.normal[r][d];
             }
         }
         let l = norm(n);

@@ -54,6 +54,17 @@ impl NestedStart {
         if !path.is_file() {
             return Err(fail("no such file".into()));
         }
+        // A frictional step starts from the last step's multipliers and
+        // slip (docs/methods.md §12.3), which a coarse displacement does
+        // not give: on the sandwich of BENCHMARKS.md (three meshes apart,
+        // four steps) it took the first step's Newton steps unchanged (8)
+        // and the later ones from 1 to 7.
+        if prep.model.qp.friction.is_some() {
+            return Err(fail(format!(
+                "{} has friction; the nested start is for frictionless contact (a frictional load step starts from the last step's multipliers, docs/methods.md §7.2)",
+                prep.problem.path.display()
+            )));
+        }
         if !crate::io::hdf5::is_solid_checkpoint(path) {
             return Err(fail(
                 "not the checkpoint of a 3D model (a solve's NAME.h5 whose root attribute model is \"solid\")"
