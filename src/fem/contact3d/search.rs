@@ -65,65 +65,54 @@ pub fn project(x: Point3, p: &[Point3; 3], n: [f64; 3]) -> Option<([f64; 3], f64
     Some((w.map(|v| v / s), dist))
 }
 
-/// A node of the tree: its box and either two children or a range of
-/// triangles (`order[start..end]`).
-struct Node {
-    lo: Point3,
-    hi: Point3,
-    start: usize,
-    end: usize,
-    kids: Option<[usize; 2]>,
+/// A node of a [`BoxTree`]: its box and either two children or a range of
+/// items (`order[start..end]`).
+pub struct BoxNode {
+    pub lo: Point3,
+    pub hi: Point3,
+    pub start: usize,
+    pub end: usize,
+    pub kids: Option<[usize; 2]>,
 }
 
 const LEAF: usize = 4;
 
-/// The master triangles in a bounding-volume tree.
-pub struct TriangleTree<'a> {
-    tris: &'a [[Point3; 3]],
-    normals: &'a [[f64; 3]],
-    nodes: Vec<Node>,
-    order: Vec<usize>,
+/// A bounding-volume tree over items given by their boxes: a node's box
+/// holds its items' boxes, and a node of more than four items is split at
+/// the median of their keys along its box's longest axis (ties to the
+/// lower item), so building costs O(n log n). Shared by the master
+/// triangles of the contact search and the coarse tetrahedra of a nested
+/// start (`run::solid::nested`); each walks it its own way.
+pub struct BoxTree {
+    /// Node 0 is the root (none when there is no item).
+    pub nodes: Vec<BoxNode>,
+    /// The items, leaf ranges contiguous.
+    pub order: Vec<usize>,
 }
 
-impl<'a> TriangleTree<'a> {
-    /// The tree of triangles `tris` (vertex coordinates) with their unit
-    /// normals.
-    pub fn build(tris: &'a [[Point3; 3]], normals: &'a [[f64; 3]]) -> TriangleTree<'a> {
-        let mut t = TriangleTree {
-            tris,
-            normals,
+impl BoxTree {
+    /// The tree of items `0..boxes.len()` with boxes `boxes[i]` = (lo, hi)
+    /// and split keys `key(i)` (one per axis).
+    pub fn build(boxes: &[(Point3, Point3)], key: impl Fn(usize) -> Point3) -> BoxTree {
+        let mut t = BoxTree {
             nodes: vec![],
-            order: (0..tris.len()).collect(),
+            order: (0..boxes.len()).collect(),
         };
-        if tris.is_empty() {
+        if boxes.is_empty() {
             return t;
         }
-        // Boxes padded by 1e-9 of the coordinates' size: a triangle at a
-        // computed distance d is never pruned by its box's round-off.
-        let scale = tris
-            .iter()
-            .flatten()
-            .flatten()
-            .fold(0.0f64, |m, v| m.max(v.abs()));
-        let pad = 1e-9 * scale;
-        let centre = |i: usize| {
-            let p = &tris[i];
-            [0, 1, 2].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0)
-        };
-        let mut todo = vec![(0usize, tris.len(), usize::MAX, 0usize)];
+        let mut todo = vec![(0usize, boxes.len(), usize::MAX, 0usize)];
         while let Some((s, e, parent, side)) = todo.pop() {
             let mut lo = [f64::INFINITY; 3];
             let mut hi = [f64::NEG_INFINITY; 3];
             for &i in &t.order[s..e] {
-                for v in &tris[i] {
-                    for k in 0..3 {
-                        lo[k] = lo[k].min(v[k] - pad);
-                        hi[k] = hi[k].max(v[k] + pad);
-                    }
+                for k in 0..3 {
+                    lo[k] = lo[k].min(boxes[i].0[k]);
+                    hi[k] = hi[k].max(boxes[i].1[k]);
                 }
             }
             let me = t.nodes.len();
-            t.nodes.push(Node {
+            t.nodes.push(BoxNode {
                 lo,
                 hi,
                 start: s,
@@ -140,13 +129,61 @@ impl<'a> TriangleTree<'a> {
                     .unwrap_or(0);
                 let mid = (s + e) / 2;
                 t.order[s..e].select_nth_unstable_by(mid - s, |&a, &b| {
-                    centre(a)[axis].total_cmp(&centre(b)[axis]).then(a.cmp(&b))
+                    key(a)[axis].total_cmp(&key(b)[axis]).then(a.cmp(&b))
                 });
                 todo.push((mid, e, me, 1));
                 todo.push((s, mid, me, 0));
             }
         }
         t
+    }
+}
+
+/// The master triangles in a bounding-volume tree.
+pub struct TriangleTree<'a> {
+    tris: &'a [[Point3; 3]],
+    normals: &'a [[f64; 3]],
+    nodes: Vec<BoxNode>,
+    order: Vec<usize>,
+}
+
+impl<'a> TriangleTree<'a> {
+    /// The tree of triangles `tris` (vertex coordinates) with their unit
+    /// normals.
+    pub fn build(tris: &'a [[Point3; 3]], normals: &'a [[f64; 3]]) -> TriangleTree<'a> {
+        // Boxes padded by 1e-9 of the coordinates' size: a triangle at a
+        // computed distance d is never pruned by its box's round-off.
+        let scale = tris
+            .iter()
+            .flatten()
+            .flatten()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        let pad = 1e-9 * scale;
+        let boxes: Vec<(Point3, Point3)> = tris
+            .iter()
+            .map(|p| {
+                let mut lo = [f64::INFINITY; 3];
+                let mut hi = [f64::NEG_INFINITY; 3];
+                for v in p {
+                    for k in 0..3 {
+                        lo[k] = lo[k].min(v[k] - pad);
+                        hi[k] = hi[k].max(v[k] + pad);
+                    }
+                }
+                (lo, hi)
+            })
+            .collect();
+        let centre = |i: usize| {
+            let p = &tris[i];
+            [0, 1, 2].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0)
+        };
+        let BoxTree { nodes, order } = BoxTree::build(&boxes, centre);
+        TriangleTree {
+            tris,
+            normals,
+            nodes,
+            order,
+        }
     }
 
     /// The triangles whose boxes meet the box [lo, hi], in increasing

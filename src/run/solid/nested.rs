@@ -15,6 +15,7 @@
 //! coarse answer enters the result.
 
 use super::SolidPrepared;
+use crate::fem::contact3d::search::BoxTree;
 use crate::fem::element::{Point3, Vector3};
 use crate::io::hdf5::{read_solid_checkpoint, SolidSteps};
 use crate::run::RunError;
@@ -274,88 +275,48 @@ fn barycentric(p: [Point3; 4], x: Point3) -> Option<[f64; 4]> {
     Some([1.0 - l1 - l2 - l3, l1, l2, l3])
 }
 
-/// A bounding-volume tree over one coarse body's tetrahedra (median
-/// splits on the longest axis, as the contact search's triangle tree):
-/// a point is located among the tetrahedra whose boxes hold it, O(log n)
-/// on a graded mesh where a uniform grid's cells near the contact would
-/// hold hundreds.
+/// One coarse body's tetrahedra in a bounding-volume tree
+/// ([`BoxTree`], as the contact search's master triangles): a point is
+/// located among the tetrahedra whose boxes hold it, O(log n) on a graded
+/// mesh where a uniform grid's cells near the contact would hold hundreds.
 struct Grid {
-    nodes: Vec<TreeNode>,
-    order: Vec<usize>,
+    tree: BoxTree,
+    /// The tetrahedron of each item of the tree.
+    of: Vec<usize>,
     /// The body's box diagonal.
     diag: f64,
 }
 
-struct TreeNode {
-    lo: Point3,
-    hi: Point3,
-    start: usize,
-    end: usize,
-    kids: Option<[usize; 2]>,
-}
-
-/// Tetrahedra per leaf.
-const LEAF: usize = 4;
-
 impl Grid {
     fn new(points: &[[f64; 3]], tets: &[[usize; 4]], of: &[usize]) -> Grid {
-        let bx = |t: usize| {
-            let (mut a, mut b) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-            for &q in &tets[t] {
-                for k in 0..3 {
-                    a[k] = a[k].min(points[q][k]);
-                    b[k] = b[k].max(points[q][k]);
+        let boxes: Vec<(Point3, Point3)> = of
+            .iter()
+            .map(|&t| {
+                let (mut a, mut b) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+                for &q in &tets[t] {
+                    for k in 0..3 {
+                        a[k] = a[k].min(points[q][k]);
+                        b[k] = b[k].max(points[q][k]);
+                    }
                 }
-            }
-            (a, b)
-        };
-        let boxes: Vec<(Point3, Point3)> = of.iter().map(|&t| bx(t)).collect();
-        let mut g = Grid {
-            nodes: vec![],
-            order: (0..of.len()).collect(),
-            diag: 0.0,
-        };
-        if of.is_empty() {
-            return g;
+                (a, b)
+            })
+            .collect();
+        let tree = BoxTree::build(&boxes, |i| {
+            let (a, b) = boxes[i];
+            [0, 1, 2].map(|k| a[k] + b[k])
+        });
+        let diag = tree.nodes.first().map_or(0.0, |r| {
+            (0..3)
+                .map(|k| (r.hi[k] - r.lo[k]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        });
+        Grid {
+            tree,
+            of: of.to_vec(),
+            diag,
         }
-        let mut todo = vec![(0usize, of.len(), usize::MAX, 0usize)];
-        while let Some((s, e, parent, side)) = todo.pop() {
-            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-            for &i in &g.order[s..e] {
-                for k in 0..3 {
-                    lo[k] = lo[k].min(boxes[i].0[k]);
-                    hi[k] = hi[k].max(boxes[i].1[k]);
-                }
-            }
-            let me = g.nodes.len();
-            g.nodes.push(TreeNode {
-                lo,
-                hi,
-                start: s,
-                end: e,
-                kids: None,
-            });
-            if parent == usize::MAX {
-                g.diag = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
-            } else {
-                g.nodes[parent].kids.get_or_insert([0, 0])[side] = me;
-            }
-            if e - s > LEAF {
-                let axis = (0..3)
-                    .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
-                    .unwrap_or(0);
-                let mid = (s + e) / 2;
-                let c = |i: usize| boxes[i].0[axis] + boxes[i].1[axis];
-                g.order[s..e].select_nth_unstable_by(mid - s, |&a, &b| {
-                    c(a).total_cmp(&c(b)).then(a.cmp(&b))
-                });
-                todo.push((mid, e, me, 1));
-                todo.push((s, mid, me, 0));
-            }
-        }
-        // Leaves list the body's tetrahedron numbers.
-        g.order = g.order.iter().map(|&i| of[i]).collect();
-        g
     }
 
     /// The tetrahedron that holds `x` (the greatest least barycentric
@@ -370,7 +331,7 @@ impl Grid {
         tets: &[[usize; 4]],
         x: Point3,
     ) -> Option<(usize, [f64; 4])> {
-        if self.nodes.is_empty() {
+        if self.tree.nodes.is_empty() {
             return None;
         }
         let mut best: Option<(f64, usize, [f64; 4])> = None;
@@ -378,7 +339,7 @@ impl Grid {
         loop {
             let mut stack = vec![0usize];
             while let Some(ni) = stack.pop() {
-                let nd = &self.nodes[ni];
+                let nd = &self.tree.nodes[ni];
                 if (0..3).any(|k| x[k] < nd.lo[k] - pad || x[k] > nd.hi[k] + pad) {
                     continue;
                 }
@@ -388,7 +349,10 @@ impl Grid {
                         stack.push(a);
                     }
                     None => {
-                        for &t in &self.order[nd.start..nd.end] {
+                        for &t in self.tree.order[nd.start..nd.end]
+                            .iter()
+                            .map(|&i| &self.of[i])
+                        {
                             let Some(w) = barycentric(tets[t].map(|q| points[q]), x) else {
                                 continue;
                             };
