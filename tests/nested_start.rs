@@ -24,38 +24,7 @@ fn data(name: &str) -> PathBuf {
 
 /// Hertz on `msh` (the TOML of scripts/bench_solid.py), `tail` appended.
 fn hertz_toml(msh: &Path, tail: &str) -> String {
-    format!(
-        r#"[mesh]
-file = "{}"
-
-[materials.ball]
-E = 2.0e11
-nu = 0.3
-
-[materials.block]
-E = 2.0e11
-nu = 0.3
-
-[[slip]]
-on = "x0"
-
-[[slip]]
-on = "y0"
-
-[[slip]]
-on = "block_bottom"
-
-[[traction]]
-on = "ball_top"
-pn = -4.6629e7
-
-[[contact]]
-slave = "ball"
-master = "block_top"
-discretization = "nts"
-{tail}"#,
-        msh.display()
-    )
+    common::hertz_toml(msh, -4.6629e7, "nts", tail)
 }
 
 /// `signorini solve TOML --out DIR ARGS…` with `toml` written as

@@ -54,32 +54,7 @@ fn hertz() -> &'static Path {
         .get_or_init(|| {
             let dir = tempfile::tempdir().unwrap();
             let msh = root().join("tests/data/solid_contact/hertz.msh");
-            let text = format!(
-                r#"[mesh]
-file = "{}"
-[materials.ball]
-E = 2.0e11
-nu = 0.3
-[materials.block]
-E = 2.0e11
-nu = 0.3
-[[slip]]
-on = "x0"
-[[slip]]
-on = "y0"
-[[slip]]
-on = "block_bottom"
-[[traction]]
-on = "ball_top"
-pn = -4.664e7
-[[contact]]
-slave = "ball"
-master = "block_top"
-discretization = "nts"
-max_gap = 0.05
-"#,
-                msh.display()
-            );
+            let text = common::hertz_toml(&msh, -4.664e7, "nts", "max_gap = 0.05\n");
             let p = dir.path().join("hertz.toml");
             std::fs::write(&p, text).unwrap();
             (dir, p)
@@ -211,17 +186,7 @@ fn a_curved_slave_surface_is_drawn_in_the_plane_of_its_contact_zone() {
     let dir = tempfile::tempdir().unwrap();
     let msh = root().join("tests/data/solid_contact/hertz.msh");
     let toml = dir.path().join("hm.toml");
-    std::fs::write(
-        &toml,
-        format!(
-            "[mesh]\nfile = \"{}\"\n[materials.ball]\nE = 2.0e11\nnu = 0.3\n[materials.block]\nE = 2.0e11\nnu = 0.3\n\
-             [[slip]]\non = \"x0\"\n[[slip]]\non = \"y0\"\n[[slip]]\non = \"block_bottom\"\n\
-             [[traction]]\non = \"ball_top\"\npn = -4.664e7\n\
-             [[contact]]\nslave = \"ball\"\nmaster = \"block_top\"\ndiscretization = \"mortar\"\n",
-            msh.display()
-        ),
-    )
-    .unwrap();
+    std::fs::write(&toml, common::hertz_toml(&msh, -4.664e7, "mortar", "")).unwrap();
     static CK: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
     let ck = read(solved(&CK, &toml));
     let (_, s) = render_solid(&ck, "hm", &opts(None, "von_mises", true), Format::Png).unwrap();

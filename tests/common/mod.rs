@@ -362,6 +362,47 @@ p = [1.0e5, -1.0e6]
     )
 }
 
+/// Hertz's ball on a block of tests/data/solid_contact (`msh`: hertz.msh or
+/// hertz_coarse.msh; the TOML of scripts/bench_solid.py): steel on steel
+/// between three slip planes, the pressure `pn` on "ball_top", the ball
+/// held by the `[[contact]]` entry slave "ball", master "block_top",
+/// `discretization`; `tail` is appended as it is (more keys of that entry
+/// first, then tables).
+pub fn hertz_toml(msh: &Path, pn: f64, discretization: &str, tail: &str) -> String {
+    format!(
+        r#"[mesh]
+file = "{}"
+
+[materials.ball]
+E = 2.0e11
+nu = 0.3
+
+[materials.block]
+E = 2.0e11
+nu = 0.3
+
+[[slip]]
+on = "x0"
+
+[[slip]]
+on = "y0"
+
+[[slip]]
+on = "block_bottom"
+
+[[traction]]
+on = "ball_top"
+pn = {pn:e}
+
+[[contact]]
+slave = "ball"
+master = "block_top"
+discretization = "{discretization}"
+{tail}"#,
+        msh.display()
+    )
+}
+
 /// The stacked cubes of tests/data/solid_contact (`msh`: stack.msh,
 /// conforming, or stack_nm.msh, meshed apart): steel (lower) under
 /// aluminium (upper) on three slip planes, the pressure `pn` on "top", the

@@ -115,9 +115,9 @@ impl NestedStart {
             tets_of[b].push(t);
             cmat[b] = mat[ck.material[t] as usize];
         }
-        let grids: Vec<Grid> = tets_of
+        let trees: Vec<BodyTree> = tets_of
             .iter()
-            .map(|ts| Grid::new(&ck.points, &ck.tets, ts))
+            .map(|ts| BodyTree::new(&ck.points, &ck.tets, ts))
             .collect();
         // This model's material per body (its tetrahedra's).
         let mut fmat: Vec<Option<u32>> = vec![None; m.nbodies];
@@ -137,7 +137,7 @@ impl NestedStart {
             let every = mine.len().div_ceil(VOTERS).max(1);
             for x in mine.iter().step_by(every).map(|&p| &m.points[p]) {
                 for cb in (0..cbodies).filter(|&cb| cmat[cb].is_some() && cmat[cb] == fmat[b]) {
-                    if let Some((_, w)) = grids[cb].locate(&ck.points, &ck.tets, *x) {
+                    if let Some((_, w)) = trees[cb].locate(&ck.points, &ck.tets, *x) {
                         if w.iter().all(|&v| v >= -1e-9) {
                             votes[cb] += 1;
                         }
@@ -163,7 +163,7 @@ impl NestedStart {
         let mut weights: Vec<Weights> = Vec::with_capacity(m.points.len());
         for (p, x) in m.points.iter().enumerate() {
             let cb = body_map[m.point_body[p] as usize];
-            match grids[cb].locate(&ck.points, &ck.tets, *x) {
+            match trees[cb].locate(&ck.points, &ck.tets, *x) {
                 Some((t, w)) if w.iter().all(|&v| v >= -FAR) => weights.push((ck.tets[t], w)),
                 _ => {
                     return Err(fail(format!(
@@ -279,7 +279,7 @@ fn barycentric(p: [Point3; 4], x: Point3) -> Option<[f64; 4]> {
 /// ([`BoxTree`], as the contact search's master triangles): a point is
 /// located among the tetrahedra whose boxes hold it, O(log n) on a graded
 /// mesh where a uniform grid's cells near the contact would hold hundreds.
-struct Grid {
+struct BodyTree {
     tree: BoxTree,
     /// The tetrahedron of each item of the tree.
     of: Vec<usize>,
@@ -287,8 +287,8 @@ struct Grid {
     diag: f64,
 }
 
-impl Grid {
-    fn new(points: &[[f64; 3]], tets: &[[usize; 4]], of: &[usize]) -> Grid {
+impl BodyTree {
+    fn new(points: &[[f64; 3]], tets: &[[usize; 4]], of: &[usize]) -> BodyTree {
         let boxes: Vec<(Point3, Point3)> = of
             .iter()
             .map(|&t| {
@@ -312,7 +312,7 @@ impl Grid {
                 .sum::<f64>()
                 .sqrt()
         });
-        Grid {
+        BodyTree {
             tree,
             of: of.to_vec(),
             diag,
@@ -407,7 +407,7 @@ mod tests {
             [0, 4, 6, 7],
         ];
         let all: Vec<usize> = (0..tets.len()).collect();
-        let g = Grid::new(&points, &tets, &all);
+        let tree = BodyTree::new(&points, &tets, &all);
         let f = |x: [f64; 3]| 2.0 * x[0] - 3.0 * x[1] + 0.5 * x[2] + 1.0;
         for x in [
             [0.1, 0.2, 0.3],
@@ -415,7 +415,7 @@ mod tests {
             [0.5, 0.5, 0.5],
             [0.0, 1.0, 1.0],
         ] {
-            let (t, w) = g.locate(&points, &tets, x).unwrap();
+            let (t, w) = tree.locate(&points, &tets, x).unwrap();
             assert!(w.iter().all(|&v| v >= -1e-12), "{x:?}: {w:?}");
             let v: f64 = tets[t]
                 .iter()
@@ -424,7 +424,7 @@ mod tests {
                 .sum();
             assert!((v - f(x)).abs() <= 1e-12, "{x:?}: {v} vs {}", f(x));
         }
-        let (t, w) = g.locate(&points, &tets, [1.05, 0.5, 0.5]).unwrap();
+        let (t, w) = tree.locate(&points, &tets, [1.05, 0.5, 0.5]).unwrap();
         assert!(
             w.iter().any(|&v| v < 0.0) && w.iter().all(|&v| v > -0.2),
             "{w:?}"
